@@ -1,0 +1,1 @@
+namespace atelier::io_detail { int io_unit = 0; }
