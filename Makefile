@@ -1,0 +1,53 @@
+# Entry points. `make demo` and `make test` work on a fresh Debian 12 machine:
+# they install missing packages first (apt-get), then configure and build.
+BUILD ?= build
+JOBS ?= $(shell nproc)
+GEN := $(shell command -v ninja >/dev/null 2>&1 && echo Ninja || echo "Unix Makefiles")
+CMAKE_ARGS ?=
+
+.PHONY: all deps configure build demo test bench asan tsan format clean
+
+all: build
+
+deps:
+	@bash scripts/install-deps.sh
+
+$(BUILD)/CMakeCache.txt:
+	@bash scripts/install-deps.sh
+	cmake -S . -B $(BUILD) -G "$(shell command -v ninja >/dev/null 2>&1 && echo Ninja || echo 'Unix Makefiles')" -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS)
+
+configure: $(BUILD)/CMakeCache.txt
+
+build: deps configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	./$(BUILD)/atelier demo --out out/demo
+
+test: build
+	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+bench:
+	@bash scripts/install-deps.sh --bench
+	cmake -S . -B $(BUILD) -DATELIER_BUILD_BENCH=ON
+	cmake --build $(BUILD) -j $(JOBS) --target atelier_bench
+	mkdir -p bench-results
+	./$(BUILD)/bench/atelier_bench --benchmark_out=bench-results/atelier_bench.json --benchmark_out_format=json
+
+asan:
+	@bash scripts/install-deps.sh
+	cmake -S . -B build-asan -G "$(GEN)" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DATELIER_SANITIZE=address,undefined -DATELIER_BUILD_BENCH=OFF
+	cmake --build build-asan -j $(JOBS)
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build-asan --output-on-failure -j $(JOBS)
+
+tsan:
+	@bash scripts/install-deps.sh
+	cmake -S . -B build-tsan -G "$(GEN)" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DATELIER_SANITIZE=thread -DATELIER_BUILD_BENCH=OFF
+	cmake --build build-tsan -j $(JOBS)
+	ctest --test-dir build-tsan --output-on-failure -j $(JOBS)
+
+format:
+	find engine storage systems io apps tests bench examples -name '*.h' -o -name '*.cpp' | xargs clang-format -i
+
+clean:
+	rm -rf $(BUILD) build-asan build-tsan
