@@ -1,0 +1,355 @@
+#include "io/obj.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <unordered_map>
+
+#include "io/atomic_file.h"
+#include "io/mesh_arrays.h"
+
+namespace atelier {
+
+using namespace io_detail;
+
+namespace {
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+struct ObjFace {
+  std::uint32_t group;
+  std::uint32_t begin, end;  // into corner arrays
+  std::size_t line;
+};
+
+struct ObjData {
+  std::vector<Vec3d> positions;
+  std::vector<Vec2d> texcoords;
+  std::vector<std::int64_t> corner_v;   // 0-based once resolved
+  std::vector<std::int64_t> corner_vt;  // 0-based, -1 when absent
+  std::vector<ObjFace> faces;
+  std::vector<std::string> group_names;
+  std::unordered_map<std::string, std::uint32_t> group_of;
+};
+
+class ObjParser {
+ public:
+  ObjParser(std::string_view text, std::string_view file) : text_(text), file_(file) {}
+
+  ObjData run() {
+    std::size_t pos = 0, line_no = 0;
+    std::string logical;
+    while (pos < text_.size()) {
+      // Assemble one logical line (a trailing backslash continues it).
+      logical.clear();
+      const std::size_t first_line = line_no + 1;
+      for (;;) {
+        const std::size_t nl = text_.find('\n', pos);
+        std::string_view phys = text_.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+        pos = nl == std::string_view::npos ? text_.size() : nl + 1;
+        ++line_no;
+        while (!phys.empty() && (phys.back() == '\r' || phys.back() == ' ' || phys.back() == '\t')) phys.remove_suffix(1);
+        if (!phys.empty() && phys.back() == '\\' && pos < text_.size()) {
+          phys.remove_suffix(1);
+          logical.append(phys).push_back(' ');
+          continue;
+        }
+        if (!phys.empty() && phys.back() == '\\') phys.remove_suffix(1);
+        logical.append(phys);
+        break;
+      }
+      line(logical, first_line);
+    }
+    check_ranges();
+    return std::move(d_);
+  }
+
+ private:
+  [[noreturn]] void fail(std::size_t line, const std::string& what) const { throw parse_error_at_line(file_, line, what); }
+
+  double number(std::string_view tok, std::size_t line, const char* what) const {
+    const auto v = parse_double(tok);
+    if (!v) fail(line, "non-numeric token '" + std::string(tok) + "' in " + what);
+    if (!std::isfinite(*v)) fail(line, "NaN/inf coordinate '" + std::string(tok) + "' in " + what);
+    return *v;
+  }
+
+  void line(std::string_view l, std::size_t line_no) {
+    if (const auto hash = l.find('#'); hash != std::string_view::npos) l = l.substr(0, hash);
+    split_blanks(l, tok_);
+    if (tok_.empty()) return;
+    const std::string_view kw = tok_[0];
+    if (kw == "v") {
+      if (tok_.size() < 4) fail(line_no, "vertex has " + std::to_string(tok_.size() - 1) + " coordinates (3 needed)");
+      // Extra values (w, or r g b vertex colours) are allowed but must be numbers.
+      Vec3d p;
+      for (int k = 0; k < 3; ++k) p[k] = number(tok_[k + 1], line_no, "vertex");
+      for (std::size_t k = 4; k < tok_.size(); ++k) (void)number(tok_[k], line_no, "vertex");
+      d_.positions.push_back(p);
+    } else if (kw == "vt") {
+      if (tok_.size() < 2) fail(line_no, "texture coordinate has no values");
+      Vec2d t(number(tok_[1], line_no, "texture coordinate"), 0.0);
+      if (tok_.size() > 2) t.y() = number(tok_[2], line_no, "texture coordinate");
+      d_.texcoords.push_back(t);
+    } else if (kw == "f") {
+      face(line_no);
+    } else if (kw == "g" || kw == "o") {
+      std::string name;
+      for (std::size_t k = 1; k < tok_.size(); ++k) {
+        if (k > 1) name.push_back(' ');
+        name.append(tok_[k]);
+      }
+      current_ = name.empty() ? std::string("default") : std::move(name);
+      group_ = kNone;
+    }
+    // Everything else (vn, vp, l, s, mtllib, usemtl, ...) does not describe
+    // the surfaces' topology and is skipped.
+  }
+
+  std::int64_t index(std::string_view tok, std::size_t count, std::size_t line_no, const char* what) const {
+    const auto v = parse_int(tok);
+    if (!v) fail(line_no, "non-numeric token '" + std::string(tok) + "' as " + what + " index in face");
+    if (*v == 0) fail(line_no, std::string("bad index: ") + what + " index 0 (OBJ indices start at 1)");
+    if (*v < 0) {
+      // Relative: -1 is the last one defined so far.
+      const std::int64_t r = static_cast<std::int64_t>(count) + *v;
+      if (r < 0)
+        fail(line_no, std::string("bad index: relative ") + what + " index " + std::string(tok) + " refers before the first " +
+                          what + " (" + std::to_string(count) + " defined so far)");
+      return r;
+    }
+    return *v - 1;  // range checked once the whole file is read (forward references)
+  }
+
+  void face(std::size_t line_no) {
+    const std::size_t n = tok_.size() - 1;
+    if (n < 3) fail(line_no, "face has " + std::to_string(n) + " vertices (at least 3 needed)");
+    if (group_ == kNone) {
+      auto [it, inserted] = d_.group_of.try_emplace(current_, static_cast<std::uint32_t>(d_.group_names.size()));
+      if (inserted) d_.group_names.push_back(current_);
+      group_ = it->second;
+    }
+    const auto begin = static_cast<std::uint32_t>(d_.corner_v.size());
+    for (std::size_t k = 1; k <= n; ++k) {
+      const std::string_view t = tok_[k];
+      const std::size_t s1 = t.find('/');
+      d_.corner_v.push_back(index(t.substr(0, s1), d_.positions.size(), line_no, "vertex"));
+      std::int64_t vt = -1;
+      if (s1 != std::string_view::npos) {
+        const std::size_t s2 = t.find('/', s1 + 1);
+        const std::string_view tt = t.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
+        if (!tt.empty()) vt = index(tt, d_.texcoords.size(), line_no, "texture");
+        if (s2 != std::string_view::npos) {
+          const std::string_view tn = t.substr(s2 + 1);
+          if (tn.empty() || tn.find('/') != std::string_view::npos || !parse_int(tn))
+            fail(line_no, "non-numeric token '" + std::string(t) + "' in face (expected v, v/vt, v/vt/vn or v//vn)");
+        }
+      }
+      d_.corner_vt.push_back(vt);
+    }
+    d_.faces.push_back({group_, begin, static_cast<std::uint32_t>(d_.corner_v.size()), line_no});
+  }
+
+  void check_ranges() const {
+    for (const ObjFace& f : d_.faces)
+      for (std::uint32_t k = f.begin; k < f.end; ++k) {
+        if (d_.corner_v[k] >= static_cast<std::int64_t>(d_.positions.size()))
+          fail(f.line, "bad index: vertex index " + std::to_string(d_.corner_v[k] + 1) + " out of range (the file has " +
+                           std::to_string(d_.positions.size()) + " vertices)");
+        if (d_.corner_vt[k] >= static_cast<std::int64_t>(d_.texcoords.size()))
+          fail(f.line, "bad index: texture index " + std::to_string(d_.corner_vt[k] + 1) +
+                           " out of range (the file has " + std::to_string(d_.texcoords.size()) +
+                           " texture coordinates)");
+      }
+  }
+
+  std::string_view text_;
+  std::string_view file_;
+  ObjData d_;
+  std::vector<std::string_view> tok_;
+  std::string current_ = "default";
+  std::uint32_t group_ = kNone;
+};
+
+Model build(ObjData& d, std::string_view file) {
+  const std::size_t nv = d.positions.size();
+  std::vector<std::uint8_t> used(nv, 0);
+  for (std::int64_t v : d.corner_v) used[static_cast<std::size_t>(v)] = 1;
+  const bool has_isolated = std::find(used.begin(), used.end(), 0) != used.end();
+  if (has_isolated && !d.group_of.count("default")) {
+    d.group_of.emplace("default", static_cast<std::uint32_t>(d.group_names.size()));
+    d.group_names.push_back("default");
+  }
+  const std::uint32_t default_group = has_isolated ? d.group_of.at("default") : kNone;
+
+  // Faces bucketed by group, file order kept inside each group.
+  const std::size_t ng = d.group_names.size();
+  std::vector<std::uint32_t> start(ng + 1, 0);
+  for (const ObjFace& f : d.faces) ++start[f.group + 1];
+  for (std::size_t g = 0; g < ng; ++g) start[g + 1] += start[g];
+  std::vector<std::uint32_t> order(d.faces.size());
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t i = 0; i < d.faces.size(); ++i) order[fill[d.faces[i].group]++] = i;
+  }
+
+  Model m;
+  std::vector<std::uint32_t> local(nv, kNone);
+  std::vector<std::uint32_t> verts;
+  const bool has_uv = !d.texcoords.empty();
+  for (std::uint32_t g = 0; g < ng; ++g) {
+    verts.clear();
+    for (std::uint32_t k = start[g]; k < start[g + 1]; ++k) {
+      const ObjFace& f = d.faces[order[k]];
+      for (std::uint32_t c = f.begin; c < f.end; ++c) verts.push_back(static_cast<std::uint32_t>(d.corner_v[c]));
+    }
+    if (g == default_group)
+      for (std::uint32_t v = 0; v < nv; ++v)
+        if (!used[v]) verts.push_back(v);
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+
+    SurfaceSoup soup;
+    soup.name = d.group_names[g];
+    soup.positions.reserve(verts.size());
+    soup.source.reserve(verts.size());
+    for (std::uint32_t i = 0; i < verts.size(); ++i) {
+      local[verts[i]] = i;
+      soup.positions.push_back(d.positions[verts[i]]);
+      soup.source.push_back(static_cast<std::int32_t>(verts[i]));
+    }
+    std::vector<std::uint8_t> uv_set;
+    if (has_uv) {
+      soup.uv.assign(verts.size(), Vec2d::Zero());
+      uv_set.assign(verts.size(), 0);
+    }
+    for (std::uint32_t k = start[g]; k < start[g + 1]; ++k) {
+      const ObjFace& f = d.faces[order[k]];
+      for (std::uint32_t c = f.begin; c < f.end; ++c) {
+        const std::uint32_t l = local[static_cast<std::size_t>(d.corner_v[c])];
+        soup.face_nodes.push_back(l);
+        if (has_uv && d.corner_vt[c] >= 0 && !uv_set[l]) {
+          soup.uv[l] = d.texcoords[static_cast<std::size_t>(d.corner_vt[c])];
+          uv_set[l] = 1;
+        }
+      }
+      soup.face_offsets.push_back(static_cast<std::uint32_t>(soup.face_nodes.size()));
+      soup.face_where.push_back(f.line);
+    }
+    for (std::uint32_t v : verts) local[v] = kNone;
+    add_soup_surface(m, soup, file, "line");
+  }
+  return m;
+}
+
+}  // namespace
+
+Model read_obj_from_string(std::string_view text, std::string_view display_name) {
+  ObjData d = ObjParser(text, display_name).run();
+  return build(d, display_name);
+}
+
+Model read_obj(const std::filesystem::path& path) {
+  const std::string bytes = read_file_bytes(path);
+  return read_obj_from_string(bytes, path.string());
+}
+
+void write_obj(const Model& m, const std::filesystem::path& path) {
+  // Vertex order: by source_vertex (the reader's OBJ index) so a file read
+  // and written again lists its vertices in the original order; nodes that
+  // came from the same OBJ vertex are written once if they still coincide.
+  const auto source = m.nodes.props.find<std::int32_t>("source_vertex");
+  std::vector<NodeIdx> live;
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
+    if (m.alive(NodeIdx{v})) live.push_back(NodeIdx{v});
+  auto key = [&](NodeIdx v) -> std::int64_t {
+    if (source.valid() && source[v] >= 0) return source[v];
+    return std::int64_t{std::numeric_limits<std::int32_t>::max()} + 1 + v.value;
+  };
+  std::stable_sort(live.begin(), live.end(), [&](NodeIdx a, NodeIdx b) { return key(a) < key(b); });
+  bool has_uv = false;
+  for (NodeIdx v : live) has_uv |= !m.nodes.uv[v.value].isZero(0.0);
+
+  std::vector<std::uint32_t> obj_index(m.nodes.slots.capacity(), kNone);
+  std::vector<NodeIdx> written;  // obj index -> first node written there
+  std::size_t run_begin = 0;
+  for (std::size_t i = 0; i < live.size(); ++i) {
+    const NodeIdx v = live[i];
+    if (i > 0 && key(live[i - 1]) != key(v)) run_begin = written.size();
+    std::uint32_t same = kNone;
+    for (std::size_t w = run_begin; w < written.size() && same == kNone; ++w) {
+      const NodeIdx o = written[w];
+      if (key(o) == key(v) && std::memcmp(m.nodes.position[o.value].data(), m.nodes.position[v.value].data(), 24) == 0 &&
+          std::memcmp(m.nodes.uv[o.value].data(), m.nodes.uv[v.value].data(), 16) == 0)
+        same = static_cast<std::uint32_t>(w);
+    }
+    if (same == kNone) {
+      same = static_cast<std::uint32_t>(written.size());
+      written.push_back(v);
+    }
+    obj_index[v.value] = same;
+  }
+
+  write_atomically(path, [&](AtomicFile& out) {
+    std::string s = "# written by Atelier\n";
+    for (NodeIdx v : written) {
+      const Vec3d& p = m.nodes.position[v.value];
+      require_finite(p, v, path);
+      s += "v ";
+      append_double(s, p.x());
+      s += ' ';
+      append_double(s, p.y());
+      s += ' ';
+      append_double(s, p.z());
+      s += '\n';
+      if (s.size() > 1u << 15) {
+        out.write(s);
+        s.clear();
+      }
+    }
+    if (has_uv)
+      for (NodeIdx v : written) {
+        s += "vt ";
+        append_double(s, m.nodes.uv[v.value].x());
+        s += ' ';
+        append_double(s, m.nodes.uv[v.value].y());
+        s += '\n';
+        if (s.size() > 1u << 15) {
+          out.write(s);
+          s.clear();
+        }
+      }
+    // Faces surface by surface.
+    std::vector<std::vector<FaceIdx>> by_surface(m.surfaces.slots.capacity());
+    for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
+      if (m.alive(FaceIdx{f})) by_surface[m.faces.surface[f].value].push_back(FaceIdx{f});
+    std::vector<NodeIdx> corners;
+    for (std::uint32_t si = 0; si < m.surfaces.slots.capacity(); ++si) {
+      if (!m.alive(SurfaceIdx{si})) continue;
+      s += "g ";
+      s += m.surfaces.name[si];
+      s += '\n';
+      for (FaceIdx f : by_surface[si]) {
+        m.face_nodes(f, corners);
+        s += 'f';
+        for (NodeIdx v : corners) {
+          s += ' ';
+          append_uint(s, obj_index[v.value] + 1u);
+          if (has_uv) {
+            s += '/';
+            append_uint(s, obj_index[v.value] + 1u);
+          }
+        }
+        s += '\n';
+        if (s.size() > 1u << 15) {
+          out.write(s);
+          s.clear();
+        }
+      }
+    }
+    out.write(s);
+  });
+}
+
+}  // namespace atelier

@@ -1,0 +1,34 @@
+// Wavefront OBJ reader and writer.
+//
+// Reading: `v` (x y z, extra values ignored), `vt` (into nodes.uv: the first
+// corner that names a vertex decides its uv, OBJ allows one per corner), `f`
+// with v, v/vt, v/vt/vn, v//vn and negative (relative) indices; n-gons stay
+// n-gons. `g NAME` and `o NAME` start a surface named NAME (faces before any
+// of them go to "default"; a repeated name continues its surface). A vertex
+// used by faces of several surfaces becomes one node per surface (a node
+// belongs to one surface); the node property "source_vertex" (int32) keeps
+// its 0-based OBJ index so write_obj writes it once again. Vertices used by no
+// face become isolated nodes of "default". Comments, blank lines, \r\n, tabs,
+// and `\` continuation lines are handled; other statements are skipped.
+// Malformed input throws Error(kParse) naming file, line and problem; file
+// system failures throw Error(kIo).
+//
+// Writing: one `g` per live surface, every live face, coordinates in the
+// shortest form that parses back to the same double (exact text round trip),
+// through an AtomicFile (all or nothing).
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+#include "storage/model.h"
+
+namespace atelier {
+
+[[nodiscard]] Model read_obj(const std::filesystem::path& path);
+/// Parses OBJ text; `display_name` names the input in error messages.
+[[nodiscard]] Model read_obj_from_string(std::string_view text, std::string_view display_name = "<memory>");
+
+void write_obj(const Model& m, const std::filesystem::path& path);
+
+}  // namespace atelier

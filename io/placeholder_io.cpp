@@ -1,1 +1,0 @@
-namespace atelier::io_detail { int io_unit = 0; }
