@@ -1,0 +1,29 @@
+// Stanford PLY reader and writer.
+//
+// Reading: ascii, binary_little_endian and binary_big_endian. The `vertex`
+// element needs x, y, z (any scalar type; float or double in practice); u/v,
+// s/t or texture_u/texture_v go to nodes.uv; every other property, of every
+// PLY scalar or list type, is skipped. Faces come from the `face` element's
+// `vertex_indices` (or `vertex_index`) list, any count and index type; other
+// elements are skipped. One surface named after the file stem ("ply" for
+// in-memory input). Malformed input throws Error(kParse) naming the file, the
+// line (ascii) or byte offset (binary), the element and the problem.
+//
+// Writing: all live nodes and faces of all surfaces flattened into one mesh;
+// binary little-endian with double coordinates (bit exact), or ascii with the
+// shortest exact decimal form. Written through an AtomicFile.
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+#include "storage/model.h"
+
+namespace atelier {
+
+[[nodiscard]] Model read_ply(const std::filesystem::path& path);
+[[nodiscard]] Model read_ply_from_string(std::string_view bytes, std::string_view display_name = "<memory>");
+
+void write_ply(const Model& m, const std::filesystem::path& path, bool binary = true);
+
+}  // namespace atelier
