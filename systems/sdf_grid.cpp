@@ -1,0 +1,369 @@
+// SdfGrid implementation: the only file of Atelier that includes OpenVDB.
+#include "systems/sdf_grid.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Prune.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <string>
+
+#include "engine/parallel.h"
+
+namespace atelier {
+
+namespace vdb = openvdb;
+
+namespace {
+
+/// OpenVDB's MeshDataAdapter over the BVH's double positions (no copy);
+/// `sel` picks a subset of the triangles (ROI grids).
+struct MeshAdapter {
+  const Vec3d* pos = nullptr;
+  const Triangle* tris = nullptr;
+  const std::uint32_t* sel = nullptr;
+  std::size_t num_polygons = 0;
+  std::size_t num_points = 0;
+  double inv_h = 1.0;
+
+  [[nodiscard]] std::size_t polygonCount() const { return num_polygons; }
+  [[nodiscard]] std::size_t pointCount() const { return num_points; }
+  [[nodiscard]] std::size_t vertexCount(std::size_t) const { return 3; }
+  void getIndexSpacePoint(std::size_t n, std::size_t v, vdb::Vec3d& out) const {
+    const std::uint32_t t = sel ? sel[n] : static_cast<std::uint32_t>(n);
+    const Vec3d& p = pos[tris[t][v]];
+    out = vdb::Vec3d(p.x() * inv_h, p.y() * inv_h, p.z() * inv_h);
+  }
+};
+
+/// OpenVDB interrupter wired to the CancelToken.
+struct CancelInterrupter {
+  const ExecContext* ctx = nullptr;
+  void start(const char* = nullptr) {}
+  void end() {}
+  bool wasInterrupted(int = -1) { return ctx->cancelled(); }
+};
+
+Box3d grow(const Box3d& b, double r) {
+  Box3d g = b;
+  g.lo.array() -= r;
+  g.hi.array() += r;
+  return g;
+}
+
+}  // namespace
+
+struct SdfGrid::Impl {
+  vdb::FloatGrid::Ptr grid;
+  const BodyBvh* body = nullptr;
+  SdfParams params;
+  SdfStats stats;
+  bool roi = false;
+  double h = 1.0, inv_h = 1.0;
+  double exact_world = 0.0;  // exact band in world units
+  double band_world = 0.0;   // half width in world units
+
+  [[nodiscard]] bool covers(const Vec3d& p) const noexcept {
+    if (!roi) return true;
+    for (const Box3d& b : params.roi) {
+      if ((p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all()) return true;
+    }
+    return false;
+  }
+
+  struct Probe {
+    double d = 0.0;
+    bool valid = false;       // p maps to representable voxel coordinates
+    bool all_active = false;  // every corner is a band voxel
+  };
+
+  /// Trilinear interpolation of the 8 voxel values around p.
+  template <class Accessor>
+  [[nodiscard]] Probe trilinear(Accessor& acc, const Vec3d& p) const {
+    Probe r;
+    const double x = p.x() * inv_h, y = p.y() * inv_h, z = p.z() * inv_h;
+    constexpr double kLimit = 1 << 30;
+    if (!(std::abs(x) < kLimit && std::abs(y) < kLimit && std::abs(z) < kLimit)) return r;
+    const double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
+    const int i = static_cast<int>(fx), j = static_cast<int>(fy), k = static_cast<int>(fz);
+    const double tx = x - fx, ty = y - fy, tz = z - fz;
+    float v[8];
+    bool all = true;
+    all &= acc.probeValue(vdb::Coord(i, j, k), v[0]);
+    all &= acc.probeValue(vdb::Coord(i, j, k + 1), v[1]);
+    all &= acc.probeValue(vdb::Coord(i, j + 1, k), v[2]);
+    all &= acc.probeValue(vdb::Coord(i, j + 1, k + 1), v[3]);
+    all &= acc.probeValue(vdb::Coord(i + 1, j, k), v[4]);
+    all &= acc.probeValue(vdb::Coord(i + 1, j, k + 1), v[5]);
+    all &= acc.probeValue(vdb::Coord(i + 1, j + 1, k), v[6]);
+    all &= acc.probeValue(vdb::Coord(i + 1, j + 1, k + 1), v[7]);
+    const double a00 = v[0] + tz * (v[1] - v[0]), a01 = v[2] + tz * (v[3] - v[2]);
+    const double a10 = v[4] + tz * (v[5] - v[4]), a11 = v[6] + tz * (v[7] - v[6]);
+    const double b0 = a00 + ty * (a01 - a00), b1 = a10 + ty * (a11 - a10);
+    r.d = b0 + tx * (b1 - b0);
+    r.valid = true;
+    r.all_active = all;
+    return r;
+  }
+
+  template <class Accessor>
+  [[nodiscard]] double sample(Accessor& acc, const Vec3d& p) const {
+    const Probe r = trilinear(acc, p);
+    return r.valid ? r.d : band_world;
+  }
+
+  template <class Accessor>
+  [[nodiscard]] bool inside(Accessor& acc, const Vec3d& p, InsideStats& st) const {
+    if (covers(p)) {
+      const Probe r = trilinear(acc, p);
+      // Full grids: outside the band the flood-filled tiles carry the sign.
+      // ROI grids have no valid flood fill (open sub-mesh): need the band.
+      if (r.valid && (!roi || r.all_active) && std::abs(r.d) >= exact_world) {
+        ++st.from_grid;
+        return r.d < 0.0;
+      }
+    }
+    ++st.exact;
+    return body->signed_distance(p).distance < 0.0;
+  }
+};
+
+struct SdfGrid::Sampler::Impl {
+  const SdfGrid::Impl* g;
+  vdb::FloatGrid::ConstUnsafeAccessor acc;
+  InsideStats stats;
+};
+
+SdfGrid::SdfGrid() = default;
+SdfGrid::~SdfGrid() = default;
+SdfGrid::SdfGrid(SdfGrid&&) noexcept = default;
+SdfGrid& SdfGrid::operator=(SdfGrid&&) noexcept = default;
+
+Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecContext& ctx) {
+  impl_.reset();
+  if (body.empty()) return {ErrorCode::kInvalidArgument, "SdfGrid: the BodyBvh is not built"};
+  if (Status s = body.require_closed(); !s) return {s.code(), "SdfGrid: " + s.message()};
+  if (!(params.voxel_size > 0.0) || !std::isfinite(params.voxel_size)) {
+    return {ErrorCode::kInvalidArgument, "SdfGrid: voxel size must be positive, got " + std::to_string(params.voxel_size)};
+  }
+  if (!(params.half_width >= 1.0) || !std::isfinite(params.half_width)) {
+    return {ErrorCode::kInvalidArgument, "SdfGrid: half width must be at least 1 voxel, got " +
+                                             std::to_string(params.half_width)};
+  }
+  if (!(params.exact_band >= 0.0) || !std::isfinite(params.exact_band)) {
+    return {ErrorCode::kInvalidArgument, "SdfGrid: exact band must be >= 0 voxels"};
+  }
+  for (std::size_t i = 0; i < params.roi.size(); ++i) {
+    const Box3d& b = params.roi[i];
+    if (b.empty() || !b.lo.allFinite() || !b.hi.allFinite()) {
+      return {ErrorCode::kInvalidArgument, "SdfGrid: ROI box " + std::to_string(i) + " is empty or not finite"};
+    }
+  }
+  auto im = std::make_unique<Impl>();
+  im->body = &body;
+  im->params = params;
+  im->roi = !params.roi.empty();
+  im->h = params.voxel_size;
+  im->inv_h = 1.0 / params.voxel_size;
+  im->exact_world = params.exact_band * params.voxel_size;
+  im->band_world = params.half_width * params.voxel_size;
+
+  const Box3d bounds = grow(body.bounds(), (params.half_width + 2.0) * params.voxel_size);
+  const double extent = std::max(bounds.lo.cwiseAbs().maxCoeff(), bounds.hi.cwiseAbs().maxCoeff());
+  if (extent * im->inv_h >= double(1 << 30)) {
+    return {ErrorCode::kInvalidArgument, "SdfGrid: voxel size " + std::to_string(params.voxel_size) +
+                                             " too small for a body reaching " + std::to_string(extent)};
+  }
+
+  const std::span<const Vec3d> pos = body.positions();
+  const std::span<const Triangle> tris = body.triangles();
+
+  // ROI: the triangles whose box meets a ROI box grown by (w + 3) h. A query
+  // in the ROI reads voxels within sqrt(3) h of it whose band distance is at
+  // most w h, so their closest triangle meets the grown box.
+  const double grow_by = (params.half_width + 3.0) * params.voxel_size;
+  std::vector<Box3d> grown;
+  std::vector<std::uint32_t> sel;
+  if (im->roi) {
+    for (const Box3d& b : params.roi) grown.push_back(grow(b, grow_by));
+    std::vector<std::uint8_t> keep(tris.size(), 0);
+    par::for_each_n(ctx, tris.size(), [&](std::size_t t) {
+      Box3d tb;
+      for (std::uint32_t v : tris[t]) tb.extend(pos[v]);
+      for (const Box3d& g : grown) {
+        if ((tb.lo.array() <= g.hi.array()).all() && (tb.hi.array() >= g.lo.array()).all()) {
+          keep[t] = 1;
+          break;
+        }
+      }
+    });
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      if (keep[t]) sel.push_back(static_cast<std::uint32_t>(t));
+    }
+  }
+
+  MeshAdapter mesh{pos.data(), tris.data(), im->roi ? sel.data() : nullptr, im->roi ? sel.size() : tris.size(),
+                   pos.size(), im->inv_h};
+  im->stats.source_triangles = mesh.num_polygons;
+  const vdb::math::Transform::Ptr xform = vdb::math::Transform::createLinearTransform(params.voxel_size);
+  CancelInterrupter interrupter{&ctx};
+  const auto w = static_cast<float>(params.half_width);
+  vdb::Int32Grid::Ptr index_grid;
+  if (im->roi) index_grid = vdb::Int32Grid::create();
+
+  par::in_arena(ctx, [&] {
+    if (mesh.num_polygons == 0) {
+      im->grid = vdb::FloatGrid::create(static_cast<float>(im->band_world));
+      im->grid->setTransform(xform);
+      return;
+    }
+    if (!im->roi) {
+      // Signed conversion with OpenVDB's interior classification and flood
+      // fill (meshToLevelSet with renormalisation off: exact distances).
+      im->grid = vdb::tools::meshToVolume<vdb::FloatGrid>(interrupter, mesh, *xform, w, w,
+                                                          vdb::tools::DISABLE_RENORMALIZATION, nullptr);
+    } else {
+      im->grid = vdb::tools::meshToVolume<vdb::FloatGrid>(
+          interrupter, mesh, *xform, w, w, vdb::tools::UNSIGNED_DISTANCE_FIELD | vdb::tools::DISABLE_RENORMALIZATION,
+          index_grid.get());
+    }
+  });
+  if (ctx.cancelled()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+  if (!im->grid) return {ErrorCode::kInternal, "SdfGrid: OpenVDB returned no grid"};
+
+  if (im->roi && mesh.num_polygons > 0) {
+    // Sign each band voxel with the pseudo-normal of its closest triangle
+    // (exact when the voxel's distance ball lies in a grown box, so every
+    // triangle that could be closer was voxelised); drop the others.
+    using LeafT = vdb::FloatTree::LeafNodeType;
+    std::vector<LeafT*> leaves;
+    leaves.reserve(im->grid->tree().leafCount());
+    im->grid->tree().getNodes(leaves);
+    const vdb::Int32Tree& itree = index_grid->tree();
+    const float off_value = static_cast<float>(im->band_world);
+    const double h = params.voxel_size;
+    const double slack = 1e-6 * h;
+    std::atomic<bool> stopped{false};
+    ExecContext c = ctx;
+    c.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / 64);
+    c.grain = ctx.grain ? ctx.grain : 8;
+    par::for_each_n(c, leaves.size(), [&](std::size_t li) {
+      if (ctx.cancelled()) {
+        stopped.store(true, std::memory_order_relaxed);
+        return;
+      }
+      LeafT& leaf = *leaves[li];
+      const vdb::Int32Tree::LeafNodeType* ileaf = itree.probeConstLeaf(leaf.origin());
+      for (vdb::Index off = 0; off < LeafT::SIZE; ++off) {
+        if (!leaf.isValueOn(off)) continue;
+        const vdb::Coord ijk = leaf.offsetToGlobalCoord(off);
+        const Vec3d q(ijk.x() * h, ijk.y() * h, ijk.z() * h);
+        const float v = std::abs(leaf.getValue(off));
+        const std::int32_t sub = ileaf ? ileaf->getValue(off) : -1;
+        bool certified = false;
+        if (sub >= 0 && static_cast<std::size_t>(sub) < sel.size()) {
+          const double r = double(v) + slack;
+          for (const Box3d& g : grown) {
+            if (((q.array() - g.lo.array()) >= r).all() && ((g.hi.array() - q.array()) >= r).all()) {
+              certified = true;
+              break;
+            }
+          }
+        }
+        if (!certified) {
+          leaf.setValueOff(off, off_value);
+          continue;
+        }
+        const double s = body.signed_distance_to(q, sel[static_cast<std::size_t>(sub)]).distance;
+        leaf.setValueOnly(off, s < 0.0 ? -v : v);
+      }
+    });
+    if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+    par::in_arena(ctx, [&] { vdb::tools::pruneInactive(im->grid->tree(), ctx.threads != 1); });
+  }
+
+  im->stats.active_voxels = static_cast<std::size_t>(im->grid->activeVoxelCount());
+  im->stats.memory_bytes = static_cast<std::size_t>(im->grid->memUsage());
+  impl_ = std::move(im);
+  return Status::ok();
+}
+
+bool SdfGrid::empty() const noexcept { return !impl_; }
+const SdfParams& SdfGrid::params() const noexcept {
+  static const SdfParams kNone{};
+  return impl_ ? impl_->params : kNone;
+}
+const SdfStats& SdfGrid::stats() const noexcept {
+  static const SdfStats kNone{};
+  return impl_ ? impl_->stats : kNone;
+}
+bool SdfGrid::covers(const Vec3d& p) const noexcept { return impl_ && impl_->covers(p); }
+
+double SdfGrid::sample(const Vec3d& p) const {
+  if (!impl_) return std::numeric_limits<double>::quiet_NaN();
+  auto acc = impl_->grid->getConstUnsafeAccessor();
+  return impl_->sample(acc, p);
+}
+
+bool SdfGrid::inside(const Vec3d& p) const {
+  if (!impl_) return false;
+  auto acc = impl_->grid->getConstUnsafeAccessor();
+  InsideStats st;
+  return impl_->inside(acc, p, st);
+}
+
+SdfGrid::Sampler::Sampler(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SdfGrid::Sampler::Sampler(Sampler&&) noexcept = default;
+SdfGrid::Sampler& SdfGrid::Sampler::operator=(Sampler&&) noexcept = default;
+SdfGrid::Sampler::~Sampler() = default;
+double SdfGrid::Sampler::sample(const Vec3d& p) { return impl_->g->sample(impl_->acc, p); }
+bool SdfGrid::Sampler::inside(const Vec3d& p) { return impl_->g->inside(impl_->acc, p, impl_->stats); }
+const InsideStats& SdfGrid::Sampler::stats() const noexcept { return impl_->stats; }
+
+SdfGrid::Sampler SdfGrid::sampler() const {
+  if (!impl_) throw Error(Status(ErrorCode::kInvalidArgument, "SdfGrid::sampler: grid not built"));
+  return Sampler(std::unique_ptr<Sampler::Impl>(
+      new Sampler::Impl{impl_.get(), impl_->grid->getConstUnsafeAccessor(), {}}));
+}
+
+Status SdfGrid::sample_many(std::span<const Vec3d> in, std::span<double> out, const ExecContext& ctx) const {
+  if (!impl_) return {ErrorCode::kInvalidArgument, "SdfGrid::sample_many: grid not built"};
+  if (in.size() != out.size()) return {ErrorCode::kMismatch, "SdfGrid::sample_many: input and output sizes differ"};
+  std::atomic<bool> stopped{false};
+  par::for_each_block(ctx, in.size(), [&](std::size_t b, std::size_t e) {
+    if (ctx.cancelled()) {
+      stopped.store(true, std::memory_order_relaxed);
+      return;
+    }
+    auto acc = impl_->grid->getConstUnsafeAccessor();
+    for (std::size_t i = b; i < e; ++i) out[i] = impl_->sample(acc, in[i]);
+  });
+  if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid::sample_many: cancelled"};
+  return Status::ok();
+}
+
+Status SdfGrid::inside_many(std::span<const Vec3d> in, std::span<std::uint8_t> out, const ExecContext& ctx,
+                            InsideStats* stats) const {
+  if (!impl_) return {ErrorCode::kInvalidArgument, "SdfGrid::inside_many: grid not built"};
+  if (in.size() != out.size()) return {ErrorCode::kMismatch, "SdfGrid::inside_many: input and output sizes differ"};
+  std::atomic<bool> stopped{false};
+  std::atomic<std::size_t> from_grid{0}, exact{0};
+  par::for_each_block(ctx, in.size(), [&](std::size_t b, std::size_t e) {
+    if (ctx.cancelled()) {
+      stopped.store(true, std::memory_order_relaxed);
+      return;
+    }
+    auto acc = impl_->grid->getConstUnsafeAccessor();
+    InsideStats st;
+    for (std::size_t i = b; i < e; ++i) out[i] = impl_->inside(acc, in[i], st) ? 1 : 0;
+    from_grid.fetch_add(st.from_grid, std::memory_order_relaxed);
+    exact.fetch_add(st.exact, std::memory_order_relaxed);
+  });
+  if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid::inside_many: cancelled"};
+  if (stats) *stats = {from_grid.load(), exact.load()};
+  return Status::ok();
+}
+
+}  // namespace atelier
