@@ -1,11 +1,19 @@
 #include "systems/makehuman_body.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <iomanip>
+#include <optional>
+#include <sstream>
 #include <stdexcept>
 
 #include "engine/parallel.h"
 #include "engine/random.h"
 #include "engine/status.h"
+#include "storage/builder.h"
+#include "systems/mesh_section.h"
 
 namespace atelier::makehuman {
 
@@ -139,6 +147,12 @@ HumanLibrary HumanLibrary::load(const std::filesystem::path& dir, const ExecCont
   };
   load_all(macro_files, lib.macro_);
   load_all(measure_files, lib.measure_);
+  if (fs::exists(dir / "measures.json")) lib.measures_ = read_measures(dir / "measures.json", nv);
+  if (const auto* body = lib.base_.group("body")) {
+    for (auto v : body->face_nodes) lib.skin_vertices_ = std::max(lib.skin_vertices_, v + 1);
+  } else {
+    throw Error(Status(ErrorCode::kParse, (dir / "base.obj").string() + ": no 'body' group"));
+  }
   // Check every macro name parses now, not at build time.
   MacroParams probe;
   for (const auto& t : lib.macro_) (void)macro_target_weight(t.name, probe);
@@ -178,6 +192,310 @@ void HumanLibrary::build(const MacroParams& p, std::span<Vec3f> out) const {
   for (const auto& [t, w] : active_targets(p)) {
     const float wf = static_cast<float>(w);
     for (std::size_t k = 0; k < t->index.size(); ++k) out[t->index[k]] += wf * t->delta[k];
+  }
+}
+
+
+// --------------------------------------------------------- reference body
+
+namespace {
+
+// Mirror partner of every skin vertex across x = 0 (nearest vertex to the
+// reflected position, through a uniform hash grid).
+std::vector<std::uint32_t> mirror_map(std::span<const Vec3d> p) {
+  const double cell = 0.01;  // metres
+  std::map<std::array<long, 3>, std::vector<std::uint32_t>> grid;
+  auto key = [&](const Vec3d& q) {
+    return std::array<long, 3>{static_cast<long>(std::floor(q.x() / cell)), static_cast<long>(std::floor(q.y() / cell)),
+                               static_cast<long>(std::floor(q.z() / cell))};
+  };
+  for (std::uint32_t i = 0; i < p.size(); ++i) grid[key(p[i])].push_back(i);
+  std::vector<std::uint32_t> out(p.size());
+  for (std::uint32_t i = 0; i < p.size(); ++i) {
+    const Vec3d q(-p[i].x(), p[i].y(), p[i].z());
+    const auto k = key(q);
+    double best = std::numeric_limits<double>::infinity();
+    std::uint32_t bi = i;
+    for (long dx = -1; dx <= 1; ++dx)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dz = -1; dz <= 1; ++dz) {
+          auto it = grid.find({k[0] + dx, k[1] + dy, k[2] + dz});
+          if (it == grid.end()) continue;
+          for (auto j : it->second) {
+            const double d = (p[j] - q).squaredNorm();
+            if (d < best || (d == best && j < bi)) best = d, bi = j;
+          }
+        }
+    out[i] = bi;
+  }
+  return out;
+}
+
+SurfaceLocation vertex_location(std::uint32_t v) {
+  SurfaceLocation l;
+  l.kind = AttribNodeKind::kVertex;
+  l.element = v;
+  return l;
+}
+
+// Point at parameter t on the loop segment a->b: on the mesh edge if there is
+// one, else at the nearer vertex.
+SurfaceLocation segment_location(const Model& m, std::uint32_t a, std::uint32_t b, double t) {
+  const HalfedgeIdx h = m.find_halfedge(NodeIdx{a}, NodeIdx{b});
+  if (!h.valid()) return vertex_location(t < 0.5 ? a : b);
+  SurfaceLocation l;
+  l.kind = AttribNodeKind::kEdge;
+  l.element = h.value;
+  l.param = Vec3d(t, 0, 0);
+  return l;
+}
+
+// Crossing of a closed vertex loop with the plane n.x = d, restricted to
+// points where `accept` holds; the first such crossing in loop order.
+bool loop_crossing(const Model& m, std::span<const std::uint32_t> loop, std::span<const Vec3d> p, const Vec3d& n,
+                   double d, const std::function<bool(const Vec3d&)>& accept, SurfaceLocation& out) {
+  for (std::size_t k = 0; k < loop.size(); ++k) {
+    const std::uint32_t a = loop[k], b = loop[(k + 1) % loop.size()];
+    const double da = n.dot(p[a]) - d, db = n.dot(p[b]) - d;
+    if ((da < 0) == (db < 0)) continue;
+    const double t = da / (da - db);
+    if (!accept((1 - t) * p[a] + t * p[b])) continue;
+    out = segment_location(m, a, b, t);
+    return true;
+  }
+  return false;
+}
+
+Vec3d centroid(std::span<const std::uint32_t> loop, std::span<const Vec3d> p) {
+  Vec3d c = Vec3d::Zero();
+  for (auto v : loop) c += p[v];
+  return c / static_cast<double>(loop.size());
+}
+
+std::vector<SurfaceLocation> to_locations(std::span<const SectionPoint> pts) {
+  std::vector<SurfaceLocation> l;
+  for (const auto& q : pts) l.push_back(q.where);
+  return l;
+}
+
+void check(const Status& s) {
+  if (!s) throw Error(s);
+}
+
+}  // namespace
+
+ReferenceBody make_reference_body(const HumanLibrary& lib) {
+  std::vector<Vec3f> pos(lib.vertex_count());
+  lib.build(MacroParams{}, pos);
+  return make_reference_body(lib, pos);
+}
+
+ReferenceBody make_reference_body(const HumanLibrary& lib, std::span<const Vec3f> full) {
+  const std::uint32_t ns = lib.skin_vertex_count();
+  const auto* body = lib.base().group("body");
+  std::vector<Vec3d> p(ns);
+  for (std::uint32_t v = 0; v < ns; ++v) p[v] = kMakeHumanToMetres * full[v].cast<double>();
+  ReferenceBody rb;
+  auto s = add_polygon_surface(rb.model, "skin", {p, body->face_offsets, body->face_nodes});
+  if (!s) throw Error(s.status());
+  rb.skin = s->idx;
+  const Model& m = rb.model;
+
+  auto loop_of = [&](const std::string& name) {
+    auto it = lib.measures().find(name);
+    if (it == lib.measures().end()) throw Error(Status(ErrorCode::kParse, "measures.json has no loop '" + name + "'"));
+    std::vector<std::uint32_t> l;
+    for (auto v : it->second)
+      if (l.empty() || l.back() != v) l.push_back(v);
+    if (l.size() > 1 && l.front() == l.back()) l.pop_back();
+    return l;
+  };
+  std::int32_t next_id = 1;
+  std::map<std::string, std::vector<std::uint32_t>> loops;
+  auto add_loop = [&](const std::string& name, const std::vector<std::uint32_t>& l) {
+    std::vector<SurfaceLocation> path;
+    for (auto v : l) path.push_back(vertex_location(v));
+    check(add_feature_curve(rb, next_id++, name, path, true));
+    loops[name] = l;
+  };
+  const char* torso[][2] = {{"neck-circ", "neck"},           {"bust-circ", "bust"}, {"underbust-circ", "underbust"},
+                            {"waist-circ", "waist"},         {"hips-circ", "hip"}};
+  for (auto& t : torso) add_loop(t[1], loop_of(t[0]));
+  const auto mirror = mirror_map(p);
+  const char* limbs[][2] = {{"thigh-circ", "thigh"},       {"knee-circ", "knee"},   {"calf-circ", "calf"},
+                            {"ankle-circ", "ankle"},       {"upperarm-circ", "upperarm"}, {"wrist-circ", "wrist"}};
+  for (auto& t : limbs) {
+    auto l = loop_of(t[0]);
+    const bool left = centroid(l, p).x() > 0;  // +x is the body's left (y up, z front)
+    std::vector<std::uint32_t> r;
+    for (auto it = l.rbegin(); it != l.rend(); ++it) r.push_back(mirror[*it]);  // reversed keeps orientation
+    add_loop(std::string(left ? "left_" : "right_") + t[1], l);
+    add_loop(std::string(left ? "right_" : "left_") + t[1], r);
+  }
+
+  // Centre lines: the sagittal section, split at its top and its crotch.
+  const Vec3d neck_c = centroid(loops["neck"], p), waist_c = centroid(loops["waist"], p);
+  auto sag = plane_section(m, rb.skin, Vec3d(1, 0, 0), 0.0, p);
+  const SectionChain* loop = nullptr;
+  for (const auto& c : sag)
+    if (c.closed && (!loop || c.points.size() > loop->points.size())) loop = &c;
+  if (!loop) throw Error(Status(ErrorCode::kTopology, "the skin has no closed sagittal section"));
+  {
+    const auto& pts = loop->points;
+    const double y_crotch_limit = centroid(loops["hip"], p).y();
+    // Front and back arcs below the neck and above the crotch: walk from the
+    // front-most / back-most point at waist height up and down.
+    auto arc = [&](bool front) {
+      std::size_t best = 0;
+      double bd = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const double dz = front ? pts[i].p.z() - waist_c.z() : waist_c.z() - pts[i].p.z();
+        if (dz <= 0) continue;
+        const double dy = std::abs(pts[i].p.y() - waist_c.y());
+        if (dy < bd) bd = dy, best = i;
+      }
+      const std::size_t n = pts.size();
+      auto in_range = [&](std::size_t i) {
+        const double y = pts[i].p.y();
+        const double dz = front ? pts[i].p.z() - neck_c.z() : neck_c.z() - pts[i].p.z();
+        return y <= neck_c.y() && y >= y_crotch_limit - 0.12 && dz > -0.05;
+      };
+      // Direction along which y increases from `best`.
+      const int up = pts[(best + 1) % n].p.y() > pts[best].p.y() ? 1 : -1;
+      std::size_t top = best, bot = best;
+      for (std::size_t k = 1; k < n; ++k) {
+        const std::size_t i = (best + n + up * static_cast<long>(k)) % n;
+        if (!in_range(i)) break;
+        top = i;
+      }
+      for (std::size_t k = 1; k < n; ++k) {
+        const std::size_t i = (best + n - up * static_cast<long>(k)) % n;
+        if (!in_range(i)) break;
+        bot = i;
+      }
+      std::vector<SectionPoint> out;
+      for (std::size_t i = top;; i = (i + n - up) % n) {  // top to bottom
+        out.push_back(pts[i]);
+        if (i == bot) break;
+      }
+      return out;
+    };
+    auto front = arc(true), back = arc(false);
+    check(add_feature_curve(rb, next_id++, "centre_front", to_locations(front), false));
+    check(add_feature_curve(rb, next_id++, "centre_back", to_locations(back), false));
+  }
+
+  // Side lines: the coronal section through the waist centroid.
+  const double y_top = centroid(loops["bust"], p).y() + 0.5 * (centroid(loops["bust"], p).y() -
+                                                               centroid(loops["underbust"], p).y());
+  const double y_bot = centroid(loops["hip"], p).y();
+  auto cor = plane_section(m, rb.skin, Vec3d(0, 0, 1), waist_c.z(), p);
+  for (int sgn : {+1, -1}) {
+    // Seed: the waist loop's outermost point on this side.
+    Vec3d seed = waist_c;
+    for (auto v : loops["waist"])
+      if (sgn * p[v].x() > sgn * seed.x()) seed = p[v];
+    const SectionChain* best_c = nullptr;
+    std::size_t best_i = 0;
+    double bd = std::numeric_limits<double>::infinity();
+    for (const auto& c : cor)
+      for (std::size_t i = 0; i < c.points.size(); ++i) {
+        const double dd = (c.points[i].p - seed).squaredNorm();
+        if (dd < bd) bd = dd, best_c = &c, best_i = i;
+      }
+    if (!best_c) throw Error(Status(ErrorCode::kTopology, "no coronal section through the waist"));
+    const auto& pts = best_c->points;
+    const std::size_t n = pts.size();
+    auto step = [&](std::size_t i, int dir) -> std::optional<std::size_t> {
+      if (!best_c->closed && ((dir < 0 && i == 0) || (dir > 0 && i + 1 == n))) return std::nullopt;
+      return (i + n + dir) % n;
+    };
+    const int up = pts[*step(best_i, 1)].p.y() > pts[best_i].p.y() ? 1 : -1;
+    std::size_t top = best_i, bot = best_i;
+    for (auto i = step(best_i, up); i && pts[*i].p.y() <= y_top && sgn * pts[*i].p.x() > 0; i = step(*i, up)) top = *i;
+    for (auto i = step(best_i, -up); i && pts[*i].p.y() >= y_bot && sgn * pts[*i].p.x() > 0; i = step(*i, -up))
+      bot = *i;
+    std::vector<SectionPoint> line;
+    for (std::size_t i = top;; i = (i + n - up) % n) {
+      line.push_back(pts[i]);
+      if (i == bot) break;
+    }
+    check(add_feature_curve(rb, next_id++, sgn > 0 ? "left_side" : "right_side", to_locations(line), false));
+  }
+
+  // Feature points: torso girths x centre and side lines.
+  std::int32_t pid = 1;
+  for (const char* g : {"neck", "bust", "underbust", "waist", "hip"}) {
+    const auto& l = loops[g];
+    const Vec3d c = centroid(l, p);
+    const std::int32_t gid = rb.find_curve(g)->id;
+    struct Line {
+      const char* name;
+      Vec3d n;
+      double d;
+      std::function<bool(const Vec3d&)> accept;
+    };
+    const std::vector<Line> lines = {
+        {"centre_front", Vec3d(1, 0, 0), 0.0, [&](const Vec3d& q) { return q.z() > c.z(); }},
+        {"centre_back", Vec3d(1, 0, 0), 0.0, [&](const Vec3d& q) { return q.z() < c.z(); }},
+        {"left_side", Vec3d(0, 0, 1), waist_c.z(), [&](const Vec3d& q) { return q.x() > 0; }},
+        {"right_side", Vec3d(0, 0, 1), waist_c.z(), [&](const Vec3d& q) { return q.x() < 0; }},
+    };
+    for (const auto& line : lines) {
+      const bool side = line.name[0] == 'l' || line.name[0] == 'r';
+      if (side && (c.y() > y_top || c.y() < y_bot - 1e-9)) continue;  // the side lines do not reach this girth
+      SurfaceLocation where;
+      if (!loop_crossing(m, l, p, line.n, line.d, line.accept, where)) continue;
+      check(add_feature_point(rb, pid++, std::string(g) + "_x_" + line.name, where, gid,
+                              rb.find_curve(line.name)->id));
+    }
+  }
+  return rb;
+}
+
+// ------------------------------------------------------------------- source
+
+MakeHumanSource::MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::vector<MacroParams> params,
+                                 std::shared_ptr<const ReferenceBody> reference)
+    : lib_(std::move(lib)), params_(std::move(params)), reference_(std::move(reference)) {}
+
+std::string MakeHumanSource::body_name(std::size_t i) const {
+  std::ostringstream s;
+  s << "makehuman-" << std::setw(5) << std::setfill('0') << i;
+  return s.str();
+}
+
+std::vector<Vec3d> MakeHumanSource::skin_positions(std::size_t i) const {
+  std::vector<Vec3f> full(lib_->vertex_count());
+  lib_->build(params_[i], full);
+  std::vector<Vec3d> p(reference_->model.nodes.slots.capacity(), Vec3d::Zero());
+  for (std::size_t v = 0; v < p.size(); ++v) p[v] = kMakeHumanToMetres * full[v].cast<double>();
+  return p;
+}
+
+void MakeHumanSource::generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
+                               const ExecContext& ctx) const {
+  out.clear();
+  const std::size_t end = std::min(params_.size(), first + count);
+  if (first >= end) return;
+  std::vector<std::vector<Vec3d>> bodies(end - first);
+  std::vector<std::string> errors(end - first);
+  ExecContext c = ctx;
+  c.sequential_threshold = 2;
+  c.grain = 1;
+  par::for_each_n(c, end - first, [&](std::size_t k) {
+    try {
+      bodies[k] = skin_positions(first + k);
+    } catch (const std::exception& e) {
+      errors[k] = e.what();
+    }
+  });
+  out.reserve(end - first);
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    const std::size_t i = first + k;
+    Status s = errors[k].empty() ? out.add(body_name(i), std::span<const Vec3d>(bodies[k]))
+                                 : Status(ErrorCode::kInvalidArgument, errors[k]);
+    if (!s) failures.push_back({i, body_name(i), s});
   }
 }
 

@@ -6,6 +6,8 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <span>
 #include <string>
 #include <utility>
@@ -14,6 +16,8 @@
 #include "engine/exec_context.h"
 #include "engine/math.h"
 #include "io/makehuman.h"
+#include "systems/body_set.h"
+#include "systems/reference_body.h"
 
 namespace atelier::makehuman {
 
@@ -62,6 +66,11 @@ class HumanLibrary {
   /// fixed order (macro targets by name, then measure targets).
   [[nodiscard]] std::vector<std::pair<const Target*, double>> active_targets(const MacroParams& p) const;
 
+  /// Measurement loops and chains of measures.json (empty if the file is absent).
+  [[nodiscard]] const std::map<std::string, std::vector<std::uint32_t>>& measures() const noexcept { return measures_; }
+  /// Number of skin vertices: the `body` group uses vertices [0, skin_vertex_count()).
+  [[nodiscard]] std::uint32_t skin_vertex_count() const noexcept { return skin_vertices_; }
+
   /// out = base + sum(weight * target) over all vertices of base.obj.
   /// Throws std::invalid_argument for an unknown measure modifier name.
   void build(const MacroParams& p, std::span<Vec3f> out) const;
@@ -70,6 +79,42 @@ class HumanLibrary {
   BaseMesh base_;
   std::vector<Target> macro_;    // sorted by name
   std::vector<Target> measure_;  // sorted by name
+  std::map<std::string, std::vector<std::uint32_t>> measures_;
+  std::uint32_t skin_vertices_ = 0;
+};
+
+/// Base-mesh units (decimetres) to metres.
+inline constexpr double kMakeHumanToMetres = 0.1;
+
+/// The MakeHuman skin as a reference body (node i = base.obj vertex i, in
+/// metres) for the given full-mesh positions (base.obj units), with feature
+/// curves: the girth loops of measures.json (torso: neck, bust, underbust,
+/// waist, hip; limbs on the left side as in the file, mirrored for the
+/// right: thigh, knee, calf, ankle, upperarm, wrist), centre_front and
+/// centre_back (the sagittal section between neck and crotch), left_side and
+/// right_side (the coronal section through the waist, from above the bust to
+/// the hip); feature points where torso girths cross those lines, named
+/// "<girth>_x_<line>". Throws atelier::Error if the loops are missing.
+[[nodiscard]] ReferenceBody make_reference_body(const HumanLibrary& lib, std::span<const Vec3f> positions);
+[[nodiscard]] ReferenceBody make_reference_body(const HumanLibrary& lib);  // the default body
+
+/// MakeHuman bodies for a list of macro parameters, generated on demand.
+class MakeHumanSource final : public BodySource {
+ public:
+  MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::vector<MacroParams> params,
+                  std::shared_ptr<const ReferenceBody> reference);
+  [[nodiscard]] std::size_t size() const override { return params_.size(); }
+  [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
+  [[nodiscard]] std::string body_name(std::size_t i) const override;
+  void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
+                const ExecContext& ctx) const override;
+  /// Skin positions (metres, indexed by node) of body i.
+  [[nodiscard]] std::vector<Vec3d> skin_positions(std::size_t i) const;
+
+ private:
+  std::shared_ptr<const HumanLibrary> lib_;
+  std::vector<MacroParams> params_;
+  std::shared_ptr<const ReferenceBody> reference_;
 };
 
 }  // namespace atelier::makehuman
