@@ -449,7 +449,7 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
   // every size is known to be right.
   {
     In& s = sec[1];
-    s.need_items(nn, 96, "nodes");
+    s.need_items(nn, 76, "nodes");
     s.column(m.nodes.position, nn);
     s.column(m.nodes.position_backup, nn);
     s.column(m.nodes.uv, nn);
@@ -463,7 +463,7 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
   }
   {
     In& s = sec[2];
-    s.need_items(ne, 5 + 2 * 24, "edges");
+    s.need_items(ne, 5 + 2 * 24, "edges");  // 53 bytes per edge
     s.column(m.edges.flags, ne);
     s.column(m.edges.mesh_edge, ne);
     s.column(m.halfedges.tail, nh);
