@@ -3,6 +3,7 @@
 // random build/undo property test.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <functional>
 #include <random>
 
@@ -359,6 +360,7 @@ struct RandomBuilder {
   std::mt19937 rng;
   std::vector<std::function<Status(Model&)>> undo;
   int done = 0;
+  std::array<int, 14> per_op{};
 
   template <class T>
   T pick(const std::vector<T>& v) {
@@ -536,9 +538,12 @@ struct RandomBuilder {
     }
     if (s) {
       ++done;
+      ++per_op[op];
     } else {
       ASSERT_NE(s.code(), ErrorCode::kInternal) << s.message();
-      if (check_unchanged) ASSERT_EQ(diff_tables(before, m), "") << "failed op " << op << " changed the model: " << s.message();
+      if (check_unchanged) {
+        ASSERT_EQ(diff_tables(before, m), "") << "failed op " << op << " changed the model: " << s.message();
+      }
     }
     const Status v = validate(m);
     ASSERT_TRUE(v) << "after op " << op << " (step " << done << "): " << v.to_string();
@@ -560,6 +565,14 @@ TEST(Euler, RandomBuildAndUndo) {
       if (HasFatalFailure()) return;
     }
     EXPECT_GE(b.done, 1500) << "seed " << seed;
+    // Every kind of operation really happened (0 vertex, 1-2 vertex-edge,
+    // 3-4 edges, 5-6 faces, 7 rings, 8 splits, 9-11 kills, 12-13 merges).
+    for (int op : {0, 1, 3, 5, 7, 8, 9, 10, 11, 12}) EXPECT_GT(b.per_op[op], 5) << "seed " << seed << " op " << op;
+    RecordProperty("ops_seed" + std::to_string(seed), [&] {
+      std::string o;
+      for (int c : b.per_op) o += std::to_string(c) + " ";
+      return o;
+    }());
     const auto t = count_topology(m);
     EXPECT_GT(t.faces, 2);  // the walk really built faces
     for (auto it = b.undo.rbegin(); it != b.undo.rend(); ++it) {
