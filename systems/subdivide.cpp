@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <sstream>
 
 #include "engine/parallel.h"
@@ -196,12 +197,45 @@ Expected<SubdivisionMap> subdivide_uniform(Model& m, const ExecContext& ctx) {
   const Layout L = make_layout(m, ctx);
   const std::uint32_t V = L.V, E = L.E, F = L.F;
 
-  // Grow every column once.
+  // Grow every column once. Most of the split's time is the kernel
+  // zero-filling the new pages, so the columns are grown concurrently (one
+  // task per column, largest first); sync_*_columns then only grows the
+  // property columns.
   m.nodes.slots.append_bulk(E + L.centres);
-  m.sync_node_columns();
   m.edges.slots.append_bulk(E + L.children + L.centres);
-  m.sync_edge_columns();
   m.faces.slots.append_bulk(L.children);
+  std::vector<HalfedgeIdx> mid_out;
+  {
+    const std::size_t nn = m.nodes.slots.capacity(), ne = m.edges.slots.capacity(), nf = m.faces.slots.capacity();
+    auto& H = m.halfedges;
+    auto& N = m.nodes;
+    const std::array<std::function<void()>, 18> grow = {
+        [&] { N.position.resize(nn, Vec3d::Zero()); },
+        [&] { N.position_backup.resize(nn, Vec3d::Zero()); },
+        [&] { N.uv.resize(nn, Vec2d::Zero()); },
+        [&] { H.tail.resize(2 * ne); },
+        [&] { H.face.resize(2 * ne); },
+        [&] { H.next.resize(2 * ne); },
+        [&] { H.prev.resize(2 * ne); },
+        [&] { H.vnext.resize(2 * ne); },
+        [&] { H.vprev.resize(2 * ne); },
+        [&] { mid_out.resize(4 * std::size_t{E}); },
+        [&] { m.edges.mesh_edge.resize(ne); },
+        [&] { m.faces.halfedge.resize(nf); },
+        [&] { m.faces.surface.resize(nf); },
+        [&] { N.out.resize(nn); },
+        [&] { N.surface.resize(nn); },
+        [&] { N.in_face.resize(nn); },
+        [&] { m.edges.flags.resize(ne, 0); },
+        [&] { m.faces.flags.resize(nf, 0); },
+    };
+    ExecContext jobs = ctx;
+    jobs.sequential_threshold = 2;
+    jobs.grain = 1;
+    par::for_each_n(jobs, grow.size(), [&](std::size_t i) { grow[i](); });
+  }
+  m.sync_node_columns();
+  m.sync_edge_columns();
   m.sync_face_columns();
 
   auto& H = m.halfedges;
@@ -237,7 +271,6 @@ Expected<SubdivisionMap> subdivide_uniform(Model& m, const ExecContext& ctx) {
 
   // 2. Faces. Interior halfedges leaving each new midpoint are noted in
   // mid_out (two per old halfedge) for the midpoint rings of step 3.
-  std::vector<HalfedgeIdx> mid_out(4 * std::size_t{E});
   auto& FT = m.faces;
   par::for_each_n(ctx, F, [&](std::size_t f) {
     const std::uint32_t n = L.degree[f];
