@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "io/obj.h"
+#include "support/shapes.h"
 #include "storage/builder.h"
 #include "storage/topology.h"
 #include "systems/body_set.h"
@@ -25,33 +26,7 @@ fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
-// A closed UV-sphere-like body (quads + triangle caps) as a reference body.
-std::shared_ptr<ReferenceBody> ball(int nu = 12, int nv = 8) {
-  std::vector<Vec3d> p;
-  std::vector<std::uint32_t> off{0}, idx;
-  p.emplace_back(0, 0, 1);
-  for (int j = 1; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      const double th = M_PI * j / nv, ph = 2 * M_PI * i / nu;
-      p.emplace_back(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
-    }
-  p.emplace_back(0, 0, -1);
-  auto ring = [&](int j, int i) { return static_cast<std::uint32_t>(1 + (j - 1) * nu + (i % nu)); };
-  auto face = [&](std::initializer_list<std::uint32_t> f) {
-    idx.insert(idx.end(), f);
-    off.push_back(static_cast<std::uint32_t>(idx.size()));
-  };
-  for (int i = 0; i < nu; ++i) face({0, ring(1, i), ring(1, i + 1)});
-  for (int j = 1; j + 1 < nv; ++j)
-    for (int i = 0; i < nu; ++i) face({ring(j, i), ring(j + 1, i), ring(j + 1, i + 1), ring(j, i + 1)});
-  const auto south = static_cast<std::uint32_t>(p.size() - 1);
-  for (int i = 0; i < nu; ++i) face({south, ring(nv - 1, i + 1), ring(nv - 1, i)});
-  auto rb = std::make_shared<ReferenceBody>();
-  auto s = add_polygon_surface(rb->model, "skin", {p, off, idx});
-  EXPECT_TRUE(s) << s.status().to_string();
-  rb->skin = s->idx;
-  return rb;
-}
+std::shared_ptr<ReferenceBody> ball(int nu = 12, int nv = 8) { return shapes::body_from(shapes::uv_sphere(nu, nv)); }
 
 }  // namespace
 

@@ -1,0 +1,329 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "engine/random.h"
+#include "support/shapes.h"
+#include "systems/body_set.h"
+#include "systems/detail_template.h"
+#include "systems/makehuman_body.h"
+
+using namespace atelier;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Body {
+  std::shared_ptr<ReferenceBody> ref;
+  BodyPolygons poly;
+  std::vector<Vec3d> pos;
+};
+
+Body sphere_body(int nu = 40, int nv = 24) {
+  Body b;
+  b.ref = shapes::body_from(shapes::uv_sphere(nu, nv));
+  b.poly = BodyPolygons::from_model(b.ref->model);
+  b.pos = skin_positions(*b.ref);
+  return b;
+}
+
+// Garment-like points: on a shell 2-8 cm outside the unit sphere.
+std::vector<Vec3d> shell_points(std::size_t n, std::uint64_t seed) {
+  SplitMix64 r(seed);
+  std::vector<Vec3d> g;
+  while (g.size() < n) {
+    Vec3d d(r.normal(), r.normal(), r.normal());
+    if (d.norm() < 1e-6) continue;
+    g.push_back(d.normalized() * r.uniform(1.02, 1.08));
+  }
+  return g;
+}
+
+std::vector<Vec3d> centroids_of(const Body& b) {
+  PolygonFrames fr;
+  compute_frames(b.poly, b.pos, fr);
+  std::vector<Vec3d> c;
+  for (auto& x : fr.centroid) c.push_back(x.cast<double>());
+  return c;
+}
+
+fs::path tmp_dir() {
+  const char* env = std::getenv("ATELIER_TMP");
+  fs::path d = (env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests") / "detail";
+  fs::create_directories(d);
+  return d;
+}
+
+}  // namespace
+
+TEST(PPolygonSearch, EqualsBruteForceOnRandomPoints) {
+  SplitMix64 r(3);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<Vec3d> c(3000);
+    for (auto& p : c) p = Vec3d(r.uniform(-1, 1), r.uniform(-0.5, 0.5), r.uniform(0, 2));
+    // Exact duplicates and lattice points make ties, which must break by index.
+    for (int i = 0; i < 200; ++i) c[2000 + i] = c[i];
+    for (int i = 0; i < 300; ++i) c[2300 + i] = Vec3d(i % 10, (i / 10) % 5, i / 50) * 0.1;
+    std::vector<std::uint8_t> skip(c.size(), 0);
+    for (std::size_t i = 0; i < c.size(); i += 17) skip[i] = 1;
+    for (std::size_t k : {1u, 7u, 30u, 150u}) {
+      CentroidGrid g;
+      g.build(c, skip, k);
+      std::vector<std::uint32_t> got, want;
+      std::vector<std::pair<double, std::uint32_t>> scratch;
+      for (int q = 0; q < 300; ++q) {
+        // Queries inside, on lattice points, and far outside the box.
+        Vec3d p = q % 3 == 0 ? c[2300 + q % 300] : Vec3d(r.uniform(-3, 3), r.uniform(-3, 3), r.uniform(-3, 5));
+        g.nearest(p, k, got, scratch);
+        nearest_brute_force(c, skip, p, k, want);
+        ASSERT_EQ(got, want) << "k=" << k << " query " << q;
+      }
+    }
+  }
+}
+
+TEST(DetailTemplate, EncodeDecodeOnTheSameBodyReturnsTheGarment) {
+  const Body b = sphere_body();
+  const auto g = shell_points(2000, 5);
+  for (bool single : {false, true}) {
+    DetailParams prm;
+    prm.single_polygon = single;
+    auto enc = encode_detail(b.poly, b.pos, g, prm);
+    ASSERT_TRUE(enc) << enc.status().to_string();
+    EXPECT_EQ(enc->entries(), g.size() * (single ? 1 : static_cast<std::size_t>(std::lround(b.poly.size() / 100.0))));
+    std::vector<Vec3d> out(g.size());
+    ASSERT_TRUE(decode_detail(*enc, b.poly, b.pos, out));
+    double worst = 0;
+    for (std::size_t v = 0; v < g.size(); ++v) worst = std::max(worst, (out[v] - g[v]).norm());
+    EXPECT_LT(worst, 2e-6) << (single ? "single" : "multi");  // float precision at unit scale
+  }
+}
+
+TEST(DetailTemplate, RigidMotionOfTheBodyMovesTheGarmentRigidly) {
+  const Body b = sphere_body();
+  const auto g = shell_points(1000, 6);
+  auto enc = encode_detail(b.poly, b.pos, g);
+  ASSERT_TRUE(enc);
+  const Mat3d R = Eigen::AngleAxisd(0.7, Vec3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Vec3d t(0.3, -2, 5);
+  std::vector<Vec3d> moved(b.pos.size());
+  for (std::size_t v = 0; v < moved.size(); ++v) moved[v] = R * b.pos[v] + t;
+  std::vector<Vec3d> out(g.size());
+  ASSERT_TRUE(decode_detail(*enc, b.poly, moved, out));
+  for (std::size_t v = 0; v < g.size(); ++v) ASSERT_LT((out[v] - (R * g[v] + t)).norm(), 1e-5);
+}
+
+TEST(DetailTemplate, MultiplePPolygonsKeepSymmetryWhereOneDoesNot) {
+  // Seed 001 Fig. 17: a vertex on the symmetry plane of a symmetric body,
+  // decoded on a symmetrically deformed body, stays on the plane only when
+  // blended over several p-polygons.
+  const Body b = sphere_body(50, 24);  // nodes on x = 0, no centroid on it
+  std::vector<Vec3d> g;
+  for (int i = 0; i < 40; ++i) {
+    const double th = 0.3 + 2.5 * i / 40.0;
+    g.push_back(1.05 * Vec3d(0, std::sin(th), std::cos(th)));  // on the plane x = 0
+  }
+  std::vector<Vec3d> bent(b.pos.size());
+  for (std::size_t v = 0; v < bent.size(); ++v) {  // mirror-symmetric, non-affine ("legs spread")
+    const Vec3d& p = b.pos[v];
+    bent[v] = Vec3d(p.x() * (1.0 + 0.6 * std::max(0.0, -p.z())) + 0.2 * p.x() * p.x() * p.x(), p.y(), p.z());
+  }
+  auto off_plane = [&](bool single) {
+    DetailParams prm;
+    prm.single_polygon = single;
+    prm.polygons_per_vertex = 24;
+    auto enc = encode_detail(b.poly, b.pos, g, prm);
+    EXPECT_TRUE(enc);
+    std::vector<Vec3d> out(g.size());
+    EXPECT_TRUE(decode_detail(*enc, b.poly, bent, out));
+    double worst = 0;
+    for (const auto& q : out) worst = std::max(worst, std::abs(q.x()));
+    return worst;
+  };
+  const double multi = off_plane(false), single = off_plane(true);
+  EXPECT_GT(single, 1e-3);
+  EXPECT_LT(multi, 1e-5);
+  // The paper's frames (Y anchored at each polygon's first corner) depend on
+  // vertex numbering and lose the symmetry under this non-affine change.
+  DetailParams paper;
+  paper.fitted_frames = false;
+  paper.tapered_weights = false;
+  paper.polygons_per_vertex = 24;
+  auto enc = encode_detail(b.poly, b.pos, g, paper);
+  ASSERT_TRUE(enc);
+  std::vector<Vec3d> out(g.size());
+  ASSERT_TRUE(decode_detail(*enc, b.poly, bent, out));
+  double paper_off = 0;
+  for (const auto& q : out) paper_off = std::max(paper_off, std::abs(q.x()));
+  EXPECT_GT(paper_off, 100 * multi);
+  std::cout << "off-plane drift: fitted frames " << multi << ", eq. (8) frames " << paper_off << ", single " << single
+            << "\n";
+}
+
+TEST(DetailTemplate, DegeneratePolygonsAreNeverPPolygons) {
+  shapes::Soup s = shapes::uv_sphere(16, 10);
+  // Collapse one quad to a segment: move two of its corners onto the others.
+  const std::uint32_t f = 40;
+  const std::uint32_t* q = s.idx.data() + s.off[f];
+  s.p[q[1]] = s.p[q[0]];
+  s.p[q[2]] = s.p[q[3]];
+  Body b;
+  b.ref = shapes::body_from(s);
+  b.poly = BodyPolygons::from_model(b.ref->model);
+  b.pos = skin_positions(*b.ref);
+  PolygonFrames fr;
+  compute_frames(b.poly, b.pos, fr);
+  std::size_t degenerate = 0;
+  for (auto d : fr.degenerate) degenerate += d;
+  EXPECT_GE(degenerate, 1u);
+  // A garment vertex right at the degenerate polygon's centroid.
+  std::vector<Vec3d> g = {fr.centroid[f].cast<double>() * 1.01};
+  DetailParams prm;
+  prm.polygons_per_vertex = 5;
+  auto enc = encode_detail(b.poly, b.pos, g, prm);
+  ASSERT_TRUE(enc);
+  for (auto p : enc->polygon) EXPECT_FALSE(fr.degenerate[p]) << "degenerate polygon " << p << " used";
+}
+
+TEST(DetailTemplate, ABodyWithAnotherTopologyIsRefused) {
+  const Body a = sphere_body(40, 24), b = sphere_body(36, 24);
+  auto enc = encode_detail(a.poly, a.pos, shell_points(10, 1));
+  ASSERT_TRUE(enc);
+  std::vector<Vec3d> out(10);
+  Status s = decode_detail(*enc, b.poly, b.pos, out);
+  EXPECT_EQ(s.code(), ErrorCode::kMismatch);
+  EXPECT_NE(s.message().find("topology"), std::string::npos);
+  std::vector<Vec3d> g = {Vec3d(0, 0, std::nan(""))};
+  auto bad = encode_detail(a.poly, a.pos, g);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.status().message().find("garment vertex 0"), std::string::npos);
+}
+
+TEST(DetailTemplate, BatchedDecodingMatchesSingleAndIsDeterministic) {
+  const Body b = sphere_body();
+  const auto g = shell_points(1500, 8);
+  auto enc = encode_detail(b.poly, b.pos, g);
+  ASSERT_TRUE(enc);
+  BodySet set(b.ref);
+  SplitMix64 r(4);
+  std::vector<std::vector<Vec3d>> bodies;
+  for (int k = 0; k < 21; ++k) {  // not a multiple of the batch width
+    std::vector<Vec3d> p(b.pos.size());
+    const Vec3d s(r.uniform(0.8, 1.2), r.uniform(0.8, 1.2), r.uniform(0.8, 1.2));
+    for (std::size_t v = 0; v < p.size(); ++v) p[v] = b.pos[v].cwiseProduct(s) + Vec3d(0, 0, 0.1 * std::sin(3 * b.pos[v].x()));
+    ASSERT_TRUE(set.add("b" + std::to_string(k), std::span<const Vec3d>(p)));
+    bodies.push_back(set.positions(set.size() - 1));  // what the set stores (float)
+  }
+  std::vector<Vec3f> batch1(21 * g.size()), batch2(21 * g.size());
+  ExecContext one = ExecContext::sequential(), two;
+  two.threads = 2;
+  two.sequential_threshold = 16;
+  ASSERT_TRUE(decode_detail_batch(*enc, b.poly, set, 0, 21, batch1, one));
+  ASSERT_TRUE(decode_detail_batch(*enc, b.poly, set, 0, 21, batch2, two));
+  EXPECT_EQ(std::memcmp(batch1.data(), batch2.data(), batch1.size() * sizeof(Vec3f)), 0);
+  std::vector<Vec3d> single(g.size());
+  for (std::size_t k = 0; k < 21; ++k) {
+    ASSERT_TRUE(decode_detail(*enc, b.poly, bodies[k], single));
+    for (std::size_t v = 0; v < g.size(); ++v)
+      ASSERT_LT((batch1[k * g.size() + v].cast<double>() - single[v]).norm(), 1e-5) << k << " " << v;
+  }
+}
+
+TEST(DetailTemplate, FileRoundTripAndCorruption) {
+  const Body b = sphere_body();
+  auto enc = encode_detail(b.poly, b.pos, shell_points(300, 2));
+  ASSERT_TRUE(enc);
+  const fs::path p = tmp_dir() / "garment.atd";
+  write_detail(*enc, p);
+  const DetailEncoding back = read_detail(p);
+  EXPECT_EQ(back.polygon, enc->polygon);
+  EXPECT_EQ(back.a, enc->a);
+  EXPECT_EQ(back.d, enc->d);
+  EXPECT_EQ(back.topology_hash, enc->topology_hash);
+  EXPECT_EQ(back.reference_corners, enc->reference_corners);
+  EXPECT_EQ(fs::file_size(p), enc->bytes() + 8 + 4 + 4 + 4 + 8 + 8 + 8 + 8 + 8);
+  std::string bytes;
+  {
+    std::ifstream in(p, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  auto expect_error = [&](const std::string& content, const std::string& fragment) {
+    const fs::path bad = tmp_dir() / "bad.atd";
+    std::ofstream(bad, std::ios::binary) << content;
+    try {
+      (void)read_detail(bad);
+      FAIL() << "no error for " << fragment;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.atd"), std::string::npos);
+    }
+  };
+  expect_error(bytes.substr(0, bytes.size() / 2), "truncated");
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x40;
+  expect_error(flipped, "checksum");
+  expect_error("hello world, not a template", "bad magic");
+  // Writing into a missing folder fails cleanly and leaves nothing behind.
+  EXPECT_THROW(write_detail(*enc, tmp_dir() / "no" / "such" / "dir" / "x.atd"), Error);
+}
+
+namespace {
+fs::path mh_dir() { return fs::path(ATELIER_SHARED_DATA) / "makehuman"; }
+}  // namespace
+
+TEST(DetailTemplate, RealSkinPPolygonsEqualBruteForceAndHelpersRegenerate) {
+  if (!fs::exists(mh_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " << mh_dir();
+  auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(mh_dir()));
+  const ReferenceBody ref = makehuman::make_reference_body(*lib);
+  Body b;
+  b.poly = BodyPolygons::from_model(ref.model);
+  b.pos = skin_positions(ref);
+  EXPECT_EQ(b.poly.size(), 13378u);
+  // The tights helper as a garment on the default body.
+  std::vector<Vec3f> full(lib->vertex_count());
+  lib->build(makehuman::MacroParams{}, full);
+  const auto* tights = lib->base().group("helper-tights");
+  ASSERT_NE(tights, nullptr);
+  std::vector<std::uint32_t> verts(tights->face_nodes.begin(), tights->face_nodes.end());
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  std::vector<Vec3d> g;
+  for (auto v : verts) g.push_back(makehuman::kMakeHumanToMetres * full[v].cast<double>());
+  // p-polygon sets on the real skin equal brute force (a sample of vertices).
+  {
+    const auto c = centroids_of(b);
+    PolygonFrames fr;
+    compute_frames(b.poly, b.pos, fr);
+    CentroidGrid grid;
+    grid.build(c, fr.degenerate, 134);
+    std::vector<std::uint32_t> got, want;
+    std::vector<std::pair<double, std::uint32_t>> scratch;
+    for (std::size_t v = 0; v < g.size(); v += 37) {
+      grid.nearest(g[v], 134, got, scratch);
+      nearest_brute_force(c, fr.degenerate, g[v], 134, want);
+      ASSERT_EQ(got, want) << "vertex " << v;
+    }
+  }
+  auto enc = encode_detail(b.poly, b.pos, g);
+  ASSERT_TRUE(enc);
+  EXPECT_EQ(enc->entries() / g.size(), 134u);  // N_q = round(13378 / 100)
+  // On morphed bodies, the regenerated tights stay close to MakeHuman's own
+  // morphed helper (a ground truth: every target moves the helpers too).
+  auto params = makehuman::sample_adults(5, 11);
+  double worst_mean = 0;
+  for (const auto& p : params) {
+    lib->build(p, full);
+    std::vector<Vec3d> body(b.pos.size()), out(g.size());
+    for (std::size_t v = 0; v < body.size(); ++v) body[v] = makehuman::kMakeHumanToMetres * full[v].cast<double>();
+    ASSERT_TRUE(decode_detail(*enc, b.poly, body, out));
+    double sum = 0;
+    for (std::size_t i = 0; i < verts.size(); ++i)
+      sum += (out[i] - makehuman::kMakeHumanToMetres * full[verts[i]].cast<double>()).norm();
+    worst_mean = std::max(worst_mean, sum / verts.size());
+  }
+  EXPECT_LT(worst_mean, 0.01);  // mean error under 1 cm on every body
+  RecordProperty("tights_worst_mean_error_m", std::to_string(worst_mean));
+  std::cout << "tights regeneration: worst mean error over 5 bodies = " << worst_mean * 1000 << " mm\n";
+}
