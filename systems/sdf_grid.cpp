@@ -6,6 +6,7 @@
 #include <openvdb/tools/Prune.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <string>
@@ -64,6 +65,7 @@ struct SdfGrid::Impl {
   double h = 1.0, inv_h = 1.0;
   double exact_world = 0.0;  // exact band in world units
   double band_world = 0.0;   // half width in world units
+  std::vector<Box3d> walk_boxes;  // ROI boxes grown by 2h: where the band is complete
 
   [[nodiscard]] bool covers(const Vec3d& p) const noexcept {
     if (!roi) return true;
@@ -114,15 +116,73 @@ struct SdfGrid::Impl {
     return r.valid ? r.d : band_world;
   }
 
+  /// ROI grids, p outside the band: the sign of the first band voxel met
+  /// walking along a grid line from p's nearest voxel. Inside a ROI box
+  /// grown by 2h the band is complete (every voxel within w h of the body is
+  /// active, w >= 2), so a run of inactive voxels never crosses the surface:
+  /// a crossing between two neighbours would put both within h of it.
+  /// Returns -1 inside, +1 outside, 0 when undecided (walked out of the box).
+  template <class Accessor>
+  [[nodiscard]] int walk_sign(Accessor& acc, const Vec3d& p, const Box3d& box) const {
+    const vdb::Coord c0(static_cast<int>(std::lround(p.x() * inv_h)), static_cast<int>(std::lround(p.y() * inv_h)),
+                        static_cast<int>(std::lround(p.z() * inv_h)));
+    float v = 0.0f;
+    if (acc.probeValue(c0, v)) {
+      // |p - c0| <= (sqrt(3) / 2) h: no surface between them if |v| exceeds it.
+      if (std::abs(double(v)) > 0.87 * h) return v < 0.0f ? -1 : 1;
+      return 0;
+    }
+    const std::array<int, 3> lo_idx = {static_cast<int>(std::ceil(box.lo.x() * inv_h)),
+                                       static_cast<int>(std::ceil(box.lo.y() * inv_h)),
+                                       static_cast<int>(std::ceil(box.lo.z() * inv_h))};
+    const std::array<int, 3> hi_idx = {static_cast<int>(std::floor(box.hi.x() * inv_h)),
+                                       static_cast<int>(std::floor(box.hi.y() * inv_h)),
+                                       static_cast<int>(std::floor(box.hi.z() * inv_h))};
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int dir : {1, -1}) {
+        vdb::Coord c = c0;
+        for (;;) {
+          // Skip whole inactive tiles (8, 128 or 4096 voxels wide).
+          const int depth = acc.getValueDepth(c);
+          int step = 1;
+          if (depth < 3) step = depth == 2 ? 8 : depth == 1 ? 128 : 4096;
+          if (step > 1) {
+            const int x = c[axis];
+            const int base = (x >= 0 ? x / step : -((-x + step - 1) / step)) * step;  // floor to a multiple
+            c[axis] = dir > 0 ? base + step : base - 1;
+          } else {
+            c[axis] += dir;
+          }
+          if (c[axis] < lo_idx[axis] || c[axis] > hi_idx[axis]) break;
+          if (acc.probeValue(c, v)) return v < 0.0f ? -1 : 1;
+        }
+      }
+    }
+    return 0;
+  }
+
   template <class Accessor>
   [[nodiscard]] bool inside(Accessor& acc, const Vec3d& p, InsideStats& st) const {
     if (covers(p)) {
       const Probe r = trilinear(acc, p);
       // Full grids: outside the band the flood-filled tiles carry the sign.
-      // ROI grids have no valid flood fill (open sub-mesh): need the band.
+      // ROI grids have no valid flood fill (open sub-mesh): inside the band
+      // the trilinear value, outside it a walk to the band.
       if (r.valid && (!roi || r.all_active) && std::abs(r.d) >= exact_world) {
         ++st.from_grid;
         return r.d < 0.0;
+      }
+      if (r.valid && roi && !r.all_active) {
+        for (const Box3d& b : walk_boxes) {
+          if ((p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all()) {
+            const int s = walk_sign(acc, p, b);
+            if (s != 0) {
+              ++st.from_grid;
+              return s < 0;
+            }
+            break;
+          }
+        }
       }
     }
     ++st.exact;
@@ -148,8 +208,8 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
   if (!(params.voxel_size > 0.0) || !std::isfinite(params.voxel_size)) {
     return {ErrorCode::kInvalidArgument, "SdfGrid: voxel size must be positive, got " + std::to_string(params.voxel_size)};
   }
-  if (!(params.half_width >= 1.0) || !std::isfinite(params.half_width)) {
-    return {ErrorCode::kInvalidArgument, "SdfGrid: half width must be at least 1 voxel, got " +
+  if (!(params.half_width >= 2.0) || !std::isfinite(params.half_width)) {
+    return {ErrorCode::kInvalidArgument, "SdfGrid: half width must be at least 2 voxels, got " +
                                              std::to_string(params.half_width)};
   }
   if (!(params.exact_band >= 0.0) || !std::isfinite(params.exact_band)) {
@@ -187,7 +247,10 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
   std::vector<Box3d> grown;
   std::vector<std::uint32_t> sel;
   if (im->roi) {
-    for (const Box3d& b : params.roi) grown.push_back(grow(b, grow_by));
+    for (const Box3d& b : params.roi) {
+      grown.push_back(grow(b, grow_by));
+      im->walk_boxes.push_back(grow(b, 2.0 * params.voxel_size));
+    }
     std::vector<std::uint8_t> keep(tris.size(), 0);
     par::for_each_n(ctx, tris.size(), [&](std::size_t t) {
       Box3d tb;

@@ -27,8 +27,11 @@
 // each band voxel gets its sign from the pseudo-normal of its closest
 // triangle, which is exact where the voxel's distance ball stays inside the
 // grown box (everywhere a query in the ROI looks); other voxels are dropped.
-// The sub-mesh is open, so there is no flood fill: queries in the ROI whose
-// voxel touches the outside of the band are answered by the BVH.
+// The sub-mesh is open, so there is no flood fill: a query in the ROI whose
+// voxel touches the outside of the band takes the sign of the first band
+// voxel met walking along a grid line (exact: the band is complete there, so
+// an inactive run of voxels cannot cross the surface), or the BVH's answer
+// when the walk leaves the ROI.
 //
 // OpenVDB headers stay in sdf_grid.cpp (MeshToVolume.h alone costs ~11 s of
 // compile time); this header is plain C++ over a pimpl.
@@ -79,7 +82,7 @@ class SdfGrid {
 
   /// Builds the grid of `body` (which must stay alive and unchanged while the
   /// grid is used: inside() falls back on it). Errors: body not built or not
-  /// closed, bad parameters (voxel size <= 0, half width < 1, exact band < 0,
+  /// closed, bad parameters (voxel size <= 0, half width < 2, exact band < 0,
   /// empty ROI box), a grid that would need more than 2^30 voxels per axis,
   /// cancellation (kCancelled, through an OpenVDB interrupter). Threads come
   /// from ctx (a tbb arena around OpenVDB's parallel loops).
