@@ -81,6 +81,7 @@ std::vector<std::pair<std::string, Model>> all_fixtures() {
   v.emplace_back("tetrahedron", fixtures::tetrahedron());
   v.emplace_back("octahedron", fixtures::octahedron());
   v.emplace_back("grid", fixtures::grid_patch(4, 3).model);
+  v.emplace_back("quad_strip", fixtures::quad_strip(3));  // polygons: split adds a corner, collapse removes it
   v.emplace_back("fan3", fixtures::fan(3, 4).model);
   v.emplace_back("fan5", fixtures::fan(5, 3).model);
   v.emplace_back("inner_joint", fixtures::inner_edge_joint(4).model);
@@ -168,6 +169,25 @@ TEST(Edit, JointSplitKeepsMembersEqualAndCoincident) {
     for (const MeshEdge& me : f.members) EXPECT_EQ(m.mesh_edges.halfedges.size(me.idx.value), len - 1);
     expect_euler_preserved(t, m, f.model.complex_holes, "joint collapse");
   }
+}
+
+TEST(Edit, CollapseNextToJointKeepsJointNode) {
+  auto f = fixtures::fan(3, 4);
+  Model& m = f.model;
+  const auto t = count_topology(m);
+  // An edge from joint node 2 of member 0 into its surface.
+  const NodeIdx j = m.tail(m.mesh_edges.halfedges.row(f.members[0].idx.value)[2]);
+  const Vec3d pj = m.position(j);
+  HalfedgeIdx in;
+  m.for_each_outgoing(j, [&](HalfedgeIdx x) {
+    if (!m.edges.mesh_edge[edge_of(x).value].valid() && !in.valid()) in = x;
+  });
+  ASSERT_TRUE(in.valid());
+  // Whichever end the halfedge 2e starts at, the joint node is kept in place.
+  const auto c = ok(edge_collapse(m, m.handle(edge_of(in)), Vec3d(9, 9, 9)));
+  EXPECT_EQ(c.kept[0].idx, j);
+  EXPECT_EQ(m.position(j), pj);
+  expect_euler_preserved(t, m, f.model.complex_holes, "collapse next to a joint");
 }
 
 TEST(Edit, SwapRefusedOnJointsAndMeshEdges) {
