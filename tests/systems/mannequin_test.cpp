@@ -138,7 +138,7 @@ const MannequinTopology& topology(std::uint32_t level) {
 
 // ------------------------------------------------------------------ tests
 
-TEST(SelfIntersection, CheckerFindsCrossingAndAcceptsSharedCorners) {
+TEST(MannequinSelfIntersection, CheckerFindsCrossingAndAcceptsSharedCorners) {
   std::vector<Vec3d> P = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, -1}, {0.2, 0.2, 1}, {2, 2, 0}, {3, 0, 0}};
   const std::vector<std::uint32_t> off = {0, 3, 6};
   // Triangle 2 pierces triangle 1.
@@ -221,10 +221,8 @@ TEST(Mannequin, DefaultGirthsMatchRequest) {
   // Heights follow the body: the waist sits back_length below the nape.
   const double nape = ms->points[body->find_point("neck_base_x_centre_back")->id - 1].height;
   const double waist = ms->points[body->find_point("waist_x_centre_back")->id - 1].height;
-  const double floor_offset = 0.055 * p.height - 0.025 * p.height;  // foot cap below the ankle
   EXPECT_NEAR(nape - waist, p.back_length, 1e-9);
   EXPECT_NEAR(body->model.position(NodeIdx{0}).y(), p.inseam, 1e-9);  // torso ring 0 is the crotch
-  (void)floor_offset;
 }
 
 TEST(Mannequin, SampledGirthsMatchRequestAndFramesEncode) {
