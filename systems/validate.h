@@ -1,23 +1,3 @@
-// validate(): checks every topological invariant of a Model. Tests run it
-// after every operator and system.
-//
-// Reads: every table. Writes: nothing.
+// validate() lives in storage/validate.h (every layer uses it, I/O included).
 #pragma once
-
-#include "engine/status.h"
-#include "storage/model.h"
-
-namespace atelier {
-
-struct ValidateOptions {
-  /// Joint nodes must coincide within this distance, relative to (1 + the
-  /// model's bounding-box diagonal).
-  double joint_tolerance = 1e-9;
-  /// Check the Euler-Poincare formula (needs O(n) union-find passes).
-  bool check_euler = true;
-};
-
-/// Returns ok, or the first violated invariant naming the element.
-[[nodiscard]] Status validate(const Model& m, const ValidateOptions& opt = {});
-
-}  // namespace atelier
+#include "storage/validate.h"

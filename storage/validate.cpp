@@ -1,4 +1,4 @@
-#include "systems/validate.h"
+#include "storage/validate.h"
 
 #include <sstream>
 #include <vector>
