@@ -442,3 +442,26 @@ TEST(Subdivide, RefusesFaceNodesInPolygons) {
   octahedron().add(t, "o");
   EXPECT_EQ(subdivide_uniform(t, c).status().code(), ErrorCode::kCancelled);
 }
+
+TEST(Subdivide, RingNodesStayInTheirFace) {
+  // Two ring nodes joined by a wire edge inside face 0 (a stand-alone
+  // polyline on a face: R = 1, which leaves V - E + F - R unchanged).
+  for (int naive = 0; naive < 2; ++naive) {
+    Model m;
+    grid(2, 2, false, [](int i, int j) { return Vec3d(i, j, 0); }).add(m, "g");
+    const NodeIdx r0 = m.new_node(SurfaceIdx{0}, {0.6, 0.2, 0}), r1 = m.new_node(SurfaceIdx{0}, {0.8, 0.3, 0});
+    m.nodes.in_face[r0.value] = m.nodes.in_face[r1.value] = FaceIdx{0};
+    (void)m.new_edge(r0, r1);
+    expect_valid(m);
+    const auto before = count_topology(m);
+    auto r = naive ? subdivide_uniform_naive(m) : subdivide_uniform(m);
+    ASSERT_TRUE(r) << r.status().to_string();
+    expect_valid(m);
+    const auto after = count_topology(m);
+    EXPECT_EQ(after.rings, before.rings);
+    EXPECT_EQ(after.components, before.components);
+    const NodeIdx mid = r->edge_midpoint[r->old_edges - 1];  // the wire edge is the last old edge
+    EXPECT_EQ(m.nodes.in_face[mid.value], FaceIdx{0});
+    EXPECT_EQ(m.position(mid), Vec3d(0.7, 0.25, 0));
+  }
+}
