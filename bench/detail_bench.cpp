@@ -1,0 +1,259 @@
+// Detail templates (issue 5): p-polygon search against nanoflann and brute
+// force, decoding throughput next to a STREAM-style bandwidth probe, batched
+// decoding, and 1,000 MakeHuman bodies end to end.
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <memory>
+
+#include "engine/parallel.h"
+#include "engine/random.h"
+#include "systems/body_set.h"
+#include "systems/detail_template.h"
+#include "systems/makehuman_body.h"
+#include "tests/support/shapes.h"
+
+#ifdef ATELIER_HAVE_NANOFLANN
+#include <nanoflann.hpp>
+#endif
+
+using namespace atelier;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path mh_dir() { return fs::path(ATELIER_BENCH_SHARED_DATA) / "makehuman"; }
+
+struct Scene {
+  std::shared_ptr<const makehuman::HumanLibrary> lib;  // null without the data
+  std::shared_ptr<ReferenceBody> ref;
+  BodyPolygons poly;
+  std::vector<Vec3d> pos;
+  std::vector<Vec3d> garment;  // 30k points 5-30 mm outside the skin
+  std::string body_name;
+};
+
+const Scene& scene() {
+  static const Scene s = [] {
+    Scene s;
+    if (fs::exists(mh_dir() / "base.obj")) {
+      s.lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(mh_dir()));
+      s.ref = std::make_shared<ReferenceBody>(makehuman::make_reference_body(*s.lib));
+      s.body_name = "makehuman skin (13,378 quads)";
+    } else {
+      s.ref = shapes::body_from(shapes::uv_sphere(160, 84, 0.3));
+      s.body_name = "uv sphere (13,440 polygons)";
+    }
+    s.poly = BodyPolygons::from_model(s.ref->model);
+    s.pos = skin_positions(*s.ref);
+    PolygonFrames fr;
+    compute_frames(s.poly, s.pos, fr);
+    SplitMix64 r(1);
+    while (s.garment.size() < 30'000) {
+      const std::size_t f = r.next() % s.poly.size();
+      if (fr.degenerate[f]) continue;
+      s.garment.push_back(fr.centroid[f].cast<double>() + r.uniform(0.005, 0.03) * fr.x[f].cast<double>() +
+                          0.004 * Vec3d(r.normal(), r.normal(), r.normal()));
+    }
+    return s;
+  }();
+  return s;
+}
+
+ExecContext threads(int t) {
+  ExecContext c;
+  c.threads = t;
+  return c;
+}
+
+std::vector<Vec3d> centroids(const Scene& s, std::vector<std::uint8_t>& skip) {
+  PolygonFrames fr;
+  compute_frames(s.poly, s.pos, fr);
+  std::vector<Vec3d> c;
+  for (auto& x : fr.centroid) c.push_back(x.cast<double>());
+  skip = fr.degenerate;
+  return c;
+}
+
+constexpr std::size_t kNq = 134;  // round(13378 / 100)
+
+void BM_PPolygonSearch_Grid(benchmark::State& st) {
+  const Scene& s = scene();
+  std::vector<std::uint8_t> skip;
+  const auto c = centroids(s, skip);
+  CentroidGrid grid;
+  grid.build(c, skip, kNq);
+  const ExecContext ctx = threads(static_cast<int>(st.range(0)));
+  for (auto _ : st) {
+    par::for_each_block(ctx, s.garment.size(), [&](std::size_t b, std::size_t e) {
+      std::vector<std::uint32_t> out;
+      std::vector<std::pair<double, std::uint32_t>> heap;
+      for (std::size_t v = b; v < e; ++v) {
+        grid.nearest(s.garment[v], kNq, out, heap);
+        benchmark::DoNotOptimize(out.data());
+      }
+    });
+  }
+  st.counters["queries/s"] = benchmark::Counter(static_cast<double>(s.garment.size()), benchmark::Counter::kIsIterationInvariantRate);
+  st.SetLabel(s.body_name + ", k=134");
+}
+BENCHMARK(BM_PPolygonSearch_Grid)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+#ifdef ATELIER_HAVE_NANOFLANN
+struct Cloud {
+  const std::vector<Vec3d>* p;
+  [[nodiscard]] std::size_t kdtree_get_point_count() const { return p->size(); }
+  [[nodiscard]] double kdtree_get_pt(std::size_t i, std::size_t d) const { return (*p)[i][static_cast<int>(d)]; }
+  template <class B>
+  bool kdtree_get_bbox(B&) const {
+    return false;
+  }
+};
+void BM_PPolygonSearch_Nanoflann(benchmark::State& st) {
+  const Scene& s = scene();
+  std::vector<std::uint8_t> skip;
+  auto all = centroids(s, skip);
+  std::vector<Vec3d> c;
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (!skip[i]) c.push_back(all[i]);
+  Cloud cloud{&c};
+  using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>, Cloud, 3>;
+  Tree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+  tree.buildIndex();
+  const ExecContext ctx = threads(static_cast<int>(st.range(0)));
+  for (auto _ : st) {
+    par::for_each_block(ctx, s.garment.size(), [&](std::size_t b, std::size_t e) {
+      std::vector<std::size_t> idx(kNq);
+      std::vector<double> d2(kNq);
+      for (std::size_t v = b; v < e; ++v) {
+        nanoflann::KNNResultSet<double> rs(kNq);
+        rs.init(idx.data(), d2.data());
+        tree.findNeighbors(rs, s.garment[v].data(), nanoflann::SearchParams());
+        benchmark::DoNotOptimize(idx.data());
+      }
+    });
+  }
+  st.counters["queries/s"] = benchmark::Counter(static_cast<double>(s.garment.size()), benchmark::Counter::kIsIterationInvariantRate);
+  st.SetLabel("nanoflann KD-tree, k=134");
+}
+BENCHMARK(BM_PPolygonSearch_Nanoflann)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+#endif
+
+void BM_PPolygonSearch_BruteForce(benchmark::State& st) {
+  const Scene& s = scene();
+  std::vector<std::uint8_t> skip;
+  const auto c = centroids(s, skip);
+  const std::size_t n = 500;  // a sample: brute force is slow
+  std::vector<std::uint32_t> out;
+  for (auto _ : st)
+    for (std::size_t v = 0; v < n; ++v) {
+      nearest_brute_force(c, skip, s.garment[v], kNq, out);
+      benchmark::DoNotOptimize(out.data());
+    }
+  st.counters["queries/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsIterationInvariantRate);
+  st.SetLabel("1 thread");
+}
+BENCHMARK(BM_PPolygonSearch_BruteForce)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// ---- decoding: 30k vertices x 200 p-polygons
+
+const DetailEncoding& encoding200() {
+  static const DetailEncoding e = [] {
+    const Scene& s = scene();
+    DetailParams p;
+    p.polygons_per_vertex = 200;
+    return encode_detail(s.poly, s.pos, s.garment, p).value();
+  }();
+  return e;
+}
+
+void BM_Encode_30k(benchmark::State& st) {
+  const Scene& s = scene();
+  const ExecContext ctx = threads(static_cast<int>(st.range(0)));
+  for (auto _ : st) benchmark::DoNotOptimize(encode_detail(s.poly, s.pos, s.garment, {}, ctx));
+  st.SetLabel("30k vertices, N_q=134");
+}
+BENCHMARK(BM_Encode_30k)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_StreamTriad(benchmark::State& st) {
+  const std::size_t n = 1u << 25;  // 3 x 128 MB
+  std::vector<float> a(n, 1.0f), b(n, 2.0f), c(n, 0.5f);
+  const ExecContext ctx = threads(static_cast<int>(st.range(0)));
+  for (auto _ : st) {
+    par::for_each_block(ctx, n, [&](std::size_t lo, std::size_t hi) {
+      for (std::size_t i = lo; i < hi; ++i) a[i] = b[i] + 3.0f * c[i];
+    });
+    benchmark::ClobberMemory();
+  }
+  st.counters["bytes/s"] = benchmark::Counter(3.0 * n * sizeof(float), benchmark::Counter::kIsIterationInvariantRate);
+  st.SetLabel("STREAM triad probe");
+}
+BENCHMARK(BM_StreamTriad)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Decode_OneBody(benchmark::State& st) {
+  const Scene& s = scene();
+  const DetailEncoding& e = encoding200();
+  const ExecContext ctx = threads(static_cast<int>(st.range(0)));
+  PolygonFrames fr;
+  compute_frames(s.poly, s.pos, fr, ctx, e.reference_corners);
+  std::vector<Vec3d> out(e.vertex_count());
+  for (auto _ : st) {
+    decode_detail(e, fr, out, ctx);
+    benchmark::DoNotOptimize(out.data());
+  }
+  st.counters["entries/s"] = benchmark::Counter(static_cast<double>(e.entries()), benchmark::Counter::kIsIterationInvariantRate);
+  st.counters["bytes/s"] = benchmark::Counter(static_cast<double>(e.bytes()), benchmark::Counter::kIsIterationInvariantRate);
+  st.SetLabel("30k x 200, frames precomputed");
+}
+BENCHMARK(BM_Decode_OneBody)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Decode_Batched(benchmark::State& st) {
+  const Scene& s = scene();
+  const DetailEncoding& e = encoding200();
+  const std::size_t bodies = static_cast<std::size_t>(st.range(1));
+  BodySet set(s.ref);
+  SplitMix64 r(5);
+  std::vector<Vec3d> p(s.pos.size());
+  for (std::size_t b = 0; b < bodies; ++b) {
+    const double k = r.uniform(0.9, 1.1);
+    for (std::size_t v = 0; v < p.size(); ++v) p[v] = s.pos[v] * k;
+    (void)set.add("b", std::span<const Vec3d>(p));
+  }
+  std::vector<Vec3f> out(bodies * e.vertex_count());
+  const ExecContext ctx = threads(static_cast<int>(st.range(0)));
+  for (auto _ : st) {
+    (void)decode_detail_batch(e, s.poly, set, 0, bodies, out, ctx);
+    benchmark::DoNotOptimize(out.data());
+  }
+  st.counters["bodies/s"] = benchmark::Counter(static_cast<double>(bodies), benchmark::Counter::kIsIterationInvariantRate);
+  st.SetLabel("30k x 200, frames included");
+}
+BENCHMARK(BM_Decode_Batched)->Args({2, 16})->Args({2, 64})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_MakeHuman_EndToEnd_1000(benchmark::State& st) {
+  const Scene& s = scene();
+  if (!s.lib) {
+    st.SkipWithError("MakeHuman data absent");
+    return;
+  }
+  DetailParams prm;
+  const DetailEncoding e = encode_detail(s.poly, s.pos, s.garment, prm).value();
+  auto params = makehuman::sample_adults(1000, 3);
+  makehuman::MakeHumanSource src(s.lib, params, s.ref);
+  const ExecContext ctx = threads(2);
+  BodySet chunk(s.ref);
+  std::vector<BodyFailure> fail;
+  const std::size_t B = 32;
+  std::vector<Vec3f> out(B * e.vertex_count());
+  for (auto _ : st) {
+    for (std::size_t first = 0; first < params.size(); first += B) {
+      src.generate(first, B, chunk, fail, ctx);
+      (void)decode_detail_batch(e, s.poly, chunk, 0, chunk.size(), std::span<Vec3f>(out.data(), chunk.size() * e.vertex_count()), ctx);
+    }
+  }
+  st.counters["bodies/s"] = benchmark::Counter(1000.0, benchmark::Counter::kIsIterationInvariantRate);
+  st.SetLabel("generation + frames + decoding, 30k-vertex garment, N_q=134, 2 threads");
+}
+BENCHMARK(BM_MakeHuman_EndToEnd_1000)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+}  // namespace
