@@ -345,6 +345,24 @@ TEST(Edit, AttributesFollowSwapAndSplit) {
   ASSERT_TRUE(validate(m)) << validate(m).to_string();
   EXPECT_LT((m.attrib_position_on_surface(fa) - pf).norm(), 1e-12);
   EXPECT_LT((m.attrib_position_on_surface(ea) - pe).norm(), 1e-12);
+  // Collapse every interior edge at the centre node that the checks allow:
+  // attribute nodes of removed faces/edges/nodes stay attached to live elements.
+  int collapsed = 0;
+  for (int round = 0; round < 4; ++round) {
+    std::vector<HalfedgeIdx> out;
+    if (!m.alive(g.node(1, 1))) break;
+    m.outgoing(g.node(1, 1), out);
+    for (HalfedgeIdx x : out) {
+      if (!m.alive(x)) continue;
+      if (edge_collapse(m, m.handle(edge_of(x)), m.position(g.node(1, 1)))) {
+        ++collapsed;
+        ASSERT_TRUE(validate(m)) << validate(m).to_string();
+        break;
+      }
+    }
+  }
+  EXPECT_GE(collapsed, 1);
+  EXPECT_TRUE(m.alive(fa) && m.alive(ea));
 }
 
 TEST(Edit, RandomSplitCollapseSwapOnGrid) {
