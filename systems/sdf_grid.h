@@ -12,13 +12,18 @@
 //    grid's region of interest, or (ROI grids) a corner of p's voxel is
 //    outside the narrow band, the answer is BodyBvh::signed_distance(p) < 0:
 //    exact up to rounding (Baerentzen & Aanaes pseudo-normal);
-//  * otherwise the answer is the sign of d. Voxel values are exact distances
-//    (OpenVDB voxelises each triangle; DISABLE_RENORMALIZATION keeps them
-//    unsmoothed), and a trilinear value is a convex combination of corner
-//    values each within sqrt(3) h of the true distance at p, so the sign of
-//    d is right whenever |d| >= sqrt(3) h: the default e = 2 leaves margin.
-//    Far from the surface (outside the band) full grids take the sign from
-//    OpenVDB's signed flood fill of the interior.
+//  * otherwise the answer is the sign of d. Voxel values are distances to a
+//    triangle (OpenVDB voxelises each triangle near it and widens the band
+//    from the neighbours' closest triangles, so off the first layers a value
+//    may overestimate the distance: up to 0.2 h (full) and 0.4 h (ROI)
+//    measured by the tests; DISABLE_RENORMALIZATION keeps them unsmoothed).
+//    A trilinear value is a convex combination of corner values; the sign of
+//    d can only be wrong when the corners' signs differ, i.e. the surface
+//    crosses p's cell, every corner is within sqrt(3) h of it and
+//    |d| <= sqrt(3) h + (error of those near values): the default e = 2
+//    covers it (zero wrong answers over 150k test points, half within a
+//    voxel of the surface). Far from the surface (outside the band) full
+//    grids take the sign from OpenVDB's signed flood fill of the interior.
 // sample(p) is the raw trilinear value (negative inside, +-w h outside the
 // band) and carries no such guarantee near the surface.
 //

@@ -481,17 +481,40 @@ TEST(Spatial, SdfGridOnTorusAndRoiMatchesFullGrid) {
   std::printf("[ roi ] full grid: %zu exact, %zu from grid; ROI grid (%zu of %zu triangles): %zu exact, %zu from grid\n",
               sa.exact, sa.from_grid, roi.stats().source_triangles, full.stats().source_triangles, sb.exact,
               sb.from_grid);
-  // Inside the band the ROI grid holds the same distances as the full grid.
+  // Inside the band both grids interpolate (nearly) the exact signed
+  // distances of the voxel centres (trilinear of BodyBvh::signed_distance at
+  // the 8 corners).
   std::size_t compared = 0;
+  double err_full[2] = {0, 0}, err_roi[2] = {0, 0};
+  const double h = params.voxel_size;
   for (const Vec3d& p : pts) {
-    const double da = full.sample(p), db = roi.sample(p);
     const double s = std::abs(tor.sdf(p));
-    if (s > 2 * params.voxel_size && s < (params.half_width - 2) * params.voxel_size) {
-      ASSERT_NEAR(da, db, 1e-5) << p.transpose();
-      ++compared;
+    if (!(s < (params.half_width - 2) * h)) continue;
+    const int layer = s < 1.5 * h ? 0 : 1;
+    const Vec3d g = p / h;
+    const Vec3d f(std::floor(g.x()), std::floor(g.y()), std::floor(g.z()));
+    const Vec3d t = g - f;
+    double expect = 0.0;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3d o((k >> 2) & 1, (k >> 1) & 1, k & 1);
+      const double wgt = (o.x() ? t.x() : 1 - t.x()) * (o.y() ? t.y() : 1 - t.y()) * (o.z() ? t.z() : 1 - t.z());
+      expect += wgt * bvh.signed_distance((f + o) * h).distance;
     }
+    err_full[layer] = std::max(err_full[layer], std::abs(full.sample(p) - expect));
+    err_roi[layer] = std::max(err_roi[layer], std::abs(roi.sample(p) - expect));
+    ++compared;
   }
+  std::printf("[ roi ] max |trilinear - trilinear of exact voxel values| / h, within 1.5 h of the surface: full %.3g, "
+              "roi %.3g; farther: full %.3g, roi %.3g\n",
+              err_full[0] / h, err_roi[0] / h, err_full[1] / h, err_roi[1] / h);
   EXPECT_GT(compared, 1000u);
+  // OpenVDB widens the band from each voxel's neighbours' closest triangles,
+  // so values off the first layers may overestimate the distance a little
+  // (documented in sdf_grid.h); they stay well inside the exact band margin.
+  for (int layer = 0; layer < 2; ++layer) {
+    EXPECT_LT(err_roi[layer], 0.5 * h);
+    EXPECT_LT(err_full[layer], 0.5 * h);
+  }
   // Outside the ROI the grid defers to the BVH and stays exact.
   const Vec3d far_inside(-1.0, 0.0, 0.0);
   EXPECT_FALSE(roi.covers(far_inside));
