@@ -10,7 +10,6 @@
 #include <map>
 #include <sstream>
 #include <string>
-#include <unordered_map>
 
 #include "storage/topology.h"
 #include "systems/mannequin.h"
@@ -51,23 +50,39 @@ bool segment_hits_triangle(const Vec3d& p, const Vec3d& q, const Vec3d& a, const
 }
 
 bool triangles_intersect(const std::vector<Vec3d>& P, const Tri& A, const Tri& B) {
-  std::vector<std::uint32_t> shared;
+  std::array<std::uint32_t, 3> shared{};
+  std::size_t nshared = 0;
   for (auto x : A.v)
     for (auto y : B.v)
-      if (x == y) shared.push_back(x);
-  if (shared.size() >= 3) return true;  // duplicate triangle
-  if (shared.size() == 2) {
+      if (x == y) shared[nshared++] = x;
+  if (nshared >= 3) return true;  // duplicate triangle
+  if (nshared == 2) {
     // Edge-adjacent: intersect only when folded onto each other.
     const Vec3d na = (P[A.v[1]] - P[A.v[0]]).cross(P[A.v[2]] - P[A.v[0]]).normalized();
     const Vec3d nb = (P[B.v[1]] - P[B.v[0]]).cross(P[B.v[2]] - P[B.v[0]]).normalized();
     return na.dot(nb) < -0.999999;
   }
+  // Early rejection (Moller): when one triangle lies strictly on one side of
+  // the other's plane (shared nodes excepted), they meet at most at a shared node.
+  auto separated = [&](const Tri& S, const Tri& T) {
+    const Vec3d a = P[S.v[0]], n = (P[S.v[1]] - a).cross(P[S.v[2]] - a);
+    int pos = 0, neg = 0;
+    for (auto v : T.v) {
+      if (nshared == 1 && v == shared[0]) continue;
+      const double d = n.dot(P[v] - a);
+      pos += d > 0;
+      neg += d < 0;
+    }
+    const int others = 3 - static_cast<int>(nshared);
+    return pos == others || neg == others;
+  };
+  if (separated(A, B) || separated(B, A)) return false;
   const double tol = 1e-9;
   auto test = [&](const Tri& S, const Tri& T) {
     for (int k = 0; k < 3; ++k) {
       Vec3d hit;
       if (!segment_hits_triangle(P[S.v[k]], P[S.v[(k + 1) % 3]], P[T.v[0]], P[T.v[1]], P[T.v[2]], hit)) continue;
-      if (!shared.empty() && (hit - P[shared[0]]).norm() < tol) continue;
+      if (nshared == 1 && (hit - P[shared[0]]).norm() < tol) continue;
       return true;
     }
     return false;
@@ -98,17 +113,23 @@ std::size_t count_self_intersections(const std::vector<Vec3d>& P, std::span<cons
   std::array<long, 3> dim;
   for (int a = 0; a < 3; ++a) dim[a] = std::max(1L, long((ghi[a] - glo[a]) / cell) + 1);
   auto cell_of = [&](const Vec3d& p, int a) { return std::clamp(long((p[a] - glo[a]) / cell), 0L, dim[a] - 1); };
-  std::unordered_map<long, std::vector<std::uint32_t>> grid;
+  // (cell, triangle) pairs sorted by cell: a flat grid without per-cell heap lists.
+  std::vector<std::pair<long, std::uint32_t>> entries;
+  entries.reserve(2 * n);
   for (std::size_t i = 0; i < n; ++i)
     for (long x = cell_of(lo[i], 0); x <= cell_of(hi[i], 0); ++x)
       for (long y = cell_of(lo[i], 1); y <= cell_of(hi[i], 1); ++y)
         for (long z = cell_of(lo[i], 2); z <= cell_of(hi[i], 2); ++z)
-          grid[(x * dim[1] + y) * dim[2] + z].push_back(static_cast<std::uint32_t>(i));
+          entries.emplace_back((x * dim[1] + y) * dim[2] + z, static_cast<std::uint32_t>(i));
+  std::sort(entries.begin(), entries.end());
   std::size_t found = 0;
-  for (const auto& [key, list] : grid) {
-    for (std::size_t i = 0; i < list.size(); ++i)
-      for (std::size_t j = i + 1; j < list.size(); ++j) {
-        const auto a = list[i], b = list[j];
+  for (std::size_t b0 = 0, b1 = 0; b0 < entries.size(); b0 = b1) {
+    const long key = entries[b0].first;
+    for (b1 = b0; b1 < entries.size() && entries[b1].first == key; ++b1) {
+    }
+    for (std::size_t i = b0; i < b1; ++i)
+      for (std::size_t j = i + 1; j < b1; ++j) {
+        const auto a = entries[i].second, b = entries[j].second;
         const Vec3d ilo = lo[a].cwiseMax(lo[b]), ihi = hi[a].cwiseMin(hi[b]);
         if ((ilo.array() > ihi.array()).any()) continue;
         // Test each pair once: in the cell holding the low corner of the overlap.
