@@ -403,3 +403,45 @@ TEST(Edit, RandomSplitCollapseSwapOnGrid) {
       }
   }
 }
+
+TEST(Edit, RandomEditsOnJointFixtures) {
+  for (int variant = 0; variant < 3; ++variant) {
+    fixtures::JointFixture f = variant == 2 ? fixtures::inner_edge_joint(6) : fixtures::fan(variant == 0 ? 3 : 5, 6);
+    Model& m = f.model;
+    const auto t = count_topology(m);
+    std::mt19937 rng(100 + variant);
+    std::map<int, int> okc;
+    int joint_ops = 0;
+    for (int step = 0; step < 400; ++step) {
+      const auto edges = live_edges(m);
+      const EdgeIdx e = edges[std::uniform_int_distribution<std::size_t>(0, edges.size() - 1)(rng)];
+      const int op = std::uniform_int_distribution<int>(0, 2)(rng);
+      const bool on_joint = m.edges.mesh_edge[e.value].valid();
+      const double u = std::uniform_real_distribution<double>(0.2, 0.8)(rng);
+      const HalfedgeIdx h = halfedge_of(e, 0);
+      const Vec3d p = (1 - u) * m.position(m.tail(h)) + u * m.position(m.head(h));
+      Status s;
+      if (op == 0) s = edge_split(m, m.handle(e), p).status();
+      if (op == 1) s = edge_collapse(m, m.handle(e), p).status();
+      if (op == 2) {
+        s = edge_swap(m, m.handle(e)).status();
+        if (on_joint) {
+          EXPECT_EQ(s.code(), ErrorCode::kJointRefused);
+        }
+      }
+      if (s) {
+        okc[op]++;
+        joint_ops += on_joint;
+      } else {
+        ASSERT_NE(s.code(), ErrorCode::kInternal) << s.message();
+      }
+      const Status v = validate(m);
+      ASSERT_TRUE(v) << "variant " << variant << " step " << step << " op " << op << ": " << v.to_string();
+    }
+    expect_euler_preserved(t, m, f.model.complex_holes, "random joint edits");
+    EXPECT_GT(joint_ops, 5) << "variant " << variant;
+    for (int op = 0; op < 3; ++op) EXPECT_GT(okc[op], 20) << "variant " << variant << " op " << op;
+    const std::size_t len = m.mesh_edges.halfedges.size(f.members[0].idx.value);
+    for (const MeshEdge& me : f.members) EXPECT_EQ(m.mesh_edges.halfedges.size(me.idx.value), len);
+  }
+}
