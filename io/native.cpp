@@ -10,7 +10,7 @@
 
 #include "io/atomic_file.h"
 #include "io/mesh_arrays.h"
-#include "systems/validate.h"
+#include "storage/validate.h"
 
 namespace atelier {
 
