@@ -1,2 +1,74 @@
+// atelier: the command-line tool.
+#include <CLI/CLI.hpp>
 #include <cstdio>
-int main() { std::puts("atelier"); return 0; }
+#include <exception>
+
+#include "apps/atelier/commands.h"
+#include "engine/status.h"
+
+#ifndef ATELIER_VERSION
+#define ATELIER_VERSION "0.1.0"
+#endif
+
+int main(int argc, char** argv) {
+  using namespace atelier::cli;
+  CLI::App app{"atelier: feature-based freeform modelling around reference bodies"};
+  app.set_version_flag("--version", std::string("atelier ") + ATELIER_VERSION);
+  app.require_subcommand(1);
+  Common common;
+  app.add_option("--threads", common.threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", common.seed, "random seed for sampled bodies");
+  app.add_flag("--quiet", common.quiet, "only warnings and errors");
+  app.add_flag("--log-json", common.log_json, "log lines as JSON on stderr (for pipelines)");
+
+  DemoOptions demo;
+  auto* demo_cmd = app.add_subcommand("demo", "sample mannequin bodies and regenerate the project's templates on each");
+  demo_cmd->add_option("--bodies", demo.bodies, "number of bodies")->check(CLI::PositiveNumber);
+  demo_cmd->add_option("--chunk", demo.chunk, "bodies per chunk (bounds memory)")->check(CLI::PositiveNumber);
+  demo_cmd->add_option("--meshes", demo.meshes, "write OBJ meshes of the first N bodies");
+  demo_cmd->add_option("--out", demo.out, "output folder");
+
+  std::string validate_file;
+  auto* validate_cmd = app.add_subcommand("validate", "read a mesh or model file and check every invariant");
+  validate_cmd->add_option("file", validate_file, "OBJ, PLY, OFF or .atm file")->required();
+
+  std::string convert_in, convert_out;
+  auto* convert_cmd = app.add_subcommand("convert", "convert between OBJ, PLY, OFF and the native .atm format");
+  convert_cmd->add_option("input", convert_in)->required();
+  convert_cmd->add_option("output", convert_out)->required();
+
+  BodiesOptions bodies;
+  auto* bodies_cmd = app.add_subcommand("bodies", "sample or load a body set and export its measurements");
+  bodies_cmd->add_option("--source", bodies.source, "mannequin, makehuman, or a directory of OBJ bodies");
+  bodies_cmd->add_option("--count", bodies.count, "bodies to sample (mannequin, makehuman)");
+  bodies_cmd->add_option("--meshes", bodies.meshes, "write OBJ meshes of the first N bodies");
+  bodies_cmd->add_option("--out", bodies.out, "output folder");
+  bodies_cmd->add_option("--data", bodies.data, "the shared data folder (for makehuman)");
+  bodies_cmd->add_option("--reference", bodies.reference, "reference body OBJ (directory sources)");
+  bodies_cmd->add_option("--scale", bodies.scale, "file units to metres (directory sources)");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+  Log log(common.quiet, common.log_json);
+  try {
+    if (*demo_cmd) return run_demo(common, demo, log);
+    if (*validate_cmd) return run_validate(common, validate_file, log);
+    if (*convert_cmd) return run_convert(common, convert_in, convert_out, log);
+    if (*bodies_cmd) return run_bodies(common, bodies, log);
+  } catch (const atelier::Error& e) {
+    log.error(e.what());
+    const auto c = e.status().code();
+    return c == atelier::ErrorCode::kParse || c == atelier::ErrorCode::kIo || c == atelier::ErrorCode::kMismatch ||
+                   c == atelier::ErrorCode::kInvalidArgument
+               ? kExitInput
+               : kExitInternal;
+  } catch (const std::exception& e) {
+    log.error(std::string("internal error: ") + e.what());
+    return kExitInternal;
+  }
+  return kExitUsage;
+}

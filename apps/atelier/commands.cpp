@@ -1,0 +1,133 @@
+#include <algorithm>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "apps/atelier/commands.h"
+#include "io/atomic_file.h"
+#include "io/native.h"
+#include "io/obj.h"
+#include "io/off.h"
+#include "io/ply.h"
+#include "storage/topology.h"
+#include "storage/validate.h"
+#include "systems/body_set.h"
+#include "systems/makehuman_body.h"
+#include "systems/mannequin.h"
+#include "systems/mannequin_source.h"
+#include "systems/measure.h"
+
+namespace atelier::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string lower_ext(const fs::path& p) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return e;
+}
+
+Model read_any(const fs::path& p) {
+  if (!fs::exists(p)) throw Error(Status(ErrorCode::kIo, p.string() + ": no such file"));
+  const std::string e = lower_ext(p);
+  if (e == ".obj") return read_obj(p);
+  if (e == ".ply") return read_ply(p);
+  if (e == ".off") return read_off(p);
+  if (e == ".atm") return read_model(p);
+  throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
+}
+
+void write_any(const Model& m, const fs::path& p) {
+  const std::string e = lower_ext(p);
+  if (e == ".obj") return write_obj(m, p);
+  if (e == ".ply") return write_ply(m, p, true);
+  if (e == ".off") return write_off(m, p);
+  if (e == ".atm") return write_model(m, p);
+  throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
+}
+
+}  // namespace
+
+int run_validate(const Common&, const fs::path& file, Log& log) {
+  const Model m = read_any(file);
+  const TopologyCounts t = count_topology(m);
+  std::printf("%s: %zu surfaces, V=%lld E=%lld F=%lld, components %lld, closed shells %lld, complex holes %lld\n",
+              file.string().c_str(), m.num_surfaces(), static_cast<long long>(t.nodes),
+              static_cast<long long>(t.edges), static_cast<long long>(t.faces),
+              static_cast<long long>(t.components), static_cast<long long>(t.shells),
+              static_cast<long long>(m.complex_holes));
+  const Status s = validate(m);
+  if (!s) {
+    log.error(file.string() + ": " + s.message());
+    return kExitPartial;
+  }
+  std::printf("valid\n");
+  return kExitOk;
+}
+
+int run_convert(const Common&, const fs::path& in, const fs::path& out, Log& log) {
+  const Model m = read_any(in);
+  write_any(m, out);
+  log.info("wrote " + out.string());
+  return kExitOk;
+}
+
+int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
+  const ExecContext ctx = common.context();
+  std::unique_ptr<BodySource> src;
+  if (opt.source == "mannequin") {
+    auto topo = make_mannequin_topology();
+    if (!topo) throw Error(topo.status());
+    auto t = std::make_shared<const MannequinTopology>(std::move(*topo));
+    auto ref = make_mannequin(MannequinParams{}, *t);
+    if (!ref) throw Error(ref.status());
+    src = std::make_unique<MannequinSource>(t, sample_mannequins(opt.count, common.seed),
+                                            std::make_shared<const ReferenceBody>(std::move(*ref)));
+  } else if (opt.source == "makehuman") {
+    auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(opt.data / "makehuman", ctx));
+    auto ref = std::make_shared<const ReferenceBody>(makehuman::make_reference_body(*lib));
+    src = std::make_unique<makehuman::MakeHumanSource>(lib, makehuman::sample_adults(opt.count, common.seed), ref);
+  } else {
+    if (opt.reference.empty())
+      throw Error(Status(ErrorCode::kInvalidArgument, "--reference is required with a directory source"));
+    ReferenceBody rb;
+    rb.model = read_obj(opt.reference);
+    for (auto& p : rb.model.nodes.position) p *= opt.scale;
+    rb.skin = SurfaceIdx{0};
+    src = std::make_unique<ObjDirectorySource>(opt.source, std::make_shared<const ReferenceBody>(std::move(rb)),
+                                               opt.scale);
+  }
+  fs::create_directories(opt.out);
+  const auto ref = src->reference();
+  BodySet chunk(ref);
+  std::vector<BodyFailure> failures;
+  std::size_t written = 0;
+  const std::size_t n = src->size();
+  write_atomically(opt.out / "measurements.csv", [&](AtomicFile& f) {
+    std::size_t done = 0;
+    for (std::size_t first = 0; first < n; first += 64) {
+      src->generate(first, 64, chunk, failures, ctx);
+      std::ostringstream rows;
+      Status s = measurements_csv(
+          rows, *ref, chunk.size(), [&](std::size_t i) { return chunk.positions(i); }, ctx, first == 0, first);
+      if (!s) throw Error(s);
+      f.write(rows.str());
+      for (std::size_t b = 0; b < chunk.size() && written < opt.meshes; ++b, ++written) {
+        Model m = ref->model;
+        chunk.positions(b, m.nodes.position);
+        write_obj(m, opt.out / (chunk.name(b) + ".obj"));
+      }
+      done += chunk.size();
+      log.progress("bodies", std::min(n, first + 64), n);
+    }
+    log.end_progress();
+  });
+  for (const auto& fl : failures) log.warn(fl.name + ": " + fl.status.message());
+  std::printf("%zu bodies, %zu failed; measurements in %s\n", n, failures.size(),
+              (opt.out / "measurements.csv").string().c_str());
+  return failures.empty() ? kExitOk : kExitPartial;
+}
+
+}  // namespace atelier::cli

@@ -1,0 +1,51 @@
+// The atelier subcommands. Each returns a process exit code:
+//   0 success, 1 partial failure (some bodies failed, or validation found
+//   problems), 2 usage error, 3 bad input, 4 internal error.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "apps/atelier/log.h"
+#include "engine/exec_context.h"
+
+namespace atelier::cli {
+
+enum ExitCode : int { kExitOk = 0, kExitPartial = 1, kExitUsage = 2, kExitInput = 3, kExitInternal = 4 };
+
+struct Common {
+  int threads = 0;
+  std::uint64_t seed = 1;
+  bool quiet = false;
+  bool log_json = false;
+  [[nodiscard]] ExecContext context() const {
+    ExecContext c;
+    c.threads = threads;
+    return c;
+  }
+};
+
+struct DemoOptions {
+  std::size_t bodies = 1000;
+  std::size_t chunk = 64;
+  std::size_t meshes = 5;
+  std::filesystem::path out = "out/demo";
+};
+int run_demo(const Common& common, const DemoOptions& opt, Log& log);
+
+int run_validate(const Common& common, const std::filesystem::path& file, Log& log);
+int run_convert(const Common& common, const std::filesystem::path& in, const std::filesystem::path& out, Log& log);
+
+struct BodiesOptions {
+  std::string source = "mannequin";  // mannequin | makehuman | a directory of OBJ files
+  std::size_t count = 100;
+  std::size_t meshes = 0;            // OBJ files of the first N bodies
+  std::filesystem::path out = "out/bodies";
+  std::filesystem::path data = "../shared/data";
+  std::filesystem::path reference;   // OBJ of the reference body (directory sources)
+  double scale = 1.0;
+};
+int run_bodies(const Common& common, const BodiesOptions& opt, Log& log);
+
+}  // namespace atelier::cli

@@ -1,0 +1,38 @@
+// Mannequin bodies as a BodySource (the embedded default body set), and a
+// helper that cuts a garment-like shell out of a body's skin (the demo's
+// own detail-template garment).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "systems/body_set.h"
+#include "systems/mannequin.h"
+
+namespace atelier {
+
+class MannequinSource final : public BodySource {
+ public:
+  MannequinSource(std::shared_ptr<const MannequinTopology> topology, std::vector<MannequinParams> params,
+                  std::shared_ptr<const ReferenceBody> reference);
+  [[nodiscard]] std::size_t size() const override { return params_.size(); }
+  [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
+  [[nodiscard]] std::string body_name(std::size_t i) const override;
+  void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
+                const ExecContext& ctx) const override;
+  [[nodiscard]] const MannequinParams& params(std::size_t i) const { return params_[i]; }
+
+ private:
+  std::shared_ptr<const MannequinTopology> topology_;
+  std::vector<MannequinParams> params_;
+  std::shared_ptr<const ReferenceBody> reference_;
+};
+
+/// A shell garment: the skin faces whose nodes all lie in the height band
+/// [y_lo, y_hi] and within `max_radius` of the vertical body axis, copied and
+/// pushed `offset` along the area-weighted node normals. One surface named
+/// `name`. Errors when the band holds no face.
+[[nodiscard]] Expected<Model> skin_band_garment(const ReferenceBody& body, double y_lo, double y_hi, double offset,
+                                                double max_radius, const std::string& name);
+
+}  // namespace atelier

@@ -1,0 +1,103 @@
+// The atelier CLI on good and bad inputs (runs the built binary).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Run {
+  int code = -1;
+  std::string out;  // stdout + stderr
+};
+
+Run run(const std::string& args) {
+  const std::string cmd = std::string(ATELIER_CLI) + " " + args + " 2>&1";
+  Run r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  const int st = pclose(p);
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+fs::path dir(const std::string& name) {
+  const char* env = std::getenv("ATELIER_TMP");
+  fs::path d = (env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests") / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+}  // namespace
+
+TEST(Cli, VersionHelpAndUsageErrors) {
+  auto v = run("--version");
+  EXPECT_EQ(v.code, 0);
+  EXPECT_NE(v.out.find("atelier 0."), std::string::npos);
+  auto h = run("--help");
+  EXPECT_EQ(h.code, 0);
+  EXPECT_NE(h.out.find("demo"), std::string::npos);
+  EXPECT_EQ(run("").code, 2);                   // a subcommand is required
+  EXPECT_EQ(run("frobnicate").code, 2);         // unknown subcommand
+  EXPECT_EQ(run("demo --bodies -3").code, 2);   // bad value
+}
+
+TEST(Cli, ValidateAndConvert) {
+  const fs::path d = dir("cli-convert");
+  std::ofstream(d / "tet.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+  auto ok = run("validate " + (d / "tet.obj").string());
+  EXPECT_EQ(ok.code, 0) << ok.out;
+  EXPECT_NE(ok.out.find("valid"), std::string::npos);
+  EXPECT_NE(ok.out.find("closed shells 1"), std::string::npos);
+  auto c = run("convert " + (d / "tet.obj").string() + " " + (d / "tet.ply").string());
+  EXPECT_EQ(c.code, 0) << c.out;
+  EXPECT_EQ(run("validate " + (d / "tet.ply").string()).code, 0);
+  auto c2 = run("convert " + (d / "tet.ply").string() + " " + (d / "tet.atm").string());
+  EXPECT_EQ(c2.code, 0) << c2.out;
+  EXPECT_EQ(run("validate " + (d / "tet.atm").string()).code, 0);
+  // Bad input: error names the file and line, exit code 3.
+  std::ofstream(d / "bad.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n";
+  auto bad = run("validate " + (d / "bad.obj").string());
+  EXPECT_EQ(bad.code, 3) << bad.out;
+  EXPECT_NE(bad.out.find("bad.obj: line 4"), std::string::npos) << bad.out;
+  auto missing = run("validate " + (d / "nope.obj").string());
+  EXPECT_EQ(missing.code, 3);
+  EXPECT_NE(missing.out.find("nope.obj"), std::string::npos);
+  auto fmt = run("convert " + (d / "tet.obj").string() + " " + (d / "tet.xyz").string());
+  EXPECT_EQ(fmt.code, 3);
+  EXPECT_FALSE(fs::exists(d / "tet.xyz"));
+}
+
+TEST(Cli, DemoWritesAReportMeshesAndMeasurements) {
+  const fs::path d = dir("cli-demo");
+  auto r = run("--quiet demo --bodies 6 --chunk 4 --meshes 2 --out " + d.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("report:"), std::string::npos);
+  std::ifstream in(d / "report.json");
+  const auto rep = nlohmann::json::parse(in);
+  EXPECT_EQ(rep["summary"]["completed"], 6);
+  EXPECT_EQ(rep["summary"]["failed"], 0);
+  EXPECT_EQ(rep["bodies_quality"].size(), 6u);
+  EXPECT_EQ(rep["summary"]["bodies_with_penetration"], 0);
+  EXPECT_TRUE(fs::exists(d / "meshes" / "mannequin-00001_shorts.obj"));
+  EXPECT_FALSE(fs::exists(d / "meshes" / "mannequin-00002_shorts.obj"));
+  // measurements.csv: a header and one row per body.
+  std::ifstream csv(d / "measurements.csv");
+  std::string line;
+  int lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 7);
+  // No temporary files left behind.
+  for (const auto& e : fs::recursive_directory_iterator(d))
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+}
