@@ -132,6 +132,9 @@ struct Plan {
   std::vector<std::pair<AttribNodeIdx, std::uint32_t>> converted;
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<FaceIdx> neighbours;                   // faces gaining corners
+  /// Joint partners of split sides: partner halfedge (running like the side)
+  /// and the points to insert along it, in order.
+  std::vector<std::pair<HalfedgeIdx, std::vector<std::uint32_t>>> partner_splits;
   std::vector<std::pair<AttribNodeIdx, Vec3d>> relocate_in_neighbours;
   std::vector<std::pair<AttribNodeIdx, Vec3d>> relocate_in_face;  // non-converting mode
 };
@@ -225,15 +228,44 @@ Expected<Plan> make_plan(const Model& m, FaceIdx f, bool convert, const Triangul
         }
         pid.emplace_back(a, static_cast<std::uint32_t>(id));
       }
+      auto add_neighbour = [&](FaceIdx g) {
+        if (g.valid() && g != f && std::find(P.neighbours.begin(), P.neighbours.end(), g) == P.neighbours.end())
+          P.neighbours.push_back(g);
+      };
+      if (P.along[k].empty()) continue;
+      add_neighbour(m.face(twin(P.sides[k])));
+      // Joint: every member gets the same split (seed 000 section 3, "face
+      // split": the corresponding TRGLEDGEs of the MESHJOINT get the same
+      // stand-alone vertices), so lengths stay equal and nodes coincide.
       const EdgeIdx e = edge_of(P.sides[k]);
       const MeshEdgeIdx me = m.edges.mesh_edge[e.value];
-      if (!P.along[k].empty() && me.valid() && m.mesh_edges.joint[me.value].valid())
-        return fail(ErrorCode::kJointRefused, "face ", f.value, ": edge ", e.value, " has attribute edge-nodes but lies on joint ",
-                    m.mesh_edges.joint[me.value].value, "; split it with the edge split operator first");
-      const FaceIdx g = m.face(twin(P.sides[k]));
-      if (!P.along[k].empty() && g.valid() && g != f &&
-          std::find(P.neighbours.begin(), P.neighbours.end(), g) == P.neighbours.end())
-        P.neighbours.push_back(g);
+      const JointIdx j = me.valid() ? m.mesh_edges.joint[me.value] : JointIdx{};
+      if (!j.valid()) continue;
+      const auto members = m.joints.members.row(j.value);
+      const auto chain = m.mesh_edges.halfedges.row(me.value);
+      const std::size_t len = chain.size();
+      std::size_t i = 0;
+      while (edge_of(chain[i]) != e) ++i;
+      bool pa = true;
+      for (const JointMember& jm : members)
+        if (jm.mesh_edge == me) pa = jm.positive;
+      const bool along_joint = (chain[i] == P.sides[k]) == pa;
+      const std::size_t t = pa ? i : len - 1 - i;
+      for (const JointMember& jm : members) {
+        if (jm.mesh_edge == me) continue;
+        const auto pc = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
+        const HalfedgeIdx d = pc[jm.positive ? t : len - 1 - t];
+        const HalfedgeIdx jd = jm.positive ? d : twin(d);
+        const HalfedgeIdx hp = along_joint ? jd : twin(jd);
+        for (std::uint32_t x = 0; x < m.attrib_nodes.slots.capacity(); ++x)
+          if (m.alive(AttribNodeIdx{x}) && m.attrib_nodes.kind[x] == AttribNodeKind::kEdge &&
+              edge_of(HalfedgeIdx{m.attrib_nodes.element[x]}) == edge_of(hp))
+            return fail(ErrorCode::kJointRefused, "face ", f.value, ": joint ", j.value, " partner edge ",
+                        edge_of(hp).value, " carries attribute edge-nodes of its own; triangulate its face first");
+        P.partner_splits.emplace_back(hp, P.along[k]);
+        add_neighbour(m.face(hp));
+        add_neighbour(m.face(twin(hp)));
+      }
     }
     for (AttribNodeIdx a : fa.vertex_nodes)
       for (std::uint32_t k = 0; k < n; ++k)
@@ -377,6 +409,15 @@ void apply_plan(Model& m, Plan& P, TriangulationResult& out) {
   for (std::size_t k = 0; k < P.sides.size(); ++k) {
     HalfedgeIdx h = P.sides[k];
     for (std::uint32_t id : P.along[k]) h = split_side(m, h, P.points[id].node);
+  }
+  for (const auto& [hp, ids] : P.partner_splits) {
+    const SurfaceIdx ps = m.surface_of(edge_of(hp));
+    HalfedgeIdx h = hp;
+    for (std::uint32_t id : ids) {
+      const NodeIdx x = m.new_node(ps, P.points[id].position);
+      out.new_nodes.push_back(x);
+      h = split_side(m, h, x);
+    }
   }
   m.delete_face(P.face);
   std::vector<FaceIdx> made;

@@ -20,9 +20,14 @@
 // is listed in TriangulationResult::grown_faces and, with
 // TriangulateOptions::triangulate_grown, triangulated as well.
 //
-// Errors leave the model untouched: kStaleHandle, kJointRefused (an edge to
-// split belongs to a mesh edge in a joint: split joint edges with the edge
-// split operator first), kUnsupported (ring nodes lie in the face),
+// Joints: when a split edge lies on a mesh edge of a MESHJOINT, the
+// corresponding edge of every other member is split at the same points
+// (new nodes at the same positions), so the joint stays crack-free; the
+// partners' faces gain corners like neighbours do.
+//
+// Errors leave the model untouched: kStaleHandle, kJointRefused (a joint
+// partner edge to split carries attribute edge-nodes of its own),
+// kUnsupported (ring nodes lie in the face),
 // kDegenerate (no plane, points outside the polygon or projecting onto one
 // another, crossing constraints, a triangle flipped against the face normal).
 #pragma once

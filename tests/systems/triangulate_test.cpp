@@ -209,7 +209,39 @@ TEST(Triangulate, CrossingConstraintsRefusedModelUntouched) {
   EXPECT_EQ(diff_tables(m, old), "");
 }
 
-TEST(Triangulate, JointEdgesRefused) {
+TEST(Triangulate, JointPartnersSplitTheSameWay) {
+  // Two triangles of two surfaces joined along (0,0,0)-(1,0,0); the members
+  // run in opposite directions to exercise the direction flags.
+  for (int flip = 0; flip < 2; ++flip) {
+    Model m;
+    std::vector<Vec3d> pa = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, pb = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
+    std::vector<std::uint32_t> off = {0, 3}, ia = {0, 1, 2}, ib = {1, 0, 2};
+    const SurfaceIdx sa = add_polygon_surface(m, "A", {pa, off, ia}).value().idx;
+    const SurfaceIdx sb = add_polygon_surface(m, "B", {pb, off, ib}).value().idx;
+    const MeshEdgeIdx ma = m.new_mesh_edge(sa, std::vector<HalfedgeIdx>{m.find_halfedge(NodeIdx{0}, NodeIdx{1})});
+    const HalfedgeIdx hb = flip ? m.find_halfedge(NodeIdx{4}, NodeIdx{3}) : m.find_halfedge(NodeIdx{3}, NodeIdx{4});
+    const MeshEdgeIdx mb = m.new_mesh_edge(sb, std::vector<HalfedgeIdx>{hb});
+    (void)m.new_joint(std::vector<JointMember>{{ma, true}, {mb, flip == 0}});
+    (void)edge_node(m, NodeIdx{0}, NodeIdx{1}, 0.25);
+    (void)edge_node(m, NodeIdx{1}, NodeIdx{0}, 0.4);  // 0.6 from node 0
+    const auto fb = face_node(m, FaceIdx{1}, Vec3d(0.3, 0.3, 0.4));
+    expect_valid(m);
+    const Model old = m;
+    auto r = triangulate_face(m, m.handle(FaceIdx{0}));
+    ASSERT_TRUE(r) << r.status().to_string();
+    expect_valid(m);  // joint: equal lengths, coincident nodes
+    EXPECT_EQ(m.mesh_edges.halfedges.size(ma.value), 3u);
+    EXPECT_EQ(m.mesh_edges.halfedges.size(mb.value), 3u);
+    EXPECT_EQ(r->faces.size(), 3u);
+    EXPECT_EQ(r->new_nodes.size(), 4u);  // two in A, their partners in B
+    ASSERT_EQ(r->grown_faces.size(), 1u);
+    EXPECT_EQ(m.face_degree(FaceIdx{1}), 5u);
+    EXPECT_LT((m.attrib_position_on_surface(fb) - old.attrib_position_on_surface(fb)).norm(), 1e-12);
+    for (NodeIdx v : r->new_nodes) EXPECT_DOUBLE_EQ(m.position(v).y() + m.position(v).z(), 0.0);
+  }
+}
+
+TEST(Triangulate, JointPartnerWithItsOwnEdgeNodesRefused) {
   Model m;
   std::vector<Vec3d> pa = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, pb = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
   std::vector<std::uint32_t> off = {0, 3}, ia = {0, 1, 2}, ib = {1, 0, 2};
@@ -219,6 +251,7 @@ TEST(Triangulate, JointEdgesRefused) {
   const MeshEdgeIdx mb = m.new_mesh_edge(sb, std::vector<HalfedgeIdx>{m.find_halfedge(NodeIdx{3}, NodeIdx{4})});
   (void)m.new_joint(std::vector<JointMember>{{ma, true}, {mb, true}});
   (void)edge_node(m, NodeIdx{0}, NodeIdx{1}, 0.5);
+  (void)edge_node(m, NodeIdx{3}, NodeIdx{4}, 0.7);
   expect_valid(m);
   const Model old = m;
   auto r = triangulate_face(m, m.handle(FaceIdx{0}));
@@ -228,6 +261,7 @@ TEST(Triangulate, JointEdgesRefused) {
   // Without attributes on it the joint edge is kept and the face stays one triangle.
   Model plain = old;
   plain.delete_attrib_node(AttribNodeIdx{0});
+  plain.delete_attrib_node(AttribNodeIdx{1});
   auto r2 = triangulate_face(plain, plain.handle(FaceIdx{0}));
   ASSERT_TRUE(r2) << r2.status().to_string();
   expect_valid(plain);
