@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <functional>
+#include <limits>
+#include <span>
 #include <sstream>
 
 #include "engine/parallel.h"
@@ -31,20 +33,15 @@ bool has_tombstones(const Model& m) {
          !m.faces.slots.free_list().empty();
 }
 
-/// Checks what the split cannot carry over; the model is not touched.
-Status check_splittable(const Model& m) {
+/// Face nodes of polygons (n >= 4) have no exact image in the child quads:
+/// their on-surface positions are kept and re-located after the split.
+std::vector<std::pair<AttribNodeIdx, Vec3d>> polygon_face_nodes(const Model& m) {
+  std::vector<std::pair<AttribNodeIdx, Vec3d>> out;
   const auto& an = m.attrib_nodes;
-  for (std::uint32_t i = 0; i < an.slots.capacity(); ++i) {
-    if (!m.alive(AttribNodeIdx{i}) || an.kind[i] != AttribNodeKind::kFace) continue;
-    const FaceIdx f{an.element[i]};
-    if (m.face_degree(f) != 3) {
-      std::ostringstream s;
-      s << "attribute face-node " << i << " lies in face " << f.value << " with " << m.face_degree(f)
-        << " sides; the uniform split remaps face nodes of triangles only (triangulate the face first)";
-      return {ErrorCode::kUnsupported, s.str()};
-    }
-  }
-  return {};
+  for (std::uint32_t i = 0; i < an.slots.capacity(); ++i)
+    if (m.alive(AttribNodeIdx{i}) && an.kind[i] == AttribNodeKind::kFace && m.face_degree(FaceIdx{an.element[i]}) != 3)
+      out.emplace_back(AttribNodeIdx{i}, m.attrib_position_on_surface(AttribNodeIdx{i}));
+  return out;
 }
 
 /// Per-face counts and their prefix sums (the layout of all new elements).
@@ -121,7 +118,7 @@ void remap_attributes(Model& m, const Layout& L, const ExecContext& ctx) {
         an.element[i] = L.second_half(h).value;
         an.param[i].x() = 2.0 * u - 1.0;
       }
-    } else if (an.kind[i] == AttribNodeKind::kFace) {
+    } else if (an.kind[i] == AttribNodeKind::kFace && L.degree[an.element[i]] == 3) {
       const std::size_t f = an.element[i];
       const ChildBarycentric cb = split_triangle_barycentric(an.param[i]);
       an.element[i] = L.child(f, cb.child).value;
@@ -129,6 +126,48 @@ void remap_attributes(Model& m, const Layout& L, const ExecContext& ctx) {
       an.corner[i] = 0;
     }
   });
+}
+
+/// Face nodes of an old polygon go to the fan triangle of its child quads
+/// that holds their old position best (largest smallest areal coordinate),
+/// clamped to a convex combination: exact up to rounding for planar faces,
+/// the projection onto the nearest child triangle for warped ones.
+void relocate_polygon_face_nodes(Model& m, const Layout& L, std::span<const std::pair<AttribNodeIdx, Vec3d>> nodes) {
+  auto& an = m.attrib_nodes;
+  std::vector<NodeIdx> c;
+  for (const auto& [a, p] : nodes) {
+    const std::uint32_t f = an.element[a.value];
+    double best = -std::numeric_limits<double>::infinity();
+    FaceIdx bf;
+    std::uint8_t bc = 0;
+    Vec3d bb = Vec3d::Zero();
+    for (std::uint32_t k = 0; k < L.degree[f]; ++k) {
+      const FaceIdx child = L.child(f, k);
+      m.face_nodes(child, c);
+      for (std::size_t t = 0; t + 2 < c.size(); ++t) {
+        const Vec3d o = m.position(c[0]), e1 = m.position(c[t + 1]) - o, e2 = m.position(c[t + 2]) - o, d = p - o;
+        const double d11 = e1.dot(e1), d12 = e1.dot(e2), d22 = e2.dot(e2), det = d11 * d22 - d12 * d12;
+        if (!(det > 1e-24 * d11 * d22)) continue;
+        const double r1 = d.dot(e1), r2 = d.dot(e2);
+        const double u = (d22 * r1 - d12 * r2) / det, v = (d11 * r2 - d12 * r1) / det;
+        const Vec3d b(1 - u - v, u, v);
+        if (b.minCoeff() > best) {
+          best = b.minCoeff();
+          bf = child;
+          bc = static_cast<std::uint8_t>(t);
+          bb = b;
+        }
+      }
+    }
+    if (!bf.valid()) {  // every child degenerate: pin it to child 0's first corner
+      bf = L.child(f, 0);
+      bb = Vec3d(1, 0, 0);
+    }
+    bb = bb.cwiseMax(0.0);
+    an.element[a.value] = bf.value;
+    an.corner[a.value] = bc;
+    an.param[a.value] = bb / bb.sum();
+  }
 }
 
 /// Each halfedge of a mesh edge chain becomes its two halves, in order.
@@ -187,13 +226,13 @@ ChildBarycentric split_triangle_barycentric(const Vec3d& b) noexcept {
 
 Expected<SubdivisionMap> subdivide_uniform(Model& m, const ExecContext& ctx) {
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "subdivide_uniform cancelled");
-  if (Status s = check_splittable(m); !s) return s;
   SubdivisionMap map;
   // Index arithmetic needs dense tables.
   if (has_tombstones(m)) {
     map.compaction = m.compact();
     map.compacted = true;
   }
+  const auto poly_nodes = polygon_face_nodes(m);
   const Layout L = make_layout(m, ctx);
   const std::uint32_t V = L.V, E = L.E, F = L.F;
 
@@ -391,6 +430,7 @@ Expected<SubdivisionMap> subdivide_uniform(Model& m, const ExecContext& ctx) {
   });
 
   remap_attributes(m, L, ctx);
+  relocate_polygon_face_nodes(m, L, poly_nodes);
   remap_mesh_edges(m, L);
   fill_map(map, L, ctx);
   ++m.topology_version;
@@ -401,12 +441,12 @@ Expected<SubdivisionMap> subdivide_uniform(Model& m, const ExecContext& ctx) {
 // ----------------------------------------------------------------- naive
 
 Expected<SubdivisionMap> subdivide_uniform_naive(Model& m) {
-  if (Status s = check_splittable(m); !s) return s;
   SubdivisionMap map;
   if (has_tombstones(m)) {
     map.compaction = m.compact();
     map.compacted = true;
   }
+  const auto poly_nodes = polygon_face_nodes(m);
   const ExecContext seq = ExecContext::sequential();
   const Layout L = make_layout(m, seq);
   const std::uint32_t V = L.V, E = L.E, F = L.F;
@@ -491,6 +531,7 @@ Expected<SubdivisionMap> subdivide_uniform_naive(Model& m) {
   }
 
   remap_attributes(m, L, seq);
+  relocate_polygon_face_nodes(m, L, poly_nodes);
   remap_mesh_edges(m, L);
   fill_map(map, L, seq);
   ++m.geometry_version;

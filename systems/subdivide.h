@@ -68,9 +68,11 @@ struct SubdivisionMap {
 /// sizes everything with prefix sums and fills the columns by index
 /// arithmetic in parallel (through engine/parallel.h). The output tables are
 /// a pure function of the input: identical for any ctx.threads.
-/// Errors (model untouched): kUnsupported when an ATTRIB_FACENODE lies in a
-/// face that is not a triangle (its fan parameters have no exact image in the
-/// quads), kCancelled when ctx is cancelled on entry.
+/// ATTRIB_FACENODEs in triangles are remapped exactly; those in polygons
+/// (whose fan parameters have no exact image in the quads) are re-located by
+/// position into the child quad fan triangle holding them (exact up to
+/// rounding for planar faces). Errors (model untouched): kCancelled when ctx
+/// is cancelled on entry.
 /// Ring nodes (nodes.in_face) stay attached to child 0 of their face.
 [[nodiscard]] Expected<SubdivisionMap> subdivide_uniform(Model& model, const ExecContext& ctx = {});
 

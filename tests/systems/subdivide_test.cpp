@@ -146,12 +146,14 @@ void add_attributes(Model& m, std::uint32_t seed) {
     if (e % 3 == 0) chain.push_back(an);
   }
   for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
-    if (!m.alive(FaceIdx{f}) || m.face_degree(FaceIdx{f}) != 3) continue;
+    if (!m.alive(FaceIdx{f})) continue;
+    const std::size_t deg = m.face_degree(FaceIdx{f});
     for (int k = 0; k < 3; ++k) {
       Vec3d b(U(rng), U(rng), U(rng));
       if (k == 1) b = Vec3d(0.5, 0.25, 0.25);  // on the boundary of two children
       b /= b.sum();
-      const auto an = m.new_attrib_node(m.faces.surface[f], AttribNodeKind::kFace, f, b, Vec3d::Zero());
+      const auto corner = static_cast<std::uint8_t>(k % (deg - 2));  // fan triangle of a polygon
+      const auto an = m.new_attrib_node(m.faces.surface[f], AttribNodeKind::kFace, f, b, Vec3d::Zero(), corner);
       m.attrib_nodes.position[an.value] = m.attrib_position_on_surface(an);
       if (m.faces.surface[f] == m.attrib_nodes.surface[chain.front().value] && k == 0) chain.push_back(an);
     }
@@ -426,21 +428,42 @@ TEST(Subdivide, ParityWithNaive) {
   }
 }
 
-TEST(Subdivide, RefusesFaceNodesInPolygons) {
+TEST(Subdivide, FaceNodesInPolygonsKeepTheirPositions) {
   Model m;
-  grid(2, 1, true, [](int i, int j) { return Vec3d(i, j, 0); }).add(m, "q");
-  (void)m.new_attrib_node(SurfaceIdx{0}, AttribNodeKind::kFace, 0, Vec3d(0.2, 0.3, 0.5), Vec3d::Zero());
+  grid(3, 2, true, [](int i, int j) { return Vec3d(0.5 * i, j + 0.1 * i, 0.3 * i - 0.2 * j); }).add(m, "planar quads");
+  Arrays mixed;
+  mixed.p = {{0, 0, 5}, {2, 0, 5}, {3, 1.5, 5}, {1, 3, 5}, {-1, 1.5, 5}, {1, -2, 5}};
+  mixed.face({0, 1, 2, 3, 4});
+  mixed.face({0, 5, 1});
+  mixed.add(m, "mixed");
+  add_attributes(m, 9);
   expect_valid(m);
   const Model old = m;
   auto r = subdivide_uniform(m);
-  ASSERT_FALSE(r);
-  EXPECT_EQ(r.status().code(), ErrorCode::kUnsupported);
-  EXPECT_EQ(diff_tables(m, old), "");
+  ASSERT_TRUE(r) << r.status().to_string();
+  expect_valid(m);
+  std::size_t in_polygons = 0;
+  for (std::uint32_t a = 0; a < old.attrib_nodes.slots.capacity(); ++a) {
+    if (old.attrib_nodes.kind[a] != AttribNodeKind::kFace) continue;
+    in_polygons += old.face_degree(FaceIdx{old.attrib_nodes.element[a]}) > 3;
+    EXPECT_LT((m.attrib_position_on_surface(AttribNodeIdx{a}) - old.attrib_position_on_surface(AttribNodeIdx{a})).norm(),
+              1e-12)
+        << "attribute node " << a;
+    // It lies in a child of its old face.
+    const std::uint32_t f = old.attrib_nodes.element[a], g = m.attrib_nodes.element[a];
+    EXPECT_TRUE(g == f || (g >= r->face_child_begin[f].value && g < r->face_child_begin[f + 1].value));
+  }
+  EXPECT_GE(in_polygons, 15u);
+}
+
+TEST(Subdivide, CancelledOnEntry) {
   ExecContext c;
   c.cancel.cancel();
   Model t;
   octahedron().add(t, "o");
+  const Model old = t;
   EXPECT_EQ(subdivide_uniform(t, c).status().code(), ErrorCode::kCancelled);
+  EXPECT_EQ(diff_tables(t, old), "");
 }
 
 TEST(Subdivide, RingNodesStayInTheirFace) {
