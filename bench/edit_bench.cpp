@@ -4,7 +4,9 @@
 // collapses/swaps (link condition, boundary) are counted in "refused".
 // The "/ring_check" variants keep EditOptions::check_ring_nodes on (one scan
 // of the node table per call, O(V)); the others switch it off, as a caller
-// that knows the mesh has no stand-alone vertices would.
+// that knows the mesh has no stand-alone vertices would. OpenMesh's
+// split / is_collapse_ok+collapse / is_flip_ok+flip on the same grid are the
+// peer figures when OpenMesh is available.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -13,6 +15,10 @@
 
 #include "storage/builder.h"
 #include "systems/edit.h"
+
+#ifdef ATELIER_HAVE_OPENMESH
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#endif
 
 namespace {
 
@@ -103,5 +109,96 @@ void BM_EdgeSwap(benchmark::State& state) {
   run_edit(state, [&](Model& m, EdgeIdx e) { return edge_swap(m, m.handle(e), opt).has_value(); }, 1'000'000);
 }
 BENCHMARK(BM_EdgeSwap)->Unit(benchmark::kMicrosecond);
+
+#ifdef ATELIER_HAVE_OPENMESH
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+OmMesh make_om_grid() {
+  const Model& src = edit_grid();
+  OmMesh om;
+  om.request_vertex_status();
+  om.request_edge_status();
+  om.request_face_status();
+  std::vector<OmMesh::VertexHandle> vh;
+  for (std::uint32_t v = 0; v < src.nodes.slots.capacity(); ++v) {
+    const Vec3d& p = src.position(NodeIdx{v});
+    vh.push_back(om.add_vertex(OmMesh::Point(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()))));
+  }
+  std::vector<NodeIdx> c;
+  for (std::uint32_t f = 0; f < src.faces.slots.capacity(); ++f) {
+    src.face_nodes(FaceIdx{f}, c);
+    om.add_face(vh[c[0].value], vh[c[1].value], vh[c[2].value]);
+  }
+  return om;
+}
+
+template <class Op>
+void run_om(benchmark::State& state, Op op, std::size_t reset_every) {
+  const OmMesh base = make_om_grid();
+  OmMesh om = base;
+  std::mt19937 rng(42);
+  std::size_t done = 0, refused = 0, since_reset = 0;
+  for (auto _ : state) {
+    if (since_reset == reset_every) {
+      state.PauseTiming();
+      om = base;
+      since_reset = 0;
+      state.ResumeTiming();
+    }
+    std::uniform_int_distribution<int> d(0, static_cast<int>(om.n_edges()) - 1);
+    OmMesh::EdgeHandle e;
+    do {
+      e = om.edge_handle(d(rng));
+    } while (om.status(e).deleted());
+    if (op(om, e))
+      ++done;
+    else
+      ++refused;
+    ++since_reset;
+  }
+  state.counters["ops/s"] = benchmark::Counter(static_cast<double>(done), benchmark::Counter::kIsRate);
+  state.counters["refused"] = static_cast<double>(refused);
+}
+
+void BM_OpenMeshEdgeSplit(benchmark::State& state) {
+  run_om(
+      state,
+      [](OmMesh& om, OmMesh::EdgeHandle e) {
+        const auto h = om.halfedge_handle(e, 0);
+        const auto p = 0.5f * (om.point(om.from_vertex_handle(h)) + om.point(om.to_vertex_handle(h)));
+        om.split(e, om.add_vertex(p));
+        return true;
+      },
+      50'000);
+}
+BENCHMARK(BM_OpenMeshEdgeSplit)->Unit(benchmark::kMicrosecond);
+
+void BM_OpenMeshEdgeCollapse(benchmark::State& state) {
+  run_om(
+      state,
+      [](OmMesh& om, OmMesh::EdgeHandle e) {
+        const auto h = om.halfedge_handle(e, 0);
+        if (!om.is_collapse_ok(h)) return false;
+        const auto p = 0.5f * (om.point(om.from_vertex_handle(h)) + om.point(om.to_vertex_handle(h)));
+        om.set_point(om.to_vertex_handle(h), p);
+        om.collapse(h);
+        return true;
+      },
+      30'000);
+}
+BENCHMARK(BM_OpenMeshEdgeCollapse)->Unit(benchmark::kMicrosecond);
+
+void BM_OpenMeshEdgeFlip(benchmark::State& state) {
+  run_om(
+      state,
+      [](OmMesh& om, OmMesh::EdgeHandle e) {
+        if (!om.is_flip_ok(e)) return false;
+        om.flip(e);
+        return true;
+      },
+      1'000'000);
+}
+BENCHMARK(BM_OpenMeshEdgeFlip)->Unit(benchmark::kMicrosecond);
+#endif
 
 }  // namespace
