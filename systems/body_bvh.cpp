@@ -454,16 +454,30 @@ Status BodyBvh::require_closed() const {
 }
 
 ClosestHit BodyBvh::closest_point(const Vec3d& p) const noexcept {
+  return closest_point(p, std::numeric_limits<double>::infinity());
+}
+
+ClosestHit BodyBvh::closest_point(const Vec3d& p, double bound) const noexcept {
   const Impl& im = *impl_;
   if (!im.committed || !p.allFinite()) return {};
-  PointQueryUser user{&im, p, 1e-6 * (im.scale + p.cwiseAbs().maxCoeff()), {}};
+  const double margin = 1e-6 * (im.scale + p.cwiseAbs().maxCoeff());
   RTCPointQuery q;
   q.x = static_cast<float>(p.x());
   q.y = static_cast<float>(p.y());
   q.z = static_cast<float>(p.z());
   q.time = 0.0f;
-  q.radius = std::numeric_limits<float>::infinity();
   RTCPointQueryContext pctx;
+  if (bound >= 0.0 && std::isfinite(bound)) {
+    // Every triangle within `bound` has its box within the first radius, so
+    // a best hit within `bound` is the same one the unbounded search finds.
+    PointQueryUser user{&im, p, margin, {}};
+    q.radius = static_cast<float>(bound * (1.0 + 1e-6) + margin);
+    rtcInitPointQueryContext(&pctx);
+    rtcPointQuery(im.scene, &q, &pctx, point_query_callback, &user);
+    if (user.best.distance <= bound) return user.best;
+  }
+  PointQueryUser user{&im, p, margin, {}};
+  q.radius = std::numeric_limits<float>::infinity();
   rtcInitPointQueryContext(&pctx);
   rtcPointQuery(im.scene, &q, &pctx, point_query_callback, &user);
   return user.best;
@@ -591,7 +605,11 @@ SignedHit BodyBvh::signed_distance_to(const Vec3d& p, std::uint32_t t) const noe
 }
 
 SignedHit BodyBvh::signed_distance(const Vec3d& p) const noexcept {
-  const ClosestHit c = closest_point(p);
+  return signed_distance(p, std::numeric_limits<double>::infinity());
+}
+
+SignedHit BodyBvh::signed_distance(const Vec3d& p, double bound) const noexcept {
+  const ClosestHit c = closest_point(p, bound);
   if (c.triangle == kNoTriangle) return {};
   return signed_distance_to(p, c.triangle);
 }

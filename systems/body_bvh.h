@@ -172,6 +172,10 @@ class BodyBvh {
   /// Exact closest point (double precision point-triangle distance; the
   /// Embree traversal only culls). Ties go to the smallest triangle index.
   [[nodiscard]] ClosestHit closest_point(const Vec3d& p) const noexcept;
+  /// The same result, faster when `bound` is an upper bound on the distance
+  /// (the search starts with that radius; when nothing lies within it, an
+  /// unbounded search follows, so a wrong bound costs time, never accuracy).
+  [[nodiscard]] ClosestHit closest_point(const Vec3d& p, double bound) const noexcept;
   [[nodiscard]] Status closest_points(std::span<const Vec3d> in, std::span<ClosestHit> out,
                                       const ExecContext& ctx = {}) const;
 
@@ -189,6 +193,8 @@ class BodyBvh {
   /// weighted pseudonormal", 2005). Requires closed() for a meaningful sign;
   /// the sign is exact up to rounding for points not on the surface.
   [[nodiscard]] SignedHit signed_distance(const Vec3d& p) const noexcept;
+  /// With an upper bound on |distance| (see closest_point(p, bound)).
+  [[nodiscard]] SignedHit signed_distance(const Vec3d& p, double bound) const noexcept;
   /// The same, given that `triangle` holds the closest point of p (used by
   /// the SDF grid, whose voxels know their closest triangle).
   [[nodiscard]] SignedHit signed_distance_to(const Vec3d& p, std::uint32_t triangle) const noexcept;

@@ -264,6 +264,12 @@ TEST(Spatial, ClosestPointMatchesBruteForce) {
       ASSERT_LT((hits[i].point - e.point).norm(), 1e-9 * scale) << i;
       ASSERT_EQ(hits[i].triangle, e.triangle) << "ties go to the smallest index, point " << i;
       ASSERT_EQ(hits[i].feature, e.feature);
+      // A distance bound (right or wrong) changes the cost, not the answer.
+      for (double f : {0.5, 1.0, 1.0 + 1e-12, 3.0}) {
+        const ClosestHit b = tree->closest_point(pts[i], f * e.distance);
+        ASSERT_EQ(b.triangle, e.triangle) << i << " bound factor " << f;
+        ASSERT_EQ(b.distance, hits[i].distance);
+      }
     }
   }
 }
