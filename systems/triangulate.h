@@ -56,7 +56,9 @@ struct TriangulationResult {
   std::vector<FaceIdx> grown_faces;  // neighbours that gained corners and are still polygons
 };
 
-/// Triangulates one face with its attributes (see above).
+/// Triangulates one face with its attributes (see above). Cost: one scan of
+/// the node and attribute tables (ring nodes, attributes touching the face)
+/// plus the CDT of the face's points.
 [[nodiscard]] Expected<TriangulationResult> triangulate_face(Model& model, Face face,
                                                              const TriangulateOptions& opt = {});
 /// Triangulates each face in turn (stops at the first error; faces done
