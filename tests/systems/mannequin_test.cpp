@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <sstream>
 #include <string>
@@ -315,6 +316,24 @@ TEST(Mannequin, NoSelfIntersectionForAThousandSampledBodies) {
       const double area = ((*pos)[v[1]] - (*pos)[v[0]]).cross((*pos)[v[2]] - (*pos)[v[0]]).norm();
       ASSERT_GT(area, 1e-8) << "body " << i << " face " << f;
     }
+    std::string where;
+    if (count_self_intersections(*pos, t.face_offsets, t.face_nodes, 1, &where) != 0) {
+      ++bad;
+      ADD_FAILURE() << "body " << i << " self-intersects: " << where;
+    }
+  }
+  EXPECT_EQ(bad, 0u);
+}
+
+TEST(Mannequin, NoSelfIntersectionForAThousandBodiesAtDefaultResolution) {
+  // About 1.5 minutes on one core: run with ATELIER_LONG_TESTS=1.
+  if (!std::getenv("ATELIER_LONG_TESTS")) GTEST_SKIP() << "set ATELIER_LONG_TESTS=1 to check 1,000 bodies at level 6";
+  const MannequinTopology& t = topology(6);
+  const auto params = sample_mannequins(1000, 1);
+  std::size_t bad = 0;
+  for (std::size_t i = 0; i < params.size(); ++i) {
+    auto pos = mannequin_positions(params[i], t);
+    ASSERT_TRUE(pos) << pos.status().to_string();
     std::string where;
     if (count_self_intersections(*pos, t.face_offsets, t.face_nodes, 1, &where) != 0) {
       ++bad;
