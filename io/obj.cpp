@@ -327,8 +327,13 @@ void write_obj(const Model& m, const std::filesystem::path& path) {
     std::vector<NodeIdx> corners;
     for (std::uint32_t si = 0; si < m.surfaces.slots.capacity(); ++si) {
       if (!m.alive(SurfaceIdx{si})) continue;
+      // A name is one line of text in OBJ: line breaks would start new
+      // statements, so they become blanks.
+      std::string name = m.surfaces.name[si];
+      for (char& ch : name)
+        if (ch == '\n' || ch == '\r') ch = ' ';
       s += "g ";
-      s += m.surfaces.name[si];
+      s += name;
       s += '\n';
       for (FaceIdx f : by_surface[si]) {
         m.face_nodes(f, corners);
