@@ -404,12 +404,18 @@ SdfGrid::Sampler::Sampler(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {
 SdfGrid::Sampler::Sampler(Sampler&&) noexcept = default;
 SdfGrid::Sampler& SdfGrid::Sampler::operator=(Sampler&&) noexcept = default;
 SdfGrid::Sampler::~Sampler() = default;
-double SdfGrid::Sampler::sample(const Vec3d& p) { return impl_->g->sample(impl_->acc, p); }
-bool SdfGrid::Sampler::inside(const Vec3d& p) { return impl_->g->inside(impl_->acc, p, impl_->stats); }
-const InsideStats& SdfGrid::Sampler::stats() const noexcept { return impl_->stats; }
+double SdfGrid::Sampler::sample(const Vec3d& p) {
+  if (!impl_) return std::numeric_limits<double>::quiet_NaN();
+  return impl_->g->sample(impl_->acc, p);
+}
+bool SdfGrid::Sampler::inside(const Vec3d& p) { return impl_ && impl_->g->inside(impl_->acc, p, impl_->stats); }
+const InsideStats& SdfGrid::Sampler::stats() const noexcept {
+  static const InsideStats kNone{};
+  return impl_ ? impl_->stats : kNone;
+}
 
 SdfGrid::Sampler SdfGrid::sampler() const {
-  if (!impl_) throw Error(Status(ErrorCode::kInvalidArgument, "SdfGrid::sampler: grid not built"));
+  if (!impl_) return Sampler(nullptr);  // an unbuilt grid: NaN samples, never inside
   return Sampler(std::unique_ptr<Sampler::Impl>(
       new Sampler::Impl{impl_.get(), impl_->grid->getConstUnsafeAccessor(), {}}));
 }

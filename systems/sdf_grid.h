@@ -106,6 +106,8 @@ class SdfGrid {
   [[nodiscard]] bool inside(const Vec3d& p) const;
 
   /// A cached (per-thread, not thread-safe) accessor: keep one per thread.
+  /// Valid while the grid lives and is not rebuilt. From an unbuilt grid it
+  /// samples NaN and answers "not inside".
   class Sampler {
    public:
     Sampler(Sampler&&) noexcept;

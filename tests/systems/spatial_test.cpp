@@ -751,6 +751,9 @@ TEST(Spatial, BadInputGivesClearErrors) {
   EXPECT_EQ(grid.build(bvh, p).code(), ErrorCode::kInvalidArgument);
   std::vector<std::uint8_t> in(1);
   EXPECT_EQ(grid.inside_many(one, in).code(), ErrorCode::kInvalidArgument);
+  SdfGrid::Sampler unbuilt = grid.sampler();
+  EXPECT_TRUE(std::isnan(unbuilt.sample(Vec3d(0, 0, 0))));
+  EXPECT_FALSE(unbuilt.inside(Vec3d(0, 0, 0)));
   // Cancellation.
   ExecContext cancelled;
   cancelled.cancel.cancel();
