@@ -189,13 +189,16 @@ void Model::link_out(HalfedgeIdx h) {
     vn[h.value] = vp[h.value] = h;
     return;
   }
-  // Sorted insertion: before the first element greater than h.
+  // Sorted insertion: before the first element greater than h. New
+  // halfedges usually have the largest index, so try the end of the ring first.
   const HalfedgeIdx start = head_of_ring;
   HalfedgeIdx x = start;
-  do {
-    if (x > h) break;
-    x = vn[x.value];
-  } while (x != start);
+  if (!(vp[start.value] < h)) {
+    do {
+      if (x > h) break;
+      x = vn[x.value];
+    } while (x != start);
+  }
   // Insert h before x (if no greater element was found, x == start: insert at end).
   const HalfedgeIdx p = vp[x.value];
   vn[p.value] = h;

@@ -1,0 +1,75 @@
+// Umbrella fairing (seed 000 section 4.2, after Kobbelt's variational
+// subdivision): free nodes move to make the 2nd-order umbrella vanish,
+//   U(p)  = 1/n sum_j p_j - p,       U2(p) = 1/n sum_j U(p_j) - U(p),
+// solved iteratively by p <- p - U2(p) / nu,  nu = 1 + 1/n sum_j 1/n_j
+// (Kobbelt 1998, the diagonal of U2). Jacobi updates over a CSR adjacency,
+// so each iteration is a pure function of the previous one: parallel and
+// bit-identical for any thread count.
+//
+// Collision avoidance (seed 000 section 4.2, Fig. 16): with a signed
+// distance to the reference body, every move is applied in sub-steps and a
+// move that would bring a node closer than the clearance is cut at its last
+// admissible sub-step. Because a signed distance is 1-Lipschitz, a node whose
+// distance exceeds the clearance by more than its move needs no test at all,
+// so the body is queried only near it.
+//
+// Reads: halfedge connectivity, nodes.position. Writes: nodes.position of
+// free nodes, geometry_version.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "engine/exec_context.h"
+#include "engine/math.h"
+#include "engine/status.h"
+#include "storage/model.h"
+
+namespace atelier {
+
+/// Node adjacency in CSR form (neighbours through edges, in ring order).
+struct NodeAdjacency {
+  std::vector<std::uint32_t> offset;    // size N+1 (N = node capacity)
+  std::vector<std::uint32_t> neighbor;  // node indices
+  std::uint64_t topology_version = 0;   // of the model it was built from
+  [[nodiscard]] std::uint32_t degree(std::size_t v) const noexcept { return offset[v + 1] - offset[v]; }
+};
+
+/// Adjacency of all live nodes (optionally of one surface only).
+[[nodiscard]] NodeAdjacency build_adjacency(const Model& m, SurfaceIdx only = {}, const ExecContext& ctx = {});
+
+struct FairParams {
+  int iterations = 50;
+  /// Stop early when the largest move of an iteration is below this.
+  double tolerance = 0.0;
+  /// Signed distance to the body (negative inside); empty: no collision test.
+  std::function<double(const Vec3d&)> signed_distance;
+  /// Distance to keep from the body when collision is on.
+  double clearance = 0.0;
+  /// Sub-steps of a move near the body (seed 000: "subdivided into several steps").
+  int substeps = 4;
+};
+
+struct FairReport {
+  int iterations = 0;
+  double last_max_move = 0;
+  std::uint64_t distance_queries = 0;  // body queries made by the collision test
+  std::uint64_t refused_moves = 0;     // moves cut short by the collision test
+};
+
+/// Fairs the free nodes (fixed[v] == false) of the model in place. `fixed`
+/// has one entry per node slot; isolated and dead nodes are ignored.
+[[nodiscard]] Expected<FairReport> fair_umbrella(Model& m, std::span<const std::uint8_t> fixed,
+                                                 const FairParams& params, const ExecContext& ctx = {});
+/// The same on a position array with a prebuilt adjacency (hot path).
+[[nodiscard]] Expected<FairReport> fair_umbrella(std::span<Vec3d> positions, const NodeAdjacency& adj,
+                                                 std::span<const std::uint8_t> fixed, const FairParams& params,
+                                                 const ExecContext& ctx = {});
+
+/// Largest |U2(p)| over free nodes (smoothness measure of a result).
+[[nodiscard]] double umbrella2_norm(std::span<const Vec3d> positions, const NodeAdjacency& adj,
+                                    std::span<const std::uint8_t> fixed, const ExecContext& ctx = {});
+
+}  // namespace atelier
