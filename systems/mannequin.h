@@ -13,6 +13,11 @@
 // hole cut in the torso grid. Ring counts per segment depend only on the
 // resolution, so every parameter set gives the same topology.
 //
+// Girths: the tape measure of a ring is the perimeter of the convex hull of
+// its polygon. Scaling a section about its centre scales that hull exactly,
+// so each measured ring is fitted in one step (no secant iterations needed)
+// and matches the request to rounding error, at every resolution.
+//
 // Axes: y up (feet at y = 0), z to the front, +x the body's left; metres.
 //
 // Reads: nothing global. Writes: a new Model (one surface "skin").

@@ -303,13 +303,27 @@ TEST(Mannequin, NoSelfIntersectionAtDefaultResolution) {
   }
 }
 
-TEST(Mannequin, NoSelfIntersectionForAThousandSampledBodies) {
+TEST(Mannequin, AThousandSampledBodiesAreEmbeddedFittedAndEncodable) {
   const MannequinTopology& t = topology(2);
   const auto params = sample_mannequins(1000, 1);
+  // One model carries the features; each body is evaluated from its positions.
+  auto features = make_mannequin(MannequinParams{}, t);
+  ASSERT_TRUE(features);
   std::size_t bad = 0;
   for (std::size_t i = 0; i < params.size(); ++i) {
     auto pos = mannequin_positions(params[i], t);
     ASSERT_TRUE(pos) << pos.status().to_string();
+    auto ms = measure_body(*features, *pos);
+    ASSERT_TRUE(ms);
+    for (const auto& c : ms->curves) {
+      const double want = requested_girth(params[i], c.id);
+      if (!std::isnan(want)) ASSERT_NEAR(c.girth / want, 1.0, 0.01) << "body " << i << " " << c.name;
+    }
+    for (const auto& fp : features->points) {
+      auto f = feature_frame(*features, fp.id, *pos);
+      ASSERT_TRUE(f);
+      ASSERT_GT(std::abs(f->triple()), 0.3) << "body " << i << " point " << fp.name;
+    }
     // Non-degenerate faces as well.
     for (std::size_t f = 0; f + 1 < t.face_offsets.size(); ++f) {
       const auto* v = &t.face_nodes[t.face_offsets[f]];
