@@ -357,6 +357,32 @@ TEST(Mannequin, NoSelfIntersectionForAThousandBodiesAtDefaultResolution) {
   EXPECT_EQ(bad, 0u);
 }
 
+TEST(Mannequin, ExtremeSampledMeasurementsStayEmbedded) {
+  // Each measurement pushed to the smallest and largest value of 20,000
+  // draws, the others kept at a typical body's: still valid and embedded.
+  const auto draws = sample_mannequins(20'000, 3);
+  const MannequinTopology& t = topology(6);
+  double MannequinParams::*fields[] = {&MannequinParams::neck_girth,     &MannequinParams::bust_girth,
+                                       &MannequinParams::underbust_girth, &MannequinParams::waist_girth,
+                                       &MannequinParams::hip_girth,       &MannequinParams::thigh_girth,
+                                       &MannequinParams::knee_girth,      &MannequinParams::ankle_girth,
+                                       &MannequinParams::upper_arm_girth, &MannequinParams::shoulder_width,
+                                       &MannequinParams::back_length};
+  int tried = 0;
+  for (auto f : fields) {
+    const auto [lo, hi] = std::minmax_element(draws.begin(), draws.end(), [f](const auto& a, const auto& b) { return a.*f < b.*f; });
+    for (const MannequinParams* src : {&*lo, &*hi}) {
+      MannequinParams p = *src;  // the extreme body itself (consistent by construction)
+      auto pos = mannequin_positions(p, t);
+      ASSERT_TRUE(pos) << pos.status().to_string();
+      std::string where;
+      EXPECT_EQ(count_self_intersections(*pos, t.face_offsets, t.face_nodes, 1, &where), 0u) << where;
+      ++tried;
+    }
+  }
+  EXPECT_EQ(tried, 22);
+}
+
 TEST(Mannequin, CheckerSeesLegsPushedIntoEachOther) {
   // The check above can fail: shifting the left leg onto the right one is caught.
   const MannequinTopology& t = topology(2);
