@@ -18,7 +18,11 @@
 // so each measured ring is fitted in one step (no secant iterations needed)
 // and matches the request to rounding error, at every resolution.
 //
-// Axes: y up (feet at y = 0), z to the front, +x the body's left; metres.
+// Axes: y up, z to the front, +x the body's left; metres. y = 0 is the floor
+// the person stands on: levels are placed from the stature with
+// anthropometric ratios (nape 0.848 H, armpit 0.118 H below it, knee
+// 0.285 H, ankle 0.055 H); the form is headless and ends in short caps
+// below the ankles (lowest point 0.03 H) and above the neck.
 //
 // Reads: nothing global. Writes: a new Model (one surface "skin").
 #pragma once
@@ -34,8 +38,9 @@
 
 namespace atelier {
 
-/// Body measurements in metres. Girths are tape measures (convex hull of the
-/// cross section). shoulder_width is the straight distance between the two
+/// Body measurements in metres. height is the person's stature (the headless
+/// form is shorter). Girths are tape measures (convex hull of the cross
+/// section). shoulder_width is the straight distance between the two
 /// shoulder points; back_length runs from the nape (neck base) to the waist;
 /// inseam is the crotch height.
 struct MannequinParams {
