@@ -75,72 +75,108 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
       << (adj.offset.empty() ? 0 : adj.offset.size() - 1) << " nodes do not match";
     return Status(ErrorCode::kMismatch, s.str());
   }
-  if (prm.iterations < 0 || prm.substeps < 1) return Status(ErrorCode::kInvalidArgument, "fair_umbrella: bad iteration or sub-step count");
-  // The diagonal nu_v (Kobbelt): 1 + 1/n sum_j 1/n_j.
-  std::vector<double> inv_nu(n, 0.0);
+  if (prm.iterations < 0 || prm.substeps < 1)
+    return Status(ErrorCode::kInvalidArgument, "fair_umbrella: bad iteration or sub-step count");
+  // 1/n per node and the diagonal 1/nu_v (Kobbelt): nu = 1 + 1/n sum_j 1/n_j.
+  std::vector<double> inv_deg(n, 0.0), inv_nu(n, 0.0);
+  for (std::size_t v = 0; v < n; ++v)
+    if (adj.degree(v)) inv_deg[v] = 1.0 / adj.degree(v);
   std::vector<std::uint32_t> free_nodes;
   for (std::size_t v = 0; v < n; ++v) {
-    const std::uint32_t d = adj.degree(v);
-    if (fixed[v] || d == 0) continue;
+    if (fixed[v] || adj.degree(v) == 0) continue;
     double s = 0;
-    for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) {
-      const std::uint32_t dj = adj.degree(adj.neighbor[k]);
-      s += dj ? 1.0 / dj : 0.0;
-    }
-    inv_nu[v] = 1.0 / (1.0 + s / d);
+    for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += inv_deg[adj.neighbor[k]];
+    inv_nu[v] = 1.0 / (1.0 + s * inv_deg[v]);
     free_nodes.push_back(static_cast<std::uint32_t>(v));
   }
+  // Nodes that feed U2 of a free node: the free nodes and their neighbours.
+  std::vector<std::uint8_t> need_u(n, 0);
+  for (std::uint32_t v : free_nodes) {
+    need_u[v] = 1;
+    for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) need_u[adj.neighbor[k]] = 1;
+  }
+  std::vector<std::uint32_t> u_nodes;
+  for (std::size_t v = 0; v < n; ++v)
+    if (need_u[v] && adj.degree(v)) u_nodes.push_back(static_cast<std::uint32_t>(v));
+
   const bool collide = static_cast<bool>(prm.signed_distance);
-  // Lower bounds of each free node's signed distance (1-Lipschitz bookkeeping).
   std::vector<double> lower(collide ? free_nodes.size() : 0, -std::numeric_limits<double>::infinity());
-  std::vector<Vec3d> u, next(free_nodes.size());
-  std::vector<double> moved(free_nodes.size());
-  std::vector<std::uint32_t> queries(free_nodes.size()), refused(free_nodes.size());
+  std::vector<std::uint32_t> queries(collide ? free_nodes.size() : 0), refused(collide ? free_nodes.size() : 0);
+  std::vector<Vec3d> u(n, Vec3d::Zero());
+  // Double buffer: fixed nodes hold the same value in both, free nodes are
+  // rewritten every iteration, so no copy pass is needed.
+  std::vector<Vec3d> other(p.begin(), p.end());
+  Vec3d* cur = p.data();
+  Vec3d* nxt = other.data();
+  const std::uint32_t* off = adj.offset.data();
+  const std::uint32_t* nb = adj.neighbor.data();
+  constexpr std::size_t kBlock = 2048;
+  std::vector<double> block_max((free_nodes.size() + kBlock - 1) / kBlock);
   FairReport rep;
+  ExecContext bctx = ctx;
+  bctx.grain = 1;
+  bctx.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / kBlock);
   for (int it = 0; it < prm.iterations; ++it) {
     if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "fair_umbrella cancelled");
-    umbrella(p, adj, u, ctx);
-    par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) {
-      const std::uint32_t v = free_nodes[i];
-      const Vec3d step = -inv_nu[v] * umbrella2_at(v, adj, u);
-      const double len = step.norm();
-      Vec3d q = p[v] + step;
-      if (collide) {
-        if (!(lower[i] - len > prm.clearance)) {
-          // Near the body: advance in sub-steps from the exact distance of
-          // the start, keep the last admissible one.
-          Vec3d last = p[v];
-          double last_d = prm.signed_distance(p[v]);
-          ++queries[i];
-          bool cut = false;
-          for (int s = 1; s <= prm.substeps; ++s) {
-            const Vec3d t = p[v] + step * (static_cast<double>(s) / prm.substeps);
-            const double d = prm.signed_distance(t);
-            ++queries[i];
-            if (d < prm.clearance && d < last_d) {  // entering (or deeper into) the forbidden zone
-              cut = true;
-              break;
-            }
-            last = t;
-            last_d = d;
-          }
-          refused[i] += cut;
-          q = last;
-          lower[i] = last_d;
-        } else {
-          lower[i] -= len;
-        }
+    par::for_each_block(ctx, u_nodes.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        const std::uint32_t v = u_nodes[i];
+        Vec3d s = Vec3d::Zero();
+        for (std::uint32_t k = off[v]; k < off[v + 1]; ++k) s += cur[nb[k]];
+        u[v] = s * inv_deg[v] - cur[v];
       }
-      next[i] = q;
-      moved[i] = (q - p[v]).norm();
     });
-    par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) { p[free_nodes[i]] = next[i]; });
+    par::for_each_n(bctx, block_max.size(), [&](std::size_t blk) {
+      double mx = 0;
+      const std::size_t end = std::min(free_nodes.size(), (blk + 1) * kBlock);
+      for (std::size_t i = blk * kBlock; i < end; ++i) {
+        const std::uint32_t v = free_nodes[i];
+        Vec3d s = Vec3d::Zero();
+        for (std::uint32_t k = off[v]; k < off[v + 1]; ++k) s += u[nb[k]];
+        const Vec3d step = -inv_nu[v] * (s * inv_deg[v] - u[v]);
+        Vec3d q = cur[v] + step;
+        if (collide) {
+          const double len = step.norm();
+          if (!(lower[i] - len > prm.clearance)) {
+            // Near the body: advance in sub-steps from the exact distance of
+            // the start, keep the last admissible one.
+            Vec3d last = cur[v];
+            double last_d = prm.signed_distance(cur[v]);
+            ++queries[i];
+            bool cut = false;
+            for (int k = 1; k <= prm.substeps; ++k) {
+              const Vec3d t = cur[v] + step * (static_cast<double>(k) / prm.substeps);
+              const double d = prm.signed_distance(t);
+              ++queries[i];
+              if (d < prm.clearance && d < last_d) {  // entering, or going deeper into, the forbidden zone
+                cut = true;
+                break;
+              }
+              last = t;
+              last_d = d;
+            }
+            refused[i] += cut;
+            q = last;
+            lower[i] = last_d;
+          } else {
+            lower[i] -= len;
+          }
+        }
+        mx = std::max(mx, (q - cur[v]).squaredNorm());
+        nxt[v] = q;
+      }
+      block_max[blk] = mx;
+    });
+    std::swap(cur, nxt);
     rep.iterations = it + 1;
-    rep.last_max_move = par::transform_reduce(
-        ctx, moved.size(), 0.0, [&](std::size_t i) { return moved[i]; }, [](double a, double b) { return std::max(a, b); });
+    double mx = 0;
+    for (double b : block_max) mx = std::max(mx, b);  // max is exact in any order
+    rep.last_max_move = std::sqrt(mx);
     if (rep.last_max_move <= prm.tolerance) break;
   }
-  for (std::size_t i = 0; i < free_nodes.size(); ++i) {
+  if (cur != p.data())
+    par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) { p[free_nodes[i]] = cur[free_nodes[i]]; });
+  for (std::size_t i = 0; i < queries.size(); ++i) {
     rep.distance_queries += queries[i];
     rep.refused_moves += refused[i];
   }
