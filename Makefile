@@ -38,13 +38,13 @@ asan:
 	@bash scripts/install-deps.sh
 	cmake -S . -B build-asan -G "$(GEN)" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DATELIER_SANITIZE=address,undefined -DATELIER_BUILD_BENCH=OFF
 	cmake --build build-asan -j $(JOBS)
-	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build-asan --output-on-failure -j $(JOBS)
+	ATELIER_SKIP_LONG_TESTS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build-asan --output-on-failure -j $(JOBS)
 
 tsan:
 	@bash scripts/install-deps.sh
 	cmake -S . -B build-tsan -G "$(GEN)" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DATELIER_SANITIZE=thread -DATELIER_BUILD_BENCH=OFF
 	cmake --build build-tsan -j $(JOBS)
-	ctest --test-dir build-tsan --output-on-failure -j $(JOBS)
+	ATELIER_SKIP_LONG_TESTS=1 ctest --test-dir build-tsan --output-on-failure -j $(JOBS)
 
 format:
 	find engine storage systems io apps tests bench examples -name '*.h' -o -name '*.cpp' | xargs clang-format -i
