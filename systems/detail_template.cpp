@@ -219,10 +219,48 @@ void CentroidGrid::build(std::span<const Vec3d> c, std::span<const std::uint8_t>
 
 void CentroidGrid::nearest(const Vec3d& q, std::size_t k, std::vector<std::uint32_t>& out,
                            std::vector<std::pair<double, std::uint32_t>>& heap) const {
+  (void)nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
+}
+
+double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound, std::vector<std::uint32_t>& out,
+                                     std::vector<std::pair<double, std::uint32_t>>& heap) const {
   out.clear();
   heap.clear();
   k = std::min(k, ids_.size());
-  if (k == 0) return;
+  if (k == 0) return 0.0;
+  // Candidates farther than the bound can never be among the k nearest.
+  const double bound2 = bound * bound;
+  const int ci = std::clamp(static_cast<int>(std::floor((q.x() - lo_.x()) / cell_)), 0, nx_ - 1);
+  const int cj = std::clamp(static_cast<int>(std::floor((q.y() - lo_.y()) / cell_)), 0, ny_ - 1);
+  const int ck = std::clamp(static_cast<int>(std::floor((q.z() - lo_.z()) / cell_)), 0, nz_ - 1);
+  if (bound2 < std::numeric_limits<double>::infinity()) {
+    // With a bound no heap is needed: collect every centroid inside the
+    // bound from the boxes the bound's cube overlaps, then select the k
+    // smallest (distance, index) pairs: the same set and order as brute force.
+    auto box = [&](double c, double l, int n) {
+      return std::pair<int, int>{std::clamp(static_cast<int>(std::floor((c - bound - l) / cell_)), 0, n - 1),
+                                 std::clamp(static_cast<int>(std::floor((c + bound - l) / cell_)), 0, n - 1)};
+    };
+    const auto [i_lo, i_hi] = box(q.x(), lo_.x(), nx_);
+    const auto [j_lo, j_hi] = box(q.y(), lo_.y(), ny_);
+    const auto [k_lo, k_hi] = box(q.z(), lo_.z(), nz_);
+    (void)ci, (void)cj, (void)ck;
+    for (int kk = k_lo; kk <= k_hi; ++kk)
+      for (int j = j_lo; j <= j_hi; ++j) {
+        const std::size_t row = (static_cast<std::size_t>(kk) * ny_ + j) * nx_;
+        const std::uint32_t b = start_[row + i_lo], e = start_[row + i_hi + 1];  // cells i_lo..i_hi are contiguous
+        for (std::uint32_t s = b; s < e; ++s) {
+          const double d2 = (exact_[s] - q).squaredNorm();
+          if (d2 <= bound2) heap.emplace_back(d2, ids_[s]);
+        }
+      }
+    if (heap.size() < k) return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
+    std::nth_element(heap.begin(), heap.begin() + static_cast<std::ptrdiff_t>(k - 1), heap.end());
+    heap.resize(k);
+    std::sort(heap.begin(), heap.end());
+    for (const auto& c : heap) out.push_back(c.second);
+    return std::sqrt(heap.back().first);
+  }
   const int i0 = std::clamp(static_cast<int>(std::floor((q.x() - lo_.x()) / cell_)), 0, nx_ - 1);
   const int j0 = std::clamp(static_cast<int>(std::floor((q.y() - lo_.y()) / cell_)), 0, ny_ - 1);
   const int k0 = std::clamp(static_cast<int>(std::floor((q.z() - lo_.z()) / cell_)), 0, nz_ - 1);
@@ -231,14 +269,16 @@ void CentroidGrid::nearest(const Vec3d& q, std::size_t k, std::vector<std::uint3
     const std::size_t c = (static_cast<std::size_t>(kk) * ny_ + j) * nx_ + i;
     const std::uint32_t b = start_[c], e = start_[c + 1];
     if (b == e) return;
-    if (heap.size() == k) {
-      // Prune boxes entirely farther than the current k-th candidate.
+    {
+      // Prune boxes entirely farther than the current k-th candidate or the bound.
+      const double limit = heap.size() == k ? heap.front().first : bound2;
       const Vec3d blo = lo_ + cell_ * Vec3d(i, j, kk);
       const Vec3d d = (blo - q).cwiseMax(q - (blo.array() + cell_).matrix()).cwiseMax(0.0);
-      if (d.squaredNorm() > heap.front().first) return;
+      if (d.squaredNorm() > limit) return;
     }
     for (std::uint32_t s = b; s < e; ++s) {
       const Cand cand((exact_[s] - q).squaredNorm(), ids_[s]);
+      if (cand.first > bound2) continue;
       if (heap.size() < k) {
         heap.push_back(cand);
         std::push_heap(heap.begin(), heap.end());
@@ -267,19 +307,35 @@ void CentroidGrid::nearest(const Vec3d& q, std::size_t k, std::vector<std::uint3
     if (heap.size() == k) {
       // Unvisited boxes lie outside the block of rings 0..h: a lower bound on
       // their distance is q's distance to that block's nearest open side.
-      double bound = std::numeric_limits<double>::infinity();
+      double ring = std::numeric_limits<double>::infinity();
       auto side = [&](int c0, int n, double qc, double l) {
-        if (c0 - h > 0) bound = std::min(bound, qc - (l + cell_ * (c0 - h)));
-        if (c0 + h < n - 1) bound = std::min(bound, l + cell_ * (c0 + h + 1) - qc);
+        if (c0 - h > 0) ring = std::min(ring, qc - (l + cell_ * (c0 - h)));
+        if (c0 + h < n - 1) ring = std::min(ring, l + cell_ * (c0 + h + 1) - qc);
       };
       side(i0, nx_, q.x(), lo_.x());
       side(j0, ny_, q.y(), lo_.y());
       side(k0, nz_, q.z(), lo_.z());
-      if (bound > 0 && heap.front().first < bound * bound) break;
+      if (ring > 0 && heap.front().first < ring * ring) break;
+    } else if (bound2 < std::numeric_limits<double>::infinity()) {
+      // Every unvisited box beyond the bound: stop, and if fewer than k were
+      // found the bound was wrong, so search again without it.
+      double ring = std::numeric_limits<double>::infinity();
+      auto side = [&](int c0, int n, double qc, double l) {
+        if (c0 - h > 0) ring = std::min(ring, qc - (l + cell_ * (c0 - h)));
+        if (c0 + h < n - 1) ring = std::min(ring, l + cell_ * (c0 + h + 1) - qc);
+      };
+      side(i0, nx_, q.x(), lo_.x());
+      side(j0, ny_, q.y(), lo_.y());
+      side(k0, nz_, q.z(), lo_.z());
+      if (ring > 0 && ring * ring > bound2)
+        return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
     }
   }
+  if (heap.size() < k) return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
+  const double kth = std::sqrt(heap.front().first);
   std::sort_heap(heap.begin(), heap.end());
   for (const auto& c : heap) out.push_back(c.second);
+  return kth;
 }
 
 // ------------------------------------------------------------------ encode
@@ -353,11 +409,17 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
     std::vector<std::uint32_t> near;
     std::vector<std::pair<double, std::uint32_t>> heap;
     std::vector<std::array<double, 5>> coef;
+    Vec3d prev_q = Vec3d::Zero();
+    double prev_kth = std::numeric_limits<double>::infinity();
     for (std::size_t v = begin; v < end; ++v) {
       if (ctx.cancelled()) return;
       const Vec3d& q = garment[v];
       const bool taper = params.tapered_weights && usable > k;
-      grid.nearest(q, taper ? k + 1 : k, near, heap);
+      // Consecutive vertices are usually neighbours: by the triangle
+      // inequality the previous k-th distance plus the step bounds this one.
+      const double bound = prev_kth + (q - prev_q).norm();
+      prev_kth = grid.nearest_bounded(q, taper ? k + 1 : k, bound * (1 + 1e-12) + 1e-15, near, heap);
+      prev_q = q;
       double w_cut = 0;
       if (taper) {
         w_cut = 1.0 / (eps + std::pow((q - frames[near.back()].c).norm(), 3));

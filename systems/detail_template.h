@@ -77,6 +77,14 @@ class CentroidGrid {
   /// holds N_q polygons, which can miss a nearer one in the next ring).
   void nearest(const Vec3d& q, std::size_t k, std::vector<std::uint32_t>& out,
                std::vector<std::pair<double, std::uint32_t>>& scratch) const;
+  /// The same with an upper bound on the k-th distance (e.g. the previous,
+  /// nearby query's k-th distance plus the distance between the queries, by
+  /// the triangle inequality): boxes and centroids beyond it are skipped, so
+  /// only about k candidates reach the heap. A bound that proves too small is
+  /// detected and the search redone without it, so the result is always exact.
+  /// Returns the k-th distance found.
+  double nearest_bounded(const Vec3d& q, std::size_t k, double bound, std::vector<std::uint32_t>& out,
+                         std::vector<std::pair<double, std::uint32_t>>& scratch) const;
   [[nodiscard]] double cell() const noexcept { return cell_; }
   [[nodiscard]] std::array<int, 3> dims() const noexcept { return {nx_, ny_, nz_}; }
   [[nodiscard]] std::size_t size() const noexcept { return ids_.size(); }

@@ -79,6 +79,12 @@ TEST(PPolygonSearch, EqualsBruteForceOnRandomPoints) {
         g.nearest(p, k, got, scratch);
         nearest_brute_force(c, skip, p, k, want);
         ASSERT_EQ(got, want) << "k=" << k << " query " << q;
+        // With a bound on the k-th distance, right or (sometimes) too small.
+        const double kth = (c[want.back()] - p).norm();
+        const double bound = q % 2 ? kth * 1.5 + 0.01 : kth * r.uniform(0.0, 1.2);
+        const double got_kth = g.nearest_bounded(p, k, bound, got, scratch);
+        ASSERT_EQ(got, want) << "bounded, k=" << k << " query " << q;
+        ASSERT_DOUBLE_EQ(got_kth, kth);
       }
     }
   }
