@@ -1,6 +1,8 @@
 #include "systems/makehuman_body.h"
 
 #include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -148,6 +150,27 @@ HumanLibrary HumanLibrary::load(const std::filesystem::path& dir, const ExecCont
   load_all(macro_files, lib.macro_);
   load_all(measure_files, lib.measure_);
   if (fs::exists(dir / "measures.json")) lib.measures_ = read_measures(dir / "measures.json", nv);
+  // The measure sliders MakeHuman declares, each two-sided (min "decr", max "incr").
+  const fs::path mods = dir / "modifiers" / "measurement_modifiers.json";
+  if (fs::exists(mods)) {
+    std::ifstream in(mods);
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(Status(ErrorCode::kParse, mods.string() + ": " + e.what()));
+    }
+    for (const auto& group : j)
+      for (const auto& m : group.value("modifiers", nlohmann::json::array())) {
+        const std::string name = m.value("target", "");
+        if (name.empty()) continue;
+        for (const char* side : {"min", "max"})
+          if (!lib.find_target(name + "-" + m.value(side, side[1] == 'i' ? "decr" : "incr")))
+            throw Error(Status(ErrorCode::kParse, mods.string() + ": modifier '" + name + "' has no " +
+                                                      m.value(side, "") + " target in targets/measure"));
+        lib.measure_modifiers_.push_back(name);
+      }
+  }
   if (const auto* body = lib.base_.group("body")) {
     for (auto v : body->face_nodes) lib.skin_vertices_ = std::max(lib.skin_vertices_, v + 1);
   } else {
@@ -178,7 +201,9 @@ std::vector<std::pair<const Target*, double>> HumanLibrary::active_targets(const
     const Target* t = nullptr;
     for (const auto& m : measure_)
       if (m.name == side) t = &m;
-    if (!t) throw std::invalid_argument("unknown measure modifier '" + name + "'");
+    if (!t || (!measure_modifiers_.empty() &&
+               std::find(measure_modifiers_.begin(), measure_modifiers_.end(), name) == measure_modifiers_.end()))
+      throw std::invalid_argument("unknown measure modifier '" + name + "' (see modifiers/measurement_modifiers.json)");
     out.emplace_back(t, std::abs(v));
   }
   return out;

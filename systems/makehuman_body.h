@@ -68,6 +68,9 @@ class HumanLibrary {
 
   /// Measurement loops and chains of measures.json (empty if the file is absent).
   [[nodiscard]] const std::map<std::string, std::vector<std::uint32_t>>& measures() const noexcept { return measures_; }
+  /// Two-sided measure modifiers declared in modifiers/measurement_modifiers.json
+  /// (e.g. "measure-waist-circ"), each with its decr and incr targets loaded.
+  [[nodiscard]] const std::vector<std::string>& measure_modifiers() const noexcept { return measure_modifiers_; }
   /// Number of skin vertices: the `body` group uses vertices [0, skin_vertex_count()).
   [[nodiscard]] std::uint32_t skin_vertex_count() const noexcept { return skin_vertices_; }
 
@@ -80,6 +83,7 @@ class HumanLibrary {
   std::vector<Target> macro_;    // sorted by name
   std::vector<Target> measure_;  // sorted by name
   std::map<std::string, std::vector<std::uint32_t>> measures_;
+  std::vector<std::string> measure_modifiers_;
   std::uint32_t skin_vertices_ = 0;
 };
 

@@ -137,6 +137,18 @@ TEST(MakeHumanBody, BaseMeshHasTheDocumentedGroups) {
   EXPECT_NE(base.group("helper-skirt"), nullptr);
   EXPECT_GT(library().macro_targets().size(), 250u);
   EXPECT_GT(library().measure_targets().size(), 30u);
+  // Every slider of modifiers/measurement_modifiers.json is two-sided and loaded.
+  const auto& mods = library().measure_modifiers();
+  EXPECT_GE(mods.size(), 20u);
+  EXPECT_NE(std::find(mods.begin(), mods.end(), "measure-waist-circ"), mods.end());
+  for (const auto& m : mods) {
+    EXPECT_NE(library().find_target(m + "-decr"), nullptr) << m;
+    EXPECT_NE(library().find_target(m + "-incr"), nullptr) << m;
+  }
+  MacroParams p;
+  p.measures = {{"measure-wasit-circ", 0.5}};  // misspelt
+  std::vector<Vec3f> out(library().vertex_count());
+  EXPECT_THROW(library().build(p, out), std::invalid_argument);
 }
 
 TEST(MakeHumanBody, ASingleMeasureTargetReproducesItsFileDisplacements) {
