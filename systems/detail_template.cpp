@@ -230,9 +230,6 @@ double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound
   if (k == 0) return 0.0;
   // Candidates farther than the bound can never be among the k nearest.
   const double bound2 = bound * bound;
-  const int ci = std::clamp(static_cast<int>(std::floor((q.x() - lo_.x()) / cell_)), 0, nx_ - 1);
-  const int cj = std::clamp(static_cast<int>(std::floor((q.y() - lo_.y()) / cell_)), 0, ny_ - 1);
-  const int ck = std::clamp(static_cast<int>(std::floor((q.z() - lo_.z()) / cell_)), 0, nz_ - 1);
   if (bound2 < std::numeric_limits<double>::infinity()) {
     // With a bound no heap is needed: collect every centroid inside the
     // bound from the boxes the bound's cube overlaps, then select the k
@@ -244,7 +241,6 @@ double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound
     const auto [i_lo, i_hi] = box(q.x(), lo_.x(), nx_);
     const auto [j_lo, j_hi] = box(q.y(), lo_.y(), ny_);
     const auto [k_lo, k_hi] = box(q.z(), lo_.z(), nz_);
-    (void)ci, (void)cj, (void)ck;
     for (int kk = k_lo; kk <= k_hi; ++kk)
       for (int j = j_lo; j <= j_hi; ++j) {
         const std::size_t row = (static_cast<std::size_t>(kk) * ny_ + j) * nx_;
@@ -316,22 +312,8 @@ double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound
       side(j0, ny_, q.y(), lo_.y());
       side(k0, nz_, q.z(), lo_.z());
       if (ring > 0 && heap.front().first < ring * ring) break;
-    } else if (bound2 < std::numeric_limits<double>::infinity()) {
-      // Every unvisited box beyond the bound: stop, and if fewer than k were
-      // found the bound was wrong, so search again without it.
-      double ring = std::numeric_limits<double>::infinity();
-      auto side = [&](int c0, int n, double qc, double l) {
-        if (c0 - h > 0) ring = std::min(ring, qc - (l + cell_ * (c0 - h)));
-        if (c0 + h < n - 1) ring = std::min(ring, l + cell_ * (c0 + h + 1) - qc);
-      };
-      side(i0, nx_, q.x(), lo_.x());
-      side(j0, ny_, q.y(), lo_.y());
-      side(k0, nz_, q.z(), lo_.z());
-      if (ring > 0 && ring * ring > bound2)
-        return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
     }
   }
-  if (heap.size() < k) return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
   const double kth = std::sqrt(heap.front().first);
   std::sort_heap(heap.begin(), heap.end());
   for (const auto& c : heap) out.push_back(c.second);

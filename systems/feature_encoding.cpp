@@ -210,7 +210,7 @@ Status decode_nodes(const NodeEncodings& enc, const ReferenceBody& body, std::sp
   if (out.size() != n) return {ErrorCode::kMismatch, "decode_nodes: output size differs from the node count"};
   if (bp.size() != body.model.nodes.slots.capacity())
     return {ErrorCode::kMismatch, "decode_nodes: body positions do not match the reference body's node count"};
-  // 0 = todo, 1 = in progress (cycle detection), 2 = done.
+  // 0 = not placed, 1 = being placed (cycle detection), 2 = placed.
   std::vector<std::uint8_t> state(n, 0);
   std::vector<std::uint32_t> stack;
   auto deps = [&](std::uint32_t i, std::vector<std::uint32_t>& d) {
