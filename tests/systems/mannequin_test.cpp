@@ -319,7 +319,9 @@ TEST(Mannequin, AThousandSampledBodiesAreEmbeddedFittedAndEncodable) {
     ASSERT_TRUE(ms);
     for (const auto& c : ms->curves) {
       const double want = requested_girth(params[i], c.id);
-      if (!std::isnan(want)) ASSERT_NEAR(c.girth / want, 1.0, 0.01) << "body " << i << " " << c.name;
+      if (!std::isnan(want)) {
+        ASSERT_NEAR(c.girth / want, 1.0, 0.01) << "body " << i << " " << c.name;
+      }
     }
     for (const auto& fp : features->points) {
       auto f = feature_frame(*features, fp.id, *pos);
