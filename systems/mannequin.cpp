@@ -460,7 +460,7 @@ Expected<std::vector<Vec3d>> mannequin_positions(const MannequinParams& p, const
   ks[kTBust] = fit_girth({1, 0.62 + prom, 0.64, 2.3, 0, 0}, p.bust_girth, angles);
   {
     // Chest at the armpit: at least as wide as the levels below, so the
-    // sides do not bulge out under the arm stubs.
+    // sides do not bulge out under the short arms.
     Section s = ks[kTBust];
     s.a = std::max({ks[kTBust].a, ks[kTUnderbust].a, ks[kTWaist].a * 1.02});
     s.bf = 0.8 * ks[kTBust].bf;
@@ -597,7 +597,7 @@ Expected<std::vector<Vec3d>> mannequin_positions(const MannequinParams& p, const
     pos[t.right_foot_apex] = {-apex.x(), apex.y(), apex.z()};
   }
 
-  // ---- arm stubs (left computed, right mirrored)
+  // ---- short arms (left computed, right mirrored)
   {
     const std::uint32_t M = t.arm_around, K = t.arm_rings - 1, kua = t.key_arm[1];
     std::vector<Vec3d> loop(M);
@@ -609,7 +609,7 @@ Expected<std::vector<Vec3d>> mannequin_positions(const MannequinParams& p, const
     // Upper arm: a circle-like section sampled at the loop's angles, fitted.
     Section ua{1.0, 1.0, 1.0, 2.0, 0, 0};
     ua = fit_girth(ua, p.upper_arm_girth, psi);
-    const double len = 0.07 * H;  // stub length along the axis
+    const double len = 0.07 * H;  // arm length along its axis
     const double tilt = 20.0 * kPi / 180.0;
     Vec3d c = c0;
     for (std::uint32_t k = 1; k <= K; ++k) {

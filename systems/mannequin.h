@@ -1,5 +1,5 @@
 // The embedded default reference body: a procedural, parametric, watertight
-// dress-form mannequin (neck, shoulders, arm stubs, torso, hips, two legs to
+// dress-form mannequin (neck, shoulders, short arms, torso, hips, two legs to
 // the ankles) built from body measurements, with the semantic feature curves
 // and points of seed 000 section 4.1.1 / seed 001 section 4.
 //
@@ -9,7 +9,7 @@
 // angle about the ring centre, so the bands between consecutive rings cannot
 // cross each other. The junctions are fixed in index space: the crotch ring
 // of the torso splits into two leg rings through a bridge of N/2-1 nodes, and
-// each arm stub is a tube whose first ring is the boundary of a rectangular
+// each short arm is a tube whose first ring is the boundary of a rectangular
 // hole cut in the torso grid. Ring counts per segment depend only on the
 // resolution, so every parameter set gives the same topology.
 //
