@@ -468,8 +468,8 @@ Status triangulate_one(Model& m, FaceIdx f, const TriangulateOptions& opt, Trian
 
 Expected<TriangulationResult> run(Model& m, std::span<const Face> faces, const TriangulateOptions& opt) {
   TriangulationResult out;
-  std::vector<Face> todo(faces.begin(), faces.end());
-  for (const Face& fh : todo) {
+  std::vector<Face> pending(faces.begin(), faces.end());
+  for (const Face& fh : pending) {
     auto f = m.resolve(fh);
     if (!f) return f.status();
     if (Status s = triangulate_one(m, *f, opt, out); !s) return s;
