@@ -259,7 +259,9 @@ TEST(Mannequin, SampledGirthsMatchRequestAndFramesEncode) {
     ASSERT_TRUE(ms);
     for (const auto& c : ms->curves) {
       const double want = requested_girth(params[i], c.id);
-      if (!std::isnan(want)) EXPECT_NEAR(c.girth / want, 1.0, 0.01) << "body " << i << " " << c.name;
+      if (!std::isnan(want)) {
+        EXPECT_NEAR(c.girth / want, 1.0, 0.01) << "body " << i << " " << c.name;
+      }
     }
     EXPECT_GT(body->points.size(), 20u);
     for (const auto& fp : body->points) {
