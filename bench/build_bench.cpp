@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "bench/grid_arrays.h"
 #include "storage/builder.h"
 
 #ifdef ATELIER_HAVE_OPENMESH
@@ -16,30 +17,11 @@ namespace {
 
 using namespace atelier;
 
-struct GridArrays {
-  std::vector<Vec3d> positions;
-  std::vector<std::uint32_t> offsets, nodes;
-};
+using bench::GridArrays;
 
 // n x n cells, two triangles each: 2 n^2 faces (n = 708: 1.0M faces).
 const GridArrays& grid_1m() {
-  static const GridArrays g = [] {
-    GridArrays a;
-    const int n = 708;
-    a.positions.reserve((n + 1) * (n + 1));
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) a.positions.emplace_back(i, j, 0.05 * std::sin(0.1 * i) * std::cos(0.1 * j));
-    auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
-    a.offsets.push_back(0);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        for (auto v : {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)})
-          a.nodes.push_back(v);
-        a.offsets.push_back(static_cast<std::uint32_t>(a.nodes.size() - 3));
-        a.offsets.push_back(static_cast<std::uint32_t>(a.nodes.size()));
-      }
-    return a;
-  }();
+  static const GridArrays g = bench::wavy_grid(708);
   return g;
 }
 

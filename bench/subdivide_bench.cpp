@@ -8,6 +8,7 @@
 #include <cmath>
 #include <vector>
 
+#include "bench/grid_arrays.h"
 #include "storage/builder.h"
 #include "systems/subdivide.h"
 
@@ -22,28 +23,10 @@ using namespace atelier;
 
 constexpr int kCells = 316;  // 2 * 316^2 = 199,712 triangles
 
-struct Grid {
-  std::vector<Vec3d> positions;
-  std::vector<std::uint32_t> offsets, nodes;
-};
+using Grid = bench::GridArrays;
 
 const Grid& grid_200k() {
-  static const Grid g = [] {
-    Grid a;
-    const int n = kCells;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) a.positions.emplace_back(i, j, 0.05 * std::sin(0.1 * i) * std::cos(0.1 * j));
-    auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
-    a.offsets.push_back(0);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        for (auto v : {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)})
-          a.nodes.push_back(v);
-        a.offsets.push_back(static_cast<std::uint32_t>(a.nodes.size() - 3));
-        a.offsets.push_back(static_cast<std::uint32_t>(a.nodes.size()));
-      }
-    return a;
-  }();
+  static const Grid g = bench::wavy_grid(kCells);
   return g;
 }
 
