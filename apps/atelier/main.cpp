@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "apps/atelier/commands.h"
+#include "engine/memory.h"
 #include "engine/status.h"
 
 #ifndef ATELIER_VERSION
@@ -12,6 +13,9 @@
 
 int main(int argc, char** argv) {
   using namespace atelier::cli;
+  // Batch work frees and re-allocates the same large columns per body: keep
+  // freed memory mapped instead of re-faulting it (engine/memory.h).
+  (void)atelier::apply_memory_policy();
   CLI::App app{"atelier: feature-based freeform modelling around reference bodies"};
   app.set_version_flag("--version", std::string("atelier ") + ATELIER_VERSION);
   app.require_subcommand(1);
