@@ -461,7 +461,9 @@ Vec3d Camera::project(const Vec3d& p) const {
 std::pair<Vec3d, Vec3d> Camera::ray(const Vec2d& px) const {
   const Mat4d inv = (projection * view).inverse();
   const double x = 2.0 * px.x() / width - 1.0, y = 1.0 - 2.0 * px.y() / height;
-  const Vec4d n = inv * Vec4d(x, y, -1.0, 1.0), f = inv * Vec4d(x, y, 1.0, 1.0);
+  // The near plane and NDC depth 0 (not the far plane): with a large
+  // far/near ratio the far point is badly conditioned.
+  const Vec4d n = inv * Vec4d(x, y, -1.0, 1.0), f = inv * Vec4d(x, y, 0.0, 1.0);
   const Vec3d pn = n.head<3>() / n.w(), pf = f.head<3>() / f.w();
   return {pn, (pf - pn).normalized()};
 }
