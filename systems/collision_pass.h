@@ -1,0 +1,190 @@
+// Collision pass: a regenerated garment never enters the body and keeps the
+// clearance it had on the source body (issue 7). Shared by detail and profile
+// regeneration; seed 001 section 6 decodes without any collision step, seed
+// 000 section 4.2 (Fig. 16) avoids collisions during fairing by sub-steps.
+//
+//  1. Encoding (once per garment): each garment vertex stores its signed
+//     distance to the source body (its clearance) and its closest source
+//     triangle (a hint: on a body of the same topology the distance to that
+//     triangle bounds the distance to the whole surface from above).
+//  2. Per body: a CollisionBody over the body triangles, with a coarse
+//     uniform grid of triangles built only where the garment lies (its box
+//     grown by the largest hint distance). Queries are exact: closest point
+//     by point-triangle distances over the grid cells within the hint's
+//     bound, sign by the angle-weighted pseudo-normal of the closest feature
+//     (Baerentzen & Aanaes 2005), computed on demand.
+//  3. Pass: every vertex inside the body or closer than its target clearance
+//     c_v = clamp(encoded, min_clearance, max_clearance) moves to x + c_v n
+//     (x its closest body point, n the outward normal there: the distance
+//     gradient, or the pseudo-normal on the surface); repeated a few rounds
+//     where concave parts of the body make one push fall short. Then the
+//     moved region, grown by `fair_rings` rings, is smoothed by umbrella
+//     fairing (seed 000 section 4.2, Kobbelt's U2 Jacobi iteration) with all
+//     other vertices fixed, every move applied in sub-steps and cut at the
+//     last one that keeps the vertex at or above its target clearance.
+//  4. Layers: garments are resolved in z_depth order (inner first); each
+//     resolved layer leaves a clearance floor on the body vertices under it
+//     and outer layers keep at least that floor plus `layer_gap`.
+//
+// Reads: body positions and triangles, garment positions and adjacency.
+// Writes: garment positions (in place) and the report.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "engine/exec_context.h"
+#include "engine/math.h"
+#include "engine/status.h"
+#include "systems/body_bvh.h"
+#include "systems/fairing.h"
+
+namespace atelier {
+
+/// Topology shared by every body of one family (built once): triangles,
+/// the triangles around each vertex and the neighbour across each edge.
+/// Errors: empty mesh, index out of range, an edge not shared by exactly two
+/// oppositely oriented triangles (the body must be closed: inside and
+/// clearance mean nothing on an open mesh).
+class CollisionTopology {
+ public:
+  [[nodiscard]] static Expected<std::shared_ptr<const CollisionTopology>> build(std::span<const Triangle> triangles,
+                                                                                 std::uint32_t point_count);
+  [[nodiscard]] std::span<const Triangle> triangles() const noexcept { return triangles_; }
+  [[nodiscard]] std::uint32_t point_count() const noexcept { return point_count_; }
+
+ private:
+  friend class CollisionBody;
+  std::vector<Triangle> triangles_;
+  std::uint32_t point_count_ = 0;
+  std::vector<std::uint32_t> vt_offset_, vt_tri_;  // vertex -> incident triangles (CSR)
+  std::vector<std::array<std::uint32_t, 3>> across_;  // triangle, edge k (corner k -> k+1) -> other triangle
+};
+
+/// Exact signed distance of a point to the body with its closest feature.
+struct BodyDistance {
+  double distance = 0;           // signed, negative inside
+  Vec3d closest = Vec3d::Zero();  // closest body point
+  Vec3d normal = Vec3d::Zero();   // unit outward direction at `closest`
+  std::uint32_t triangle = kNoTriangle;
+  Vec3d barycentric = Vec3d::Zero();
+};
+
+struct CollisionBodyParams {
+  /// Grid cell edge; 0 = 1.5 x the mean body edge length.
+  double cell = 0.0;
+  /// Region of interest (e.g. the garment's box); empty = the whole body.
+  Box3d roi;
+  /// Extra margin around the ROI, in world units (queries farther than this
+  /// from the ROI, or with a larger bound, fall back to a full scan).
+  double margin = 0.05;
+};
+
+/// Per-body query structure. Keeps a view of the positions: they must stay
+/// alive and unchanged while it is used.
+class CollisionBody {
+ public:
+  /// Errors: positions count differs from the topology, non-finite
+  /// position, bad parameters.
+  [[nodiscard]] Status build(std::shared_ptr<const CollisionTopology> topology, std::span<const Vec3d> positions,
+                             const CollisionBodyParams& params = {}, const ExecContext& ctx = {});
+  [[nodiscard]] bool empty() const noexcept { return topo_ == nullptr; }
+  [[nodiscard]] const CollisionTopology& topology() const noexcept { return *topo_; }
+  [[nodiscard]] std::span<const Vec3d> positions() const noexcept { return pos_; }
+  /// Number of (triangle, cell) entries of the grid (set-up size).
+  [[nodiscard]] std::size_t grid_entries() const noexcept { return ids_.size(); }
+
+  /// Exact signed distance. `hint`: a triangle believed near (e.g. the
+  /// closest one on the source body, or kNoTriangle); it only speeds the
+  /// search up, the result is exact either way. Thread-safe.
+  [[nodiscard]] BodyDistance query(const Vec3d& p, std::uint32_t hint = kNoTriangle) const noexcept;
+  /// Pseudo-normal signed distance to one given triangle (the triangle must
+  /// hold the closest point for the sign to be meaningful).
+  [[nodiscard]] BodyDistance query_triangle(const Vec3d& p, std::uint32_t t) const noexcept;
+
+ private:
+  void scan_cells(const Vec3d& p, double& best2, std::uint32_t& best_t) const noexcept;
+  [[nodiscard]] Vec3d face_normal(std::uint32_t t) const noexcept;  // area-weighted (unnormalised)
+
+  std::shared_ptr<const CollisionTopology> topo_;
+  std::span<const Vec3d> pos_;
+  Vec3d lo_ = Vec3d::Zero(), hi_ = Vec3d::Zero();              // grid box (ROI + margin, clipped to the body)
+  Vec3d valid_lo_ = Vec3d::Zero(), valid_hi_ = Vec3d::Zero();  // ROI + margin: balls inside use the grid
+  double h_ = 1.0, inv_h_ = 1.0;
+  int nx_ = 0, ny_ = 0, nz_ = 0;
+  std::vector<std::uint32_t> start_, ids_;  // cell -> triangles (CSR)
+};
+
+/// Clearance encoding of a garment on its source body.
+struct ClearanceEncoding {
+  std::vector<float> clearance;        // signed distance to the source body per vertex
+  std::vector<std::uint32_t> triangle;  // closest source triangle per vertex (hint on other bodies)
+};
+
+/// Signed distances of the garment vertices to the source body. Errors:
+/// empty garment, non-finite vertex (naming it).
+[[nodiscard]] Expected<ClearanceEncoding> encode_clearance(std::span<const Vec3d> garment,
+                                                           const CollisionBody& source, const ExecContext& ctx = {});
+
+struct CollisionParams {
+  double min_clearance = 0.0005;  // floor of every target clearance (m)
+  double max_clearance = 0.05;    // cap: a loose garment's far parts are never pushed farther
+  /// Vertices within this much below their target are left alone (the pass
+  /// does not chase rounding).
+  double tolerance = 0.0002;
+  int push_rounds = 3;       // push, re-query, push again where concavities make it fall short
+  int fair_rings = 2;        // rings of unmoved neighbours freed around the moved region
+  int fair_iterations = 10;  // umbrella iterations (0: no smoothing)
+  int substeps = 4;          // sub-steps of a fairing move near the body
+  double layer_gap = 0.001;  // resolve_layers: outer layer at least this far outside the inner one
+};
+
+struct CollisionReport {
+  std::size_t vertices = 0;
+  std::size_t inside_before = 0;   // signed distance < 0 on entry
+  std::size_t below_before = 0;    // below target clearance - tolerance on entry
+  std::size_t pushed = 0;          // vertices moved by the push
+  std::size_t faired = 0;          // free vertices of the smoothing
+  std::size_t inside_after = 0;    // signed distance < 0 on exit
+  std::size_t below_after = 0;     // below min(target, floor) - tolerance on exit
+  double max_depth_before = 0;     // deepest penetration on entry (>= 0)
+  double max_depth_after = 0;
+  std::uint64_t queries = 0;       // exact body queries
+  std::uint64_t refused_moves = 0;  // fairing sub-steps cut by the collision test
+};
+
+/// Adjacency (CSR) of `vertex_count` vertices from undirected edges (for
+/// polygon soups that a Model would refuse, e.g. inconsistently oriented
+/// garments). Errors on an index out of range.
+[[nodiscard]] Expected<NodeAdjacency> adjacency_from_edges(std::size_t vertex_count,
+                                                           std::span<const std::array<std::uint32_t, 2>> edges);
+
+/// The pass, in place on `garment`. `encoding` gives the target clearances
+/// and hints (its triangles must index the body's topology; an empty
+/// `triangle` array means no hints). Errors: empty garment, sizes that do
+/// not match, empty body, bad parameters, non-finite vertex.
+[[nodiscard]] Expected<CollisionReport> resolve_collisions(std::span<Vec3d> garment, const NodeAdjacency& adjacency,
+                                                           const ClearanceEncoding& encoding,
+                                                           const CollisionBody& body, const CollisionParams& params,
+                                                           const ExecContext& ctx = {});
+
+/// One garment of a layered outfit.
+struct GarmentLayer {
+  std::span<Vec3d> positions;
+  const NodeAdjacency* adjacency = nullptr;
+  const ClearanceEncoding* encoding = nullptr;
+  int z_depth = 0;  // MakeHuman's layer order: smaller is nearer the skin
+};
+
+/// Resolves the layers inner first (stable by z_depth); each outer layer's
+/// target clearance is at least the clearance of the inner layers under it
+/// (interpolated on the body triangle under the vertex) plus layer_gap.
+/// Reports in the order given.
+[[nodiscard]] Expected<std::vector<CollisionReport>> resolve_layers(std::span<GarmentLayer> layers,
+                                                                    const CollisionBody& body,
+                                                                    const CollisionParams& params,
+                                                                    const ExecContext& ctx = {});
+
+}  // namespace atelier
