@@ -1,0 +1,99 @@
+#include "apps/atelier/render_cmd.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <deque>
+
+#include "io/obj.h"
+#include "io/off.h"
+#include "io/ply.h"
+#include "io/png.h"
+#include "systems/body_bvh.h"
+#include "systems/render.h"
+
+namespace atelier::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+Model read_mesh(const fs::path& p) {
+  if (!fs::exists(p)) throw Error(Status(ErrorCode::kIo, p.string() + ": no such file"));
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (e == ".obj") return read_obj(p);
+  if (e == ".ply") return read_ply(p);
+  if (e == ".off") return read_off(p);
+  throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown mesh format (use .obj, .ply or .off)"));
+}
+
+// A mesh's triangles in a BVH; the model stays with it (the BVH reads its
+// position column at commit time).
+struct SceneMesh {
+  Model model;
+  BodyBvh bvh;
+};
+
+void load(const fs::path& p, SceneMesh& m) {
+  m.model = read_mesh(p);
+  auto tri = fan_triangulate(m.model);
+  if (!tri) throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": " + tri.status().message()));
+  if (tri->triangles.empty()) throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": no faces to render"));
+  const Status s = m.bvh.build(std::span<const Vec3d>(m.model.nodes.position), tri->triangles);
+  if (!s) throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": " + s.message()));
+}
+
+}  // namespace
+
+CLI::App* add_render_subcommand(CLI::App& app, RenderOptions& opt) {
+  auto* cmd = app.add_subcommand("render", "ray-cast a PNG picture of a body and its garments (no GPU needed)");
+  cmd->add_option("--body", opt.body, "body mesh (OBJ, PLY or OFF)");
+  cmd->add_option("--garment", opt.garments, "garment mesh; repeat for several");
+  cmd->add_option("--out", opt.out, "output PNG");
+  cmd->add_option("--view", opt.view, "front, side or back")->check(CLI::IsMember({"front", "side", "back"}));
+  cmd->add_option("--width", opt.width, "picture width in pixels")->check(CLI::Range(1u, 8192u));
+  cmd->add_option("--height", opt.height, "picture height in pixels")->check(CLI::Range(1u, 8192u));
+  cmd->add_option("--supersample", opt.supersample, "samples per pixel along each axis")->check(CLI::Range(1, 8));
+  cmd->add_flag("--perspective", opt.perspective, "perspective instead of orthographic projection");
+  cmd->add_flag("--no-outlines", opt.no_outlines, "no silhouette outlines");
+  return cmd;
+}
+
+int run_render(const Common& common, const RenderOptions& opt, Log& log) {
+  if (opt.body.empty() && opt.garments.empty()) {
+    log.error("render: give --body and/or --garment");
+    return kExitUsage;
+  }
+  ExecContext ctx = common.context();
+  // std::deque keeps addresses stable for the RenderMesh pointers.
+  std::deque<SceneMesh> scene;
+  std::vector<RenderMesh> meshes;
+  if (!opt.body.empty()) {
+    load(opt.body, scene.emplace_back());
+    meshes.push_back({&scene.back().bvh, body_colour()});
+  }
+  for (std::size_t g = 0; g < opt.garments.size(); ++g) {
+    load(opt.garments[g], scene.emplace_back());
+    meshes.push_back({&scene.back().bvh, garment_colour(g)});
+  }
+  RenderParams p;
+  p.width = opt.width;
+  p.height = opt.height;
+  p.view = opt.view == "side" ? View::kSide : opt.view == "back" ? View::kBack : View::kFront;
+  p.projection = opt.perspective ? Projection::kPerspective : Projection::kOrthographic;
+  p.supersample = opt.supersample;
+  p.outlines = !opt.no_outlines;
+  ctx.progress = [&log](std::string_view stage, std::size_t done, std::size_t total) {
+    log.progress(stage, done, total);
+  };
+  auto res = render_scene(meshes, p, ctx);
+  log.end_progress();
+  if (!res) throw Error(res.status());
+  write_png(res->image, opt.out);
+  std::printf("%s: %ux%u %s view, %zu meshes, %zu of %zu pixels covered\n", opt.out.string().c_str(), p.width,
+              p.height, opt.view.c_str(), meshes.size(), res->covered_pixels, std::size_t{p.width} * p.height);
+  return kExitOk;
+}
+
+}  // namespace atelier::cli
