@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "apps/atelier/commands.h"
+#include "apps/atelier/render_cmd.h"
 #include "engine/memory.h"
 #include "engine/status.h"
 
@@ -51,6 +52,9 @@ int main(int argc, char** argv) {
   bodies_cmd->add_option("--reference", bodies.reference, "reference body OBJ (directory sources)");
   bodies_cmd->add_option("--scale", bodies.scale, "file units to metres (directory sources)");
 
+  RenderOptions render_opt;
+  auto* render_cmd = add_render_subcommand(app, render_opt);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -63,6 +67,7 @@ int main(int argc, char** argv) {
     if (*validate_cmd) return run_validate(common, validate_file, log);
     if (*convert_cmd) return run_convert(common, convert_in, convert_out, log);
     if (*bodies_cmd) return run_bodies(common, bodies, log);
+    if (*render_cmd) return run_render(common, render_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();
