@@ -1,6 +1,7 @@
 #include "systems/profile.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -17,13 +18,34 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 [[nodiscard]] Vec3d lerp(const Vec3d& a, const Vec3d& b, double t) noexcept { return (1.0 - t) * a + t * b; }
 
+/// Scratch for de Casteljau: on the stack up to degree 7 (profiles are cubic),
+/// so evaluation in the distance search does not allocate.
+class Scratch {
+ public:
+  explicit Scratch(std::span<const Vec3d> p) {
+    if (p.size() > small_.size()) {
+      big_.assign(p.begin(), p.end());
+      data_ = big_.data();
+    } else {
+      std::copy(p.begin(), p.end(), small_.begin());
+      data_ = small_.data();
+    }
+  }
+  Vec3d& operator[](std::size_t i) noexcept { return data_[i]; }
+
+ private:
+  std::array<Vec3d, 8> small_;
+  std::vector<Vec3d> big_;
+  Vec3d* data_ = nullptr;
+};
+
 /// De Casteljau value and first/second derivatives of a Bezier at t.
 struct BezierJet {
   Vec3d c, d1, d2;
 };
 [[nodiscard]] BezierJet bezier_jet(std::span<const Vec3d> P, double t) {
   const std::size_t n = P.size() - 1;
-  std::vector<Vec3d> b(P.begin(), P.end());
+  Scratch b(P);
   BezierJet j{Vec3d::Zero(), Vec3d::Zero(), Vec3d::Zero()};
   // After n-2 levels three points remain: C'' = n(n-1)(q2 - 2 q1 + q0); after
   // n-1 levels two: C' = n(q1 - q0).
@@ -113,8 +135,8 @@ Vec3d ProfileCurve::eval(double t) const {
   t = std::clamp(t, 0.0, 1.0);
   if (points.size() == 1) return points[0];
   if (kind == Kind::kBezier) {
-    std::vector<Vec3d> b = points;
-    for (std::size_t left = b.size(); left > 1; --left)
+    Scratch b(points);
+    for (std::size_t left = points.size(); left > 1; --left)
       for (std::size_t i = 0; i + 1 < left; ++i) b[i] = lerp(b[i], b[i + 1], t);
     return b[0];
   }
@@ -534,6 +556,7 @@ std::vector<EdgeIdx> select_edges_by_stroke(const Model& m, std::span<const Vec3
                                             const std::function<bool(const Vec3d&)>& visible) {
   std::vector<EdgeIdx> out;
   if (stroke.empty()) return out;
+  if (!positions.empty() && positions.size() < m.nodes.slots.capacity()) return out;  // one position per node slot
   const std::span<const Vec3d> pos = positions.empty() ? std::span<const Vec3d>(m.nodes.position) : positions;
   const double tol2 = tol_px * tol_px;
   // Screen-space box of the stroke grown by the tolerance: a cheap reject.

@@ -155,8 +155,8 @@ struct Camera {
 /// seed 000 4.1.4: edges whose both projected ends lie within tol_px of the
 /// stroke polyline and that are visible: the optional predicate must hold at
 /// both ends and the midpoint (e.g. a BodyBvh ray test). positions are node
-/// positions indexed by node index (empty: the model's own positions).
-/// Increasing edge order.
+/// positions indexed by node index (empty: the model's own positions; fewer
+/// than the node capacity selects nothing). Increasing edge order.
 [[nodiscard]] std::vector<EdgeIdx> select_edges_by_stroke(const Model& m, std::span<const Vec3d> positions,
                                                           const Camera& cam, std::span<const Vec2d> stroke,
                                                           double tol_px,
