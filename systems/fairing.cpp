@@ -102,6 +102,8 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
   const bool collide = static_cast<bool>(prm.signed_distance);
   std::vector<double> lower(collide ? free_nodes.size() : 0, -std::numeric_limits<double>::infinity());
   std::vector<std::uint32_t> queries(collide ? free_nodes.size() : 0), refused(collide ? free_nodes.size() : 0);
+  // exact[i]: lower[i] is the exact distance at the node's current position.
+  std::vector<std::uint8_t> exact(collide ? free_nodes.size() : 0, 0);
   std::vector<Vec3d> u(n, Vec3d::Zero());
   // Double buffer: fixed nodes hold the same value in both, free nodes are
   // rewritten every iteration, so no copy pass is needed.
@@ -138,11 +140,24 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
         if (collide) {
           const double len = step.norm();
           if (!(lower[i] - len > prm.clearance)) {
-            // Near the body: advance in sub-steps from the exact distance of
-            // the start, keep the last admissible one.
+            // Near the body. The end point first: when the move neither
+            // enters nor deepens the forbidden zone and cannot tunnel (every
+            // point of the segment is within len/2 of an end, and both ends
+            // are at least that far out), it is taken whole with one query.
+            const double d_start = exact[i] ? lower[i] : prm.signed_distance(cur[v]);
+            queries[i] += exact[i] ? 1 : 2;
+            const double d_end = prm.signed_distance(q);
+            if ((d_end >= prm.clearance || d_end >= d_start) && std::min(d_start, d_end) - 0.5 * len >= 0.0) {
+              lower[i] = d_end;
+              exact[i] = 1;
+              mx = std::max(mx, (q - cur[v]).squaredNorm());
+              nxt[v] = q;
+              continue;
+            }
+            // Otherwise advance in sub-steps from the start and keep the last
+            // admissible one.
             Vec3d last = cur[v];
-            double last_d = prm.signed_distance(cur[v]);
-            ++queries[i];
+            double last_d = d_start;
             bool cut = false;
             for (int k = 1; k <= prm.substeps; ++k) {
               const Vec3d t = cur[v] + step * (static_cast<double>(k) / prm.substeps);
@@ -158,8 +173,10 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
             refused[i] += cut;
             q = last;
             lower[i] = last_d;
+            exact[i] = 1;
           } else {
             lower[i] -= len;
+            exact[i] = 0;
           }
         }
         mx = std::max(mx, (q - cur[v]).squaredNorm());

@@ -11,7 +11,11 @@
 // move that would bring a node closer than the clearance is cut at its last
 // admissible sub-step. Because a signed distance is 1-Lipschitz, a node whose
 // distance exceeds the clearance by more than its move needs no test at all,
-// so the body is queried only near it.
+// so the body is queried only near it. Near it, the end point is tested
+// first: a move that neither enters nor deepens the forbidden zone and whose
+// ends are both farther from the body than half its length (so no point of
+// the segment is inside) is taken with one query; only the others are
+// walked in sub-steps.
 //
 // Reads: halfedge connectivity, nodes.position. Writes: nodes.position of
 // free nodes, geometry_version.
