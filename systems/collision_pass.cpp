@@ -133,6 +133,15 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   start_.clear();
   ids_.clear();
   nx_ = ny_ = nz_ = 0;
+  // Bounding sphere per triangle (centroid, farthest corner): a cheap lower
+  // bound on its distance, tested before the exact one.
+  sphere_.resize(nt);
+  par::for_each_n(ctx, nt, [&](std::size_t t) {
+    const Vec3d c = (pos_[tris[t][0]] + pos_[tris[t][1]] + pos_[tris[t][2]]) / 3.0;
+    double r = 0;
+    for (std::uint32_t k : tris[t]) r = std::max(r, (pos_[k] - c).norm());
+    sphere_[t] << c, r * (1 + 1e-12) + 1e-15;  // rounding: the bound must stay a bound
+  });
   if (box.empty()) {  // ROI away from the body: every query scans all triangles
     lo_ = hi_ = Vec3d::Zero();
     return Status::ok();
@@ -154,6 +163,7 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   par::for_each_n(ctx, nt, [&](std::size_t t) {
     Box3d b;
     for (std::uint32_t c : tris[t]) b.extend(pos_[c]);
+
     auto& r = range[t];
     const Vec3d l = (b.lo - lo_) * inv_h_, u = (b.hi - lo_) * inv_h_;
     const int dims[3] = {nx_, ny_, nz_};
@@ -258,6 +268,10 @@ void CollisionBody::scan_cells(const Vec3d& p, double& best2, std::uint32_t& bes
         for (std::uint32_t i = start_[cell]; i < start_[cell + 1]; ++i) {
           const std::uint32_t t = ids_[i];
           if (t == best_t) continue;
+          // Bounding sphere first: most candidates end here.
+          const Vec4d& sp = sphere_[t];
+          const double dc = (p - sp.head<3>()).norm() - sp[3];
+          if (dc > 0 && dc * dc > best2) continue;
           const Triangle& tr = tris[t];
           const TrianglePoint q = closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]);
           const double d2 = (p - q.point).squaredNorm();
@@ -298,6 +312,9 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
   }
   // The ball leaves the grid (far from the region of interest): full scan.
   for (std::uint32_t t = 0; t < tris.size(); ++t) {
+    const Vec4d& sp = sphere_[t];
+    const double dc = (p - sp.head<3>()).norm() - sp[3];
+    if (dc > 0 && dc * dc > best2) continue;
     const Triangle& tr = tris[t];
     const double d2 = (p - closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]).point).squaredNorm();
     if (d2 < best2 || (d2 == best2 && t < best_t)) {
@@ -510,6 +527,8 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
     }
     std::vector<Vec3d> u(n, Vec3d::Zero()), next(free_nodes.size());
     std::vector<BodyDistance> next_d(free_nodes.size());
+    // d[v] is exact, or (after unchecked far moves) a lower bound.
+    std::vector<std::uint8_t> exact(free_nodes.size(), 1), next_exact(free_nodes.size(), 1);
     std::vector<std::uint32_t> refused(free_nodes.size(), 0);
     for (int it = 0; it < prm.fair_iterations; ++it) {
       if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "resolve_collisions cancelled");
@@ -534,13 +553,20 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
         const double len = step.norm();
         next[i] = g[v];
         next_d[i] = d[v];
+        next_exact[i] = exact[i];
         // 1-Lipschitz distance: a move shorter than the margin above the
-        // target cannot cross it; only moves near the target are sub-stepped.
+        // target cannot cross it, and the distance less the move stays a
+        // lower bound (seed 000's sub-steps are only needed near the body).
         if (d[v].distance - len >= target[v]) {
           next[i] = g[v] + step;
-          next_d[i] = body.query(next[i], d[v].triangle);  // one exact query: reports and layer floors need it
-          ++queries[v];
+          next_d[i].distance -= len;
+          next_exact[i] = 0;
           return;
+        }
+        if (!exact[i]) {  // sub-steps start from the exact distance
+          next_d[i] = body.query(g[v], d[v].triangle);
+          next_exact[i] = 1;
+          ++queries[v];
         }
         for (int k = 1; k <= prm.substeps; ++k) {
           const Vec3d t = g[v] + step * (static_cast<double>(k) / prm.substeps);
@@ -557,8 +583,15 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
       par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) {
         g[free_nodes[i]] = next[i];
         d[free_nodes[i]] = next_d[i];
+        exact[i] = next_exact[i];
       });
     }
+    par::for_each_n(qctx, free_nodes.size(), [&](std::size_t i) {
+      if (exact[i]) return;
+      const std::uint32_t v = free_nodes[i];
+      d[v] = body.query(g[v], d[v].triangle);
+      ++queries[v];
+    });
     for (auto r : refused) rep.refused_moves += r;
   }
   for (std::size_t v = 0; v < n; ++v) {

@@ -115,6 +115,7 @@ class CollisionBody {
   double h_ = 1.0, inv_h_ = 1.0;
   int nx_ = 0, ny_ = 0, nz_ = 0;
   std::vector<std::uint32_t> start_, ids_;  // cell -> triangles (CSR)
+  std::vector<Vec4d> sphere_;               // per triangle: bounding sphere (centre, radius)
 };
 
 /// Clearance encoding of a garment on its source body.
@@ -133,7 +134,7 @@ struct CollisionParams {
   double max_clearance = 0.05;    // cap: a loose garment's far parts are never pushed farther
   /// Vertices within this much below their target are left alone (the pass
   /// does not chase rounding).
-  double tolerance = 0.0002;
+  double tolerance = 0.001;
   int push_rounds = 3;       // push, re-query, push again where concavities make it fall short
   int fair_rings = 2;        // rings of unmoved neighbours freed around the moved region
   int fair_iterations = 10;  // umbrella iterations (0: no smoothing)
