@@ -678,7 +678,9 @@ Expected<StrokeProfiles> profiles_from_stroke(const Model& m, std::span<const Ve
     const double t = normal.dot(centre - o) / den;
     out.stroke_points.push_back(o + t * dir);
   }
-  const std::vector<Vec3d>& Y = out.stroke_points;
+  // Repeated pixels of a slow stroke would repeat points: cut a copy without them.
+  std::vector<Vec3d> Y = out.stroke_points;
+  Y.erase(std::unique(Y.begin(), Y.end(), [](const Vec3d& p, const Vec3d& q) { return p == q; }), Y.end());
   if (Y.size() < 2) return Status(ErrorCode::kDegenerate, "profiles_from_stroke: the stroke misses the projection plane");
 
   // ---- cut per edge: the points strictly between the closest stroke points to its ends

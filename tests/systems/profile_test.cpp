@@ -556,6 +556,16 @@ TEST(ProfileStroke, PixelRoundedStrokeStaysNearTheCurveAndVisibilityFilters) {
       const double t = std::atan2(q.y(), q.x());
       EXPECT_LT((q - ring_curve(t)).norm(), 5e-3);
     }
+  // A slow stroke repeats pixels: the attached lists do not.
+  std::vector<Vec2d> slow;
+  for (const Vec2d& px : stroke) slow.insert(slow.end(), {px, px});
+  const auto sp2 = profiles_from_stroke(cyl.m, {}, cam, slow, 4.0);
+  ASSERT_TRUE(sp2);
+  ASSERT_EQ(sp2->profiles.size(), sp->profiles.size());
+  for (std::size_t e = 0; e < sp->profiles.size(); ++e) {
+    EXPECT_EQ(sp2->profiles[e].points, sp->profiles[e].points);
+    EXPECT_EQ(sp2->profiles[e].u, sp->profiles[e].u);
+  }
   // Only the part with y < sin(3.5 step) is visible: the third edge drops out.
   const double ycut = std::sin(3.5 * kStep);
   const auto vis = [&](const Vec3d& p) { return p.y() < ycut; };
