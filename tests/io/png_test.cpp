@@ -151,5 +151,29 @@ TEST(Png, RefusesDamagedFiles) {
   }
 }
 
+TEST(Png, EveryFlippedByteAndEveryTruncationIsRefused) {
+  // Signature, lengths, types, data and CRCs are all covered: any single
+  // damaged byte or cut must be a parse error, never a crash or a silent read.
+  const std::string good = encode_png(gradient_image(9, 5));
+  for (std::size_t at = 0; at < good.size(); ++at) {
+    std::string bad = good;
+    bad[at] = static_cast<char>(bad[at] ^ 0x01);
+    try {
+      (void)decode_png(bad);
+      ADD_FAILURE() << "flipped byte " << at << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status().code(), ErrorCode::kParse) << at;
+    }
+  }
+  for (std::size_t n = 0; n < good.size(); ++n) {
+    try {
+      (void)decode_png(good.substr(0, n));
+      ADD_FAILURE() << "truncation to " << n << " bytes was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status().code(), ErrorCode::kParse) << n;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace atelier
