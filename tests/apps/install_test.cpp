@@ -67,7 +67,8 @@ TEST(Install, DownstreamProjectBuildsAndRunsTheEmbeddingExample) {
   ASSERT_EQ(compile.code, 0) << compile.out;
   // The example must not pick up the source tree's headers: it compiled
   // against the installed ones only.
-  const Outcome flags = run("grep -r -l -- " + q("-I" + source.string() + " ") + " " + q(work / "build"));
+  const Outcome flags =
+      run("grep -r -l -E -- " + q("(-I|-isystem )" + source.string() + "( |$)") + " " + q(work / "build"));
   EXPECT_NE(flags.code, 0) << flags.out;
 
   const Outcome example = run(q(work / "build" / "embed"));
