@@ -75,7 +75,7 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
       << (adj.offset.empty() ? 0 : adj.offset.size() - 1) << " nodes do not match";
     return Status(ErrorCode::kMismatch, s.str());
   }
-  if (prm.iterations < 0 || prm.substeps < 1)
+  if (prm.iterations < 0 || prm.substeps < 1 || !(prm.relaxation > 0.0 && prm.relaxation <= 1.0))
     return Status(ErrorCode::kInvalidArgument, "fair_umbrella: bad iteration or sub-step count");
   // 1/n per node and the diagonal 1/nu_v (Kobbelt): nu = 1 + 1/n sum_j 1/n_j.
   std::vector<double> inv_deg(n, 0.0), inv_nu(n, 0.0);
@@ -86,7 +86,7 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
     if (fixed[v] || adj.degree(v) == 0) continue;
     double s = 0;
     for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += inv_deg[adj.neighbor[k]];
-    inv_nu[v] = 1.0 / (1.0 + s * inv_deg[v]);
+    inv_nu[v] = prm.relaxation / (1.0 + s * inv_deg[v]);
     free_nodes.push_back(static_cast<std::uint32_t>(v));
   }
   // Nodes that feed U2 of a free node: the free nodes and their neighbours.

@@ -1,8 +1,8 @@
 // Umbrella fairing (seed 000 section 4.2, after Kobbelt's variational
 // subdivision): free nodes move to make the 2nd-order umbrella vanish,
 //   U(p)  = 1/n sum_j p_j - p,       U2(p) = 1/n sum_j U(p_j) - U(p),
-// solved iteratively by p <- p - U2(p) / nu,  nu = 1 + 1/n sum_j 1/n_j
-// (Kobbelt 1998, the diagonal of U2). Jacobi updates over a CSR adjacency,
+// solved iteratively by p <- p - w U2(p) / nu,  nu = 1 + 1/n sum_j 1/n_j
+// (Kobbelt 1998, the diagonal of U2; w = FairParams::relaxation damps it). Jacobi updates over a CSR adjacency,
 // so each iteration is a pure function of the previous one: parallel and
 // bit-identical for any thread count.
 //
@@ -52,6 +52,12 @@ struct FairParams {
   std::function<double(const Vec3d&)> signed_distance;
   /// Distance to keep from the body when collision is on.
   double clearance = 0.0;
+  /// Damping of the Jacobi step: p <- p - relaxation * U2(p) / nu. Undamped
+  /// Jacobi diverges on the highest-frequency modes: the eigenvalues of U2
+  /// reach 4 while nu can be as small as 1.5 (regular 1D chain, 2.67 > 2), so
+  /// a node's oscillation grows by |1 - lambda / nu| per iteration. With 0.5
+  /// the factor stays below 1 for every mode (lambda / nu <= 4).
+  double relaxation = 0.5;
   /// Sub-steps of a move near the body (seed 000: "subdivided into several steps").
   int substeps = 4;
 };

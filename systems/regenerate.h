@@ -89,6 +89,7 @@ struct RegenParams {
   int levels = -1;           // refinement levels; < 0: the template's
   double clearance = -1;     // distance kept from the body (m); < 0: the template's
   int fair_iterations = 12;  // Jacobi iterations of umbrella fairing per level
+  double fair_tolerance = 1e-5;  // stop a level's fairing once no node moves farther (m)
   int substeps = 4;          // sub-steps of a fairing move near the body
   bool collision = true;     // push-out and collision-checked fairing
   bool smooth_chains = true; // 4-point rule on boundary / joint edges (else midpoints)
