@@ -661,3 +661,88 @@ TEST(ProfileStroke, BoundaryEdgeUsesThePlaneFacingTheCamera) {
   ASSERT_TRUE(attach_stroke_profiles(d.m, *sp));
   ASSERT_TRUE(validate(d.m));
 }
+
+namespace {
+
+/// A chain of wire edges through the given points (one surface).
+Model wire_chain(const std::vector<Vec3d>& p) {
+  Model m;
+  const SurfaceIdx s = m.add_surface("wire").idx;
+  std::vector<NodeIdx> v;
+  for (const Vec3d& q : p) v.push_back(m.new_node(s, q));
+  for (std::size_t i = 0; i + 1 < v.size(); ++i) (void)m.new_edge(v[i], v[i + 1]);
+  return m;
+}
+
+}  // namespace
+
+TEST(ProfileStroke, NonCoplanarEdgesUseTheirLeastSquaresPlane) {
+  const std::vector<Vec3d> nodes{Vec3d(0, 0, 0), Vec3d(1, 0, 0.1), Vec3d(2, 0.1, -0.05), Vec3d(3, 0, 0.08)};
+  Model m = wire_chain(nodes);
+  ASSERT_TRUE(validate(m)) << validate(m).to_string();
+  const Camera cam = Camera::look_at(Vec3d(1.5, -1, 4), Vec3d(1.5, 0, 0), Vec3d(0, 1, 0), 50, 1000, 800);
+  constexpr int kPer = 10;  // stroke samples per edge, 9 strictly inside
+  std::vector<Vec2d> stroke;
+  for (std::size_t e = 0; e + 1 < nodes.size(); ++e)
+    for (int k = (e == 0 ? 0 : 1); k <= kPer; ++k) {
+      const double t = double(k) / kPer;
+      // Off the chord by a screen-visible bump so the stroke is not the edges themselves.
+      const Vec3d q = (1 - t) * nodes[e] + t * nodes[e + 1] + Vec3d(0, 0.2 * std::sin(kPi * t), 0);
+      stroke.push_back(cam.project(q).head<2>());
+    }
+  const auto sp = profiles_from_stroke(m, {}, cam, stroke, 3.0);
+  ASSERT_TRUE(sp) << sp.status().to_string();
+  ASSERT_EQ(sp->edges.size(), 3u);
+  // The plane minimising the squared distances of the four nodes: through
+  // their centroid, normal = the smallest right singular vector (SVD, not the
+  // eigen-solver the implementation uses).
+  Vec3d c = Vec3d::Zero();
+  for (const Vec3d& q : nodes) c += q;
+  c /= 4.0;
+  Eigen::Matrix<double, 4, 3> A;
+  for (int i = 0; i < 4; ++i) A.row(i) = (nodes[i] - c).transpose();
+  const Vec3d n = Eigen::JacobiSVD<Eigen::Matrix<double, 4, 3>>(A, Eigen::ComputeFullV).matrixV().col(2);
+  EXPECT_NEAR(std::abs(sp->plane_normal.dot(n)), 1.0, 1e-12);
+  EXPECT_LT((sp->plane_point - c).norm(), 1e-15);
+  EXPECT_GT(sp->plane_normal.dot(Vec3d(1.5, -1, 4) - c), 0.0);  // faces the camera
+  ASSERT_EQ(sp->stroke_points.size(), stroke.size());
+  for (std::size_t i = 0; i < stroke.size(); ++i) {
+    EXPECT_NEAR((sp->stroke_points[i] - c).dot(n), 0.0, 1e-12);
+    EXPECT_LT((cam.project(sp->stroke_points[i]).head<2>() - stroke[i]).norm(), 1e-8);
+  }
+  // Each edge receives the samples drawn inside it, in order.
+  for (std::size_t e = 0; e < 3; ++e) {
+    const HalfedgeIdx h = sp->edges[e];
+    const std::uint32_t i = m.tail(h).value;
+    EXPECT_EQ(m.head(h).value, i + 1);
+    ASSERT_EQ(sp->profiles[e].points.size(), std::size_t(kPer - 1));
+    const std::size_t first = i == 0 ? 1 : 1 + i * kPer;  // stroke index of the first inner sample
+    for (std::size_t k = 0; k + 1 < kPer; ++k)
+      EXPECT_TRUE(sp->profiles[e].points[k] == sp->stroke_points[first + k]);
+  }
+  ASSERT_TRUE(attach_stroke_profiles(m, *sp));
+  ASSERT_TRUE(validate(m));
+  EXPECT_EQ(read_all_point_lists(m).size(), 3u);
+}
+
+TEST(ProfileStroke, CollinearEdgesUseThePlaneFacingTheCamera) {
+  const std::vector<Vec3d> nodes{Vec3d(0, 0, 0), Vec3d(1.25, 0, 0), Vec3d(2.5, 0, 0)};  // at stroke t = 0, 1/2, 1
+  Model m = wire_chain(nodes);
+  const Vec3d eye(1.0, -2.0, 3.0);
+  const Camera cam = Camera::look_at(eye, Vec3d(1.2, 0, 0), Vec3d(0, 0, 1), 45, 800, 800);
+  std::vector<Vec2d> stroke;
+  for (int k = 0; k <= 30; ++k) {
+    const double t = k / 30.0;
+    stroke.push_back(cam.project(Vec3d(2.5 * t, 0, 0)).head<2>() + Vec2d(0, 25.0 * std::sin(2 * kPi * t)));
+  }
+  const auto sp = profiles_from_stroke(m, {}, cam, stroke, 3.0);
+  ASSERT_TRUE(sp) << sp.status().to_string();
+  ASSERT_EQ(sp->edges.size(), 2u);
+  // Any plane through the x axis fits; the one whose normal is nearest the
+  // viewing direction at the centroid is chosen.
+  const Vec3d centroid(1.25, 0, 0);
+  const Vec3d view = cam.ray(cam.project(centroid).head<2>()).second;
+  const Vec3d expect = -(view - view.x() * Vec3d::UnitX()).normalized();
+  EXPECT_NEAR(sp->plane_normal.dot(expect), 1.0, 1e-12);
+  for (const Vec3d& q : sp->stroke_points) EXPECT_NEAR(q.dot(expect), 0.0, 1e-12);
+}
