@@ -258,6 +258,42 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Ca
   return out;
 }
 
+Expected<RenderResult> render_scene(std::span<const RenderTriangles> meshes, const RenderParams& params,
+                                    const ExecContext& ctx) {
+  if (meshes.empty()) return Status(ErrorCode::kInvalidArgument, "render: no meshes");
+  std::vector<BodyBvh> bvhs(meshes.size());
+  std::vector<RenderMesh> scene(meshes.size());
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    if (Status s = bvhs[m].build(meshes[m].positions, meshes[m].triangles, {}, ctx); !s)
+      return Status(s.code(), "render: mesh " + std::to_string(m) + ": " + s.message());
+    scene[m] = {&bvhs[m], meshes[m].colour};
+  }
+  return render_scene(scene, params, ctx);
+}
+
+Expected<RgbImage> side_by_side(std::span<const RgbImage> images, std::uint32_t gap, const Vec3d& background) {
+  if (images.empty()) return Status(ErrorCode::kInvalidArgument, "side_by_side: no images");
+  std::uint64_t width = 0;
+  std::uint32_t height = 0;
+  for (const RgbImage& im : images) {
+    if (im.width == 0 || im.height == 0 || im.pixels.size() != std::size_t{3} * im.width * im.height)
+      return Status(ErrorCode::kInvalidArgument, "side_by_side: malformed image");
+    width += im.width;
+    height = std::max(height, im.height);
+  }
+  width += std::uint64_t{gap} * (images.size() - 1);
+  if (width > (1u << 16)) return Status(ErrorCode::kInvalidArgument, "side_by_side: result too wide");
+  RgbImage out(static_cast<std::uint32_t>(width), height);
+  const std::uint8_t bg[3] = {to_byte(background[0]), to_byte(background[1]), to_byte(background[2])};
+  for (std::size_t i = 0; i < out.pixels.size(); i += 3) std::copy(bg, bg + 3, out.pixels.data() + i);
+  std::uint32_t x0 = 0;
+  for (const RgbImage& im : images) {
+    for (std::uint32_t y = 0; y < im.height; ++y) std::copy(im.at(0, y), im.at(0, y) + 3 * im.width, out.at(x0, y));
+    x0 += im.width + gap;
+  }
+  return out;
+}
+
 Vec3d body_colour() noexcept { return {0.80, 0.62, 0.50}; }
 
 Vec3d garment_colour(std::size_t i) noexcept {

@@ -108,6 +108,23 @@ struct RenderResult {
 [[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Camera& camera,
                                                   const RenderParams& params, const ExecContext& ctx = {});
 
+/// A mesh given as arrays (e.g. a body of a BodySet and a decoded garment):
+/// render_scene builds a BVH over it for the call.
+struct RenderTriangles {
+  std::span<const Vec3d> positions;
+  std::span<const Triangle> triangles;
+  Vec3d colour{0.8, 0.8, 0.8};
+};
+/// Builds one BVH per mesh (errors name the mesh), then renders as above.
+[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderTriangles> meshes, const RenderParams& params,
+                                                  const ExecContext& ctx = {});
+
+/// Pictures placed left to right, top aligned, `gap` pixels apart, on the
+/// background colour (e.g. front and side views in one report picture).
+/// kInvalidArgument when empty or an image is malformed.
+[[nodiscard]] Expected<RgbImage> side_by_side(std::span<const RgbImage> images, std::uint32_t gap = 8,
+                                              const Vec3d& background = Vec3d::Ones());
+
 /// Default colours: skin for bodies, then a palette for garments.
 [[nodiscard]] Vec3d body_colour() noexcept;
 [[nodiscard]] Vec3d garment_colour(std::size_t i) noexcept;

@@ -51,7 +51,8 @@ CLI::App* add_render_subcommand(CLI::App& app, RenderOptions& opt) {
   cmd->add_option("--body", opt.body, "body mesh (OBJ, PLY or OFF)");
   cmd->add_option("--garment", opt.garments, "garment mesh; repeat for several");
   cmd->add_option("--out", opt.out, "output PNG");
-  cmd->add_option("--view", opt.view, "front, side or back")->check(CLI::IsMember({"front", "side", "back"}));
+  cmd->add_option("--view", opt.view, "front, side, back, or both (front and side next to each other)")
+      ->check(CLI::IsMember({"front", "side", "back", "both"}));
   cmd->add_option("--width", opt.width, "picture width in pixels")->check(CLI::Range(1u, 8192u));
   cmd->add_option("--height", opt.height, "picture height in pixels")->check(CLI::Range(1u, 8192u));
   cmd->add_option("--supersample", opt.supersample, "samples per pixel along each axis")->check(CLI::Range(1, 8));
@@ -80,19 +81,31 @@ int run_render(const Common& common, const RenderOptions& opt, Log& log) {
   RenderParams p;
   p.width = opt.width;
   p.height = opt.height;
-  p.view = opt.view == "side" ? View::kSide : opt.view == "back" ? View::kBack : View::kFront;
+  const std::vector<View> views = opt.view == "both"   ? std::vector<View>{View::kFront, View::kSide}
+                                  : opt.view == "side" ? std::vector<View>{View::kSide}
+                                  : opt.view == "back" ? std::vector<View>{View::kBack}
+                                                       : std::vector<View>{View::kFront};
   p.projection = opt.perspective ? Projection::kPerspective : Projection::kOrthographic;
   p.supersample = opt.supersample;
   p.outlines = !opt.no_outlines;
   ctx.progress = [&log](std::string_view stage, std::size_t done, std::size_t total) {
     log.progress(stage, done, total);
   };
-  auto res = render_scene(meshes, p, ctx);
-  log.end_progress();
-  if (!res) throw Error(res.status());
-  write_png(res->image, opt.out);
-  std::printf("%s: %ux%u %s view, %zu meshes, %zu of %zu pixels covered\n", opt.out.string().c_str(), p.width,
-              p.height, opt.view.c_str(), meshes.size(), res->covered_pixels, std::size_t{p.width} * p.height);
+  std::vector<RgbImage> pictures;
+  std::size_t covered = 0;
+  for (View v : views) {
+    p.view = v;
+    auto res = render_scene(meshes, p, ctx);
+    log.end_progress();
+    if (!res) throw Error(res.status());
+    covered += res->covered_pixels;
+    pictures.push_back(std::move(res->image));
+  }
+  auto image = side_by_side(pictures);
+  if (!image) throw Error(image.status());
+  write_png(*image, opt.out);
+  std::printf("%s: %ux%u %s view, %zu meshes, %zu of %zu pixels covered\n", opt.out.string().c_str(), image->width,
+              image->height, opt.view.c_str(), meshes.size(), covered, std::size_t{p.width} * p.height * views.size());
   return kExitOk;
 }
 

@@ -16,7 +16,7 @@ struct RenderOptions {
   std::filesystem::path body;                   // optional when garments are given
   std::vector<std::filesystem::path> garments;  // drawn in the palette's colours
   std::filesystem::path out = "render.png";
-  std::string view = "front";                   // front | side | back
+  std::string view = "front";                   // front | side | back | both
   std::uint32_t width = 480;
   std::uint32_t height = 640;
   int supersample = 2;

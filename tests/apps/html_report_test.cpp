@@ -231,6 +231,21 @@ void write_pictures(const fs::path& dir) {
   };
   EXPECT_GT(blue(front), 3 * blue(side));
   EXPECT_GT(blue(side), 0u);
+  // --view both: front and side next to each other, 8 pixels apart.
+  int both_code = 0;
+  const std::string both_out =
+      run(std::string(ATELIER_CLI) + " render --body " + (dir / "body.obj").string() + " --garment " +
+              (dir / "garment.obj").string() + " --view both --width 64 --height 80 --out " +
+              (dir / "both.png").string() + " 2>&1",
+          both_code);
+  ASSERT_EQ(both_code, 0) << both_out;
+  const RgbImage both = read_png(dir / "both.png");
+  ASSERT_EQ(both.width, 64u + 8u + 64u);
+  for (std::uint32_t y = 0; y < 80; ++y)
+    for (std::uint32_t x = 0; x < 64; ++x) {
+      ASSERT_TRUE(std::equal(both.at(x, y), both.at(x, y) + 3, front.at(x, y)));
+      ASSERT_TRUE(std::equal(both.at(x + 72, y), both.at(x + 72, y) + 3, side.at(x, y)));
+    }
   int code = 0;
   (void)run(std::string(ATELIER_CLI) + " render --out " + (dir / "x.png").string() + " 2>&1", code);
   EXPECT_EQ(code, 2);  // neither a body nor a garment: usage error

@@ -282,12 +282,55 @@ TEST(Render, ProgressCancellationAndErrors) {
   ExecContext cancelled;
   cancelled.cancel.cancel();
   EXPECT_EQ(render_scene(std::span(&mesh, 1), p, cancelled).status().code(), ErrorCode::kCancelled);
-  EXPECT_EQ(render_scene({}, p).status().code(), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(render_scene(std::span<const RenderMesh>{}, p).status().code(), ErrorCode::kInvalidArgument);
   BodyBvh empty;
   const RenderMesh bad{&empty, body_colour()};
   EXPECT_EQ(render_scene(std::span(&bad, 1), p).status().code(), ErrorCode::kInvalidArgument);
   p.width = 0;
   EXPECT_EQ(render_scene(std::span(&mesh, 1), p).status().code(), ErrorCode::kInvalidArgument);
+}
+
+TEST(Render, TriangleArraysAndSideBySide) {
+  const TriMesh s = icosphere(3, 1.0, Vec3d::Zero());
+  const TriMesh b = box_mesh({-1.5, -0.2, 0.9}, {1.5, 0.2, 1.2});
+  const BodyBvh bs = make_bvh(s), bb = make_bvh(b);
+  const RenderMesh via_bvh[] = {{&bs, body_colour()}, {&bb, garment_colour(0)}};
+  const RenderTriangles via_arrays[] = {{s.p, s.t, body_colour()}, {b.p, b.t, garment_colour(0)}};
+  RenderParams p;
+  p.width = 60;
+  p.height = 50;
+  p.outlines = true;
+  auto r1 = render_scene(via_bvh, p);
+  auto r2 = render_scene(via_arrays, p);
+  ASSERT_TRUE(r1.has_value() && r2.has_value());
+  EXPECT_EQ(r1->image, r2->image);
+  std::vector<Triangle> broken = b.t;
+  broken[3][1] = 999;
+  const RenderTriangles bad[] = {{s.p, s.t, body_colour()}, {b.p, broken, garment_colour(0)}};
+  auto rb = render_scene(bad, p);
+  ASSERT_FALSE(rb.has_value());
+  EXPECT_NE(rb.status().message().find("mesh 1"), std::string::npos) << rb.status().message();
+
+  // Front (60 x 50) and side (30 x 70) pictures side by side, 4 pixels apart.
+  p.view = View::kSide;
+  p.width = 30;
+  p.height = 70;
+  auto side = render_scene(via_arrays, p);
+  ASSERT_TRUE(side.has_value());
+  const RgbImage both_in[] = {r1->image, side->image};
+  auto both = side_by_side(both_in, 4, Vec3d(0, 0, 0));
+  ASSERT_TRUE(both.has_value());
+  EXPECT_EQ(both->width, 60u + 4u + 30u);
+  EXPECT_EQ(both->height, 70u);
+  for (std::uint32_t y = 0; y < 70; ++y)
+    for (std::uint32_t x = 0; x < both->width; ++x) {
+      const std::uint8_t* got = both->at(x, y);
+      const std::uint8_t* want = nullptr;
+      if (x < 60 && y < 50) want = r1->image.at(x, y);
+      if (x >= 64) want = side->image.at(x - 64, y);
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(got[c], want ? want[c] : 0) << x << "," << y;
+    }
+  EXPECT_EQ(side_by_side({}).status().code(), ErrorCode::kInvalidArgument);
 }
 
 }  // namespace
