@@ -269,7 +269,9 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
       const std::size_t v = first + i;
       if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) return;
       const Vec3d& p = m.nodes.position[v];
-      if (collider->signed_distance(p) >= target) return;
+      // The grid (when there is one) clears far nodes cheaply; otherwise one
+      // exact query decides and gives the push-out target.
+      if (collider->has_grid() && collider->signed_distance(p) >= target) return;
       const SignedHit hit = collider->exact(p);
       if (hit.distance >= target) return;
       m.nodes.position[v] = hit.closest.point + target * hit.normal;
@@ -399,32 +401,32 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
   // A node pushed out of one part of the body can land in another where two
   // parts nearly touch (the thighs at the crotch): push again with a
   // shrinking target until nothing is inside.
+  // The exact distance of every node, kept up to date through the re-push
+  // rounds, is also what the quality measures report.
+  const std::size_t n = m.nodes.slots.capacity();
+  std::vector<double> d(n, INFINITY);
+  if (collider) {
+    par::for_each_n(ctx, n, [&](std::size_t v) {
+      if (m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) d[v] = collider->exact(m.nodes.position[v]).distance;
+    });
+  }
   if (collide) {
     for (int round = 0; round < 8; ++round) {
-      const std::size_t n = m.nodes.slots.capacity();
-      std::vector<std::uint8_t> in(n, 0);
-      par::for_each_n(ctx, n, [&](std::size_t v) {
-        in[v] = m.alive(NodeIdx{static_cast<std::uint32_t>(v)}) && collider->exact(m.nodes.position[v]).distance < 0;
-      });
-      std::size_t count = 0;
-      const double target = std::max(clearance * std::ldexp(1.0, -round), 1e-6);
+      std::vector<std::uint32_t> in;
       for (std::size_t v = 0; v < n; ++v)
-        if (in[v]) count += push_out(v, v + 1, target);
-      out.quality.pushed += count;
-      if (count == 0) break;
+        if (d[v] < 0) in.push_back(static_cast<std::uint32_t>(v));
+      if (in.empty()) break;
+      const double target = std::max(clearance * std::ldexp(1.0, -round), 1e-6);
+      for (std::uint32_t v : in) out.quality.pushed += push_out(v, v + 1, target);
+      for (std::uint32_t v : in) d[v] = collider->exact(m.nodes.position[v]).distance;
     }
   }
 
   // 3. Quality.
   RegenQuality& q = out.quality;
-  const std::size_t n = m.nodes.slots.capacity();
   q.nodes = m.nodes.slots.size();
   q.faces = m.faces.slots.size();
   if (collider) {
-    std::vector<double> d(n, INFINITY);
-    par::for_each_n(ctx, n, [&](std::size_t v) {
-      if (m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) d[v] = collider->exact(m.nodes.position[v]).distance;
-    });
     q.min_distance = INFINITY;
     for (std::size_t v = 0; v < n; ++v) {
       if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) continue;
