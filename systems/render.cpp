@@ -54,7 +54,7 @@ Status check_meshes(std::span<const RenderMesh> meshes) {
 
 }  // namespace
 
-void Camera::ray(double px, double py, std::uint32_t width, std::uint32_t height, Vec3d& origin,
+void RenderCamera::ray(double px, double py, std::uint32_t width, std::uint32_t height, Vec3d& origin,
                  Vec3d& dir) const noexcept {
   // Image plane coordinates in [-aspect, aspect] x [-1, 1], y up.
   const double aspect = static_cast<double>(width) / static_cast<double>(height);
@@ -69,7 +69,7 @@ void Camera::ray(double px, double py, std::uint32_t width, std::uint32_t height
   }
 }
 
-Vec2d Camera::project(const Vec3d& p, std::uint32_t width, std::uint32_t height) const noexcept {
+Vec2d RenderCamera::project(const Vec3d& p, std::uint32_t width, std::uint32_t height) const noexcept {
   const double aspect = static_cast<double>(width) / static_cast<double>(height);
   const Vec3d d = p - eye;
   double u = d.dot(right), v = d.dot(up);
@@ -84,7 +84,7 @@ Vec2d Camera::project(const Vec3d& p, std::uint32_t width, std::uint32_t height)
   return {(u / aspect + 1.0) * 0.5 * width, (1.0 - v) * 0.5 * height};
 }
 
-Expected<Camera> frame_box(const Box3d& box, View view, Projection projection, double aspect, double margin,
+Expected<RenderCamera> frame_box(const Box3d& box, View view, Projection projection, double aspect, double margin,
                            double fov_degrees) {
   if (box.empty() || !box.lo.allFinite() || !box.hi.allFinite())
     return Status(ErrorCode::kInvalidArgument, "frame_box: empty or non-finite box");
@@ -92,7 +92,7 @@ Expected<Camera> frame_box(const Box3d& box, View view, Projection projection, d
   if (!(margin >= 0.0) || !std::isfinite(margin)) return Status(ErrorCode::kInvalidArgument, "frame_box: bad margin");
   if (projection == Projection::kPerspective && !(fov_degrees > 0.0 && fov_degrees < 170.0))
     return Status(ErrorCode::kInvalidArgument, "frame_box: field of view outside (0, 170) degrees");
-  Camera c;
+  RenderCamera c;
   c.projection = projection;
   c.up = Vec3d::UnitY();
   switch (view) {
@@ -141,7 +141,7 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Re
   return render_scene(meshes, *cam, params, ctx);
 }
 
-Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Camera& camera,
+Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderCamera& camera,
                                     const RenderParams& params, const ExecContext& ctx) {
   if (Status s = check_meshes(meshes); !s) return s;
   const std::uint32_t W = params.width, H = params.height;

@@ -43,7 +43,7 @@ enum class Projection : std::uint8_t { kOrthographic, kPerspective };
 /// A pinhole or orthographic camera. forward, up and right are orthonormal
 /// (right = forward x up). Orthographic rays start on the plane through
 /// `eye` orthogonal to forward; perspective rays start at `eye`.
-struct Camera {
+struct RenderCamera {
   Projection projection = Projection::kOrthographic;
   Vec3d eye = Vec3d::Zero();
   Vec3d forward{0, 0, -1};
@@ -65,7 +65,7 @@ struct Camera {
 /// Perspective cameras use the vertical field of view `fov_degrees` and stand
 /// far enough for the box's bounding sphere to fit. kInvalidArgument for an
 /// empty or non-finite box or a bad aspect/fov.
-[[nodiscard]] Expected<Camera> frame_box(const Box3d& box, View view, Projection projection, double aspect,
+[[nodiscard]] Expected<RenderCamera> frame_box(const Box3d& box, View view, Projection projection, double aspect,
                                          double margin = 0.05, double fov_degrees = 30.0);
 
 struct RenderParams {
@@ -93,7 +93,7 @@ struct RenderParams {
 /// distance along the ray (infinity for background).
 struct RenderResult {
   RgbImage image;
-  Camera camera;
+  RenderCamera camera;
   std::vector<std::int32_t> mesh;
   std::vector<double> depth;
   std::size_t covered_pixels = 0;  // pixels whose centre ray hits a mesh
@@ -105,7 +105,7 @@ struct RenderResult {
 [[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderParams& params,
                                                   const ExecContext& ctx = {});
 /// The same with an explicit camera (params.view/projection/frame ignored).
-[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Camera& camera,
+[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderCamera& camera,
                                                   const RenderParams& params, const ExecContext& ctx = {});
 
 /// A mesh given as arrays (e.g. a body of a BodySet and a decoded garment):

@@ -101,7 +101,7 @@ TEST(Render, OrthographicSphereCoversItsProjectedDisc) {
   ASSERT_TRUE(res.has_value()) << res.status().to_string();
   // The picture frames the sphere's box with a margin, so the disc's radius
   // in pixels is r / half_height * H / 2; the camera keeps it centred.
-  const Camera& cam = res->camera;
+  const RenderCamera& cam = res->camera;
   const Vec2d c = cam.project(centre, p.width, p.height);
   EXPECT_NEAR(c.x(), p.width / 2.0, 1e-6);
   EXPECT_NEAR(c.y(), p.height / 2.0, 1e-6);
@@ -134,7 +134,7 @@ TEST(Render, PerspectiveSphereMatchesItsAngularRadius) {
   p.fov_degrees = 40.0;
   auto res = render_scene(std::span(&mesh, 1), p);
   ASSERT_TRUE(res.has_value()) << res.status().to_string();
-  const Camera& cam = res->camera;
+  const RenderCamera& cam = res->camera;
   // A sphere at distance D subtends asin(r / D); on the image plane that is
   // tan(asin(r / D)) / tan(fov / 2) half-heights.
   const double dist = (cam.eye - centre).norm();
@@ -153,7 +153,7 @@ TEST(Render, LambertShadingAtTheSphereCentre) {
   p.ambient = 0.2;
   auto res = render_scene(std::span(&mesh, 1), p);
   ASSERT_TRUE(res.has_value());
-  const Camera& cam = res->camera;
+  const RenderCamera& cam = res->camera;
   const Vec3d n = -cam.forward;
   const Vec3d light = (-cam.forward + 0.45 * cam.up - 0.3 * cam.right).normalized();
   const double k = p.ambient + (1.0 - p.ambient) * n.dot(light);
