@@ -182,13 +182,22 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   }
   std::partial_sum(start_.begin(), start_.end(), start_.begin());
   ids_.resize(start_.back());
+  // Float spheres, widened by 1 um so that the rounding of the centre
+  // (< 0.2 um for coordinates of a few metres) cannot make them too small.
+  std::vector<GridEntry> entry(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const Vec4d& sp = sphere_[t];
+    entry[t] = {{static_cast<float>(sp[0]), static_cast<float>(sp[1]), static_cast<float>(sp[2])},
+                static_cast<float>(sp[3] * (1 + 1e-6) + 1e-6),
+                static_cast<std::uint32_t>(t)};
+  }
   std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
   for (std::size_t t = 0; t < nt; ++t) {
     const auto& r = range[t];
     for (int z = r[2]; z <= r[5]; ++z)
       for (int y = r[1]; y <= r[4]; ++y)
         for (int x = r[0]; x <= r[3]; ++x)
-          ids_[fill[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x]++] = static_cast<std::uint32_t>(t);
+          ids_[fill[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x]++] = entry[t];
   }
   return Status::ok();
 }
@@ -266,12 +275,17 @@ void CollisionBody::scan_cells(const Vec3d& p, double& best2, std::uint32_t& bes
         if (gap.squaredNorm() > best2) continue;
         const std::size_t cell = (static_cast<std::size_t>(z) * ny_ + y) * nx_ + x;
         for (std::uint32_t i = start_[cell]; i < start_[cell + 1]; ++i) {
-          const std::uint32_t t = ids_[i];
+          // Bounding sphere first, stored in the entry (no indirection):
+          // most candidates end here.
+          const GridEntry& en = ids_[i];
+          const double dx = p.x() - en.c[0], dy = p.y() - en.c[1], dz = p.z() - en.c[2];
+          const double cd2 = dx * dx + dy * dy + dz * dz;
+          if (cd2 > best2) {  // cheap pre-test before the square root
+            const double dc = std::sqrt(cd2) - en.r;
+            if (dc > 0 && dc * dc > best2) continue;
+          }
+          const std::uint32_t t = en.t;
           if (t == best_t) continue;
-          // Bounding sphere first: most candidates end here.
-          const Vec4d& sp = sphere_[t];
-          const double dc = (p - sp.head<3>()).norm() - sp[3];
-          if (dc > 0 && dc * dc > best2) continue;
           const Triangle& tr = tris[t];
           const TrianglePoint q = closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]);
           const double d2 = (p - q.point).squaredNorm();
@@ -292,6 +306,21 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     const Triangle& tr = tris[hint];
     best2 = (p - closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]).point).squaredNorm();
     best_t = hint;
+    // Greedy walk across edges to a nearer triangle: on a deformed body the
+    // closest triangle is usually a few steps from the hint, and a tighter
+    // bound shrinks the ball the grid has to certify (cost ~ radius^2).
+    for (int step = 0; step < 16; ++step) {
+      const std::uint32_t from = best_t;
+      for (std::uint32_t o : topo_->across_[from]) {
+        const Triangle& q = tris[o];
+        const double d2 = (p - closest_point_on_triangle(p, pos_[q[0]], pos_[q[1]], pos_[q[2]]).point).squaredNorm();
+        if (d2 < best2) {
+          best2 = d2;
+          best_t = o;
+        }
+      }
+      if (best_t == from) break;
+    }
   }
   auto in_grid = [&](double r) {
     return nx_ > 0 && (p.array() - r >= valid_lo_.array()).all() && (p.array() + r <= valid_hi_.array()).all();
@@ -505,9 +534,10 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
     if (free_flag[v] && adj.offset[v + 1] > adj.offset[v]) free_nodes.push_back(static_cast<std::uint32_t>(v));
   rep.faired = free_nodes.size();
   // Restricted umbrella fairing (seed 000 section 4.2; Kobbelt's U2 Jacobi
-  // step p <- p - U2(p)/nu as in systems/fairing.h), every move tested in
-  // sub-steps against the vertex's own target clearance (and the body), cut
-  // at its last admissible sub-step.
+  // step p <- p - U2(p)/nu as in systems/fairing.h) of the free region, the
+  // others fixed; every move is tested in sub-steps against the vertex's own
+  // target clearance and cut at its last admissible sub-step (seed 000 Fig.
+  // 16 tests against the body alone).
   if (prm.fair_iterations > 0 && !free_nodes.empty()) {
     std::vector<std::uint8_t> need_u(n, 0);
     for (std::uint32_t v : free_nodes) {
@@ -525,10 +555,16 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
       for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += inv_deg(adj.neighbor[k]);
       inv_nu[i] = 1.0 / (1.0 + s * inv_deg(v));
     }
-    std::vector<Vec3d> u(n, Vec3d::Zero()), next(free_nodes.size());
-    std::vector<BodyDistance> next_d(free_nodes.size());
-    // d[v] is exact, or (after unchecked far moves) a lower bound.
-    std::vector<std::uint8_t> exact(free_nodes.size(), 1), next_exact(free_nodes.size(), 1);
+    // Moves are along the body normal n at the closest point x, so to first
+    // order the signed distance is (p - x).n + d_x: sub-steps are tested on
+    // that tangent plane (no body query per sub-step), and the end state is
+    // verified exactly below.
+    std::vector<Vec3d> u(n, Vec3d::Zero()), next(free_nodes.size()), start(free_nodes.size());
+    std::vector<double> lin(free_nodes.size()), next_lin(free_nodes.size());
+    for (std::size_t i = 0; i < free_nodes.size(); ++i) {
+      start[i] = g[free_nodes[i]];
+      lin[i] = d[free_nodes[i]].distance;
+    }
     std::vector<std::uint32_t> refused(free_nodes.size(), 0);
     for (int it = 0; it < prm.fair_iterations; ++it) {
       if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "resolve_collisions cancelled");
@@ -538,7 +574,7 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
         for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += g[adj.neighbor[k]];
         u[v] = s * inv_deg(v) - g[v];
       });
-      par::for_each_n(qctx, free_nodes.size(), [&](std::size_t i) {
+      par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) {
         const std::uint32_t v = free_nodes[i];
         Vec3d s = Vec3d::Zero();
         for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += u[adj.neighbor[k]];
@@ -548,49 +584,38 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
         // the garment's offset from the body (the bump left by the push), and
         // tangential moves would slide open hems along the body (a free
         // boundary shrinks under U2 fairing) and add strain.
-        const Vec3d full = -0.5 * inv_nu[i] * (s * inv_deg(v) - u[v]);
-        const Vec3d step = d[v].normal * d[v].normal.dot(full);
-        const double len = step.norm();
+        const Vec3d& nrm = d[v].normal;
+        const double along = nrm.dot(-0.5 * inv_nu[i] * (s * inv_deg(v) - u[v]));
         next[i] = g[v];
-        next_d[i] = d[v];
-        next_exact[i] = exact[i];
-        // 1-Lipschitz distance: a move shorter than the margin above the
-        // target cannot cross it, and the distance less the move stays a
-        // lower bound (seed 000's sub-steps are only needed near the body).
-        if (d[v].distance - len >= target[v]) {
-          next[i] = g[v] + step;
-          next_d[i].distance -= len;
-          next_exact[i] = 0;
-          return;
-        }
-        if (!exact[i]) {  // sub-steps start from the exact distance
-          next_d[i] = body.query(g[v], d[v].triangle);
-          next_exact[i] = 1;
-          ++queries[v];
-        }
+        next_lin[i] = lin[i];
         for (int k = 1; k <= prm.substeps; ++k) {
-          const Vec3d t = g[v] + step * (static_cast<double>(k) / prm.substeps);
-          const BodyDistance q = body.query(t, next_d[i].triangle);
-          ++queries[v];
-          if (q.distance < target[v] && q.distance < next_d[i].distance) {
+          const double dk = lin[i] + along * k / prm.substeps;
+          if (dk < target[v] && dk < next_lin[i]) {  // entering, or going deeper into, the forbidden zone
             ++refused[i];
             break;
           }
-          next[i] = t;
-          next_d[i] = q;
+          next[i] = g[v] + nrm * (along * k / prm.substeps);
+          next_lin[i] = dk;
         }
       });
       par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) {
         g[free_nodes[i]] = next[i];
-        d[free_nodes[i]] = next_d[i];
-        exact[i] = next_exact[i];
+        lin[i] = next_lin[i];
       });
     }
+    // Exact check of the faired vertices: one that ended deeper than both
+    // its target and its pre-fairing distance (curvature beyond the tangent
+    // plane) goes back to where the push left it.
     par::for_each_n(qctx, free_nodes.size(), [&](std::size_t i) {
-      if (exact[i]) return;
       const std::uint32_t v = free_nodes[i];
-      d[v] = body.query(g[v], d[v].triangle);
+      const BodyDistance q = body.query(g[v], d[v].triangle);
       ++queries[v];
+      if (q.distance < target[v] - prm.tolerance && q.distance < d[v].distance) {
+        g[v] = start[i];
+        ++refused[i];
+      } else {
+        d[v] = q;
+      }
     });
     for (auto r : refused) rep.refused_moves += r;
   }

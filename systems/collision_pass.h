@@ -19,9 +19,14 @@
 //     gradient, or the pseudo-normal on the surface); repeated a few rounds
 //     where concave parts of the body make one push fall short. Then the
 //     moved region, grown by `fair_rings` rings, is smoothed by umbrella
-//     fairing (seed 000 section 4.2, Kobbelt's U2 Jacobi iteration) with all
-//     other vertices fixed, every move applied in sub-steps and cut at the
-//     last one that keeps the vertex at or above its target clearance.
+//     fairing (seed 000 section 4.2, Kobbelt's U2 Jacobi iteration, half
+//     steps, along the body normal only: it smooths the garment's offset)
+//     with all other vertices fixed, every move applied in sub-steps and cut
+//     at the last one that keeps the vertex at or above its target clearance.
+//     Sub-steps are tested on the tangent plane at the closest body point
+//     (first-order signed distance, no query); the end state is verified by
+//     one exact query per vertex, and a vertex found deeper than both its
+//     target and its pre-fairing distance returns to its pushed position.
 //  4. Layers: garments are resolved in z_depth order (inner first); each
 //     resolved layer leaves a clearance floor on the body vertices under it
 //     and outer layers keep at least that floor plus `layer_gap`.
@@ -114,7 +119,13 @@ class CollisionBody {
   Vec3d valid_lo_ = Vec3d::Zero(), valid_hi_ = Vec3d::Zero();  // ROI + margin: balls inside use the grid
   double h_ = 1.0, inv_h_ = 1.0;
   int nx_ = 0, ny_ = 0, nz_ = 0;
-  std::vector<std::uint32_t> start_, ids_;  // cell -> triangles (CSR)
+  struct GridEntry {
+    float c[3];  // bounding sphere of the triangle
+    float r;
+    std::uint32_t t;
+  };
+  std::vector<std::uint32_t> start_;  // cell -> entries (CSR)
+  std::vector<GridEntry> ids_;
   std::vector<Vec4d> sphere_;               // per triangle: bounding sphere (centre, radius)
 };
 
@@ -138,7 +149,7 @@ struct CollisionParams {
   int push_rounds = 3;       // push, re-query, push again where concavities make it fall short
   int fair_rings = 2;        // rings of unmoved neighbours freed around the moved region
   int fair_iterations = 10;  // umbrella iterations (0: no smoothing)
-  int substeps = 4;          // sub-steps of a fairing move near the body
+  int substeps = 4;          // sub-steps of a fairing move (tested on the tangent plane)
   double layer_gap = 0.001;  // resolve_layers: outer layer at least this far outside the inner one
 };
 

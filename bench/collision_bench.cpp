@@ -1,0 +1,163 @@
+// Collision pass (issue 7): the pass on one body including its per-body
+// set-up (CollisionBody grid over the garment's box, then
+// resolve_collisions), for a garment decoded by its detail template on
+// bodies it was not encoded on. Goal: <= 10 ms per body for ~10k garment
+// vertices on 2 threads.
+//
+// With ../shared/data: MakeHuman's male_casualsuit01 (8,426 vertices) fitted
+// by its binding on the default body, regenerated on 16 random adults.
+// Without: the mannequin with a skin-band garment (the demo's shorts, widened
+// to the torso) on 16 sampled mannequins.
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+
+#include "io/mhclo.h"
+#include "io/makehuman.h"
+#include "systems/collision_pass.h"
+#include "systems/detail_template.h"
+#include "systems/makehuman_body.h"
+#include "systems/mannequin.h"
+#include "systems/mannequin_source.h"
+#include "systems/reference_body.h"
+
+using namespace atelier;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CollisionScene {
+  std::string label;
+  std::shared_ptr<const CollisionTopology> topo;
+  std::vector<std::vector<Vec3d>> skins;    // per body
+  std::vector<std::vector<Vec3d>> decoded;  // garment decoded on each body
+  NodeAdjacency adj;
+  ClearanceEncoding clear;
+  std::size_t vertices = 0;
+};
+
+std::vector<std::array<std::uint32_t, 2>> soup_edges(const makehuman::BaseMesh& mesh) {
+  std::vector<std::array<std::uint32_t, 2>> e;
+  for (const auto& g : mesh.groups)
+    for (std::size_t f = 0; f + 1 < g.face_offsets.size(); ++f)
+      for (std::uint32_t k = g.face_offsets[f]; k < g.face_offsets[f + 1]; ++k) {
+        const std::uint32_t a = g.face_nodes[k];
+        const std::uint32_t b = g.face_nodes[k + 1 < g.face_offsets[f + 1] ? k + 1 : g.face_offsets[f]];
+        e.push_back({std::min(a, b), std::max(a, b)});
+      }
+  std::sort(e.begin(), e.end());
+  e.erase(std::unique(e.begin(), e.end()), e.end());
+  return e;
+}
+
+// Encodes the garment (detail template + clearance) on the reference and
+// decodes it on every body.
+void finish(CollisionScene& s, const ReferenceBody& ref, std::span<const Vec3d> garment,
+            std::span<const std::array<std::uint32_t, 2>> edges) {
+  const BodyPolygons poly = BodyPolygons::from_model(ref.model);
+  const std::vector<Vec3d> skin0 = skin_positions(ref);
+  auto tris = fan_triangulate(ref.model).value();
+  s.topo = CollisionTopology::build(tris.triangles, static_cast<std::uint32_t>(skin0.size())).value();
+  CollisionBody cb0;
+  if (Status st = cb0.build(s.topo, skin0); !st) throw Error(st);
+  s.clear = encode_clearance(garment, cb0).value();
+  s.adj = adjacency_from_edges(garment.size(), edges).value();
+  const DetailEncoding enc = encode_detail(poly, skin0, garment).value();
+  PolygonFrames fr;
+  for (const auto& skin : s.skins) {
+    std::vector<Vec3d> out(garment.size());
+    compute_frames(poly, skin, fr, {}, enc.reference_corners);
+    decode_detail(enc, fr, out);
+    s.decoded.push_back(std::move(out));
+  }
+  s.vertices = garment.size();
+}
+
+const CollisionScene& scene() {
+  static const CollisionScene s = [] {
+    CollisionScene s;
+    const fs::path mh = fs::path(ATELIER_BENCH_SHARED_DATA) / "makehuman";
+    // ATELIER_BENCH_PROCEDURAL=1 forces the procedural fallback.
+    if (!std::getenv("ATELIER_BENCH_PROCEDURAL") && fs::exists(mh / "base.obj") &&
+        fs::exists(mh / "clothes" / "male_casualsuit01.mhclo")) {
+      const auto lib = makehuman::HumanLibrary::load(mh);
+      const ReferenceBody ref = makehuman::make_reference_body(lib);
+      std::vector<Vec3f> H(lib.vertex_count());
+      lib.build(makehuman::MacroParams{}, H);
+      const auto binding = makehuman::read_mhclo(mh / "clothes" / "male_casualsuit01.mhclo", lib.vertex_count());
+      const makehuman::BaseMesh mesh = makehuman::read_base_mesh(mh / "clothes" / binding.obj_file);
+      std::vector<Vec3d> g = makehuman::fit_binding(binding, H);
+      for (auto& q : g) q *= makehuman::kMakeHumanToMetres;
+      const std::size_t nskin = skin_positions(ref).size();
+      for (const auto& prm : makehuman::sample_adults(16, 99)) {
+        lib.build(prm, H);
+        std::vector<Vec3d> skin(nskin);
+        for (std::size_t v = 0; v < nskin; ++v) skin[v] = makehuman::kMakeHumanToMetres * H[v].cast<double>();
+        s.skins.push_back(std::move(skin));
+      }
+      finish(s, ref, g, soup_edges(mesh));
+      s.label = "makehuman male_casualsuit01 (" + std::to_string(g.size()) + " v), 16 adults";
+    } else {
+      auto topo = make_mannequin_topology().value();
+      const ReferenceBody ref = make_mannequin(MannequinParams{}, topo).value();
+      const Model garment = skin_band_garment(ref, 0.55, 1.45, 0.004, 0.40, "suit").value();
+      std::vector<Vec3d> g(garment.nodes.position.begin(), garment.nodes.position.end());
+      std::vector<std::array<std::uint32_t, 2>> edges;
+      for (std::uint32_t e = 0; e < garment.edges.slots.capacity(); ++e)
+        edges.push_back({garment.tail(halfedge_of(EdgeIdx{e}, 0)).value,
+                         garment.tail(halfedge_of(EdgeIdx{e}, 1)).value});
+      for (const auto& prm : sample_mannequins(16, 99)) s.skins.push_back(mannequin_positions(prm, topo).value());
+      finish(s, ref, g, edges);
+      s.label = "mannequin skin band (" + std::to_string(g.size()) + " v), 16 bodies";
+    }
+    return s;
+  }();
+  return s;
+}
+
+void BM_CollisionPassPerBody(benchmark::State& st) {
+  const CollisionScene& s = scene();
+  ExecContext ctx;
+  ctx.threads = static_cast<int>(st.range(0));
+  std::vector<Vec3d> g;
+  std::size_t body = 0, pushed = 0, bodies = 0;
+  for (auto _ : st) {
+    const std::size_t b = body++ % s.skins.size();
+    g = s.decoded[b];
+    CollisionBodyParams cbp;
+    for (const Vec3d& q : g) cbp.roi.extend(q);
+    CollisionBody cb;
+    if (Status e = cb.build(s.topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
+    auto rep = resolve_collisions(g, s.adj, s.clear, cb, CollisionParams{}, ctx);
+    if (!rep) st.SkipWithError(rep.status().to_string().c_str());
+    pushed += rep->pushed;
+    ++bodies;
+    benchmark::DoNotOptimize(g.data());
+  }
+  st.counters["pushed/body"] = static_cast<double>(pushed) / std::max<std::size_t>(1, bodies);
+  st.counters["vertices"] = static_cast<double>(s.vertices);
+  st.SetLabel(s.label);
+}
+BENCHMARK(BM_CollisionPassPerBody)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The set-up alone (grid over the garment's box).
+void BM_CollisionBodySetup(benchmark::State& st) {
+  const CollisionScene& s = scene();
+  ExecContext ctx;
+  ctx.threads = static_cast<int>(st.range(0));
+  std::size_t body = 0;
+  for (auto _ : st) {
+    const std::size_t b = body++ % s.skins.size();
+    CollisionBodyParams cbp;
+    for (const Vec3d& q : s.decoded[b]) cbp.roi.extend(q);
+    CollisionBody cb;
+    if (Status e = cb.build(s.topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
+    benchmark::DoNotOptimize(cb.grid_entries());
+  }
+  st.SetLabel(s.label);
+}
+BENCHMARK(BM_CollisionBodySetup)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
