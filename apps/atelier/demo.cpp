@@ -1,6 +1,9 @@
 // `atelier demo`: the main job on the embedded default. Samples mannequin
-// bodies, regenerates the project's garment on each, measures quality, and
-// writes meshes, a JSON report and measurements to the output folder.
+// bodies and regenerates on each the project's three profile templates (top
+// with collar, skirt, trousers: modified variational subdivision with
+// collision avoidance) and its detail template (shorts), measures quality,
+// and writes meshes, a JSON report, pictures, an HTML report and the
+// bodies' measurements to the output folder.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,13 +15,18 @@
 #include "apps/atelier/commands.h"
 #include "engine/parallel.h"
 #include "io/atomic_file.h"
+#include "io/html_report.h"
 #include "io/obj.h"
+#include "io/png.h"
 #include "systems/body_bvh.h"
 #include "systems/body_set.h"
 #include "systems/detail_template.h"
 #include "systems/mannequin.h"
 #include "systems/mannequin_source.h"
 #include "systems/measure.h"
+#include "systems/project_templates.h"
+#include "systems/regenerate.h"
+#include "systems/render.h"
 
 namespace atelier::cli {
 
@@ -46,6 +54,7 @@ struct BodyQuality {
   double mean_clearance = 0;
   double strain_p95 = 0;        // |l/l0 - 1| of garment edges, 95th percentile
   double decode_ms = 0;
+  std::vector<RegenQuality> templates;  // one per profile template
 };
 
 double percentile(std::vector<double> v, double q) {
@@ -90,6 +99,34 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   write_detail(*enc, opt.out / "garment_template.atd");
   log.info("encoded the shorts (" + std::to_string(g0.size()) + " vertices, " +
            std::to_string(enc->entries() / std::max<std::size_t>(1, g0.size())) + " p-polygons each) on the mannequin");
+  // The profile templates, authored on the reference body (systems/project_templates.h).
+  auto made = make_project_templates(*ref);
+  if (!made) throw Error(made.status());
+  const std::vector<ProfileTemplate> templates = std::move(*made);
+  fs::create_directories(opt.out / "templates");
+  Box3d roi;
+  for (const auto& t : templates) {
+    write_obj(t.model, opt.out / "templates" / (t.name + ".obj"));
+    for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) roi.extend(t.model.nodes.position[v]);
+    log.info("profile template '" + t.name + "': " + std::to_string(t.model.num_faces()) + " faces, " +
+             std::to_string(t.model.num_surfaces()) + " surfaces, " + std::to_string(t.model.num_joints()) +
+             " joints, " + std::to_string(t.profiles.size()) + " profiles");
+  }
+  for (const auto& g : g0) roi.extend(g);
+  // Regenerates the profile templates on one body (also used again for the pictures).
+  auto regen_all = [&](std::span<const Vec3d> body, const ExecContext& c, BodyCollider& col,
+                       std::vector<RegenResult>& out) -> Status {
+    ColliderParams cp;
+    cp.use_grid = false;  // at these sizes the exact BVH queries are cheaper than a grid per body
+    if (Status s = col.build(ref->model, ref->skin, body, roi, cp, c); !s) return s;
+    out.clear();
+    for (const auto& t : templates) {
+      auto r = regenerate(t, *ref, body, &col, {}, c);
+      if (!r) return Status(r.status().code(), t.name + ": " + r.status().message());
+      out.push_back(std::move(*r));
+    }
+    return {};
+  };
 
   // Bodies, streamed in chunks: memory is bounded by the chunk size.
   MannequinSource src(topology, sample_mannequins(opt.bodies, common.seed), ref);
@@ -117,11 +154,18 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     per_body.grain = 1;
     par::for_each_n(per_body, chunk.size(), [&](std::size_t b) {
       const std::vector<Vec3d> body = chunk.positions(b);
-      BodyBvh bvh;
       ExecContext inner = ExecContext::sequential();
-      if (Status s = bvh.build(body, tris->triangles, {}, inner); !s) {
+      inner.cancel = ctx.cancel;
+      BodyCollider col;
+      std::vector<RegenResult> regen;
+      if (Status s = regen_all(body, inner, col, regen); !s) {
         errors[b] = s.message();
         return;
+      }
+      const BodyBvh& bvh = col.bvh();
+      if (first + b < opt.meshes) {
+        for (std::size_t k = 0; k < regen.size(); ++k)
+          write_obj(regen[k].model, opt.out / "meshes" / (chunk.name(b) + "_" + templates[k].name + ".obj"));
       }
       std::vector<Vec3d> g(nv);
       for (std::size_t v = 0; v < nv; ++v) g[v] = decoded[b * nv + v].cast<double>();
@@ -146,6 +190,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       }
       r.strain_p95 = percentile(strain, 0.95);
       r.decode_ms = per_body_ms;
+      for (const auto& x : regen) r.templates.push_back(x.quality);
     });
     for (std::size_t b = 0; b < chunk.size(); ++b) {
       if (!errors[b].empty()) {
@@ -209,7 +254,134 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   for (const auto& f : failures) fails.push_back({{"body", f.name}, {"reason", f.status.to_string()}});
   rep["failures"] = fails;
   rep["bodies_quality"] = per;
+  // Profile templates: per template totals over all bodies.
+  nlohmann::json tsum = nlohmann::json::array();
+  std::size_t template_inside = 0;
+  double template_crack = 0;
+  for (std::size_t k = 0; k < templates.size(); ++k) {
+    std::size_t inside = 0, nodes = 0;
+    double crack = 0, prof = 0, clr = 0, ms = 0, u2 = 0, min_d = INFINITY;
+    for (const auto& r : quality) {
+      if (r.templates.size() <= k) continue;
+      const RegenQuality& q = r.templates[k];
+      inside += q.inside;
+      nodes = q.nodes;
+      crack = std::max(crack, q.crack);
+      prof = std::max(prof, q.profile_error);
+      clr = std::max(clr, q.node_clearance_error);
+      u2 = std::max(u2, q.umbrella);
+      min_d = std::min(min_d, q.min_distance);
+      ms += q.ms;
+    }
+    template_inside += inside;
+    template_crack = std::max(template_crack, crack);
+    tsum.push_back({{"template", templates[k].name}, {"nodes", nodes}, {"inside_nodes_total", inside},
+                    {"min_distance_m", std::isfinite(min_d) ? min_d : 0.0}, {"max_crack_m", crack},
+                    {"max_profile_error_m", prof}, {"max_node_clearance_error_m", clr}, {"max_umbrella", u2},
+                    {"mean_ms", ms / nq}});
+  }
+  rep["profile_templates"] = tsum;
   write_atomically(opt.out / "report.json", [&](AtomicFile& f) { f.write(rep.dump(1)); });
+
+  // The HTML report: per-body rows, summary, and pictures of a sample of
+  // bodies and of the worst body by each measure.
+  nlohmann::json html;
+  html["title"] = "atelier demo: " + std::to_string(quality.size()) + " mannequin bodies";
+  html["summary"] = rep["summary"];
+  html["summary"]["profile_template_nodes_inside"] = template_inside;
+  html["summary"]["profile_template_max_crack_m"] = template_crack;
+  std::vector<std::string> columns = {"body", "shorts_inside", "shorts_min_clearance_mm", "shorts_strain_p95"};
+  for (const auto& t : templates)
+    for (const char* c : {"_inside", "_min_distance_mm", "_profile_error_mm", "_crack_mm", "_ms"})
+      columns.push_back(t.name + c);
+  html["columns"] = columns;
+  nlohmann::json rows = nlohmann::json::array();
+  for (const auto& r : quality) {
+    nlohmann::json row = {{"body", r.name}, {"shorts_inside", r.inside},
+                          {"shorts_min_clearance_mm", 1000 * r.min_clearance}, {"shorts_strain_p95", r.strain_p95}};
+    for (std::size_t k = 0; k < r.templates.size() && k < templates.size(); ++k) {
+      const RegenQuality& q = r.templates[k];
+      const std::string& n = templates[k].name;
+      row[n + "_inside"] = q.inside;
+      row[n + "_min_distance_mm"] = 1000 * q.min_distance;
+      row[n + "_profile_error_mm"] = 1000 * q.profile_error;
+      row[n + "_crack_mm"] = 1000 * q.crack;
+      row[n + "_ms"] = q.ms;
+    }
+    rows.push_back(row);
+  }
+  html["rows"] = rows;
+  std::vector<std::pair<std::size_t, std::string>> picks;  // (row, why)
+  for (std::size_t i = 0; i < std::min<std::size_t>(2, quality.size()); ++i) picks.emplace_back(i, "sample");
+  for (const char* c : {"shorts_min_clearance_mm", "top_min_distance_mm", "trousers_min_distance_mm"}) {
+    // worst_rows ranks by the largest value: the closest approach is the smallest, so rank its negation.
+    std::size_t best = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      if (rows[i].contains(c) && rows[i][c].get<double>() < rows[best][c].get<double>()) best = i;
+    if (!rows.empty()) picks.emplace_back(best, std::string("lowest ") + c);
+  }
+  for (const char* c : {"shorts_strain_p95", "top_ms"}) {
+    auto w = worst_rows(html, c, 1);
+    if (!w.empty()) picks.emplace_back(w[0], std::string("highest ") + c);
+  }
+  nlohmann::json pictures = nlohmann::json::array();
+  fs::create_directories(opt.out / "pictures");
+  std::vector<std::size_t> done_rows;
+  for (const auto& [row, why] : picks) {
+    if (std::find(done_rows.begin(), done_rows.end(), row) != done_rows.end()) continue;
+    done_rows.push_back(row);
+    // The body's index in the source, from its name's position in the run.
+    const std::string& name = quality[row].name;
+    std::size_t index = src.size();
+    for (std::size_t i = 0; i < src.size(); ++i)
+      if (src.body_name(i) == name) {
+        index = i;
+        break;
+      }
+    if (index == src.size()) continue;
+    BodySet one(ref);
+    std::vector<BodyFailure> f1;
+    src.generate(index, 1, one, f1, ctx);
+    if (one.size() != 1) continue;
+    const std::vector<Vec3d> body = one.positions(0);
+    BodyCollider col;
+    std::vector<RegenResult> regen;
+    if (!regen_all(body, ctx, col, regen)) continue;
+    std::vector<Vec3f> shorts(nv);
+    if (!decode_detail_batch(*enc, poly, one, 0, 1, shorts, ctx)) continue;
+    std::vector<Vec3d> shorts_d(nv);
+    for (std::size_t v = 0; v < nv; ++v) shorts_d[v] = shorts[v].cast<double>();
+    auto shorts_tris = fan_triangulate(*garment);
+    std::vector<SurfaceTriangles> gt;
+    for (const auto& r : regen) gt.push_back(fan_triangulate(r.model).value());
+    std::vector<RenderTriangles> scene;
+    scene.push_back({body, tris->triangles, body_colour()});
+    for (std::size_t k = 0; k < regen.size(); ++k)
+      scene.push_back({regen[k].model.nodes.position, gt[k].triangles, garment_colour(k)});
+    if (shorts_tris) scene.push_back({shorts_d, shorts_tris->triangles, garment_colour(regen.size())});
+    std::vector<RgbImage> views;
+    for (View view : {View::kFront, View::kSide}) {
+      RenderParams rp;
+      rp.view = view;
+      rp.width = 360;
+      rp.height = 560;
+      rp.outlines = true;
+      auto img = render_scene(scene, rp, ctx);
+      if (img) views.push_back(std::move(img->image));
+    }
+    if (views.size() != 2) continue;
+    auto both = side_by_side(views);
+    if (!both) continue;
+    const std::string file = "pictures/" + name + ".png";
+    write_png(*both, opt.out / file);
+    pictures.push_back({{"title", name + " (" + why + ")"},
+                        {"path", file},
+                        {"caption", "front and side: body, top with collar, skirt, trousers, shorts"}});
+  }
+  html["pictures"] = pictures;
+  HtmlReportOptions ho;
+  ho.picture_dir = opt.out;
+  write_html_report(html, opt.out / "report.html", ho);
 
   std::printf("atelier demo: %zu bodies regenerated, %zu failed, in %.1f s (%.1f bodies/s)\n", quality.size(),
               failures.size(), total_s, static_cast<double>(quality.size()) / total_s);
@@ -217,7 +389,13 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
               decode_sum / nq, 100.0 * strain_sum / nq);
   std::printf("  penetration: %zu of %zu bodies have garment vertices inside the body (worst %.1f mm)\n",
               bodies_with_penetration, quality.size(), 1000.0 * worst_depth);
-  std::printf("  report: %s\n", fs::absolute(opt.out / "report.json").string().c_str());
+  for (const auto& t : tsum)
+    std::printf("  %-9s %6zu nodes, %zu nodes inside over all bodies, max crack %.1e m, max profile error %.2f mm, %.1f ms per body\n",
+                t["template"].get<std::string>().c_str(), t["nodes"].get<std::size_t>(),
+                t["inside_nodes_total"].get<std::size_t>(), t["max_crack_m"].get<double>(),
+                1000 * t["max_profile_error_m"].get<double>(), t["mean_ms"].get<double>());
+  std::printf("  report: %s\n", fs::absolute(opt.out / "report.html").string().c_str());
+  std::printf("  data:   %s\n", fs::absolute(opt.out / "report.json").string().c_str());
   return failures.empty() ? kExitOk : kExitPartial;
 }
 
