@@ -1,5 +1,6 @@
 #include "systems/profile.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -8,15 +9,15 @@
 #include <numeric>
 #include <string>
 
-#include <Eigen/Eigenvalues>
-
 namespace atelier {
 
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-[[nodiscard]] Vec3d lerp(const Vec3d& a, const Vec3d& b, double t) noexcept { return (1.0 - t) * a + t * b; }
+[[nodiscard]] Vec3d lerp(const Vec3d& a, const Vec3d& b, double t) noexcept {
+  return (1.0 - t) * a + t * b;
+}
 
 /// Scratch for de Casteljau: on the stack up to degree 7 (profiles are cubic),
 /// so evaluation in the distance search does not allocate.
@@ -120,8 +121,7 @@ struct BezierJet {
   if (pts.size() < 2) return u;
   for (std::size_t i = 1; i < pts.size(); ++i) u[i] = u[i - 1] + (pts[i] - pts[i - 1]).norm();
   const double total = u.back();
-  for (std::size_t i = 0; i < pts.size(); ++i)
-    u[i] = total > 0 ? u[i] / total : double(i) / double(pts.size() - 1);
+  for (std::size_t i = 0; i < pts.size(); ++i) u[i] = total > 0 ? u[i] / total : double(i) / double(pts.size() - 1);
   u.front() = 0.0;
   u.back() = 1.0;
   return u;
@@ -266,7 +266,8 @@ double ProfileCurve::distance(const Vec3d& p) const {
 Status ProfileCurve::check() const {
   if (points.size() < 2) return {ErrorCode::kInvalidArgument, "profile curve needs at least 2 points"};
   for (std::size_t i = 0; i < points.size(); ++i)
-    if (!is_finite(points[i])) return {ErrorCode::kDegenerate, "profile curve point " + std::to_string(i) + " is not finite"};
+    if (!is_finite(points[i]))
+      return {ErrorCode::kDegenerate, "profile curve point " + std::to_string(i) + " is not finite"};
   if (kind == Kind::kBezier) return {};
   if (u.size() != points.size())
     return {ErrorCode::kMismatch, "polyline profile has " + std::to_string(points.size()) + " points but " +
@@ -274,7 +275,8 @@ Status ProfileCurve::check() const {
   if (u.front() != 0.0 || u.back() != 1.0)
     return {ErrorCode::kInvalidArgument, "polyline profile parameters must run from 0 to 1"};
   for (std::size_t i = 1; i < u.size(); ++i)
-    if (!(u[i] >= u[i - 1])) return {ErrorCode::kInvalidArgument, "polyline profile parameter " + std::to_string(i) + " decreases"};
+    if (!(u[i] >= u[i - 1]))
+      return {ErrorCode::kInvalidArgument, "polyline profile parameter " + std::to_string(i) + " decreases"};
   return {};
 }
 
@@ -380,13 +382,12 @@ std::size_t clear_point_list(Model& m, EdgeIdx e) {
   return removed;
 }
 
-Status attach_point_list(Model& m, SurfaceIdx s, HalfedgeIdx h, std::span<const double> u,
-                         std::span<const Vec3d> pts) {
+Status attach_point_list(Model& m, SurfaceIdx s, HalfedgeIdx h, std::span<const double> u, std::span<const Vec3d> pts) {
   if (!h.valid() || h.value >= m.halfedges.tail.size() || !m.alive(h))
     return {ErrorCode::kStaleHandle, "attach_point_list: halfedge " + std::to_string(h.value) + " is dead"};
   if (m.surface_of(edge_of(h)) != s)
-    return {ErrorCode::kInvalidArgument, "attach_point_list: halfedge " + std::to_string(h.value) +
-                                             " is not in surface " + std::to_string(s.value)};
+    return {ErrorCode::kInvalidArgument,
+            "attach_point_list: halfedge " + std::to_string(h.value) + " is not in surface " + std::to_string(s.value)};
   if (u.size() != pts.size())
     return {ErrorCode::kMismatch, "attach_point_list: " + std::to_string(u.size()) + " parameters for " +
                                       std::to_string(pts.size()) + " points"};
@@ -394,7 +395,8 @@ Status attach_point_list(Model& m, SurfaceIdx s, HalfedgeIdx h, std::span<const 
     if (!(u[i] >= 0.0 && u[i] <= 1.0))
       return {ErrorCode::kInvalidArgument,
               "attach_point_list: parameter " + std::to_string(i) + " = " + std::to_string(u[i]) + " outside [0,1]"};
-    if (!is_finite(pts[i])) return {ErrorCode::kDegenerate, "attach_point_list: point " + std::to_string(i) + " is not finite"};
+    if (!is_finite(pts[i]))
+      return {ErrorCode::kDegenerate, "attach_point_list: point " + std::to_string(i) + " is not finite"};
   }
   (void)clear_point_list(m, edge_of(h));
   for (std::size_t i = 0; i < u.size(); ++i)
@@ -612,9 +614,8 @@ Expected<StrokeProfiles> profiles_from_stroke(const Model& m, std::span<const Ve
   if (stroke.size() < 2) return Status(ErrorCode::kInvalidArgument, "profiles_from_stroke: the stroke needs 2 points");
   const std::vector<EdgeIdx> sel = select_edges_by_stroke(m, pos, cam, stroke, tol_px, visible);
   if (sel.empty())
-    return Status(ErrorCode::kInvalidArgument,
-                  "profiles_from_stroke: no visible edge has both ends within " + std::to_string(tol_px) +
-                      " px of the stroke");
+    return Status(ErrorCode::kInvalidArgument, "profiles_from_stroke: no visible edge has both ends within " +
+                                                   std::to_string(tol_px) + " px of the stroke");
 
   StrokeProfiles out;
   // ---- the projection plane
@@ -681,7 +682,8 @@ Expected<StrokeProfiles> profiles_from_stroke(const Model& m, std::span<const Ve
   // Repeated pixels of a slow stroke would repeat points: cut a copy without them.
   std::vector<Vec3d> Y = out.stroke_points;
   Y.erase(std::unique(Y.begin(), Y.end(), [](const Vec3d& p, const Vec3d& q) { return p == q; }), Y.end());
-  if (Y.size() < 2) return Status(ErrorCode::kDegenerate, "profiles_from_stroke: the stroke misses the projection plane");
+  if (Y.size() < 2)
+    return Status(ErrorCode::kDegenerate, "profiles_from_stroke: the stroke misses the projection plane");
 
   // ---- cut per edge: the points strictly between the closest stroke points to its ends
   for (EdgeIdx e : sel) {

@@ -101,7 +101,8 @@ struct PointListProfile {
 
 enum class ShiftMode : std::uint8_t {
   kScale,        // seed 000 eq. (3) as written: offsets from the chord scaled by |a*b*| / |ab|
-  kScaleRotate,  // eq. (3) plus the minimal rotation taking (b - a) to (b* - a*) (our default: follows the body's orientation)
+  kScaleRotate,  // eq. (3) plus the minimal rotation taking (b - a) to (b* - a*) (our default: follows the body's
+                 // orientation)
 };
 
 /// eq. (3): the shifted profile as a kPolyline ProfileCurve from a* to b* (ends included).

@@ -2,6 +2,8 @@
 // seed 001 eqs. (6)-(7) against their analytic consequences, seed 000 eq. (3)
 // against the formula written out here, and strokes (seed 000 4.1.4) drawn as
 // the camera projection of known 3D curves in known planes.
+#include "systems/profile.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,9 +13,8 @@
 #include <vector>
 
 #include "storage/builder.h"
-#include "systems/profile.h"
-#include "systems/validate.h"
 #include "support/shapes.h"
+#include "systems/validate.h"
 
 using namespace atelier;
 
@@ -40,7 +41,9 @@ Vec3d bernstein(const std::vector<Vec3d>& P, double t) {
   return c;
 }
 
-Mat3d rotation(const Vec3d& axis, double angle) { return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix(); }
+Mat3d rotation(const Vec3d& axis, double angle) {
+  return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+}
 
 }  // namespace
 
@@ -150,7 +153,8 @@ TEST(ProfileCurve, DistanceAgreesWithDenseSamplingAndWithKnownFootPoints) {
         double pbrute = 1e300;
         for (std::size_t i = 0; i + 1 < poly.points.size(); ++i)
           for (int k = 0; k <= 2000; ++k)
-            pbrute = std::min(pbrute, (poly.points[i] + (k / 2000.0) * (poly.points[i + 1] - poly.points[i]) - p).norm());
+            pbrute =
+                std::min(pbrute, (poly.points[i] + (k / 2000.0) * (poly.points[i + 1] - poly.points[i]) - p).norm());
         EXPECT_LE(poly.distance(p), pbrute + 1e-12);
         EXPECT_GE(poly.distance(p), pbrute - 1e-3);
       }
@@ -215,7 +219,8 @@ TEST(ProfileBezier, EncodeDecodeRoundTripTranslationAndStretch) {
   const std::vector<Vec3d> pts{Vec3d(0, 0, 0), Vec3d(1, 0, 0)};
   EXPECT_EQ(encode_bezier_profile(ProfileCurve::polyline(pts)).status().code(), ErrorCode::kInvalidArgument);
   // Explicit edge ends that differ from the curve's: the end offsets carry the difference.
-  const ProfileCurve c = ProfileCurve::bezier(std::vector<Vec3d>{Vec3d(0, 0, 0), Vec3d(1, 1, 0), Vec3d(2, 1, 0), Vec3d(3, 0, 0)});
+  const ProfileCurve c =
+      ProfileCurve::bezier(std::vector<Vec3d>{Vec3d(0, 0, 0), Vec3d(1, 1, 0), Vec3d(2, 1, 0), Vec3d(3, 0, 0)});
   const auto e = encode_bezier_profile(c, Vec3d(0, 0, 1), Vec3d(3, 0, 1));
   ASSERT_TRUE(e);
   EXPECT_LT((e->offsets.front() - Vec3d(0, 0, -1)).norm(), 1e-15);
@@ -233,7 +238,8 @@ PointListProfile random_point_list(std::mt19937& rng, std::size_t n) {
   std::uniform_real_distribution<double> uni(0.02, 0.98);
   for (std::size_t i = 0; i < n; ++i) p.u.push_back(uni(rng));
   std::sort(p.u.begin(), p.u.end());
-  for (double u : p.u) p.points.push_back((1 - u) * p.a + u * p.b + 0.3 * Vec3d(std::sin(7 * u), std::cos(5 * u), u * u));
+  for (double u : p.u)
+    p.points.push_back((1 - u) * p.a + u * p.b + 0.3 * Vec3d(std::sin(7 * u), std::cos(5 * u), u * u));
   return p;
 }
 
@@ -242,15 +248,16 @@ PointListProfile random_point_list(std::mt19937& rng, std::size_t n) {
 TEST(ProfileShift, ScaleModeIsEquationThree) {
   std::mt19937 rng(5);
   const PointListProfile p = random_point_list(rng, 9);
-  for (const auto& ends : {std::pair{Vec3d(0.5, 0.5, 0.5), Vec3d(2.0, -1.0, 0.7)},
-                           std::pair{Vec3d(-1, 0, 0), Vec3d(-1.2, 0.1, 0.05)}}) {
+  for (const auto& ends :
+       {std::pair{Vec3d(0.5, 0.5, 0.5), Vec3d(2.0, -1.0, 0.7)}, std::pair{Vec3d(-1, 0, 0), Vec3d(-1.2, 0.1, 0.05)}}) {
     const auto& [an, bn] = ends;
     const ProfileCurve c = shift_point_list(p, an, bn, ShiftMode::kScale);
     ASSERT_TRUE(c.check());
     ASSERT_EQ(c.points.size(), p.points.size() + 2);
     EXPECT_TRUE(c.start() == an);
     EXPECT_TRUE(c.end() == bn);
-    // eq. (3): p*(Q_i) = |v*_i v*_m| / |v_i v_m| {p(Q_i) - p(v_i) - u_i [p(v_m) - p(v_i)]} + p(v*_i) + u_i (p(v*_m) - p(v*_i)).
+    // eq. (3): p*(Q_i) = |v*_i v*_m| / |v_i v_m| {p(Q_i) - p(v_i) - u_i [p(v_m) - p(v_i)]} + p(v*_i) + u_i (p(v*_m) -
+    // p(v*_i)).
     const double ratio = (bn - an).norm() / (p.b - p.a).norm();
     for (std::size_t i = 0; i < p.points.size(); ++i) {
       const double ui = p.u[i];
@@ -283,7 +290,8 @@ TEST(ProfileShift, SameEndsKeepThePointsAndRigidMotionsMoveThemRigidly) {
     // kScale keeps the offsets' orientation: it differs from the rigid motion.
     const ProfileCurve s = shift_point_list(p, R * p.a + t, R * p.b + t, ShiftMode::kScale);
     double worst = 0;
-    for (std::size_t i = 0; i < p.points.size(); ++i) worst = std::max(worst, (s.points[i + 1] - (R * p.points[i] + t)).norm());
+    for (std::size_t i = 0; i < p.points.size(); ++i)
+      worst = std::max(worst, (s.points[i + 1] - (R * p.points[i] + t)).norm());
     EXPECT_GT(worst, 1e-3);
     // Any rigid motion (a twist about the edge cannot be seen from its ends):
     // the shifted profile is congruent to the original.
@@ -421,7 +429,9 @@ namespace {
 // k * 15 deg, k = 0..5, quads split into triangles.
 constexpr int kCols = 6;
 constexpr double kStep = 15.0 * kPi / 180.0;
-std::uint32_t cyl_node(int ring, int k) { return std::uint32_t(ring * kCols + k); }
+std::uint32_t cyl_node(int ring, int k) {
+  return std::uint32_t(ring * kCols + k);
+}
 
 struct Cylinder {
   Model m;
@@ -470,7 +480,8 @@ TEST(ProfileStroke, ThreeEdgesOfACylinderRingTakeTheCurveInTheirPlane) {
   // Exactly the three ring edges.
   const std::vector<EdgeIdx> sel = select_edges_by_stroke(m, {}, cam, stroke, 4.0);
   std::vector<EdgeIdx> expect;
-  for (int k = 1; k <= 3; ++k) expect.push_back(edge_of(m.find_halfedge(NodeIdx{cyl_node(1, k)}, NodeIdx{cyl_node(1, k + 1)})));
+  for (int k = 1; k <= 3; ++k)
+    expect.push_back(edge_of(m.find_halfedge(NodeIdx{cyl_node(1, k)}, NodeIdx{cyl_node(1, k + 1)})));
   std::sort(expect.begin(), expect.end());
   EXPECT_EQ(sel, expect);
 
@@ -609,7 +620,8 @@ TEST(ProfileStroke, OneEdgeUsesTheDihedralBisectorPlane) {
     const auto curve = [&](double s) -> Vec3d { return Vec3d(s, 0, 0) - 0.25 * std::sin(kPi * s) * bis; };
     // Looking at the plane from its normal side, slightly off-axis.
     const Vec3d mid(0.5, 0, 0);
-    const Camera cam = Camera::look_at(mid + 3.0 * n_expect + 0.4 * bis, mid, Vec3d(1, 0, 0).cross(n_expect), 35, 900, 900);
+    const Camera cam =
+        Camera::look_at(mid + 3.0 * n_expect + 0.4 * bis, mid, Vec3d(1, 0, 0).cross(n_expect), 35, 900, 900);
     std::vector<Vec2d> stroke;
     std::vector<double> ss;
     for (int i = 0; i <= 40; ++i) {
@@ -717,8 +729,7 @@ TEST(ProfileStroke, NonCoplanarEdgesUseTheirLeastSquaresPlane) {
     EXPECT_EQ(m.head(h).value, i + 1);
     ASSERT_EQ(sp->profiles[e].points.size(), std::size_t(kPer - 1));
     const std::size_t first = i == 0 ? 1 : 1 + i * kPer;  // stroke index of the first inner sample
-    for (std::size_t k = 0; k + 1 < kPer; ++k)
-      EXPECT_TRUE(sp->profiles[e].points[k] == sp->stroke_points[first + k]);
+    for (std::size_t k = 0; k + 1 < kPer; ++k) EXPECT_TRUE(sp->profiles[e].points[k] == sp->stroke_points[first + k]);
   }
   ASSERT_TRUE(attach_stroke_profiles(m, *sp));
   ASSERT_TRUE(validate(m));
