@@ -101,6 +101,13 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
 
   const bool collide = static_cast<bool>(prm.signed_distance);
   std::vector<double> lower(collide ? free_nodes.size() : 0, -std::numeric_limits<double>::infinity());
+  const bool bounds_io = collide && !prm.distance_bounds.empty();
+  if (bounds_io && prm.distance_bounds.size() < n)
+    return Status(ErrorCode::kMismatch, "fair_umbrella: distance_bounds has " +
+                                            std::to_string(prm.distance_bounds.size()) + " entries for " +
+                                            std::to_string(n) + " nodes");
+  if (bounds_io)
+    for (std::size_t i = 0; i < free_nodes.size(); ++i) lower[i] = prm.distance_bounds[free_nodes[i]];
   std::vector<std::uint32_t> queries(collide ? free_nodes.size() : 0), refused(collide ? free_nodes.size() : 0);
   // exact[i]: lower[i] is the exact distance at the node's current position.
   std::vector<std::uint8_t> exact(collide ? free_nodes.size() : 0, 0);
@@ -193,6 +200,8 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
   }
   if (cur != p.data())
     par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) { p[free_nodes[i]] = cur[free_nodes[i]]; });
+  if (bounds_io)
+    for (std::size_t i = 0; i < free_nodes.size(); ++i) prm.distance_bounds[free_nodes[i]] = lower[i];
   for (std::size_t i = 0; i < queries.size(); ++i) {
     rep.distance_queries += queries[i];
     rep.refused_moves += refused[i];

@@ -52,6 +52,11 @@ struct FairParams {
   std::function<double(const Vec3d&)> signed_distance;
   /// Distance to keep from the body when collision is on.
   double clearance = 0.0;
+  /// Optional, one entry per node slot: on entry a lower bound of each node's
+  /// signed distance at its current position (-infinity when unknown), on
+  /// exit a lower bound at its final position. Lets a caller that already
+  /// knows distances (and will need them again) skip body queries.
+  std::span<double> distance_bounds;
   /// Damping of the Jacobi step: p <- p - relaxation * U2(p) / nu. Undamped
   /// Jacobi diverges on the highest-frequency modes: the eigenvalues of U2
   /// reach 4 while nu can be as small as 1.5 (regular 1D chain, 2.67 > 2), so

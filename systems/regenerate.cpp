@@ -1,8 +1,10 @@
 #include "systems/regenerate.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "engine/parallel.h"
@@ -193,6 +195,12 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
                                  std::span<const Vec3d> body_positions, const BodyCollider* collider,
                                  const RegenParams& params, const ExecContext& ctx) {
   const auto t0 = std::chrono::steady_clock::now();
+  auto lap = [last = t0]() mutable {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last).count();
+    last = now;
+    return ms;
+  };
   const int levels = params.levels >= 0 ? params.levels : t.levels;
   const double clearance = params.clearance >= 0 ? params.clearance : t.clearance;
   const bool collide = params.collision && collider != nullptr;
@@ -260,6 +268,12 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
   fp.tolerance = params.fair_tolerance;
   if (collide) fp.signed_distance = [collider](const Vec3d& p) { return collider->signed_distance(p); };
 
+  // lb[v]: a lower bound of node v's signed distance to the body (-inf when
+  // unknown). A signed distance is 1-Lipschitz, so bounds carry over to new
+  // nodes (from their parents) and through moves (minus the move's length),
+  // and a node whose bound clears the target needs no body query.
+  constexpr double kUnknown = -std::numeric_limits<double>::infinity();
+  std::vector<double> lb(n0, kUnknown);
   auto push_out = [&](std::size_t first, std::size_t last, double target) -> std::size_t {
     // A node inside or too close moves along the body normal at its closest
     // point (seed 000 Fig. 16). A pure function of the position, so joint
@@ -267,14 +281,21 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
     std::vector<std::uint8_t> moved(last - first, 0);
     par::for_each_n(ctx, last - first, [&](std::size_t i) {
       const std::size_t v = first + i;
-      if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) return;
+      if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)}) || lb[v] >= target) return;
       const Vec3d& p = m.nodes.position[v];
       // The grid (when there is one) clears far nodes cheaply; otherwise one
       // exact query decides and gives the push-out target.
-      if (collider->has_grid() && collider->signed_distance(p) >= target) return;
+      if (collider->has_grid()) {
+        const double g = collider->signed_distance(p);
+        if (g >= target) return;
+      }
       const SignedHit hit = collider->exact(p);
-      if (hit.distance >= target) return;
+      if (hit.distance >= target) {
+        lb[v] = hit.distance;
+        return;
+      }
       m.nodes.position[v] = hit.closest.point + target * hit.normal;
+      lb[v] = kUnknown;
       moved[i] = 1;
     });
     std::size_t n = 0;
@@ -285,7 +306,9 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
   if (collide) {  // decoded nodes only when inside (a node encoded closer than the clearance stays)
     std::vector<std::uint8_t> in(n0, 0);
     par::for_each_n(ctx, n0, [&](std::size_t v) {
-      in[v] = m.alive(NodeIdx{static_cast<std::uint32_t>(v)}) && collider->signed_distance(m.nodes.position[v]) < 0;
+      if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) return;
+      lb[v] = collider->exact(m.nodes.position[v]).distance;
+      in[v] = lb[v] < 0;
     });
     for (std::size_t v = 0; v < n0; ++v)
       if (in[v]) out.quality.pushed += push_out(v, v + 1, clearance);
@@ -362,6 +385,22 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
       }
     });
 
+    // Parents of the new nodes, for their distance bounds.
+    std::vector<std::array<NodeIdx, 2>> ends(E);
+    for (std::uint32_t e = 0; e < E; ++e)
+      if (m.alive(EdgeIdx{e})) ends[e] = {m.tail(halfedge_of(EdgeIdx{e}, 0)), m.head(halfedge_of(EdgeIdx{e}, 0))};
+    const std::uint32_t F = static_cast<std::uint32_t>(m.faces.slots.capacity());
+    std::vector<std::uint32_t> corner_off{0};
+    std::vector<NodeIdx> corners;
+    std::vector<NodeIdx> ring;
+    for (std::uint32_t f = 0; f < F; ++f) {
+      if (m.alive(FaceIdx{f}) && m.face_degree(FaceIdx{f}) > 3) {
+        m.face_nodes(FaceIdx{f}, ring);
+        corners.insert(corners.end(), ring.begin(), ring.end());
+      }
+      corner_off.push_back(static_cast<std::uint32_t>(corners.size()));
+    }
+    out.quality.split_ms += lap();
     auto map = subdivide_uniform(m, ctx);
     if (!map) return map.status();
     if (map->compacted) return Status(ErrorCode::kInternal, "regenerate: unexpected compaction");
@@ -385,29 +424,55 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
       }
     }
     ec = std::move(next);
+    lb.resize(n, kUnknown);
+    if (collide) {
+      auto from = [&](NodeIdx v, NodeIdx parent) {
+        lb[v.value] = std::max(lb[v.value], lb[parent.value] - (m.position(v) - m.position(parent)).norm());
+      };
+      for (std::uint32_t e = 0; e < E; ++e) {
+        if (!m.alive(EdgeIdx{e})) continue;
+        from(map->edge_midpoint[e], ends[e][0]);
+        from(map->edge_midpoint[e], ends[e][1]);
+      }
+      for (std::uint32_t f = 0; f < F; ++f) {
+        const NodeIdx c = map->face_centre[f];
+        if (!c.valid()) continue;
+        for (std::uint32_t k = corner_off[f]; k < corner_off[f + 1]; ++k) from(c, corners[k]);
+      }
+    }
 
     // New nodes go out to 1.5x the clearance: the slack lets the fairing's
     // Lipschitz test skip most of their distance queries.
+    out.quality.split_ms += lap();
     if (collide) out.quality.pushed += push_out(map->old_nodes, n, 1.5 * clearance);
+    out.quality.push_ms += lap();
 
     fixed.assign(n, 1);
     for (std::size_t v = map->old_nodes; v < n; ++v) fixed[v] = out.role[v] == kFree ? 0 : 1;
     adj = build_adjacency(m, {}, ctx);
+    if (collide) fp.distance_bounds = lb;
     auto fr = fair_umbrella(m.nodes.position, adj, fixed, fp, ctx);
     if (!fr) return fr.status();
     out.quality.refused_moves += fr->refused_moves;
+    out.quality.fair_queries += fr->distance_queries;
+    out.quality.fair_ms += lap();
   }
 
   // A node pushed out of one part of the body can land in another where two
   // parts nearly touch (the thighs at the crotch): push again with a
   // shrinking target until nothing is inside.
-  // The exact distance of every node, kept up to date through the re-push
-  // rounds, is also what the quality measures report.
+  // The exact distance of every node that may be near the body (bound below
+  // 3x the clearance) and of every feature node; the others keep their
+  // bound, which already shows them outside. Kept up to date through the
+  // re-push rounds; the quality measures report it.
   const std::size_t n = m.nodes.slots.capacity();
   std::vector<double> d(n, INFINITY);
   if (collider) {
+    lb.resize(n, kUnknown);
+    const double near = 3.0 * clearance;
     par::for_each_n(ctx, n, [&](std::size_t v) {
-      if (m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) d[v] = collider->exact(m.nodes.position[v]).distance;
+      if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) return;
+      d[v] = (collide && lb[v] >= near && v >= n0) ? lb[v] : collider->exact(m.nodes.position[v]).distance;
     });
   }
   if (collide) {
@@ -451,6 +516,7 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
   }
   if (!fixed.empty()) q.umbrella = umbrella2_norm(m.nodes.position, adj, fixed, ctx);
   q.crack = joint_crack(m);
+  q.quality_ms += lap();
   q.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

@@ -99,7 +99,7 @@ struct RegenQuality {
   std::size_t nodes = 0, faces = 0;
   std::size_t inside = 0;         // nodes with signed distance < 0
   double max_depth = 0;           // deepest of them (m, >= 0)
-  double min_distance = 0;        // smallest signed distance over all nodes
+  double min_distance = 0;        // smallest signed distance over all nodes (exact below 3x the clearance)
   double node_clearance_error = 0;  // max |d(node) - encoded d(node)| over feature nodes
   double profile_error = 0;       // max distance of refined profile nodes to their curve
   double umbrella = 0;            // max |U2| over the free nodes of the last level
@@ -107,6 +107,10 @@ struct RegenQuality {
   std::size_t pushed = 0;         // push-outs applied
   std::uint64_t refused_moves = 0;
   double ms = 0;                  // wall time of regenerate()
+  // Where that time went (ms): node and profile decoding plus the splits,
+  // push-outs, fairing, and the final distance pass with the quality measures.
+  double split_ms = 0, push_ms = 0, fair_ms = 0, quality_ms = 0;
+  std::uint64_t fair_queries = 0;  // body queries made by the fairing's collision test
 };
 
 struct RegenResult {

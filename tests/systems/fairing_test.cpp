@@ -126,6 +126,20 @@ TEST(Fairing, CollisionKeepsATightPatchOutOfTheBody) {
   EXPECT_GT(rep->refused_moves, 0u);
   // The Lipschitz skip: far fewer body queries than nodes x iterations x sub-steps.
   EXPECT_LT(rep->distance_queries, 0.5 * 961 * 600 * prm.substeps);
+  // Distance bounds in and out: every bound returned is a true lower bound at
+  // the final position, and starting from exact bounds saves queries.
+  Grid again = make();
+  std::vector<double> bounds(again.m.nodes.slots.capacity());
+  for (std::size_t v = 0; v < bounds.size(); ++v) bounds[v] = sphere_sd(again.m.nodes.position[v]);
+  prm.distance_bounds = bounds;
+  auto rep2 = fair_umbrella(again.m, again.fixed, prm);
+  ASSERT_TRUE(rep2);
+  for (std::size_t v = 0; v < bounds.size(); ++v)
+    EXPECT_LE(bounds[v], sphere_sd(again.m.nodes.position[v]) + 1e-12) << v;
+  EXPECT_LT(rep2->distance_queries, rep->distance_queries);
+  std::vector<double> too_short(3);
+  prm.distance_bounds = too_short;
+  EXPECT_FALSE(fair_umbrella(again.m, again.fixed, prm));
 }
 
 TEST(Fairing, MismatchedInputIsRefused) {

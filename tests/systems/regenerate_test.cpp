@@ -57,9 +57,10 @@ Box3d bounds(const std::vector<ProfileTemplate>& ts) {
 void print(const ProfileTemplate& t, const RegenQuality& q) {
   std::printf(
       "  %-9s nodes %6zu faces %6zu | inside %zu (max %.1e) min d %.4f | node clearance err %.1e | profile err "
-      "%.1e | U2 %.1e | crack %.1e | %.1f ms\n",
+      "%.1e | U2 %.1e | crack %.1e | %.1f ms (split %.1f push %.1f fair %.1f [%llu queries] quality %.1f)\n",
       t.name.c_str(), q.nodes, q.faces, q.inside, q.max_depth, q.min_distance, q.node_clearance_error,
-      q.profile_error, q.umbrella, q.crack, q.ms);
+      q.profile_error, q.umbrella, q.crack, q.ms, q.split_ms, q.push_ms, q.fair_ms,
+      static_cast<unsigned long long>(q.fair_queries), q.quality_ms);
 }
 
 // A template over a hand-built model: every node encoded as an offset from
