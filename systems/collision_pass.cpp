@@ -117,7 +117,7 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
         return x;
       });
   if (!acc.finite) return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
-  double h = params.cell > 0 ? params.cell : 1.5 * acc.len / static_cast<double>(nt);
+  double h = params.cell > 0 ? params.cell : 4.0 * acc.len / static_cast<double>(nt);
   if (!(h > 0)) return Status(ErrorCode::kDegenerate, "collision body: all triangles are degenerate");
   Box3d box = params.roi.empty() ? acc.box : params.roi;
   box.lo -= Vec3d::Constant(params.margin);

@@ -78,7 +78,8 @@ struct BodyDistance {
 };
 
 struct CollisionBodyParams {
-  /// Grid cell edge; 0 = 1.5 x the mean body edge length.
+  /// Grid cell edge; 0 = 4 x the mean body edge length (measured best: finer
+  /// cells cost more in cell visits than they save in triangle tests).
   double cell = 0.0;
   /// Region of interest (e.g. the garment's box); empty = the whole body.
   Box3d roi;
