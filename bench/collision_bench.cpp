@@ -14,8 +14,8 @@
 #include <filesystem>
 #include <memory>
 
-#include "io/mhclo.h"
 #include "io/makehuman.h"
+#include "io/mhclo.h"
 #include "systems/collision_pass.h"
 #include "systems/detail_template.h"
 #include "systems/makehuman_body.h"
@@ -106,8 +106,8 @@ const CollisionScene& scene() {
       std::vector<Vec3d> g(garment.nodes.position.begin(), garment.nodes.position.end());
       std::vector<std::array<std::uint32_t, 2>> edges;
       for (std::uint32_t e = 0; e < garment.edges.slots.capacity(); ++e)
-        edges.push_back({garment.tail(halfedge_of(EdgeIdx{e}, 0)).value,
-                         garment.tail(halfedge_of(EdgeIdx{e}, 1)).value});
+        edges.push_back(
+            {garment.tail(halfedge_of(EdgeIdx{e}, 0)).value, garment.tail(halfedge_of(EdgeIdx{e}, 1)).value});
       for (const auto& prm : sample_mannequins(16, 99)) s.skins.push_back(mannequin_positions(prm, topo).value());
       finish(s, ref, g, edges);
       s.label = "mannequin skin band (" + std::to_string(g.size()) + " v), 16 bodies";

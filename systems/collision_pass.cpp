@@ -25,9 +25,8 @@ std::string vec_str(const Vec3d& p) {
 // ------------------------------------------------------------ topology
 
 Expected<std::shared_ptr<const CollisionTopology>> CollisionTopology::build(std::span<const Triangle> triangles,
-                                                                             std::uint32_t point_count) {
-  if (triangles.empty() || point_count == 0)
-    return Status(ErrorCode::kInvalidArgument, "collision body: empty mesh");
+                                                                            std::uint32_t point_count) {
+  if (triangles.empty() || point_count == 0) return Status(ErrorCode::kInvalidArgument, "collision body: empty mesh");
   auto topo = std::make_shared<CollisionTopology>();
   topo->triangles_.assign(triangles.begin(), triangles.end());
   topo->point_count_ = point_count;
@@ -47,14 +46,13 @@ Expected<std::shared_ptr<const CollisionTopology>> CollisionTopology::build(std:
       const std::uint32_t a = triangles[t][k], b = triangles[t][(k + 1) % 3];
       keys[3 * t + k] = {std::min(a, b), std::max(a, b), t, k};
     }
-  std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) {
-    return std::tie(x.lo, x.hi, x.t, x.k) < std::tie(y.lo, y.hi, y.t, y.k);
-  });
+  std::sort(keys.begin(), keys.end(),
+            [](const Key& x, const Key& y) { return std::tie(x.lo, x.hi, x.t, x.k) < std::tie(y.lo, y.hi, y.t, y.k); });
   topo->across_.assign(n, {kNoTriangle, kNoTriangle, kNoTriangle});
   auto open = [&](const Key& k, const char* why) {
     return Status(ErrorCode::kTopology, "collision body is not closed: edge (" + std::to_string(k.lo) + ", " +
-                                            std::to_string(k.hi) + ") of triangle " + std::to_string(k.t) + " " +
-                                            why + " (inside and clearance need a closed, oriented body)");
+                                            std::to_string(k.hi) + ") of triangle " + std::to_string(k.t) + " " + why +
+                                            " (inside and clearance need a closed, oriented body)");
   };
   for (std::size_t i = 0; i < keys.size();) {
     std::size_t j = i;
@@ -86,8 +84,8 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   if (!topology) return Status(ErrorCode::kInvalidArgument, "collision body: no topology");
   if (positions.size() != topology->point_count())
     return Status(ErrorCode::kMismatch, "collision body: " + std::to_string(positions.size()) +
-                                            " positions for a topology of " +
-                                            std::to_string(topology->point_count()) + " points");
+                                            " positions for a topology of " + std::to_string(topology->point_count()) +
+                                            " points");
   if (!(params.cell >= 0) || !(params.margin >= 0))
     return Status(ErrorCode::kInvalidArgument, "collision body: negative cell or margin");
   const auto tris = topology->triangles();
@@ -196,8 +194,7 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
     const auto& r = range[t];
     for (int z = r[2]; z <= r[5]; ++z)
       for (int y = r[1]; y <= r[4]; ++y)
-        for (int x = r[0]; x <= r[3]; ++x)
-          ids_[fill[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x]++] = entry[t];
+        for (int x = r[0]; x <= r[3]; ++x) ids_[fill[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x]++] = entry[t];
   }
   return Status::ok();
 }
@@ -220,7 +217,9 @@ BodyDistance CollisionBody::query_triangle(const Vec3d& p, std::uint32_t t) cons
   };
   Vec3d pn;
   switch (r.feature) {
-    case TriFeature::kFace: pn = unit_face(t); break;
+    case TriFeature::kFace:
+      pn = unit_face(t);
+      break;
     case TriFeature::kEdge01:
     case TriFeature::kEdge12:
     case TriFeature::kEdge20: {
@@ -362,8 +361,8 @@ Expected<ClearanceEncoding> encode_clearance(std::span<const Vec3d> garment, con
   if (source.empty()) return Status(ErrorCode::kInvalidArgument, "encode_clearance: collision body not built");
   for (std::size_t v = 0; v < garment.size(); ++v)
     if (!is_finite(garment[v]))
-      return Status(ErrorCode::kDegenerate, "encode_clearance: garment vertex " + std::to_string(v) + " is " +
-                                                vec_str(garment[v]));
+      return Status(ErrorCode::kDegenerate,
+                    "encode_clearance: garment vertex " + std::to_string(v) + " is " + vec_str(garment[v]));
   ExecContext qctx = ctx;
   qctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
   if (ctx.grain == 0) qctx.grain = 64;
@@ -385,8 +384,8 @@ Expected<NodeAdjacency> adjacency_from_edges(std::size_t vertex_count,
   for (std::size_t e = 0; e < edges.size(); ++e) {
     const auto [a, b] = edges[e];
     if (a >= vertex_count || b >= vertex_count)
-      return Status(ErrorCode::kInvalidArgument, "adjacency_from_edges: edge " + std::to_string(e) +
-                                                     " uses a vertex out of range");
+      return Status(ErrorCode::kInvalidArgument,
+                    "adjacency_from_edges: edge " + std::to_string(e) + " uses a vertex out of range");
     if (a == b) continue;
     ++adj.offset[a + 1];
     ++adj.offset[b + 1];
@@ -405,8 +404,7 @@ Expected<NodeAdjacency> adjacency_from_edges(std::size_t vertex_count,
     auto* e = adj.neighbor.data() + adj.offset[v + 1];
     std::sort(b, e);
     if (std::adjacent_find(b, e) != e)
-      return Status(ErrorCode::kInvalidArgument, "adjacency_from_edges: duplicate edge at vertex " +
-                                                     std::to_string(v));
+      return Status(ErrorCode::kInvalidArgument, "adjacency_from_edges: duplicate edge at vertex " + std::to_string(v));
   }
   return adj;
 }
@@ -416,8 +414,8 @@ Expected<NodeAdjacency> adjacency_from_edges(std::size_t vertex_count,
 namespace {
 
 Status check_params(const CollisionParams& p) {
-  if (!(p.min_clearance >= 0) || !(p.max_clearance >= p.min_clearance) || !(p.tolerance >= 0) ||
-      p.push_rounds < 1 || p.fair_rings < 0 || p.fair_iterations < 0 || p.substeps < 1 || !(p.layer_gap >= 0))
+  if (!(p.min_clearance >= 0) || !(p.max_clearance >= p.min_clearance) || !(p.tolerance >= 0) || p.push_rounds < 1 ||
+      p.fair_rings < 0 || p.fair_iterations < 0 || p.substeps < 1 || !(p.layer_gap >= 0))
     return Status(ErrorCode::kInvalidArgument,
                   "collision pass: bad parameters (need 0 <= min_clearance <= max_clearance, tolerance >= 0, "
                   "push_rounds >= 1, fair_rings >= 0, fair_iterations >= 0, substeps >= 1, layer_gap >= 0)");
@@ -459,11 +457,11 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
   const std::size_t nt = body.topology().triangles().size();
   for (std::size_t v = 0; v < n; ++v) {
     if (!is_finite(g[v]))
-      return Status(ErrorCode::kDegenerate, "resolve_collisions: garment vertex " + std::to_string(v) + " is " +
-                                                vec_str(g[v]));
+      return Status(ErrorCode::kDegenerate,
+                    "resolve_collisions: garment vertex " + std::to_string(v) + " is " + vec_str(g[v]));
     if (!enc.triangle.empty() && enc.triangle[v] >= nt && enc.triangle[v] != kNoTriangle)
-      return Status(ErrorCode::kMismatch, "resolve_collisions: hint of vertex " + std::to_string(v) +
-                                              " is not a triangle of this body");
+      return Status(ErrorCode::kMismatch,
+                    "resolve_collisions: hint of vertex " + std::to_string(v) + " is not a triangle of this body");
   }
   // Per-vertex work here is exact body queries (microseconds each): split
   // much smaller loops than the default threshold assumes.

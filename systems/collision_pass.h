@@ -35,6 +35,7 @@
 // Writes: garment positions (in place) and the report.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -56,7 +57,7 @@ namespace atelier {
 class CollisionTopology {
  public:
   [[nodiscard]] static Expected<std::shared_ptr<const CollisionTopology>> build(std::span<const Triangle> triangles,
-                                                                                 std::uint32_t point_count);
+                                                                                std::uint32_t point_count);
   [[nodiscard]] std::span<const Triangle> triangles() const noexcept { return triangles_; }
   [[nodiscard]] std::uint32_t point_count() const noexcept { return point_count_; }
 
@@ -64,13 +65,13 @@ class CollisionTopology {
   friend class CollisionBody;
   std::vector<Triangle> triangles_;
   std::uint32_t point_count_ = 0;
-  std::vector<std::uint32_t> vt_offset_, vt_tri_;  // vertex -> incident triangles (CSR)
+  std::vector<std::uint32_t> vt_offset_, vt_tri_;     // vertex -> incident triangles (CSR)
   std::vector<std::array<std::uint32_t, 3>> across_;  // triangle, edge k (corner k -> k+1) -> other triangle
 };
 
 /// Exact signed distance of a point to the body with its closest feature.
 struct BodyDistance {
-  double distance = 0;           // signed, negative inside
+  double distance = 0;            // signed, negative inside
   Vec3d closest = Vec3d::Zero();  // closest body point
   Vec3d normal = Vec3d::Zero();   // unit outward direction at `closest`
   std::uint32_t triangle = kNoTriangle;
@@ -127,19 +128,19 @@ class CollisionBody {
   };
   std::vector<std::uint32_t> start_;  // cell -> entries (CSR)
   std::vector<GridEntry> ids_;
-  std::vector<Vec4d> sphere_;               // per triangle: bounding sphere (centre, radius)
+  std::vector<Vec4d> sphere_;  // per triangle: bounding sphere (centre, radius)
 };
 
 /// Clearance encoding of a garment on its source body.
 struct ClearanceEncoding {
-  std::vector<float> clearance;        // signed distance to the source body per vertex
+  std::vector<float> clearance;         // signed distance to the source body per vertex
   std::vector<std::uint32_t> triangle;  // closest source triangle per vertex (hint on other bodies)
 };
 
 /// Signed distances of the garment vertices to the source body. Errors:
 /// empty garment, non-finite vertex (naming it).
-[[nodiscard]] Expected<ClearanceEncoding> encode_clearance(std::span<const Vec3d> garment,
-                                                           const CollisionBody& source, const ExecContext& ctx = {});
+[[nodiscard]] Expected<ClearanceEncoding> encode_clearance(std::span<const Vec3d> garment, const CollisionBody& source,
+                                                           const ExecContext& ctx = {});
 
 struct CollisionParams {
   double min_clearance = 0.0005;  // floor of every target clearance (m)
@@ -156,15 +157,15 @@ struct CollisionParams {
 
 struct CollisionReport {
   std::size_t vertices = 0;
-  std::size_t inside_before = 0;   // signed distance < 0 on entry
-  std::size_t below_before = 0;    // below target clearance - tolerance on entry
-  std::size_t pushed = 0;          // vertices moved by the push
-  std::size_t faired = 0;          // free vertices of the smoothing
-  std::size_t inside_after = 0;    // signed distance < 0 on exit
-  std::size_t below_after = 0;     // below min(target, floor) - tolerance on exit
-  double max_depth_before = 0;     // deepest penetration on entry (>= 0)
+  std::size_t inside_before = 0;  // signed distance < 0 on entry
+  std::size_t below_before = 0;   // below target clearance - tolerance on entry
+  std::size_t pushed = 0;         // vertices moved by the push
+  std::size_t faired = 0;         // free vertices of the smoothing
+  std::size_t inside_after = 0;   // signed distance < 0 on exit
+  std::size_t below_after = 0;    // below min(target, floor) - tolerance on exit
+  double max_depth_before = 0;    // deepest penetration on entry (>= 0)
   double max_depth_after = 0;
-  std::uint64_t queries = 0;       // exact body queries
+  std::uint64_t queries = 0;        // exact body queries
   std::uint64_t refused_moves = 0;  // fairing sub-steps cut by the collision test
 };
 
@@ -179,9 +180,8 @@ struct CollisionReport {
 /// `triangle` array means no hints). Errors: empty garment, sizes that do
 /// not match, empty body, bad parameters, non-finite vertex.
 [[nodiscard]] Expected<CollisionReport> resolve_collisions(std::span<Vec3d> garment, const NodeAdjacency& adjacency,
-                                                           const ClearanceEncoding& encoding,
-                                                           const CollisionBody& body, const CollisionParams& params,
-                                                           const ExecContext& ctx = {});
+                                                           const ClearanceEncoding& encoding, const CollisionBody& body,
+                                                           const CollisionParams& params, const ExecContext& ctx = {});
 
 /// One garment of a layered outfit.
 struct GarmentLayer {

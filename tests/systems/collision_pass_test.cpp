@@ -1,14 +1,15 @@
 // Collision pass (issue 7) on analytic bodies: a sphere and a capsule built
 // here, garments as grid patches around them. Expectations come from the
 // geometry (radii) and from BodyBvh, an independent signed distance.
+#include "systems/collision_pass.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "engine/random.h"
-#include "systems/body_bvh.h"
-#include "systems/collision_pass.h"
 #include "support/shapes.h"
+#include "systems/body_bvh.h"
 
 using namespace atelier;
 
@@ -123,7 +124,9 @@ std::vector<double> bvh_distances(const BodyBvh& bvh, std::span<const Vec3d> p) 
   return d;
 }
 
-TriBody sphere_body(double r) { return triangulate(shapes::uv_sphere(64, 32, r)); }
+TriBody sphere_body(double r) {
+  return triangulate(shapes::uv_sphere(64, 32, r));
+}
 
 }  // namespace
 

@@ -38,7 +38,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path mh_dir() { return fs::path(ATELIER_SHARED_DATA) / "makehuman"; }
+fs::path mh_dir() {
+  return fs::path(ATELIER_SHARED_DATA) / "makehuman";
+}
 fs::path out_dir() {
   const char* env = std::getenv("ATELIER_TMP");
   fs::path d = env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests";
@@ -69,8 +71,8 @@ struct Garment {
 };
 
 struct Stats {  // accumulated over bodies
-  std::vector<double> mean_dist, max_dist, inside_ours, inside_peer, inside1_ours, inside1_peer, depth_ours,
-      depth_peer, clear_rms_ours, clear_rms_peer, strain_ours, strain_peer;
+  std::vector<double> mean_dist, max_dist, inside_ours, inside_peer, inside1_ours, inside1_peer, depth_ours, depth_peer,
+      clear_rms_ours, clear_rms_peer, strain_ours, strain_peer;
   std::vector<double> inside1_raw, depth_raw, clear_rms_raw, excess_ours, excess_peer, excess_raw, pushed, pass_ms;
 };
 
@@ -86,8 +88,12 @@ double p95(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : v[std::min(v.size() - 1, static_cast<std::size_t>(0.95 * v.size()))];
 }
-double mean(const std::vector<double>& v) { return v.empty() ? 0 : std::accumulate(v.begin(), v.end(), 0.0) / v.size(); }
-double maxv(const std::vector<double>& v) { return v.empty() ? 0 : *std::max_element(v.begin(), v.end()); }
+double mean(const std::vector<double>& v) {
+  return v.empty() ? 0 : std::accumulate(v.begin(), v.end(), 0.0) / v.size();
+}
+double maxv(const std::vector<double>& v) {
+  return v.empty() ? 0 : *std::max_element(v.begin(), v.end());
+}
 
 // Unique undirected edges of a polygon soup (real garments may have
 // inconsistently oriented faces, which a Model refuses; strain only needs edges).
@@ -353,37 +359,36 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
   rep["method"] =
       "ours: detail template (fitted frames, tapered weights, N_q = 134) + collision pass (systems/collision_pass.h, "
       "default CollisionParams); raw: the detail template alone; binding: MakeHuman .mhclo";
-  std::printf("\n%-20s | %-20s | %-15s | %-20s | %-20s | %6s %6s\n", "garment (100 bodies)",
-              "in>1mm % us/raw/mh", "depth mm us/mh", "clrRMS mm us/raw/mh", "excess% us/raw/mh", "pushed", "ms");
+  std::printf("\n%-20s | %-20s | %-15s | %-20s | %-20s | %6s %6s\n", "garment (100 bodies)", "in>1mm % us/raw/mh",
+              "depth mm us/mh", "clrRMS mm us/raw/mh", "excess% us/raw/mh", "pushed", "ms");
   for (std::size_t k = 0; k < garments.size(); ++k) {
     const Stats& s = stats[k];
-    rep["garments"][garments[k].name] = {
-        {"vertices", garments[k].source.size()},
-        {"distance_to_binding_mean_m", mean(s.mean_dist)},
-        {"distance_to_binding_max_m", maxv(s.max_dist)},
-        {"inside_share_ours", mean(s.inside_ours)},
-        {"inside_share_binding", mean(s.inside_peer)},
-        {"inside_over_1mm_share_ours", mean(s.inside1_ours)},
-        {"inside_over_1mm_share_ours_worst_body", maxv(s.inside1_ours)},
-        {"inside_over_1mm_share_raw", mean(s.inside1_raw)},
-        {"inside_over_1mm_share_binding", mean(s.inside1_peer)},
-        {"inside_over_1mm_share_binding_worst_body", maxv(s.inside1_peer)},
-        {"max_depth_ours_m", maxv(s.depth_ours)},
-        {"max_depth_raw_m", maxv(s.depth_raw)},
-        {"max_depth_binding_m", maxv(s.depth_peer)},
-        {"clearance_change_rms_ours_m", mean(s.clear_rms_ours)},
-        {"clearance_change_rms_ours_worst_body_m", maxv(s.clear_rms_ours)},
-        {"clearance_change_rms_raw_m", mean(s.clear_rms_raw)},
-        {"clearance_change_rms_binding_m", mean(s.clear_rms_peer)},
-        {"edge_strain_p95_ours", mean(s.strain_ours)},
-        {"edge_strain_p95_binding", mean(s.strain_peer)},
-        {"excess_edge_strain_p95_ours", mean(s.excess_ours)},
-        {"excess_edge_strain_p95_ours_worst_body", maxv(s.excess_ours)},
-        {"excess_edge_strain_p95_raw", mean(s.excess_raw)},
-        {"excess_edge_strain_p95_binding", mean(s.excess_peer)},
-        {"clearance_change_rms_source_floor_m", garments[k].source_floor_rms},
-        {"pushed_vertices_mean", mean(s.pushed)},
-        {"pass_ms_mean_1_thread", mean(s.pass_ms)}};
+    rep["garments"][garments[k].name] = {{"vertices", garments[k].source.size()},
+                                         {"distance_to_binding_mean_m", mean(s.mean_dist)},
+                                         {"distance_to_binding_max_m", maxv(s.max_dist)},
+                                         {"inside_share_ours", mean(s.inside_ours)},
+                                         {"inside_share_binding", mean(s.inside_peer)},
+                                         {"inside_over_1mm_share_ours", mean(s.inside1_ours)},
+                                         {"inside_over_1mm_share_ours_worst_body", maxv(s.inside1_ours)},
+                                         {"inside_over_1mm_share_raw", mean(s.inside1_raw)},
+                                         {"inside_over_1mm_share_binding", mean(s.inside1_peer)},
+                                         {"inside_over_1mm_share_binding_worst_body", maxv(s.inside1_peer)},
+                                         {"max_depth_ours_m", maxv(s.depth_ours)},
+                                         {"max_depth_raw_m", maxv(s.depth_raw)},
+                                         {"max_depth_binding_m", maxv(s.depth_peer)},
+                                         {"clearance_change_rms_ours_m", mean(s.clear_rms_ours)},
+                                         {"clearance_change_rms_ours_worst_body_m", maxv(s.clear_rms_ours)},
+                                         {"clearance_change_rms_raw_m", mean(s.clear_rms_raw)},
+                                         {"clearance_change_rms_binding_m", mean(s.clear_rms_peer)},
+                                         {"edge_strain_p95_ours", mean(s.strain_ours)},
+                                         {"edge_strain_p95_binding", mean(s.strain_peer)},
+                                         {"excess_edge_strain_p95_ours", mean(s.excess_ours)},
+                                         {"excess_edge_strain_p95_ours_worst_body", maxv(s.excess_ours)},
+                                         {"excess_edge_strain_p95_raw", mean(s.excess_raw)},
+                                         {"excess_edge_strain_p95_binding", mean(s.excess_peer)},
+                                         {"clearance_change_rms_source_floor_m", garments[k].source_floor_rms},
+                                         {"pushed_vertices_mean", mean(s.pushed)},
+                                         {"pass_ms_mean_1_thread", mean(s.pass_ms)}};
     std::printf("%-20s | %5.2f %6.2f %6.2f | %6.2f %7.2f | %6.2f %6.2f %6.2f | %6.2f %6.2f %6.2f | %6.0f %6.2f\n",
                 garments[k].name.c_str(), 100 * mean(s.inside1_ours), 100 * mean(s.inside1_raw),
                 100 * mean(s.inside1_peer), 1000 * maxv(s.depth_ours), 1000 * maxv(s.depth_peer),
@@ -403,7 +408,8 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     EXPECT_LE(mean(s.excess_ours), mean(s.excess_raw) + 0.04) << garments[k].name;
   }
   for (const auto& h : helpers) {
-    rep["helpers"][h.name] = {{"mean_error_m", mean(h.mean_err)}, {"worst_body_mean_error_m", maxv(h.mean_err)},
+    rep["helpers"][h.name] = {{"mean_error_m", mean(h.mean_err)},
+                              {"worst_body_mean_error_m", maxv(h.mean_err)},
                               {"max_error_m", maxv(h.max_err)}};
     std::printf("%-22s ground truth: mean error %.2f mm, worst body mean %.2f mm, max %.2f mm\n", h.name.c_str(),
                 1000 * mean(h.mean_err), 1000 * maxv(h.mean_err), 1000 * maxv(h.max_err));
