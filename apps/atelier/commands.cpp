@@ -74,7 +74,7 @@ int run_convert(const Common&, const fs::path& in, const fs::path& out, Log& log
   return kExitOk;
 }
 
-int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
+std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt) {
   const ExecContext ctx = common.context();
   std::unique_ptr<BodySource> src;
   if (opt.source == "mannequin") {
@@ -99,6 +99,12 @@ int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
     src = std::make_unique<ObjDirectorySource>(opt.source, std::make_shared<const ReferenceBody>(std::move(rb)),
                                                opt.scale);
   }
+  return src;
+}
+
+int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
+  const ExecContext ctx = common.context();
+  std::unique_ptr<BodySource> src = make_body_source(common, opt);
   fs::create_directories(opt.out);
   const auto ref = src->reference();
   BodySet chunk(ref);

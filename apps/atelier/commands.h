@@ -5,10 +5,12 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 
 #include "apps/atelier/log.h"
 #include "engine/exec_context.h"
+#include "systems/body_set.h"
 
 namespace atelier::cli {
 
@@ -47,5 +49,8 @@ struct BodiesOptions {
   double scale = 1.0;
 };
 int run_bodies(const Common& common, const BodiesOptions& opt, Log& log);
+/// The body source named by opt.source (mannequin, makehuman, or a directory
+/// of OBJ files with opt.reference); throws Error on bad input.
+[[nodiscard]] std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt);
 
 }  // namespace atelier::cli

@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "apps/atelier/commands.h"
+#include "apps/atelier/regen_cmd.h"
 #include "apps/atelier/render_cmd.h"
 #include "engine/memory.h"
 #include "engine/status.h"
@@ -54,6 +55,10 @@ int main(int argc, char** argv) {
 
   RenderOptions render_opt;
   auto* render_cmd = add_render_subcommand(app, render_opt);
+  EncodeOptions encode_opt;
+  auto* encode_cmd = add_encode_subcommand(app, encode_opt);
+  RegenOptions regen_opt;
+  auto* regen_cmd = add_regen_subcommand(app, regen_opt);
 
   try {
     app.parse(argc, argv);
@@ -68,6 +73,8 @@ int main(int argc, char** argv) {
     if (*convert_cmd) return run_convert(common, convert_in, convert_out, log);
     if (*bodies_cmd) return run_bodies(common, bodies, log);
     if (*render_cmd) return run_render(common, render_opt, log);
+    if (*encode_cmd) return run_encode(common, encode_opt, log);
+    if (*regen_cmd) return run_regen(common, regen_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();

@@ -1,0 +1,50 @@
+// `atelier encode` and `atelier regen`: the batch job on files.
+//
+//   atelier encode --template all --reference mannequin --out templates/
+//       encodes the project's profile templates on a reference body and
+//       writes <name>.template.json (systems/template_json.h) and <name>.obj;
+//   atelier regen --template templates/top.template.json --source mannequin
+//       --count 1000 --out run/
+//       regenerates every template on every body of a body set, streamed in
+//       chunks. Per body, run/bodies/<body>/<template>.obj (first --meshes
+//       bodies) and run/bodies/<body>.json, the body's quality record,
+//       written last and atomically: it marks the body complete, so a rerun
+//       skips it (resume after a kill). A failing body is recorded with its
+//       reason and the others go on (exit code 1). run/report.json merges
+//       the records in body order; it holds no timings, so the same inputs
+//       and seed give byte-identical outputs for any --threads (timings go to
+//       run/timing.json).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "apps/atelier/commands.h"
+
+namespace atelier::cli {
+
+struct EncodeOptions {
+  std::string name = "all";                 // top | skirt | trousers | all
+  std::string reference = "mannequin";      // mannequin | makehuman
+  std::filesystem::path data = "../shared/data";
+  std::filesystem::path out = "templates";
+};
+CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt);
+int run_encode(const Common& common, const EncodeOptions& opt, Log& log);
+
+struct RegenOptions {
+  std::vector<std::filesystem::path> templates;
+  BodiesOptions bodies;  // source, count, data, reference, scale; out is unused
+  std::filesystem::path out = "out/regen";
+  std::size_t meshes = 0;
+  std::size_t chunk = 32;
+  int levels = -1;
+  double clearance = -1;
+  bool no_resume = false;
+};
+CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt);
+int run_regen(const Common& common, const RegenOptions& opt, Log& log);
+
+}  // namespace atelier::cli
