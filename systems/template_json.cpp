@@ -805,8 +805,15 @@ ProfileTemplate parse(std::string_view text, std::string_view source) {
     throw Error(Status(ErrorCode::kParse, std::string(source) + ": at byte " + std::to_string(e.byte) + ": " +
                                               (at_end ? "truncated file or " : "") + "invalid JSON: " + e.what()));
   } catch (const Json::exception& e) {
-    // Out-of-range numbers (1e999) are refused by the parser itself.
-    throw Error(Status(ErrorCode::kParse, std::string(source) + ": non-finite number or invalid JSON: " + e.what()));
+    // Out-of-range numbers (1e999) are refused by the parser itself, which
+    // names the token but not its place: find it in the text.
+    std::string where;
+    const std::string what = e.what();
+    const auto q1 = what.find('\''), q2 = what.rfind('\'');
+    if (q1 != std::string::npos && q2 > q1 + 1)
+      if (const auto at = text.find(what.substr(q1 + 1, q2 - q1 - 1)); at != std::string_view::npos)
+        where = "at byte " + std::to_string(at) + ": ";
+    throw Error(Status(ErrorCode::kParse, std::string(source) + ": " + where + "non-finite number or invalid JSON: " + what));
   }
   try {
     return from_json(root, R);

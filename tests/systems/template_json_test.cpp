@@ -270,7 +270,7 @@ TEST(TemplateJson, MalformedFilesAreRefusedWithPreciseMessages) {
           const auto q = text.find(',', p);
           text.replace(p, q - p, "\"clearance\": 1e999");
         },
-        {"non-finite number"}}},
+        {"at byte ", "non-finite number", "1e999"}}},
       {&skirt, {"duplicated profile edge", on_json([](Json& j) { j["profiles"][1]["halfedge"] = j["profiles"][0]["halfedge"]; }),
                 {"/profiles/1/halfedge", "duplicated profile edge", "already has profile 0"}}},
       {&trousers,
