@@ -33,6 +33,8 @@ const char* attrib_kind_name(AttribNodeKind k) noexcept {
   return "?";
 }
 
+constexpr int kMaxLevels = 16;
+
 constexpr NodeEncodingMode kModes[] = {NodeEncodingMode::kFeaturePoint, NodeEncodingMode::kFeatureOffset,
                                        NodeEncodingMode::kVertex,       NodeEncodingMode::kEdge,
                                        NodeEncodingMode::kFace,         NodeEncodingMode::kOneToOne,
@@ -100,6 +102,9 @@ Json to_json(const ProfileTemplate& t) {
   if (Status s = validate_template(t); !s) refuse(t.name, "it does not validate: " + s.message());
   const Model& m = t.model;
   const std::string& tn = t.name;
+  // The reader's ranges: a file this writes must read back.
+  if (t.levels < 0 || t.levels > kMaxLevels) refuse(tn, "levels " + std::to_string(t.levels) + " outside [0, 16]");
+  if (m.complex_holes < 0) refuse(tn, "negative complex hole count");
   const std::size_t nn = m.nodes.slots.capacity(), ne = m.edges.slots.capacity(), nf = m.faces.slots.capacity();
 
   Json doc = Json::object();
@@ -470,7 +475,7 @@ ProfileTemplate from_json(const Json& root, const Reader& R) {
   t.name = R.string(R.field(doc, "name"));
   t.reference = R.string(R.field(doc, "reference"));
   t.clearance = R.number(R.field(doc, "clearance"));
-  t.levels = static_cast<int>(R.integer(R.field(doc, "levels"), 0, 16, "levels"));
+  t.levels = static_cast<int>(R.integer(R.field(doc, "levels"), 0, kMaxLevels, "levels"));
   Model& m = t.model;
   m.complex_holes = R.integer(R.field(doc, "complex_holes"), 0, std::numeric_limits<std::int32_t>::max(),
                               "complex hole count");
