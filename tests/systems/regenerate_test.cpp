@@ -226,8 +226,10 @@ TEST(Regenerate, CollisionAvoidanceRemovesPenetration) {
 }
 
 TEST(Regenerate, TwoHundredMannequins) {
+  // Minutes under the sanitizers: `make asan` sets ATELIER_SKIP_LONG_TESTS; `make test` runs it.
+  if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "ATELIER_SKIP_LONG_TESTS is set";
   const Fixture& f = fixture();
-  const auto params = sample_mannequins(std::getenv("NB") ? std::atoi(std::getenv("NB")) : 200, 2026);
+  const auto params = sample_mannequins(200, 2026);
   struct Worst {
     std::size_t inside = 0;
     double crack = 0, depth = 0, clearance = 0;
@@ -273,6 +275,7 @@ TEST(Regenerate, TwoHundredMannequins) {
 }
 
 TEST(Regenerate, FiftyMakeHumanBodies) {
+  if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "ATELIER_SKIP_LONG_TESTS is set";
   const fs::path dir = fs::path(ATELIER_SHARED_DATA) / "makehuman";
   if (!fs::exists(dir / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " << dir << " (../shared/data absent)";
   auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(dir));
