@@ -66,38 +66,76 @@ double umbrella2_norm(std::span<const Vec3d> p, const NodeAdjacency& adj, std::s
       [](double a, double b) { return std::max(a, b); });
 }
 
-Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj, std::span<const std::uint8_t> fixed,
-                                   const FairParams& prm, const ExecContext& ctx) {
-  const std::size_t n = p.size();
-  if (adj.offset.size() != n + 1 || fixed.size() != n) {
+Expected<FairPlan> make_fair_plan(const NodeAdjacency& adj, std::span<const std::uint8_t> fixed, const FairParams& prm,
+                                  const ExecContext& ctx) {
+  const std::size_t n = fixed.size();
+  if (adj.offset.size() != n + 1) {
     std::ostringstream s;
-    s << "fair_umbrella: " << n << " positions, " << fixed.size() << " fixed flags and an adjacency of "
+    s << "fair_umbrella: " << n << " fixed flags and an adjacency of "
       << (adj.offset.empty() ? 0 : adj.offset.size() - 1) << " nodes do not match";
     return Status(ErrorCode::kMismatch, s.str());
   }
-  if (prm.iterations < 0 || prm.substeps < 1 || !(prm.relaxation > 0.0 && prm.relaxation <= 1.0))
-    return Status(ErrorCode::kInvalidArgument, "fair_umbrella: bad iteration or sub-step count");
+  if (!(prm.relaxation > 0.0 && prm.relaxation <= 1.0))
+    return Status(ErrorCode::kInvalidArgument, "fair_umbrella: relaxation must be in (0, 1]");
+  FairPlan plan;
+  plan.nodes = n;
+  plan.adjacency_version = adj.topology_version;
+  plan.relaxation = prm.relaxation;
   // 1/n per node and the diagonal 1/nu_v (Kobbelt): nu = 1 + 1/n sum_j 1/n_j.
-  std::vector<double> inv_deg(n, 0.0), inv_nu(n, 0.0);
-  for (std::size_t v = 0; v < n; ++v)
-    if (adj.degree(v)) inv_deg[v] = 1.0 / adj.degree(v);
-  std::vector<std::uint32_t> free_nodes;
-  for (std::size_t v = 0; v < n; ++v) {
-    if (fixed[v] || adj.degree(v) == 0) continue;
+  plan.inv_deg.assign(n, 0.0);
+  plan.inv_nu.assign(n, 0.0);
+  par::for_each_n(ctx, n, [&](std::size_t v) {
+    if (adj.degree(v)) plan.inv_deg[v] = 1.0 / adj.degree(v);
+  });
+  par::for_each_n(ctx, n, [&](std::size_t v) {
+    if (fixed[v] || adj.degree(v) == 0) return;
     double s = 0;
-    for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += inv_deg[adj.neighbor[k]];
-    inv_nu[v] = prm.relaxation / (1.0 + s * inv_deg[v]);
-    free_nodes.push_back(static_cast<std::uint32_t>(v));
-  }
+    for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += plan.inv_deg[adj.neighbor[k]];
+    plan.inv_nu[v] = prm.relaxation / (1.0 + s * plan.inv_deg[v]);
+  });
+  for (std::size_t v = 0; v < n; ++v)
+    if (!fixed[v] && adj.degree(v)) plan.free_nodes.push_back(static_cast<std::uint32_t>(v));
   // Nodes that feed U2 of a free node: the free nodes and their neighbours.
   std::vector<std::uint8_t> need_u(n, 0);
-  for (std::uint32_t v : free_nodes) {
+  for (std::uint32_t v : plan.free_nodes) {
     need_u[v] = 1;
     for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) need_u[adj.neighbor[k]] = 1;
   }
-  std::vector<std::uint32_t> u_nodes;
   for (std::size_t v = 0; v < n; ++v)
-    if (need_u[v] && adj.degree(v)) u_nodes.push_back(static_cast<std::uint32_t>(v));
+    if (need_u[v] && adj.degree(v)) plan.u_nodes.push_back(static_cast<std::uint32_t>(v));
+  return plan;
+}
+
+Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj, std::span<const std::uint8_t> fixed,
+                                   const FairParams& prm, const ExecContext& ctx) {
+  if (fixed.size() != p.size()) {
+    std::ostringstream s;
+    s << "fair_umbrella: " << p.size() << " positions, " << fixed.size() << " fixed flags and an adjacency of "
+      << (adj.offset.empty() ? 0 : adj.offset.size() - 1) << " nodes do not match";
+    return Status(ErrorCode::kMismatch, s.str());
+  }
+  auto plan = make_fair_plan(adj, fixed, prm, ctx);
+  if (!plan) return plan.status();
+  return fair_umbrella(p, adj, *plan, prm, ctx);
+}
+
+Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj, const FairPlan& plan,
+                                   const FairParams& prm, const ExecContext& ctx) {
+  const std::size_t n = p.size();
+  if (plan.nodes != n || adj.offset.size() != n + 1 || plan.adjacency_version != adj.topology_version) {
+    std::ostringstream s;
+    s << "fair_umbrella: " << n << " positions, a plan for " << plan.nodes << " nodes and an adjacency of "
+      << (adj.offset.empty() ? 0 : adj.offset.size() - 1) << " nodes do not match";
+    return Status(ErrorCode::kMismatch, s.str());
+  }
+  if (prm.iterations < 0 || prm.substeps < 1)
+    return Status(ErrorCode::kInvalidArgument, "fair_umbrella: bad iteration or sub-step count");
+  if (prm.relaxation != plan.relaxation)
+    return Status(ErrorCode::kInvalidArgument, "fair_umbrella: the plan was made with another relaxation");
+  const std::vector<double>& inv_deg = plan.inv_deg;
+  const std::vector<double>& inv_nu = plan.inv_nu;
+  const std::vector<std::uint32_t>& free_nodes = plan.free_nodes;
+  const std::vector<std::uint32_t>& u_nodes = plan.u_nodes;
 
   const bool collide = static_cast<bool>(prm.signed_distance);
   std::vector<double> lower(collide ? free_nodes.size() : 0, -std::numeric_limits<double>::infinity());

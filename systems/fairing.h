@@ -74,6 +74,23 @@ struct FairReport {
   std::uint64_t refused_moves = 0;     // moves cut short by the collision test
 };
 
+/// The per-mesh part of a fairing run: 1/n and 1/nu per node, the free
+/// nodes, and the nodes whose umbrella they need. Like OpenMesh's smoother
+/// initialize(): make it once per mesh and fixed set, fair many times.
+struct FairPlan {
+  std::size_t nodes = 0;
+  std::uint64_t adjacency_version = 0;
+  double relaxation = 0.5;
+  std::vector<double> inv_deg, inv_nu;
+  std::vector<std::uint32_t> free_nodes, u_nodes;
+};
+[[nodiscard]] Expected<FairPlan> make_fair_plan(const NodeAdjacency& adj, std::span<const std::uint8_t> fixed,
+                                                const FairParams& params, const ExecContext& ctx = {});
+/// Runs a plan (params.relaxation must be the plan's).
+[[nodiscard]] Expected<FairReport> fair_umbrella(std::span<Vec3d> positions, const NodeAdjacency& adj,
+                                                 const FairPlan& plan, const FairParams& params,
+                                                 const ExecContext& ctx = {});
+
 /// Fairs the free nodes (fixed[v] == false) of the model in place. `fixed`
 /// has one entry per node slot; isolated and dead nodes are ignored.
 [[nodiscard]] Expected<FairReport> fair_umbrella(Model& m, std::span<const std::uint8_t> fixed,
