@@ -148,6 +148,26 @@ TEST(Fairing, MismatchedInputIsRefused) {
   auto r = fair_umbrella(g.m, fixed, {});
   ASSERT_FALSE(r);
   EXPECT_EQ(r.status().code(), ErrorCode::kMismatch);
+  // A plan made for another mesh, or with another relaxation, is refused;
+  // a matching plan gives the same result as the one-call form.
+  Grid big = grid(6, [](double x, double y) { return 0.1 * x * y; });
+  const NodeAdjacency small_adj = build_adjacency(g.m), big_adj = build_adjacency(big.m);
+  FairParams prm;
+  prm.iterations = 5;
+  auto plan = make_fair_plan(small_adj, g.fixed, prm);
+  ASSERT_TRUE(plan);
+  std::vector<Vec3d> p = big.m.nodes.position;
+  auto wrong = fair_umbrella(p, big_adj, *plan, prm);
+  ASSERT_FALSE(wrong);
+  EXPECT_EQ(wrong.status().code(), ErrorCode::kMismatch);
+  auto big_plan = make_fair_plan(big_adj, big.fixed, prm).value();
+  FairParams other = prm;
+  other.relaxation = 0.9;
+  EXPECT_FALSE(fair_umbrella(p, big_adj, big_plan, other));
+  std::vector<Vec3d> q = p;
+  ASSERT_TRUE(fair_umbrella(p, big_adj, big_plan, prm));
+  ASSERT_TRUE(fair_umbrella(q, big_adj, big.fixed, prm));
+  EXPECT_EQ(std::memcmp(p.data(), q.data(), p.size() * sizeof(Vec3d)), 0);
 }
 
 TEST(Fairing, DampingKeepsQuadMeshesStable) {
