@@ -8,35 +8,15 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "support/run_command.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Run {
-  int code = -1;
-  std::string out;  // stdout + stderr
-};
-
-Run run(const std::string& args) {
-  const std::string cmd = std::string(ATELIER_CLI) + " " + args + " 2>&1";
-  Run r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
-fs::path dir(const std::string& name) {
-  const char* env = std::getenv("ATELIER_TMP");
-  fs::path d = (env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests") / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+using Run = atelier::testing::CommandResult;
+Run run(const std::string& args) { return atelier::testing::run_cli(args); }
+fs::path dir(const std::string& name) { return atelier::testing::scratch_dir(name); }
 
 }  // namespace
 

@@ -15,35 +15,16 @@
 #include <string>
 #include <thread>
 
+#include "support/run_command.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string out;
-};
-
-CliRun run(const std::string& args) {
-  const std::string cmd = std::string(ATELIER_CLI) + " " + args + " 2>&1";
-  CliRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int st = pclose(p);
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
-
-fs::path dir(const std::string& name) {
-  const char* env = std::getenv("ATELIER_TMP");
-  fs::path d = (env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests") / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+using CliRun = atelier::testing::CommandResult;
+using atelier::testing::scratch_dir;
+CliRun run(const std::string& args) { return atelier::testing::run_cli(args); }
+fs::path dir(const std::string& name) { return scratch_dir(name); }
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
