@@ -20,6 +20,7 @@
 #include "io/png.h"
 #include "systems/body_bvh.h"
 #include "systems/body_set.h"
+#include "systems/collision_pass.h"
 #include "systems/detail_template.h"
 #include "systems/mannequin.h"
 #include "systems/mannequin_source.h"
@@ -54,6 +55,7 @@ struct BodyQuality {
   double mean_clearance = 0;
   double strain_p95 = 0;        // |l/l0 - 1| of garment edges, 95th percentile
   double decode_ms = 0;
+  std::size_t pushed = 0;  // garment vertices moved by the collision pass
   std::vector<RegenQuality> templates;  // one per profile template
 };
 
@@ -90,6 +92,21 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     g_edges.push_back({garment->tail(halfedge_of(EdgeIdx{e}, 0)).value, garment->tail(halfedge_of(EdgeIdx{e}, 1)).value});
 
   const BodyPolygons poly = BodyPolygons::from_model(ref->model);
+  // The collision pass of the detail garment (systems/collision_pass.h): its
+  // clearance on the reference body is part of the encoding.
+  auto ref_tris = fan_triangulate(ref->model);
+  if (!ref_tris) throw Error(ref_tris.status());
+  auto coll_topo = CollisionTopology::build(ref_tris->triangles, static_cast<std::uint32_t>(ref->model.nodes.slots.capacity()));
+  if (!coll_topo) throw Error(coll_topo.status());
+  const std::vector<Vec3d> ref_pos = skin_positions(*ref);
+  Box3d g_box;
+  for (const auto& g : g0) g_box.extend(g);
+  CollisionBody ref_coll;
+  if (Status s = ref_coll.build(*coll_topo, ref_pos, {.roi = g_box}, ctx); !s) throw Error(s);
+  auto clearance_enc = encode_clearance(g0, ref_coll, ctx);
+  if (!clearance_enc) throw Error(clearance_enc.status());
+  auto g_adj = adjacency_from_edges(g0.size(), g_edges);
+  if (!g_adj) throw Error(g_adj.status());
   const auto t_enc = std::chrono::steady_clock::now();
   auto enc = encode_detail(poly, skin_positions(*ref), g0, {}, ctx);
   if (!enc) throw Error(enc.status());
@@ -169,6 +186,20 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       }
       std::vector<Vec3d> g(nv);
       for (std::size_t v = 0; v < nv; ++v) g[v] = decoded[b * nv + v].cast<double>();
+      {  // Collision pass: out of the body, back to the encoded clearance.
+        CollisionBody cb;
+        if (Status s = cb.build(*coll_topo, body, {.roi = g_box}, inner); !s) {
+          errors[b] = s.message();
+          return;
+        }
+        auto rep = resolve_collisions(g, *g_adj, *clearance_enc, cb, {}, inner);
+        if (!rep) {
+          errors[b] = rep.status().message();
+          return;
+        }
+        q[b].pushed = rep->pushed;
+        for (std::size_t v = 0; v < nv; ++v) decoded[b * nv + v] = g[v].cast<float>();
+      }
       std::vector<double> sd(nv);
       if (Status s = bvh.signed_distances(g, sd, inner); !s) {
         errors[b] = s.message();
@@ -176,6 +207,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       }
       BodyQuality& r = q[b];
       r.name = chunk.name(b);
+      // (r.pushed was set by the collision pass above)
       r.min_clearance = *std::min_element(sd.begin(), sd.end());
       r.mean_clearance = std::accumulate(sd.begin(), sd.end(), 0.0) / static_cast<double>(nv);
       for (double d : sd)
@@ -238,6 +270,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
                    {"min_clearance_m", r.min_clearance},
                    {"mean_clearance_m", r.mean_clearance},
                    {"edge_strain_p95", r.strain_p95},
+                   {"collision_pushed", r.pushed},
                    {"decode_ms", r.decode_ms}});
   }
   const double nq = std::max<double>(1, static_cast<double>(quality.size()));
@@ -351,6 +384,9 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     if (!decode_detail_batch(*enc, poly, one, 0, 1, shorts, ctx)) continue;
     std::vector<Vec3d> shorts_d(nv);
     for (std::size_t v = 0; v < nv; ++v) shorts_d[v] = shorts[v].cast<double>();
+    CollisionBody cb;
+    if (!cb.build(*coll_topo, body, {.roi = g_box}, ctx)) continue;
+    if (!resolve_collisions(shorts_d, *g_adj, *clearance_enc, cb, {}, ctx)) continue;
     auto shorts_tris = fan_triangulate(*garment);
     std::vector<SurfaceTriangles> gt;
     for (const auto& r : regen) gt.push_back(fan_triangulate(r.model).value());
