@@ -136,21 +136,21 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
   for (std::size_t first = 0; first < n; first += opt.chunk) {
     if (ctx.cancelled()) break;
     // Resume: bodies whose record exists are complete.
-    std::vector<std::uint8_t> todo(std::min(opt.chunk, n - first), 1);
+    std::vector<std::uint8_t> pending(std::min(opt.chunk, n - first), 1);
     bool any = false;
-    for (std::size_t i = 0; i < todo.size(); ++i) {
+    for (std::size_t i = 0; i < pending.size(); ++i) {
       if (!opt.no_resume && fs::exists(bodies_dir / (src->body_name(first + i) + ".json"))) {
-        todo[i] = 0;
+        pending[i] = 0;
         ++skipped;
       }
-      any = any || todo[i];
+      any = any || pending[i];
     }
     if (!any) {
       log.progress("bodies", std::min(n, first + opt.chunk), n);
       continue;
     }
     const std::size_t failures_before = failures.size();
-    src->generate(first, todo.size(), chunk, failures, ctx);
+    src->generate(first, pending.size(), chunk, failures, ctx);
     for (std::size_t f = failures_before; f < failures.size(); ++f) {  // unreadable bodies: record them too
       nlohmann::json rec = {{"body", failures[f].name}, {"ok", false}, {"reason", failures[f].status.to_string()}};
       write_atomically(bodies_dir / (failures[f].name + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
@@ -162,9 +162,9 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
     per_body.grain = 1;
     par::for_each_n(per_body, chunk.size(), [&](std::size_t b) {
       std::size_t index = first;  // the body's index in the source, by name
-      for (std::size_t i = 0; i < todo.size(); ++i)
+      for (std::size_t i = 0; i < pending.size(); ++i)
         if (src->body_name(first + i) == chunk.name(b)) index = first + i;
-      if (!todo[index - first]) return;
+      if (!pending[index - first]) return;
       const auto t0 = std::chrono::steady_clock::now();
       ExecContext inner = ExecContext::sequential();
       inner.cancel = ctx.cancel;
