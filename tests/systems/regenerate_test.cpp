@@ -12,6 +12,7 @@
 #include "support/fixtures.h"
 #include "systems/makehuman_body.h"
 #include "systems/mannequin.h"
+#include "support/project_templates.h"
 #include "systems/project_templates.h"
 #include "systems/regenerate.h"
 
@@ -20,22 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Fixture {
-  MannequinTopology topo;
-  ReferenceBody body;
-  std::vector<ProfileTemplate> templates;
-};
-
-const Fixture& fixture() {
-  static const Fixture f = [] {
-    Fixture x;
-    x.topo = make_mannequin_topology().value();
-    x.body = make_mannequin(MannequinParams{}, x.topo).value();
-    x.templates = make_project_templates(x.body).value();
-    return x;
-  }();
-  return f;
-}
+using Fixture = atelier::testing::TemplateFixture;
+const Fixture& fixture() { return atelier::testing::template_fixture(); }
 
 Box3d bounds(const Model& m) {
   Box3d b;

@@ -17,6 +17,7 @@
 #include "storage/validate.h"
 #include "systems/feature_encoding.h"
 #include "systems/mannequin.h"
+#include "support/project_templates.h"
 #include "systems/project_templates.h"
 #include "systems/regenerate.h"
 #include "systems/template_json.h"
@@ -27,22 +28,8 @@ using Json = nlohmann::ordered_json;
 
 namespace {
 
-struct Fixture {
-  MannequinTopology topo;
-  ReferenceBody body;
-  std::vector<ProfileTemplate> templates;
-};
-
-const Fixture& fixture() {
-  static const Fixture f = [] {
-    Fixture x;
-    x.topo = make_mannequin_topology().value();
-    x.body = make_mannequin(MannequinParams{}, x.topo).value();
-    x.templates = make_project_templates(x.body).value();
-    return x;
-  }();
-  return f;
-}
+using Fixture = atelier::testing::TemplateFixture;
+const Fixture& fixture() { return atelier::testing::template_fixture(); }
 
 fs::path scratch() {
   const char* env = std::getenv("ATELIER_TMP");
