@@ -169,6 +169,23 @@ Vec3d four_point(const Vec3d& a, const Vec3d& b, const std::optional<Vec3d>& a_p
 
 }  // namespace
 
+Expected<std::vector<RegenResult>> regenerate_on_body(std::span<const ProfileTemplate> templates,
+                                                     const ReferenceBody& reference,
+                                                     std::span<const Vec3d> body_positions, const Box3d& roi,
+                                                     const RegenParams& params, const ColliderParams& collider,
+                                                     const ExecContext& ctx) {
+  BodyCollider col;
+  if (Status s = col.build(reference.model, reference.skin, body_positions, roi, collider, ctx); !s) return s;
+  std::vector<RegenResult> out;
+  out.reserve(templates.size());
+  for (const ProfileTemplate& t : templates) {
+    auto r = regenerate(t, reference, body_positions, &col, params, ctx);
+    if (!r) return Status(r.status().code(), t.name + ": " + r.status().message());
+    out.push_back(std::move(*r));
+  }
+  return out;
+}
+
 double joint_crack(const Model& m) noexcept {
   double worst = 0;
   for (std::uint32_t j = 0; j < m.joints.slots.capacity(); ++j) {

@@ -127,6 +127,16 @@ struct RegenResult {
                                                std::span<const Vec3d> body_positions, const BodyCollider* collider,
                                                const RegenParams& params = {}, const ExecContext& ctx = {});
 
+/// Several templates on one body, sharing one collider built over `roi`
+/// (the batch path: ColliderParams::use_grid is off unless given). Errors
+/// name the template.
+[[nodiscard]] Expected<std::vector<RegenResult>> regenerate_on_body(std::span<const ProfileTemplate> templates,
+                                                                    const ReferenceBody& reference,
+                                                                    std::span<const Vec3d> body_positions,
+                                                                    const Box3d& roi, const RegenParams& params = {},
+                                                                    const ColliderParams& collider = {.use_grid = false},
+                                                                    const ExecContext& ctx = {});
+
 /// Largest distance between corresponding nodes of the model's joints.
 [[nodiscard]] double joint_crack(const Model& m) noexcept;
 

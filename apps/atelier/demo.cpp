@@ -131,17 +131,10 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   }
   for (const auto& g : g0) roi.extend(g);
   // Regenerates the profile templates on one body (also used again for the pictures).
-  auto regen_all = [&](std::span<const Vec3d> body, const ExecContext& c, BodyCollider& col,
-                       std::vector<RegenResult>& out) -> Status {
-    ColliderParams cp;
-    cp.use_grid = false;  // at these sizes the exact BVH queries are cheaper than a grid per body
-    if (Status s = col.build(ref->model, ref->skin, body, roi, cp, c); !s) return s;
-    out.clear();
-    for (const auto& t : templates) {
-      auto r = regenerate(t, *ref, body, &col, {}, c);
-      if (!r) return Status(r.status().code(), t.name + ": " + r.status().message());
-      out.push_back(std::move(*r));
-    }
+  auto regen_all = [&](std::span<const Vec3d> body, const ExecContext& c, std::vector<RegenResult>& out) -> Status {
+    auto r = regenerate_on_body(templates, *ref, body, roi, {}, {.use_grid = false}, c);
+    if (!r) return r.status();
+    out = std::move(*r);
     return {};
   };
 
@@ -173,41 +166,34 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       const std::vector<Vec3d> body = chunk.positions(b);
       ExecContext inner = ExecContext::sequential();
       inner.cancel = ctx.cancel;
-      BodyCollider col;
       std::vector<RegenResult> regen;
-      if (Status s = regen_all(body, inner, col, regen); !s) {
+      if (Status s = regen_all(body, inner, regen); !s) {
         errors[b] = s.message();
         return;
       }
-      const BodyBvh& bvh = col.bvh();
       if (first + b < opt.meshes) {
         for (std::size_t k = 0; k < regen.size(); ++k)
           write_obj(regen[k].model, opt.out / "meshes" / (chunk.name(b) + "_" + templates[k].name + ".obj"));
       }
       std::vector<Vec3d> g(nv);
       for (std::size_t v = 0; v < nv; ++v) g[v] = decoded[b * nv + v].cast<double>();
-      {  // Collision pass: out of the body, back to the encoded clearance.
-        CollisionBody cb;
-        if (Status s = cb.build(*coll_topo, body, {.roi = g_box}, inner); !s) {
-          errors[b] = s.message();
-          return;
-        }
-        auto rep = resolve_collisions(g, *g_adj, *clearance_enc, cb, {}, inner);
-        if (!rep) {
-          errors[b] = rep.status().message();
-          return;
-        }
-        q[b].pushed = rep->pushed;
-        for (std::size_t v = 0; v < nv; ++v) decoded[b * nv + v] = g[v].cast<float>();
-      }
-      std::vector<double> sd(nv);
-      if (Status s = bvh.signed_distances(g, sd, inner); !s) {
+      // Collision pass: out of the body, back to the encoded clearance.
+      CollisionBody cb;
+      if (Status s = cb.build(*coll_topo, body, {.roi = g_box}, inner); !s) {
         errors[b] = s.message();
         return;
       }
+      auto pass = resolve_collisions(g, *g_adj, *clearance_enc, cb, {}, inner);
+      if (!pass) {
+        errors[b] = pass.status().message();
+        return;
+      }
+      for (std::size_t v = 0; v < nv; ++v) decoded[b * nv + v] = g[v].cast<float>();
+      std::vector<double> sd(nv);
+      for (std::size_t v = 0; v < nv; ++v) sd[v] = cb.query(g[v], clearance_enc->triangle[v]).distance;
       BodyQuality& r = q[b];
       r.name = chunk.name(b);
-      // (r.pushed was set by the collision pass above)
+      r.pushed = pass->pushed;
       r.min_clearance = *std::min_element(sd.begin(), sd.end());
       r.mean_clearance = std::accumulate(sd.begin(), sd.end(), 0.0) / static_cast<double>(nv);
       for (double d : sd)
@@ -377,9 +363,8 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     src.generate(index, 1, one, f1, ctx);
     if (one.size() != 1) continue;
     const std::vector<Vec3d> body = one.positions(0);
-    BodyCollider col;
     std::vector<RegenResult> regen;
-    if (!regen_all(body, ctx, col, regen)) continue;
+    if (!regen_all(body, ctx, regen)) continue;
     std::vector<Vec3f> shorts(nv);
     if (!decode_detail_batch(*enc, poly, one, 0, 1, shorts, ctx)) continue;
     std::vector<Vec3d> shorts_d(nv);

@@ -171,21 +171,19 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
       const std::vector<Vec3d> body = chunk.positions(b);
       nlohmann::json rec = {{"body", chunk.name(b)}, {"ok", true}};
       try {
-        BodyCollider col;
-        ColliderParams cp;
-        cp.use_grid = false;
-        if (Status s = col.build(ref->model, ref->skin, body, roi, cp, inner); !s) throw Error(s);
+        auto regen = regenerate_on_body(templates, *ref, body, roi, rp, {.use_grid = false}, inner);
+        if (!regen) throw Error(regen.status());
         nlohmann::json per = nlohmann::json::object();
-        for (const auto& t : templates) {
-          auto r = regenerate(t, *ref, body, &col, rp, inner);
-          if (!r) throw Error(Status(r.status().code(), t.name + ": " + r.status().message()));
-          if (r->quality.inside > 0)
-            throw Error(Status(ErrorCode::kDegenerate, t.name + ": " + std::to_string(r->quality.inside) +
+        for (std::size_t k = 0; k < templates.size(); ++k) {
+          const ProfileTemplate& t = templates[k];
+          const RegenResult& r = (*regen)[k];
+          if (r.quality.inside > 0)
+            throw Error(Status(ErrorCode::kDegenerate, t.name + ": " + std::to_string(r.quality.inside) +
                                                            " nodes could not be pushed out of the body"));
-          per[t.name] = quality_json(r->quality);
+          per[t.name] = quality_json(r.quality);
           if (index < opt.meshes) {
             fs::create_directories(bodies_dir / chunk.name(b));
-            write_obj(r->model, bodies_dir / chunk.name(b) / (t.name + ".obj"));
+            write_obj(r.model, bodies_dir / chunk.name(b) / (t.name + ".obj"));
           }
         }
         rec["templates"] = per;
