@@ -29,16 +29,6 @@ std::string lower_ext(const fs::path& p) {
   return e;
 }
 
-Model read_any(const fs::path& p) {
-  if (!fs::exists(p)) throw Error(Status(ErrorCode::kIo, p.string() + ": no such file"));
-  const std::string e = lower_ext(p);
-  if (e == ".obj") return read_obj(p);
-  if (e == ".ply") return read_ply(p);
-  if (e == ".off") return read_off(p);
-  if (e == ".atm") return read_model(p);
-  throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
-}
-
 void write_any(const Model& m, const fs::path& p) {
   const std::string e = lower_ext(p);
   if (e == ".obj") return write_obj(m, p);
@@ -50,8 +40,18 @@ void write_any(const Model& m, const fs::path& p) {
 
 }  // namespace
 
+Model read_mesh_file(const fs::path& p) {
+  if (!fs::exists(p)) throw Error(Status(ErrorCode::kIo, p.string() + ": no such file"));
+  const std::string e = lower_ext(p);
+  if (e == ".obj") return read_obj(p);
+  if (e == ".ply") return read_ply(p);
+  if (e == ".off") return read_off(p);
+  if (e == ".atm") return read_model(p);
+  throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
+}
+
 int run_validate(const Common&, const fs::path& file, Log& log) {
-  const Model m = read_any(file);
+  const Model m = read_mesh_file(file);
   const TopologyCounts t = count_topology(m);
   std::printf("%s: %zu surfaces, V=%lld E=%lld F=%lld, components %lld, closed shells %lld, complex holes %lld\n",
               file.string().c_str(), m.num_surfaces(), static_cast<long long>(t.nodes),
@@ -68,7 +68,7 @@ int run_validate(const Common&, const fs::path& file, Log& log) {
 }
 
 int run_convert(const Common&, const fs::path& in, const fs::path& out, Log& log) {
-  const Model m = read_any(in);
+  const Model m = read_mesh_file(in);
   write_any(m, out);
   log.info("wrote " + out.string());
   return kExitOk;

@@ -36,6 +36,10 @@ struct DemoOptions {
 };
 int run_demo(const Common& common, const DemoOptions& opt, Log& log);
 
+/// Reads OBJ, PLY, OFF or the native .atm by extension; Error(kIo) for a
+/// missing file, Error(kInvalidArgument) for an unknown extension.
+[[nodiscard]] Model read_mesh_file(const std::filesystem::path& p);
+
 int run_validate(const Common& common, const std::filesystem::path& file, Log& log);
 int run_convert(const Common& common, const std::filesystem::path& in, const std::filesystem::path& out, Log& log);
 

@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "apps/atelier/commands.h"
+#include "apps/atelier/measure_cmd.h"
 #include "apps/atelier/regen_cmd.h"
 #include "apps/atelier/render_cmd.h"
 #include "engine/memory.h"
@@ -57,6 +58,8 @@ int main(int argc, char** argv) {
   auto* render_cmd = add_render_subcommand(app, render_opt);
   EncodeOptions encode_opt;
   auto* encode_cmd = add_encode_subcommand(app, encode_opt);
+  MeasureOptions measure_opt;
+  auto* measure_cmd = add_measure_subcommand(app, measure_opt);
   RegenOptions regen_opt;
   auto* regen_cmd = add_regen_subcommand(app, regen_opt);
 
@@ -75,13 +78,13 @@ int main(int argc, char** argv) {
     if (*render_cmd) return run_render(common, render_opt, log);
     if (*encode_cmd) return run_encode(common, encode_opt, log);
     if (*regen_cmd) return run_regen(common, regen_opt, log);
+    if (*measure_cmd) return run_measure(common, measure_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();
-    return c == atelier::ErrorCode::kParse || c == atelier::ErrorCode::kIo || c == atelier::ErrorCode::kMismatch ||
-                   c == atelier::ErrorCode::kInvalidArgument
-               ? kExitInput
-               : kExitInternal;
+    // Errors of the engine's own state are internal; every other error at
+    // this entry point comes from the input (files, options, meshes).
+    return c == atelier::ErrorCode::kInternal || c == atelier::ErrorCode::kStaleHandle ? kExitInternal : kExitInput;
   } catch (const std::exception& e) {
     log.error(std::string("internal error: ") + e.what());
     return kExitInternal;

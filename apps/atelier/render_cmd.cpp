@@ -18,16 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Model read_mesh(const fs::path& p) {
-  if (!fs::exists(p)) throw Error(Status(ErrorCode::kIo, p.string() + ": no such file"));
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (e == ".obj") return read_obj(p);
-  if (e == ".ply") return read_ply(p);
-  if (e == ".off") return read_off(p);
-  throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown mesh format (use .obj, .ply or .off)"));
-}
-
 // A mesh's triangles in a BVH; the model stays with it (the BVH reads its
 // position column at commit time).
 struct SceneMesh {
@@ -36,7 +26,7 @@ struct SceneMesh {
 };
 
 void load(const fs::path& p, SceneMesh& m) {
-  m.model = read_mesh(p);
+  m.model = read_mesh_file(p);
   auto tri = fan_triangulate(m.model);
   if (!tri) throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": " + tri.status().message()));
   if (tri->triangles.empty()) throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": no faces to render"));
