@@ -5,7 +5,7 @@ set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
       libtbb-dev libeigen3-dev libembree-dev libopenvdb-dev libboost-iostreams-dev
       libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev libfmt-dev libcgal-dev
-      zlib1g-dev chromium)
+      zlib1g-dev chromium libopenmpi-dev openmpi-bin)
 if [[ "${1:-}" == "--bench" ]]; then
   pkgs+=(libopenmesh-dev libnanoflann-dev)
 fi
