@@ -25,6 +25,11 @@ struct BodyCollider::Impl {
   double exact_band = 0;  // |grid value| below this: ask the BVH
   double grid_ms = 0;
   double radius = 0.03;
+  // What update() needs to redo the per-body part.
+  const Model* body = nullptr;
+  SurfaceIdx skin;
+  Box3d roi;
+  ColliderParams params;
 };
 
 BodyCollider::BodyCollider() : impl_(std::make_unique<Impl>()) {}
@@ -35,6 +40,7 @@ BodyCollider& BodyCollider::operator=(BodyCollider&&) noexcept = default;
 Status BodyCollider::build(const Model& body, SurfaceIdx skin, std::span<const Vec3d> positions, const Box3d& roi,
                            const ColliderParams& params, const ExecContext& ctx) {
   Impl& I = *impl_;
+  I.body = nullptr;  // not reusable until this build succeeds
   if (positions.size() < body.nodes.slots.capacity())
     return Status(ErrorCode::kMismatch, "collider: " + std::to_string(positions.size()) + " positions for " +
                                             std::to_string(body.nodes.slots.capacity()) + " body nodes");
@@ -44,6 +50,47 @@ Status BodyCollider::build(const Model& body, SurfaceIdx skin, std::span<const V
   I.tris = std::move(*t);
   if (Status s = I.bvh.build(std::span<const Vec3d>(I.positions), I.tris.triangles, {}, ctx); !s) return s;
   if (Status s = I.bvh.require_closed(); !s) return Status(s.code(), "collider: body surface: " + s.message());
+  I.body = &body;
+  I.skin = skin;
+  I.roi = roi;
+  I.params = params;
+  return build_grid(ctx);
+}
+
+bool BodyCollider::built() const noexcept { return impl_->body != nullptr && !impl_->bvh.empty(); }
+
+bool BodyCollider::reusable_for(const Model& body, SurfaceIdx skin, const Box3d& roi,
+                                const ColliderParams& params) const noexcept {
+  const Impl& I = *impl_;
+  const auto same_box = [](const Box3d& a, const Box3d& b) {
+    return a.empty() == b.empty() && (a.empty() || (a.lo == b.lo && a.hi == b.hi));
+  };
+  return built() && I.body == &body && I.skin == skin && I.positions.size() == body.nodes.slots.capacity() &&
+         I.tris.triangles.size() >= body.num_faces() && same_box(I.roi, roi) && I.params.use_grid == params.use_grid &&
+         I.params.voxel_size == params.voxel_size && I.params.margin == params.margin &&
+         I.params.query_radius == params.query_radius;
+}
+
+Status BodyCollider::update(std::span<const Vec3d> positions, const ExecContext& ctx) {
+  Impl& I = *impl_;
+  if (!built()) return Status(ErrorCode::kInvalidArgument, "collider: update() before build()");
+  if (positions.size() < I.positions.size())
+    return Status(ErrorCode::kMismatch, "collider: " + std::to_string(positions.size()) + " positions for " +
+                                            std::to_string(I.positions.size()) + " body nodes");
+  std::copy_n(positions.begin(), I.positions.size(), I.positions.begin());
+  for (const auto& t : I.tris.triangles)
+    for (std::uint32_t v : t)
+      if (!I.positions[v].allFinite())
+        return Status(ErrorCode::kDegenerate, "collider: body node " + std::to_string(v) + " is not finite");
+  // The same memory, so the BVH's view is still right: commit re-reads it.
+  if (Status s = I.bvh.commit(ctx); !s) return s;
+  return build_grid(ctx);
+}
+
+Status BodyCollider::build_grid(const ExecContext& ctx) {
+  Impl& I = *impl_;
+  const ColliderParams& params = I.params;
+  const Box3d& roi = I.roi;
   I.has_grid = false;
   I.radius = params.query_radius;
   if (params.use_grid) {
@@ -174,15 +221,47 @@ Expected<std::vector<RegenResult>> regenerate_on_body(std::span<const ProfileTem
                                                      std::span<const Vec3d> body_positions, const Box3d& roi,
                                                      const RegenParams& params, const ColliderParams& collider,
                                                      const ExecContext& ctx) {
-  BodyCollider col;
-  if (Status s = col.build(reference.model, reference.skin, body_positions, roi, collider, ctx); !s) return s;
+  ColliderPool pool;
+  return regenerate_on_body(templates, reference, body_positions, roi, params, collider, ctx, pool);
+}
+
+std::unique_ptr<BodyCollider> ColliderPool::acquire() {
+  std::lock_guard lock(mutex_);
+  if (free_.empty()) return std::make_unique<BodyCollider>();
+  auto c = std::move(free_.back());
+  free_.pop_back();
+  return c;
+}
+
+void ColliderPool::release(std::unique_ptr<BodyCollider> c) {
+  if (!c) return;
+  std::lock_guard lock(mutex_);
+  free_.push_back(std::move(c));
+}
+
+Expected<std::vector<RegenResult>> regenerate_on_body(std::span<const ProfileTemplate> templates,
+                                                     const ReferenceBody& reference,
+                                                     std::span<const Vec3d> body_positions, const Box3d& roi,
+                                                     const RegenParams& params, const ColliderParams& collider,
+                                                     const ExecContext& ctx, ColliderPool& pool) {
+  std::unique_ptr<BodyCollider> col = pool.acquire();
+  // A pooled collider built on this reference's topology with the same
+  // settings is refitted; anything else is built afresh.
+  Status s = col->reusable_for(reference.model, reference.skin, roi, collider)
+                 ? col->update(body_positions, ctx)
+                 : col->build(reference.model, reference.skin, body_positions, roi, collider, ctx);
+  if (!s) return s;  // a failed collider is dropped, not pooled
   std::vector<RegenResult> out;
   out.reserve(templates.size());
   for (const ProfileTemplate& t : templates) {
-    auto r = regenerate(t, reference, body_positions, &col, params, ctx);
-    if (!r) return Status(r.status().code(), t.name + ": " + r.status().message());
+    auto r = regenerate(t, reference, body_positions, col.get(), params, ctx);
+    if (!r) {
+      pool.release(std::move(col));
+      return Status(r.status().code(), t.name + ": " + r.status().message());
+    }
     out.push_back(std::move(*r));
   }
+  pool.release(std::move(col));
   return out;
 }
 

@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <vector>
 
@@ -71,6 +72,19 @@ class BodyCollider {
   /// must be closed.
   [[nodiscard]] Status build(const Model& body, SurfaceIdx skin, std::span<const Vec3d> positions, const Box3d& roi,
                              const ColliderParams& params = {}, const ExecContext& ctx = {});
+  /// Moves a built collider to another body of the same topology: copies
+  /// the positions and refits the BVH (BvhParams::refit_on_commit), keeping
+  /// the Embree device, the triangulation, the adjacency and the closedness
+  /// check; rebuilds the grid when it has one. Every query answer is the
+  /// same as after build() (they are exact; only the BVH boxes differ).
+  /// Errors: not built, another number of positions, non-finite position.
+  [[nodiscard]] Status update(std::span<const Vec3d> positions, const ExecContext& ctx = {});
+  [[nodiscard]] bool built() const noexcept;
+  /// Built on this body model (the same object, which must not have changed
+  /// since) and skin with the same region and parameters, so update() may
+  /// replace build().
+  [[nodiscard]] bool reusable_for(const Model& body, SurfaceIdx skin, const Box3d& roi,
+                                  const ColliderParams& params) const noexcept;
   /// Signed distance (negative inside): the grid's value where it is
   /// reliable (farther than its exact band), exact (BVH) elsewhere.
   [[nodiscard]] double signed_distance(const Vec3d& p) const;
@@ -81,6 +95,8 @@ class BodyCollider {
   [[nodiscard]] double grid_build_ms() const noexcept;
 
  private:
+  [[nodiscard]] Status build_grid(const ExecContext& ctx);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
@@ -136,6 +152,28 @@ struct RegenResult {
                                                                     const Box3d& roi, const RegenParams& params = {},
                                                                     const ColliderParams& collider = {.use_grid = false},
                                                                     const ExecContext& ctx = {});
+
+/// Colliders kept across the bodies of a batch, so that each body costs a
+/// refit instead of a build (device, triangulation, adjacency). A worker
+/// takes one, uses it for one body and gives it back; thread-safe.
+class ColliderPool {
+ public:
+  [[nodiscard]] std::unique_ptr<BodyCollider> acquire();
+  void release(std::unique_ptr<BodyCollider> c);
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<BodyCollider>> free_;
+};
+
+/// The same, with the collider taken from `pool` (updated when it was built
+/// on this reference's topology, built otherwise) and given back after.
+[[nodiscard]] Expected<std::vector<RegenResult>> regenerate_on_body(std::span<const ProfileTemplate> templates,
+                                                                    const ReferenceBody& reference,
+                                                                    std::span<const Vec3d> body_positions,
+                                                                    const Box3d& roi, const RegenParams& params,
+                                                                    const ColliderParams& collider,
+                                                                    const ExecContext& ctx, ColliderPool& pool);
 
 /// Largest distance between corresponding nodes of the model's joints.
 [[nodiscard]] double joint_crack(const Model& m) noexcept;

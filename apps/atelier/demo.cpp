@@ -131,8 +131,10 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   }
   for (const auto& g : g0) roi.extend(g);
   // Regenerates the profile templates on one body (also used again for the pictures).
+  // One collider per worker, refitted to each body (systems/regenerate.h).
+  ColliderPool colliders;
   auto regen_all = [&](std::span<const Vec3d> body, const ExecContext& c, std::vector<RegenResult>& out) -> Status {
-    auto r = regenerate_on_body(templates, *ref, body, roi, {}, {.use_grid = false}, c);
+    auto r = regenerate_on_body(templates, *ref, body, roi, {}, {.use_grid = false}, c, colliders);
     if (!r) return r.status();
     out = std::move(*r);
     return {};

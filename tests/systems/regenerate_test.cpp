@@ -224,23 +224,23 @@ TEST(Regenerate, TwoHundredMannequins) {
   std::vector<Worst> per(params.size());
   std::vector<std::string> errors(params.size());
   ExecContext seq = ExecContext::sequential();
+  const Box3d roi = bounds(f.templates);
+  ColliderPool pool;
   par::for_each_n(ExecContext{.sequential_threshold = 1, .grain = 1}, params.size(), [&](std::size_t i) {
     auto p = mannequin_positions(params[i], f.topo);
     if (!p) {
       errors[i] = p.status().to_string();
       return;
     }
-    BodyCollider col;
-    if (Status s = col.build(f.body.model, f.body.skin, *p, bounds(f.templates), {.use_grid = false}, seq); !s) {
-      errors[i] = s.to_string();
+    // Through a collider pool, as the batch job runs (refits after the first body of each worker).
+    auto regen = regenerate_on_body(f.templates, f.body, *p, roi, {}, {.use_grid = false}, seq, pool);
+    if (!regen) {
+      errors[i] = regen.status().to_string();
       return;
     }
-    for (const auto& t : f.templates) {
-      auto r = regenerate(t, f.body, *p, &col, {}, seq);
-      if (!r) {
-        errors[i] = r.status().to_string();
-        return;
-      }
+    for (std::size_t k = 0; k < f.templates.size(); ++k) {
+      const auto& t = f.templates[k];
+      const RegenResult* r = &(*regen)[k];
       per[i].inside += r->quality.inside;
       per[i].crack = std::max(per[i].crack, r->quality.crack);
       per[i].depth = std::max(per[i].depth, r->quality.max_depth);
@@ -318,6 +318,37 @@ TEST(Regenerate, DeterministicAcrossThreadCounts) {
     auto b = regenerate(t, f.body, p, &col, {}, two).value();
     EXPECT_TRUE(diff_tables(a.model, b.model).empty()) << t.name;
   }
+}
+
+TEST(Regenerate, PooledCollidersGiveTheSameResultsAsFreshOnes) {
+  // A pooled collider is refitted to each new body instead of built; the
+  // queries are exact, so every result must be identical to a fresh build.
+  const Fixture& f = fixture();
+  const auto params = sample_mannequins(3, 4242);
+  const Box3d roi = bounds(f.templates);
+  ColliderPool pool;
+  for (std::size_t i = 0; i < params.size(); ++i) {
+    const auto p = mannequin_positions(params[i], f.topo).value();
+    auto fresh = regenerate_on_body(f.templates, f.body, p, roi, {}, {.use_grid = false}, {});
+    auto pooled = regenerate_on_body(f.templates, f.body, p, roi, {}, {.use_grid = false}, {}, pool);
+    ASSERT_TRUE(fresh && pooled);
+    for (std::size_t k = 0; k < f.templates.size(); ++k) {
+      EXPECT_TRUE(diff_tables((*fresh)[k].model, (*pooled)[k].model).empty()) << "body " << i << " " << k;
+      EXPECT_EQ((*fresh)[k].quality.min_distance, (*pooled)[k].quality.min_distance);
+    }
+  }
+  // The pool kept one collider, built: the next body is a refit.
+  auto c = pool.acquire();
+  EXPECT_TRUE(c->built());
+  EXPECT_TRUE(c->reusable_for(f.body.model, f.body.skin, roi, {.use_grid = false}));
+  EXPECT_FALSE(c->reusable_for(f.body.model, f.body.skin, Box3d{}, {.use_grid = false}));
+  std::vector<Vec3d> few(10, Vec3d::Zero());
+  EXPECT_EQ(c->update(few).code(), ErrorCode::kMismatch);
+  auto p = skin_positions(f.body);
+  p[f.topo.num_nodes / 2].x() = std::nan("");
+  EXPECT_FALSE(c->update(p));
+  BodyCollider never_built;
+  EXPECT_FALSE(never_built.update(skin_positions(f.body)));
 }
 
 TEST(Regenerate, BadInputIsRefused) {
