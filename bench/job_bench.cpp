@@ -1,0 +1,126 @@
+// The end-to-end job (issue 6), measured as users run it: the built `atelier`
+// CLI in a child process, timed by the wall clock, with the child's peak
+// resident memory from wait4(). Nothing is mocked: body sampling, every
+// template's regeneration, the detail garment with its collision pass, the
+// per-body records, the report and the pictures are all in the time.
+//
+//  * BM_DemoJob/bodies/chunk: `atelier demo` (three profile templates and the
+//    detail garment per body). Two chunk sizes give the memory held per body
+//    in flight: (peak(chunk a) - peak(chunk b)) / (a - b).
+//  * BM_RegenJob/bodies: `atelier regen` of the skirt template (2 levels) on
+//    1,000 and 10,000 mannequins in chunks of 64: the peak memory must not
+//    grow with the number of bodies.
+#include <benchmark/benchmark.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ChildRun {
+  int code = -1;
+  double seconds = 0;
+  double peak_rss_mb = 0;
+};
+
+// Runs argv with stdout and stderr sent to /dev/null.
+ChildRun run_child(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+  ChildRun r;
+  const auto t0 = std::chrono::steady_clock::now();
+  pid_t pid = 0;
+  if (posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) != 0) {
+    posix_spawn_file_actions_destroy(&fa);
+    return r;
+  }
+  int status = 0;
+  rusage ru{};
+  wait4(pid, &status, 0, &ru);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  posix_spawn_file_actions_destroy(&fa);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.peak_rss_mb = static_cast<double>(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+  return r;
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / "atelier-bench" / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::map<long, double>& demo_peaks() {  // chunk -> peak RSS (MB), for the per-body figure
+  static std::map<long, double> m;
+  return m;
+}
+
+void BM_DemoJob(benchmark::State& st) {
+  const long bodies = st.range(0), chunk = st.range(1);
+  ChildRun r;
+  for (auto _ : st) {
+    const fs::path out = scratch("demo");
+    r = run_child({ATELIER_CLI, "--threads", "2", "--quiet", "demo", "--bodies", std::to_string(bodies), "--chunk",
+                   std::to_string(chunk), "--meshes", "0", "--out", out.string()});
+    if (r.code != 0) {
+      st.SkipWithError("atelier demo failed");
+      return;
+    }
+    st.SetIterationTime(r.seconds);
+  }
+  st.counters["bodies_per_s"] = static_cast<double>(bodies) / r.seconds;
+  st.counters["ms_per_body"] = 1e3 * r.seconds / static_cast<double>(bodies);
+  st.counters["peak_rss_MB"] = r.peak_rss_mb;
+  auto& peaks = demo_peaks();
+  peaks[chunk] = r.peak_rss_mb;
+  if (peaks.size() >= 2) {
+    const auto lo = peaks.begin(), hi = std::prev(peaks.end());
+    st.counters["MB_per_body_in_flight"] = (hi->second - lo->second) / static_cast<double>(hi->first - lo->first);
+  }
+  st.SetLabel("atelier demo, 2 threads, 3 profile templates + detail garment per body");
+}
+BENCHMARK(BM_DemoJob)->Args({1000, 16})->Args({1000, 128})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+
+void BM_RegenJob(benchmark::State& st) {
+  const long bodies = st.range(0);
+  const fs::path dir = scratch("regen_template");
+  if (run_child({ATELIER_CLI, "--quiet", "encode", "--template", "skirt", "--out", dir.string()}).code != 0) {
+    st.SkipWithError("atelier encode failed");
+    return;
+  }
+  ChildRun r;
+  for (auto _ : st) {
+    const fs::path out = scratch("regen");
+    r = run_child({ATELIER_CLI, "--threads", "2", "--quiet", "regen", "--template",
+                   (dir / "skirt.template.json").string(), "--count", std::to_string(bodies), "--levels", "2",
+                   "--chunk", "64", "--out", out.string()});
+    if (r.code != 0) {
+      st.SkipWithError("atelier regen failed");
+      return;
+    }
+    st.SetIterationTime(r.seconds);
+  }
+  st.counters["bodies_per_s"] = static_cast<double>(bodies) / r.seconds;
+  st.counters["peak_rss_MB"] = r.peak_rss_mb;
+  st.SetLabel("atelier regen, skirt (2 levels), chunks of 64, 2 threads");
+}
+BENCHMARK(BM_RegenJob)->Arg(1000)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+
+}  // namespace
