@@ -21,10 +21,16 @@ configure: $(BUILD)/CMakeCache.txt
 build: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
 
-demo: build
+# The demo builds the CLI only (no tests, no benchmarks): about half the compile work.
+demo: deps configure
+	cmake --build $(BUILD) -j $(JOBS) --target atelier
 	./$(BUILD)/atelier demo --out out/demo
 
-test: build
+# Test packages, then configure again so that CMake finds them.
+test: configure
+	@bash scripts/install-deps.sh --test
+	cmake -S . -B $(BUILD) $(CMAKE_ARGS)
+	cmake --build $(BUILD) -j $(JOBS)
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
 bench:
@@ -35,13 +41,13 @@ bench:
 	./$(BUILD)/bench/atelier_bench --benchmark_out=bench-results/atelier_bench.json --benchmark_out_format=json
 
 asan:
-	@bash scripts/install-deps.sh
+	@bash scripts/install-deps.sh --test
 	cmake -S . -B build-asan -G "$(GEN)" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DATELIER_SANITIZE=address,undefined -DATELIER_BUILD_BENCH=OFF
 	cmake --build build-asan -j $(JOBS)
 	ATELIER_SKIP_LONG_TESTS=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir build-asan --output-on-failure -j $(JOBS)
 
 tsan:
-	@bash scripts/install-deps.sh
+	@bash scripts/install-deps.sh --test
 	cmake -S . -B build-tsan -G "$(GEN)" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DATELIER_SANITIZE=thread -DATELIER_BUILD_BENCH=OFF
 	cmake --build build-tsan -j $(JOBS)
 	ATELIER_SKIP_LONG_TESTS=1 ctest --test-dir build-tsan --output-on-failure -j $(JOBS)

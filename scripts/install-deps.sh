@@ -1,14 +1,21 @@
 #!/usr/bin/env bash
 # Installs the Debian packages Atelier needs, only those missing.
-# Usage: scripts/install-deps.sh [--bench]   (--bench adds the optional peers)
+# Usage: scripts/install-deps.sh [--test] [--bench]
+#   (none)   what the library and the CLI need (`make demo`)
+#   --test   adds GoogleTest, Chromium (HTML report test) and Open MPI (the
+#            2-rank regen test; the CLI uses MPI when it is installed)
+#   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann)
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
       libtbb-dev libeigen3-dev libembree-dev libopenvdb-dev libboost-iostreams-dev
-      libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev libfmt-dev libcgal-dev
-      zlib1g-dev chromium libopenmpi-dev openmpi-bin)
-if [[ "${1:-}" == "--bench" ]]; then
-  pkgs+=(libopenmesh-dev libnanoflann-dev)
-fi
+      nlohmann-json3-dev libcli11-dev libcgal-dev zlib1g-dev)
+for arg in "$@"; do
+  case "$arg" in
+    --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin) ;;
+    --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev) ;;
+    *) echo "install-deps: unknown option $arg (use --test, --bench)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
