@@ -154,7 +154,7 @@ void BM_CollisionBodySetup(benchmark::State& st) {
     for (const Vec3d& q : s.decoded[b]) cbp.roi.extend(q);
     CollisionBody cb;
     if (Status e = cb.build(s.topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
-    benchmark::DoNotOptimize(cb.grid_entries());
+    benchmark::DoNotOptimize(cb.hierarchy_nodes());
   }
   st.SetLabel(s.label);
 }

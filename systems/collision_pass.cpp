@@ -76,125 +76,109 @@ Expected<std::shared_ptr<const CollisionTopology>> CollisionTopology::build(std:
   return std::shared_ptr<const CollisionTopology>(std::move(topo));
 }
 
+// ------------------------------------------------------------ hierarchy
+
+void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
+  const std::size_t nt = triangles_.size();
+  std::vector<Vec3d> centre(nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    centre[t] = (pos[triangles_[t][0]] + pos[triangles_[t][1]] + pos[triangles_[t][2]]) / 3.0;
+  leaf_tri_.resize(nt);
+  std::iota(leaf_tri_.begin(), leaf_tri_.end(), 0u);
+  tree_.clear();
+  tree_.reserve(2 * nt / 2 + 2);
+  tree_.push_back({});
+  // Median split of the centroids on the longest axis, down to leaves of at
+  // most 4 triangles; children are appended as a pair after their parent.
+  struct Task {
+    std::uint32_t node, lo, hi;
+  };
+  std::vector<Task> todo{{0, 0, static_cast<std::uint32_t>(nt)}};
+  while (!todo.empty()) {
+    const Task k = todo.back();
+    todo.pop_back();
+    if (k.hi - k.lo <= 4) {
+      tree_[k.node] = {k.lo, k.hi - k.lo};
+      continue;
+    }
+    Box3d b;
+    for (std::uint32_t i = k.lo; i < k.hi; ++i) b.extend(centre[leaf_tri_[i]]);
+    int axis = 0;
+    (b.hi - b.lo).maxCoeff(&axis);
+    const std::uint32_t mid = k.lo + (k.hi - k.lo) / 2;
+    std::nth_element(leaf_tri_.begin() + k.lo, leaf_tri_.begin() + mid, leaf_tri_.begin() + k.hi,
+                     [&](std::uint32_t x, std::uint32_t y) {
+                       return centre[x][axis] < centre[y][axis] || (centre[x][axis] == centre[y][axis] && x < y);
+                     });
+    const auto child = static_cast<std::uint32_t>(tree_.size());
+    tree_[k.node] = {child, 0};
+    tree_.push_back({});
+    tree_.push_back({});
+    todo.push_back({child + 1, mid, k.hi});
+    todo.push_back({child, k.lo, mid});
+  }
+}
+
 // ------------------------------------------------------------ body
 
 Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, std::span<const Vec3d> positions,
-                            const CollisionBodyParams& params, const ExecContext& ctx) {
+                            const CollisionBodyParams& /*params: see its comment*/, const ExecContext& ctx) {
   topo_.reset();
   if (!topology) return Status(ErrorCode::kInvalidArgument, "collision body: no topology");
   if (positions.size() != topology->point_count())
     return Status(ErrorCode::kMismatch, "collision body: " + std::to_string(positions.size()) +
                                             " positions for a topology of " + std::to_string(topology->point_count()) +
                                             " points");
-  if (!(params.cell >= 0) || !(params.margin >= 0))
-    return Status(ErrorCode::kInvalidArgument, "collision body: negative cell or margin");
-  const auto tris = topology->triangles();
-  const std::size_t nt = tris.size();
-  // Bounds and mean edge length (one edge per triangle) in one reduction.
-  struct Acc {
-    Box3d box;
-    double len = 0;
-    bool finite = true;
-  };
-  const Acc acc = par::transform_reduce(
-      ctx, nt, Acc{},
-      [&](std::size_t t) {
-        Acc a;
-        for (std::uint32_t c : tris[t]) {
-          a.finite = a.finite && is_finite(positions[c]);
-          a.box.extend(positions[c]);
-        }
-        a.len = (positions[tris[t][1]] - positions[tris[t][0]]).norm();
-        return a;
-      },
-      [](Acc x, const Acc& y) {
-        x.box.extend(y.box.lo);
-        x.box.extend(y.box.hi);
-        x.len += y.len;
-        x.finite = x.finite && y.finite;
-        return x;
-      });
-  if (!acc.finite) return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
-  double h = params.cell > 0 ? params.cell : 4.0 * acc.len / static_cast<double>(nt);
-  if (!(h > 0)) return Status(ErrorCode::kDegenerate, "collision body: all triangles are degenerate");
-  Box3d box = params.roi.empty() ? acc.box : params.roi;
-  box.lo -= Vec3d::Constant(params.margin);
-  box.hi += Vec3d::Constant(params.margin);
-  // Queries whose search ball stays in this box are answered from the grid:
-  // the grid itself stops at the body's box, beyond which there is nothing.
-  valid_lo_ = box.lo;
-  valid_hi_ = box.hi;
-  box.lo = box.lo.cwiseMax(acc.box.lo - Vec3d::Constant(h));  // nothing to bin beyond the body
-  box.hi = box.hi.cwiseMin(acc.box.hi + Vec3d::Constant(h));
+  const bool finite = par::transform_reduce(
+      ctx, positions.size(), true, [&](std::size_t v) { return is_finite(positions[v]); },
+      [](bool x, bool y) { return x && y; });
+  if (!finite) return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
+  const CollisionTopology& tp = *topology;
+  std::call_once(tp.tree_once_, [&] { tp.build_tree(positions); });
   pos_ = positions;
   topo_ = std::move(topology);
-  start_.clear();
-  ids_.clear();
-  nx_ = ny_ = nz_ = 0;
-  // Bounding sphere per triangle (centroid, farthest corner): a cheap lower
-  // bound on its distance, tested before the exact one.
-  sphere_.resize(nt);
-  par::for_each_n(ctx, nt, [&](std::size_t t) {
-    const Vec3d c = (pos_[tris[t][0]] + pos_[tris[t][1]] + pos_[tris[t][2]]) / 3.0;
-    double r = 0;
-    for (std::uint32_t k : tris[t]) r = std::max(r, (pos_[k] - c).norm());
-    sphere_[t] << c, r * (1 + 1e-12) + 1e-15;  // rounding: the bound must stay a bound
+  const std::size_t nt = tp.triangles_.size();
+  const auto& tree = tp.tree_;
+  // Corners in leaf order (the traversal reads them contiguously).
+  corners_.resize(nt);
+  par::for_each_n(ctx, nt, [&](std::size_t i) {
+    const Triangle& t = tp.triangles_[tp.leaf_tri_[i]];
+    corners_[i] = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
   });
-  if (box.empty()) {  // ROI away from the body: every query scans all triangles
-    lo_ = hi_ = Vec3d::Zero();
-    return Status::ok();
-  }
-  // Coarse cells: at most ~2M cells whatever the ROI (a finer grid costs
-  // more to fill than it saves).
-  const Vec3d ext = box.hi - box.lo;
-  while ((std::ceil(ext.x() / h) * std::ceil(ext.y() / h) * std::ceil(ext.z() / h)) > 2e6) h *= 1.25;
-  h_ = h;
-  inv_h_ = 1.0 / h;
-  nx_ = std::max(1, static_cast<int>(std::ceil(ext.x() * inv_h_)));
-  ny_ = std::max(1, static_cast<int>(std::ceil(ext.y() * inv_h_)));
-  nz_ = std::max(1, static_cast<int>(std::ceil(ext.z() * inv_h_)));
-  lo_ = box.lo;
-  hi_ = lo_ + h * Vec3d(nx_, ny_, nz_);
-  // Cell range of every triangle's box (empty when outside the grid), then
-  // counting sort into CSR: deterministic, triangles ascending per cell.
-  std::vector<std::array<int, 6>> range(nt);
-  par::for_each_n(ctx, nt, [&](std::size_t t) {
-    Box3d b;
-    for (std::uint32_t c : tris[t]) b.extend(pos_[c]);
-
-    auto& r = range[t];
-    const Vec3d l = (b.lo - lo_) * inv_h_, u = (b.hi - lo_) * inv_h_;
-    const int dims[3] = {nx_, ny_, nz_};
+  // Refit: leaves from their corners (rounded outward to float, so a box
+  // never excludes its triangle), then inner nodes in a reverse sweep
+  // (children follow their parents).
+  box_.resize(tree.size());
+  auto down = [](double x) {
+    float f = static_cast<float>(x);
+    return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+  };
+  auto up = [](double x) {
+    float f = static_cast<float>(x);
+    return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+  };
+  par::for_each_n(ctx, tree.size(), [&](std::size_t n) {
+    const CollisionTopology::TreeNode& nd = tree[n];
+    if (nd.count == 0) return;
+    Vec3d lo = corners_[nd.first][0], hi = lo;
+    for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i)
+      for (const Vec3d& c : corners_[i]) {
+        lo = lo.cwiseMin(c);
+        hi = hi.cwiseMax(c);
+      }
     for (int a = 0; a < 3; ++a) {
-      r[a] = std::max(0, static_cast<int>(std::floor(l[a])));
-      r[a + 3] = std::min(dims[a] - 1, static_cast<int>(std::floor(u[a])));
+      box_[n].lo[a] = down(lo[a]);
+      box_[n].hi[a] = up(hi[a]);
     }
   });
-  const std::size_t ncell = static_cast<std::size_t>(nx_) * ny_ * nz_;
-  start_.assign(ncell + 1, 0);
-  for (std::size_t t = 0; t < nt; ++t) {
-    const auto& r = range[t];
-    for (int z = r[2]; z <= r[5]; ++z)
-      for (int y = r[1]; y <= r[4]; ++y)
-        for (int x = r[0]; x <= r[3]; ++x) ++start_[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x + 1];
-  }
-  std::partial_sum(start_.begin(), start_.end(), start_.begin());
-  ids_.resize(start_.back());
-  // Float spheres, widened by 1 um so that the rounding of the centre
-  // (< 0.2 um for coordinates of a few metres) cannot make them too small.
-  std::vector<GridEntry> entry(nt);
-  for (std::size_t t = 0; t < nt; ++t) {
-    const Vec4d& sp = sphere_[t];
-    entry[t] = {{static_cast<float>(sp[0]), static_cast<float>(sp[1]), static_cast<float>(sp[2])},
-                static_cast<float>(sp[3] * (1 + 1e-6) + 1e-6),
-                static_cast<std::uint32_t>(t)};
-  }
-  std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-  for (std::size_t t = 0; t < nt; ++t) {
-    const auto& r = range[t];
-    for (int z = r[2]; z <= r[5]; ++z)
-      for (int y = r[1]; y <= r[4]; ++y)
-        for (int x = r[0]; x <= r[3]; ++x) ids_[fill[(static_cast<std::size_t>(z) * ny_ + y) * nx_ + x]++] = entry[t];
+  for (std::size_t n = tree.size(); n-- > 0;) {
+    const CollisionTopology::TreeNode& nd = tree[n];
+    if (nd.count != 0) continue;
+    const NodeBox &l = box_[nd.first], &r = box_[nd.first + 1];
+    for (int a = 0; a < 3; ++a) {
+      box_[n].lo[a] = std::min(l.lo[a], r.lo[a]);
+      box_[n].hi[a] = std::max(l.hi[a], r.hi[a]);
+    }
   }
   return Status::ok();
 }
@@ -255,47 +239,6 @@ BodyDistance CollisionBody::query_triangle(const Vec3d& p, std::uint32_t t) cons
   return out;
 }
 
-void CollisionBody::scan_cells(const Vec3d& p, double& best2, std::uint32_t& best_t) const noexcept {
-  const double r = std::sqrt(best2);
-  const Vec3d l = (p - Vec3d::Constant(r) - lo_) * inv_h_, u = (p + Vec3d::Constant(r) - lo_) * inv_h_;
-  // Clamp in double before converting: far points must not overflow int.
-  auto lo_cell = [](double x, int n) { return static_cast<int>(std::clamp(std::floor(x), 0.0, double(n))); };
-  auto hi_cell = [](double x, int n) { return static_cast<int>(std::clamp(std::floor(x), -1.0, double(n - 1))); };
-  const int x0 = lo_cell(l.x(), nx_), x1 = hi_cell(u.x(), nx_);
-  const int y0 = lo_cell(l.y(), ny_), y1 = hi_cell(u.y(), ny_);
-  const int z0 = lo_cell(l.z(), nz_), z1 = hi_cell(u.z(), nz_);
-  const auto& tris = topo_->triangles_;
-  for (int z = z0; z <= z1; ++z)
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        // Skip cells whose box is no nearer than the best distance so far.
-        const Vec3d c0 = lo_ + h_ * Vec3d(x, y, z);
-        const Vec3d gap = (c0 - p).cwiseMax(p - c0 - Vec3d::Constant(h_)).cwiseMax(0.0);
-        if (gap.squaredNorm() > best2) continue;
-        const std::size_t cell = (static_cast<std::size_t>(z) * ny_ + y) * nx_ + x;
-        for (std::uint32_t i = start_[cell]; i < start_[cell + 1]; ++i) {
-          // Bounding sphere first, stored in the entry (no indirection):
-          // most candidates end here.
-          const GridEntry& en = ids_[i];
-          const double dx = p.x() - en.c[0], dy = p.y() - en.c[1], dz = p.z() - en.c[2];
-          const double cd2 = dx * dx + dy * dy + dz * dz;
-          if (cd2 > best2) {  // cheap pre-test before the square root
-            const double dc = std::sqrt(cd2) - en.r;
-            if (dc > 0 && dc * dc > best2) continue;
-          }
-          const std::uint32_t t = en.t;
-          if (t == best_t) continue;
-          const Triangle& tr = tris[t];
-          const TrianglePoint q = closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]);
-          const double d2 = (p - q.point).squaredNorm();
-          if (d2 < best2 || (d2 == best2 && t < best_t)) {
-            best2 = d2;
-            best_t = t;
-          }
-        }
-      }
-}
-
 BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noexcept {
   const auto& tris = topo_->triangles_;
   double best2 = kInf;
@@ -306,8 +249,8 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     best2 = (p - closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]).point).squaredNorm();
     best_t = hint;
     // Greedy walk across edges to a nearer triangle: on a deformed body the
-    // closest triangle is usually a few steps from the hint, and a tighter
-    // bound shrinks the ball the grid has to certify (cost ~ radius^2).
+    // closest triangle is usually a few steps from the hint, and a tight
+    // bound prunes most of the hierarchy at once.
     for (int step = 0; step < 16; ++step) {
       const std::uint32_t from = best_t;
       for (std::uint32_t o : topo_->across_[from]) {
@@ -321,34 +264,50 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
       if (best_t == from) break;
     }
   }
-  auto in_grid = [&](double r) {
-    return nx_ > 0 && (p.array() - r >= valid_lo_.array()).all() && (p.array() + r <= valid_hi_.array()).all();
+  // Branch and bound over the refit hierarchy, nearer child first. Boxes
+  // at exactly the best distance are still opened: ties go to the smaller
+  // triangle index, so the answer does not depend on the hint.
+  const auto& tree = topo_->tree_;
+  const auto& leaf_tri = topo_->leaf_tri_;
+  auto box_d2 = [&](std::uint32_t n) {
+    const NodeBox& b = box_[n];
+    double s = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double g = std::max({static_cast<double>(b.lo[a]) - p[a], p[a] - static_cast<double>(b.hi[a]), 0.0});
+      s += g * g;
+    }
+    return s;
   };
-  if (best_t != kNoTriangle) {
-    if (in_grid(std::sqrt(best2))) {
-      scan_cells(p, best2, best_t);
-      return query_triangle(p, best_t);
+  struct Item {
+    std::uint32_t node;
+    double d2;
+  };
+  Item stack[96];
+  int top = 0;
+  stack[top++] = {0, box_d2(0)};
+  while (top > 0) {
+    const Item it = stack[--top];
+    if (it.d2 > best2) continue;
+    const CollisionTopology::TreeNode& nd = tree[it.node];
+    if (nd.count > 0) {
+      for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
+        const std::uint32_t t = leaf_tri[i];
+        if (t == best_t) continue;
+        const auto& c = corners_[i];
+        const double d2 = (p - closest_point_on_triangle(p, c[0], c[1], c[2]).point).squaredNorm();
+        if (d2 < best2 || (d2 == best2 && t < best_t)) {
+          best2 = d2;
+          best_t = t;
+        }
+      }
+      continue;
     }
-  } else {
-    // No hint: grow the search ball from one cell until it holds a triangle.
-    for (double r = h_; in_grid(r); r *= 2) {
-      double b2 = r * r;
-      std::uint32_t bt = kNoTriangle;
-      scan_cells(p, b2, bt);
-      if (bt != kNoTriangle) return query_triangle(p, bt);
-    }
-  }
-  // The ball leaves the grid (far from the region of interest): full scan.
-  for (std::uint32_t t = 0; t < tris.size(); ++t) {
-    const Vec4d& sp = sphere_[t];
-    const double dc = (p - sp.head<3>()).norm() - sp[3];
-    if (dc > 0 && dc * dc > best2) continue;
-    const Triangle& tr = tris[t];
-    const double d2 = (p - closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]).point).squaredNorm();
-    if (d2 < best2 || (d2 == best2 && t < best_t)) {
-      best2 = d2;
-      best_t = t;
-    }
+    const double dl = box_d2(nd.first), dr = box_d2(nd.first + 1);
+    const bool left_first = dl <= dr;
+    const Item near{left_first ? nd.first : nd.first + 1, left_first ? dl : dr};
+    const Item far{left_first ? nd.first + 1 : nd.first, left_first ? dr : dl};
+    if (far.d2 <= best2) stack[top++] = far;
+    if (near.d2 <= best2) stack[top++] = near;
   }
   return query_triangle(p, best_t);
 }
