@@ -1,11 +1,14 @@
 #include "apps/atelier/regen_cmd.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
+#include "apps/atelier/mpi_split.h"
 #include "engine/parallel.h"
 #include "io/atomic_file.h"
 #include "io/obj.h"
@@ -84,7 +87,10 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
 }
 
 CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
-  auto* c = app.add_subcommand("regen", "regenerate encoded templates on every body of a body set");
+  auto* c = app.add_subcommand("regen", mpi::built_with_mpi()
+                                            ? "regenerate encoded templates on every body of a body set (under "
+                                              "mpirun: the bodies are split across the ranks)"
+                                            : "regenerate encoded templates on every body of a body set");
   c->add_option("--template", opt.templates, "template JSON file (repeatable)")->required();
   c->add_option("--source", opt.bodies.source, "mannequin, makehuman, or a directory of OBJ bodies");
   c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)");
@@ -100,14 +106,25 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   return c;
 }
 
-int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const ExecContext ctx = common.context();
+namespace {
+
+/// One rank's part of a regen run, from its set-up to its share of bodies.
+struct RegenJob {
   std::vector<ProfileTemplate> templates;
-  for (const auto& p : opt.templates) templates.push_back(read_template_json(p));
-  const std::unique_ptr<BodySource> src = make_body_source(common, opt.bodies);
-  const auto ref = src->reference();
-  for (const auto& t : templates) {
+  std::unique_ptr<BodySource> src;
+  fs::path bodies_dir;
+  // This rank's work, for timing.json.
+  std::size_t done = 0, skipped = 0;
+  std::vector<double> body_ms;
+};
+
+/// Reads the templates and the body set and checks they fit (throws Error).
+RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
+  RegenJob job;
+  for (const auto& p : opt.templates) job.templates.push_back(read_template_json(p));
+  job.src = make_body_source(common, opt.bodies);
+  const auto ref = job.src->reference();
+  for (const auto& t : job.templates) {
     if (t.model.nodes.slots.capacity() != t.encodings.nodes.size())
       throw Error(Status(ErrorCode::kMismatch, t.name + ": encodings do not match the template's nodes"));
     const std::string tag = reference_tag(*ref);
@@ -116,8 +133,20 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
                                                    t.reference + "; the body set's reference has " + tag +
                                                    " (encode the template on this reference with `atelier encode`)"));
   }
-  const fs::path bodies_dir = opt.out / "bodies";
-  fs::create_directories(bodies_dir);
+  job.bodies_dir = opt.out / "bodies";
+  fs::create_directories(job.bodies_dir);
+  return job;
+}
+
+/// Regenerates the bodies of this rank's chunks (mpi::regen_share) that have
+/// no record yet; writes each body's outputs and record (last, atomically).
+void regen_share(const Common& common, const RegenOptions& opt, const mpi::ProcessGroup& group, RegenJob& job,
+                 Log& log) {
+  const ExecContext ctx = common.context();
+  const auto& templates = job.templates;
+  const BodySource& src = *job.src;
+  const fs::path& bodies_dir = job.bodies_dir;
+  const auto ref = src.reference();
   Box3d roi;
   for (const auto& t : templates)
     for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) roi.extend(t.model.nodes.position[v]);
@@ -129,28 +158,34 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
   // collider and one regenerated template at a time.
   BodySet chunk(ref);
   std::vector<BodyFailure> failures;
-  std::size_t skipped = 0, done = 0;
-  std::vector<double> body_ms;
-  const std::size_t n = src->size();
-  log.progress("bodies", 0, n);
-  for (std::size_t first = 0; first < n; first += opt.chunk) {
+  const std::size_t n = src.size();
+  // Progress counts this rank's share; only rank 0 draws it (one bar).
+  const bool show = group.rank() == 0;
+  std::size_t share = 0, share_seen = 0;
+  for (std::size_t first = 0, c = 0; first < n; first += opt.chunk, ++c)
+    if (mpi::regen_share(c, group.rank(), group.size())) share += std::min(opt.chunk, n - first);
+  if (show) log.progress("bodies", 0, share);
+  for (std::size_t first = 0, c = 0; first < n; first += opt.chunk, ++c) {
     if (ctx.cancelled()) break;
+    if (!mpi::regen_share(c, group.rank(), group.size())) continue;
+    const std::size_t count = std::min(opt.chunk, n - first);
+    share_seen += count;
     // Resume: bodies whose record exists are complete.
-    std::vector<std::uint8_t> pending(std::min(opt.chunk, n - first), 1);
+    std::vector<std::uint8_t> pending(count, 1);
     bool any = false;
     for (std::size_t i = 0; i < pending.size(); ++i) {
-      if (!opt.no_resume && fs::exists(bodies_dir / (src->body_name(first + i) + ".json"))) {
+      if (!opt.no_resume && fs::exists(bodies_dir / (src.body_name(first + i) + ".json"))) {
         pending[i] = 0;
-        ++skipped;
+        ++job.skipped;
       }
       any = any || pending[i];
     }
     if (!any) {
-      log.progress("bodies", std::min(n, first + opt.chunk), n);
+      if (show) log.progress("bodies", share_seen, share);
       continue;
     }
     const std::size_t failures_before = failures.size();
-    src->generate(first, pending.size(), chunk, failures, ctx);
+    src.generate(first, pending.size(), chunk, failures, ctx);
     for (std::size_t f = failures_before; f < failures.size(); ++f) {  // unreadable bodies: record them too
       nlohmann::json rec = {{"body", failures[f].name}, {"ok", false}, {"reason", failures[f].status.to_string()}};
       write_atomically(bodies_dir / (failures[f].name + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
@@ -163,7 +198,7 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
     par::for_each_n(per_body, chunk.size(), [&](std::size_t b) {
       std::size_t index = first;  // the body's index in the source, by name
       for (std::size_t i = 0; i < pending.size(); ++i)
-        if (src->body_name(first + i) == chunk.name(b)) index = first + i;
+        if (src.body_name(first + i) == chunk.name(b)) index = first + i;
       if (!pending[index - first]) return;
       const auto t0 = std::chrono::steady_clock::now();
       ExecContext inner = ExecContext::sequential();
@@ -200,58 +235,146 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
         failures.push_back({first + b, chunk.name(b), Status(ErrorCode::kInternal, errors[b])});
         log.warn(chunk.name(b) + ": " + errors[b]);
       } else if (ms[b] > 0) {
-        ++done;
-        body_ms.push_back(ms[b]);
+        ++job.done;
+        job.body_ms.push_back(ms[b]);
       }
     }
-    log.progress("bodies", std::min(n, first + opt.chunk), n);
+    if (show) log.progress("bodies", share_seen, share);
   }
-  log.end_progress();
+  if (show) log.end_progress();
+}
 
-  // Merge the records in body order (the ones from earlier runs included).
+struct MergeCounts {
+  std::size_t ok = 0, failed = 0, inside = 0;
+  double crack = 0;
+};
+
+/// Merges every body's record, in body order, into report.json (the records
+/// of earlier runs and of other ranks included). Rank 0 only.
+MergeCounts merge_report(const Common& common, const RegenOptions& opt, const RegenJob& job) {
+  const std::size_t n = job.src->size();
   nlohmann::json report;
   report["tool"] = "atelier regen";
   report["seed"] = common.seed;
   report["source"] = opt.bodies.source;
   nlohmann::json names = nlohmann::json::array();
-  for (const auto& t : templates) names.push_back(t.name);
+  for (const auto& t : job.templates) names.push_back(t.name);
   report["templates"] = names;
   nlohmann::json rows = nlohmann::json::array();
-  std::size_t ok = 0, failed = 0, inside = 0;
-  double crack = 0;
+  MergeCounts m;
   for (std::size_t i = 0; i < n; ++i) {
-    const fs::path rec = bodies_dir / (src->body_name(i) + ".json");
+    const fs::path rec = job.bodies_dir / (job.src->body_name(i) + ".json");
     if (!fs::exists(rec)) continue;  // cancelled before it
     std::ifstream in(rec);
     nlohmann::json r = nlohmann::json::parse(in, nullptr, false);
     if (r.is_discarded()) throw Error(Status(ErrorCode::kParse, rec.string() + ": not valid JSON"));
     if (r.value("ok", false)) {
-      ++ok;
+      ++m.ok;
       for (auto& [k, q] : r["templates"].items()) {
-        inside += q.value("inside_nodes", std::size_t{0});
-        crack = std::max(crack, q.value("crack_m", 0.0));
+        m.inside += q.value("inside_nodes", std::size_t{0});
+        m.crack = std::max(m.crack, q.value("crack_m", 0.0));
       }
     } else {
-      ++failed;
+      ++m.failed;
     }
     rows.push_back(std::move(r));
   }
-  report["summary"] = {{"bodies", n}, {"completed", ok}, {"failed", failed}, {"inside_nodes_total", inside},
-                       {"max_crack_m", crack}};
+  report["summary"] = {{"bodies", n}, {"completed", m.ok}, {"failed", m.failed}, {"inside_nodes_total", m.inside},
+                       {"max_crack_m", m.crack}};
   report["bodies"] = rows;
   write_atomically(opt.out / "report.json", [&](AtomicFile& f) { f.write(report.dump(1)); });
-  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return m;
+}
+
+/// Exit code of an exception at this entry point, as main() maps them.
+int exit_code_of(const Error& e) {
+  const auto c = e.status().code();
+  return c == ErrorCode::kInternal || c == ErrorCode::kStaleHandle ? kExitInternal : kExitInput;
+}
+
+}  // namespace
+
+int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const mpi::ProcessGroup group;
+  if (group.launched_without_mpi())
+    throw Error(Status(ErrorCode::kInvalidArgument,
+                       "started by an MPI launcher as one of several ranks, but this atelier was built without MPI "
+                       "(install libopenmpi-dev and reconfigure with -DATELIER_WITH_MPI=ON)"));
+  const std::string who = group.distributed() ? "rank " + std::to_string(group.rank()) + " of " +
+                                                    std::to_string(group.size()) + ": "
+                                              : "";
+  // Every rank must reach the collectives below, so on several ranks an
+  // error is caught, logged and reduced instead of leaving the others
+  // waiting; one process keeps the plain exception path of main().
+  std::optional<RegenJob> job;
+  int code = kExitOk;
+  try {
+    job.emplace(prepare_regen(common, opt));
+    regen_share(common, opt, group, *job, log);
+  } catch (const Error& e) {
+    if (!group.distributed()) throw;
+    log.error(who + e.what());
+    code = exit_code_of(e);
+  } catch (const std::exception& e) {
+    if (!group.distributed()) throw;
+    log.error(who + "internal error: " + e.what());
+    code = kExitInternal;
+  }
+  if (group.distributed())
+    log.info(who + "regenerated " + std::to_string(job ? job->done : 0) + " bodies, skipped " +
+             std::to_string(job ? job->skipped : 0) + " complete ones");
+
+  // Per-rank work for timing.json: gathered on every rank (one collective,
+  // which is also the barrier before the merge: all records are written).
   double mean_ms = 0;
-  for (double x : body_ms) mean_ms += x;
-  mean_ms /= std::max<double>(1, static_cast<double>(body_ms.size()));
-  nlohmann::json timing = {{"total_s", total_s}, {"regenerated_now", done}, {"skipped_complete", skipped},
-                           {"mean_ms_per_body", mean_ms}, {"threads", common.threads}};
-  write_atomically(opt.out / "timing.json", [&](AtomicFile& f) { f.write(timing.dump(1)); });
-  std::printf("atelier regen: %zu bodies x %zu templates: %zu complete (%zu now, %zu from an earlier run), %zu failed; "
-              "%zu nodes inside, max crack %.1e m; %.1f s\n",
-              n, templates.size(), ok, done, skipped, failed, inside, crack, total_s);
-  std::printf("  report: %s\n", fs::absolute(opt.out / "report.json").string().c_str());
-  return failed == 0 ? kExitOk : kExitPartial;
+  if (job) {
+    for (double x : job->body_ms) mean_ms += x;
+    mean_ms /= std::max<double>(1, static_cast<double>(job->body_ms.size()));
+  }
+  const std::array<double, 4> mine = {static_cast<double>(code), job ? static_cast<double>(job->done) : 0.0,
+                                      job ? static_cast<double>(job->skipped) : 0.0, mean_ms};
+  const std::vector<double> all = group.all_gather(mine);
+  for (int r = 0; r < group.size(); ++r) code = std::max(code, static_cast<int>(all[4 * r]));
+
+  if (group.rank() == 0 && code < kExitUsage) {
+    try {
+      const MergeCounts m = merge_report(common, opt, *job);
+      const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+      std::size_t done = 0, skipped = 0;
+      double weighted_ms = 0;
+      nlohmann::json ranks = nlohmann::json::array();
+      for (int r = 0; r < group.size(); ++r) {
+        const auto d = static_cast<std::size_t>(all[4 * r + 1]);
+        const auto s = static_cast<std::size_t>(all[4 * r + 2]);
+        done += d;
+        skipped += s;
+        weighted_ms += all[4 * r + 3] * static_cast<double>(d);
+        ranks.push_back({{"rank", r}, {"regenerated_now", d}, {"skipped_complete", s}, {"mean_ms_per_body", all[4 * r + 3]}});
+      }
+      nlohmann::json timing = {{"total_s", total_s},
+                               {"regenerated_now", done},
+                               {"skipped_complete", skipped},
+                               {"mean_ms_per_body", weighted_ms / std::max<double>(1, static_cast<double>(done))},
+                               {"threads", common.threads},
+                               {"ranks", ranks}};
+      write_atomically(opt.out / "timing.json", [&](AtomicFile& f) { f.write(timing.dump(1)); });
+      const std::size_t n = job->src->size();
+      std::printf("atelier regen: %zu bodies x %zu templates: %zu complete (%zu now, %zu from an earlier run), %zu "
+                  "failed; %zu nodes inside, max crack %.1e m; %.1f s",
+                  n, job->templates.size(), m.ok, done, skipped, m.failed, m.inside, m.crack, total_s);
+      if (group.distributed()) std::printf(" on %d ranks", group.size());
+      std::printf("\n  report: %s\n", fs::absolute(opt.out / "report.json").string().c_str());
+      std::fflush(stdout);
+      code = std::max(code, m.failed == 0 ? int{kExitOk} : int{kExitPartial});
+    } catch (const Error& e) {
+      if (!group.distributed()) throw;
+      log.error(who + e.what());
+      code = exit_code_of(e);
+    }
+  }
+  // Rank 0's verdict on the merge, to every rank: each exits with the same code.
+  return group.max_all(code);
 }
 
 }  // namespace atelier::cli

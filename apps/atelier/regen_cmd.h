@@ -14,6 +14,12 @@
 //       the records in body order; it holds no timings, so the same inputs
 //       and seed give byte-identical outputs for any --threads (timings go to
 //       run/timing.json).
+//   mpirun -np K atelier regen ... (a build with MPI, apps/atelier/mpi_split.h)
+//       splits the body set across K ranks, chunk c to rank c mod K; each
+//       rank writes its bodies' records into the shared output folder, and
+//       after all ranks are done rank 0 alone merges report.json (the same
+//       bytes as a one-process run) and timing.json (with each rank's
+//       work). The exit code is the worst over the ranks. docs/cluster.md.
 #pragma once
 
 #include <CLI/CLI.hpp>
