@@ -12,6 +12,7 @@
 #include "storage/topology.h"
 #include "storage/validate.h"
 #include "systems/body_set.h"
+#include "systems/detail_template.h"
 #include "systems/makehuman_body.h"
 #include "systems/mannequin.h"
 #include "systems/mannequin_source.h"
@@ -74,6 +75,36 @@ int run_convert(const Common&, const fs::path& in, const fs::path& out, Log& log
   return kExitOk;
 }
 
+static ReferenceBody reference_from_obj(const fs::path& file, double scale, const fs::path& data, const ExecContext& ctx) {
+  ReferenceBody rb;
+  rb.model = read_obj(file);
+  for (auto& p : rb.model.nodes.position) p *= scale;
+  rb.skin = SurfaceIdx{0};
+  // Features are not in an OBJ file. A body with the topology of a known
+  // reference (the mannequin, or MakeHuman's base mesh when its data is
+  // there) takes that reference's features: its feature points and curves
+  // sit on nodes, edges and faces, so they follow the OBJ's positions.
+  const std::uint64_t hash = BodyPolygons::from_model(rb.model).topology_hash;
+  const std::vector<Vec3d> positions = rb.model.nodes.position;
+  auto adopt = [&](const ReferenceBody& known) -> bool {
+    if (known.model.nodes.slots.capacity() != positions.size() ||
+        BodyPolygons::from_model(known.model).topology_hash != hash)
+      return false;
+    auto moved = with_positions(known, positions);
+    if (!moved) throw Error(Status(moved.status().code(), file.string() + ": " + moved.status().message()));
+    rb = std::move(*moved);
+    return true;
+  };
+  if (auto topo = make_mannequin_topology(); topo) {
+    if (auto ref = make_mannequin(MannequinParams{}, *topo); ref && adopt(*ref)) return rb;
+  }
+  if (positions.size() > 10000 && fs::exists(data / "makehuman")) {
+    const auto lib = makehuman::HumanLibrary::load(data / "makehuman", ctx);
+    if (adopt(makehuman::make_reference_body(lib))) return rb;
+  }
+  return rb;  // no features: profile templates refuse it, detail templates work
+}
+
 std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt) {
   const ExecContext ctx = common.context();
   std::unique_ptr<BodySource> src;
@@ -92,12 +123,9 @@ std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesO
   } else {
     if (opt.reference.empty())
       throw Error(Status(ErrorCode::kInvalidArgument, "--reference is required with a directory source"));
-    ReferenceBody rb;
-    rb.model = read_obj(opt.reference);
-    for (auto& p : rb.model.nodes.position) p *= opt.scale;
-    rb.skin = SurfaceIdx{0};
-    src = std::make_unique<ObjDirectorySource>(opt.source, std::make_shared<const ReferenceBody>(std::move(rb)),
-                                               opt.scale);
+    src = std::make_unique<ObjDirectorySource>(
+        opt.source, std::make_shared<const ReferenceBody>(reference_from_obj(opt.reference, opt.scale, opt.data, ctx)),
+        opt.scale);
   }
   return src;
 }

@@ -4,13 +4,19 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 
 #include "apps/atelier/mpi_split.h"
 #include "engine/parallel.h"
+#include "systems/collision_pass.h"
+#include "systems/detail_template.h"
 #include "io/atomic_file.h"
+#include "io/makehuman.h"
+#include "io/mhclo.h"
 #include "io/obj.h"
 #include "systems/makehuman_body.h"
 #include "systems/mannequin.h"
@@ -44,12 +50,100 @@ nlohmann::json quality_json(const RegenQuality& q) {
           {"pushed", q.pushed}};
 }
 
+/// A garment as a polygon soup: vertices in file order (the rows of its
+/// detail encoding), polygons over them. MakeHuman garments and scanned
+/// clothes are often not manifold, so no Model is made of them.
+struct GarmentMesh {
+  std::vector<Vec3d> positions;  // metres
+  std::vector<std::uint32_t> face_offsets{0}, face_nodes;
+};
+
+/// The garment of an OBJ file (read_base_mesh: every `v`, every `f` of every
+/// group), positions times `scale`.
+GarmentMesh read_garment_obj(const fs::path& file, double scale) {
+  const makehuman::BaseMesh m = makehuman::read_base_mesh(file);
+  GarmentMesh g;
+  for (const Vec3f& p : m.positions) g.positions.push_back(scale * p.cast<double>());
+  for (const auto& grp : m.groups)
+    for (std::size_t f = 0; f + 1 < grp.face_offsets.size(); ++f) {
+      for (std::uint32_t k = grp.face_offsets[f]; k < grp.face_offsets[f + 1]; ++k)
+        g.face_nodes.push_back(grp.face_nodes[k]);
+      g.face_offsets.push_back(static_cast<std::uint32_t>(g.face_nodes.size()));
+    }
+  if (g.positions.empty()) throw Error(Status(ErrorCode::kInvalidArgument, file.string() + ": no vertices"));
+  if (g.face_nodes.empty()) throw Error(Status(ErrorCode::kInvalidArgument, file.string() + ": no faces"));
+  return g;
+}
+
+/// Writes the garment with `positions` (float precision: what
+/// read_garment_obj gives back, so encoding and regeneration see the same
+/// reference garment).
+void write_garment_obj(const GarmentMesh& g, std::span<const Vec3d> positions, const fs::path& file) {
+  write_atomically(file, [&](AtomicFile& f) {
+    char line[128];
+    for (const Vec3d& p : positions) {
+      const int n = std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", static_cast<double>(static_cast<float>(p.x())),
+                                  static_cast<double>(static_cast<float>(p.y())),
+                                  static_cast<double>(static_cast<float>(p.z())));
+      f.write(line, static_cast<std::size_t>(n));
+    }
+    std::string face;
+    for (std::size_t k = 0; k + 1 < g.face_offsets.size(); ++k) {
+      face = "f";
+      for (std::uint32_t i = g.face_offsets[k]; i < g.face_offsets[k + 1]; ++i)
+        face += " " + std::to_string(g.face_nodes[i] + 1);
+      face += "\n";
+      f.write(face);
+    }
+  });
+}
+
+/// Undirected edges of the polygons, sorted and unique.
+std::vector<std::array<std::uint32_t, 2>> garment_edges(const GarmentMesh& g) {
+  std::vector<std::array<std::uint32_t, 2>> e;
+  for (std::size_t f = 0; f + 1 < g.face_offsets.size(); ++f) {
+    const std::uint32_t a = g.face_offsets[f], n = g.face_offsets[f + 1] - a;
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const std::uint32_t u = g.face_nodes[a + k], v = g.face_nodes[a + (k + 1) % n];
+      if (u != v) e.push_back({std::min(u, v), std::max(u, v)});
+    }
+  }
+  std::sort(e.begin(), e.end());
+  e.erase(std::unique(e.begin(), e.end()), e.end());
+  return e;
+}
+
+/// The collision body of a reference body's skin (shared topology, built once).
+std::shared_ptr<const CollisionTopology> collision_topology(const ReferenceBody& ref) {
+  auto tris = fan_triangulate(ref.model);
+  if (!tris) throw Error(tris.status());
+  auto topo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(ref.model.nodes.slots.capacity()));
+  if (!topo) throw Error(Status(topo.status().code(), "reference body: " + topo.status().message()));
+  return *topo;
+}
+
+/// A detail template ready to regenerate: the encoding, the garment on the
+/// reference body, and its clearance there (the collision pass's target).
+struct DetailJob {
+  std::string name;
+  DetailEncoding enc;
+  GarmentMesh mesh;  // positions: on the reference body
+  std::vector<std::array<std::uint32_t, 2>> edges;
+  std::vector<double> rest;  // edge lengths on the reference body
+  NodeAdjacency adjacency;
+  ClearanceEncoding clearance;
+};
+
 }  // namespace
 
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
-  auto* c = app.add_subcommand("encode", "encode the project's profile templates on a reference body (JSON files)");
-  c->add_option("--template", opt.name, "top, skirt, trousers or all")
+  auto* c = app.add_subcommand("encode",
+                               "encode the project's profile templates (JSON files) or a garment mesh (--garment, a "
+                               "detail template .atd) on a reference body");
+  c->add_option("--template", opt.name, "top, skirt, trousers or all (default: all, none with --garment)")
       ->check(CLI::IsMember({"top", "skirt", "trousers", "all"}));
+  c->add_option("--garment", opt.garment, "a garment on the reference body: .obj, or .mhclo (--reference makehuman)");
+  c->add_option("--scale", opt.scale, "garment OBJ units to metres")->check(CLI::PositiveNumber);
   c->add_option("--reference", opt.reference, "reference body: mannequin or makehuman")
       ->check(CLI::IsMember({"mannequin", "makehuman"}));
   c->add_option("--data", opt.data, "the shared data folder (for makehuman)");
@@ -57,21 +151,93 @@ CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
   return c;
 }
 
+namespace {
+
+/// `encode --garment`: the detail template of a garment on `ref` (seed 001
+/// section 6), written as <stem>.atd with the garment as <stem>.obj.
+void encode_garment(const Common& common, const EncodeOptions& opt, const ReferenceBody& ref,
+                    const makehuman::HumanLibrary* lib, Log& log) {
+  const ExecContext ctx = common.context();
+  const fs::path& file = opt.garment;
+  if (!fs::exists(file)) throw Error(Status(ErrorCode::kIo, file.string() + ": no such file"));
+  GarmentMesh g;
+  const std::string ext = file.extension().string();
+  if (ext == ".mhclo") {
+    if (!lib)
+      throw Error(Status(ErrorCode::kInvalidArgument,
+                         file.string() + ": a .mhclo garment is bound to the MakeHuman base mesh: use --reference "
+                                         "makehuman (or give the garment as an OBJ on the mannequin)"));
+    const auto binding = makehuman::read_mhclo(file, lib->vertex_count());
+    g = read_garment_obj(file.parent_path() / binding.obj_file, 1.0);
+    if (g.positions.size() != binding.refs.size())
+      throw Error(Status(ErrorCode::kMismatch, file.string() + ": " + std::to_string(binding.refs.size()) +
+                                                   " bound vertices but " + binding.obj_file + " has " +
+                                                   std::to_string(g.positions.size())));
+    // The binding's fit on the default body, the reference body's shape.
+    std::vector<Vec3f> H(lib->vertex_count());
+    lib->build(makehuman::MacroParams{}, H);
+    g.positions = makehuman::fit_binding(binding, H);
+    for (Vec3d& p : g.positions) p *= makehuman::kMakeHumanToMetres;
+  } else if (ext == ".obj") {
+    g = read_garment_obj(file, opt.scale);
+  } else {
+    throw Error(Status(ErrorCode::kInvalidArgument, file.string() + ": unknown garment format (use .obj or .mhclo)"));
+  }
+  // Float precision, as the .obj beside the template stores it.
+  for (Vec3d& p : g.positions) p = p.cast<float>().cast<double>();
+  const std::string name = file.stem().string();
+  const std::vector<Vec3d> skin = skin_positions(ref);
+  const BodyPolygons poly = BodyPolygons::from_model(ref.model);
+  auto enc = encode_detail(poly, skin, g.positions, {}, ctx);
+  if (!enc) throw Error(Status(enc.status().code(), file.string() + ": " + enc.status().message()));
+  // Where the garment sits on the reference body: what the collision pass
+  // restores on every other body (systems/collision_pass.h).
+  CollisionBody cb;
+  if (Status s = cb.build(collision_topology(ref), skin, {}, ctx); !s) throw Error(s);
+  auto clear = encode_clearance(g.positions, cb, ctx);
+  if (!clear) throw Error(Status(clear.status().code(), file.string() + ": " + clear.status().message()));
+  std::size_t inside = 0;
+  double min_c = std::numeric_limits<double>::infinity();
+  for (float c : clear->clearance) {
+    inside += c < 0;
+    min_c = std::min(min_c, static_cast<double>(c));
+  }
+  fs::create_directories(opt.out);
+  write_garment_obj(g, g.positions, opt.out / (name + ".obj"));
+  write_detail(*enc, opt.out / (name + ".atd"));  // last: the template is complete with its mesh
+  std::printf("%s: %zu vertices, %zu faces, %zu p-polygons per vertex, clearance on the reference %.1f mm (min), "
+              "%zu vertices inside -> %s\n",
+              name.c_str(), g.positions.size(), g.face_offsets.size() - 1,
+              enc->entries() / std::max<std::size_t>(1, g.positions.size()), 1000 * min_c, inside,
+              (opt.out / (name + ".atd")).string().c_str());
+  if (inside > 0)
+    log.warn(name + ": " + std::to_string(inside) +
+             " vertices are inside the reference body; regeneration pushes them out to the minimum clearance");
+}
+
+}  // namespace
+
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
   ReferenceBody ref;
+  std::optional<makehuman::HumanLibrary> lib;
   if (opt.reference == "mannequin") {
     auto r = make_mannequin();
     if (!r) throw Error(r.status());
     ref = std::move(*r);
   } else {
-    const auto lib = makehuman::HumanLibrary::load(opt.data / "makehuman", common.context());
-    ref = makehuman::make_reference_body(lib);
+    lib.emplace(makehuman::HumanLibrary::load(opt.data / "makehuman", common.context()));
+    ref = makehuman::make_reference_body(*lib);
   }
   fs::create_directories(opt.out);
   int written = 0;
+  if (!opt.garment.empty()) {
+    encode_garment(common, opt, ref, lib ? &*lib : nullptr, log);
+    ++written;
+  }
+  const std::string which = opt.name.empty() ? (opt.garment.empty() ? "all" : "") : opt.name;
   for (auto [name, make] : {std::pair{"top", &make_top_template}, std::pair{"skirt", &make_skirt_template},
                             std::pair{"trousers", &make_trousers_template}}) {
-    if (opt.name != "all" && opt.name != name) continue;
+    if (which != "all" && which != name) continue;
     auto t = make(ref);
     if (!t) throw Error(Status(t.status().code(), std::string(name) + ": " + t.status().message()));
     t->reference = opt.reference + ": " + reference_tag(ref);
@@ -91,7 +257,8 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
                                             ? "regenerate encoded templates on every body of a body set (under "
                                               "mpirun: the bodies are split across the ranks)"
                                             : "regenerate encoded templates on every body of a body set");
-  c->add_option("--template", opt.templates, "template JSON file (repeatable)")->required();
+  c->add_option("--template", opt.templates, "template file (repeatable): profile .template.json or detail .atd")
+      ->required();
   c->add_option("--source", opt.bodies.source, "mannequin, makehuman, or a directory of OBJ bodies");
   c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)");
   c->add_option("--data", opt.bodies.data, "the shared data folder (for makehuman)");
@@ -111,19 +278,65 @@ namespace {
 /// One rank's part of a regen run, from its set-up to its share of bodies.
 struct RegenJob {
   std::vector<ProfileTemplate> templates;
+  std::vector<DetailJob> details;
+  BodyPolygons poly;                                // details: the reference's polygons
+  std::shared_ptr<const CollisionTopology> collide;  // details: the reference's skin
   std::unique_ptr<BodySource> src;
   fs::path bodies_dir;
   // This rank's work, for timing.json.
   std::size_t done = 0, skipped = 0;
-  std::vector<double> body_ms;
+  double body_ms_sum = 0;  // over the bodies regenerated now (no per-body list: memory stays bounded)
 };
 
 /// Reads the templates and the body set and checks they fit (throws Error).
 RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   RegenJob job;
-  for (const auto& p : opt.templates) job.templates.push_back(read_template_json(p));
+  std::vector<fs::path> detail_files;
+  for (const auto& p : opt.templates) {
+    if (p.extension() == ".atd")
+      detail_files.push_back(p);
+    else
+      job.templates.push_back(read_template_json(p));
+  }
   job.src = make_body_source(common, opt.bodies);
   const auto ref = job.src->reference();
+  if (!detail_files.empty()) {
+    const ExecContext ctx = common.context();
+    job.poly = BodyPolygons::from_model(ref->model);
+    job.collide = collision_topology(*ref);
+    const std::vector<Vec3d> skin = skin_positions(*ref);
+    CollisionBody cb;
+    if (Status s = cb.build(job.collide, skin, {}, ctx); !s) throw Error(s);
+    for (const fs::path& f : detail_files) {
+      DetailJob d;
+      d.name = f.stem().string();
+      if (!fs::exists(f)) throw Error(Status(ErrorCode::kIo, f.string() + ": no such file"));
+      d.enc = read_detail(f);
+      if (Status s = check_topology(d.enc, job.poly); !s)
+        throw Error(Status(ErrorCode::kMismatch, f.string() + ": encoded on another reference body (" + s.message() +
+                                                     "); encode the garment on this reference with `atelier encode "
+                                                     "--garment`"));
+      fs::path mesh_file = f;
+      mesh_file.replace_extension(".obj");
+      if (!fs::exists(mesh_file))
+        throw Error(Status(ErrorCode::kIo, f.string() + ": its garment mesh " + mesh_file.string() +
+                                               " is missing (`atelier encode --garment` writes both)"));
+      d.mesh = read_garment_obj(mesh_file, 1.0);
+      if (d.mesh.positions.size() != d.enc.vertex_count())
+        throw Error(Status(ErrorCode::kMismatch, mesh_file.string() + " has " + std::to_string(d.mesh.positions.size()) +
+                                                     " vertices, " + f.string() + " encodes " +
+                                                     std::to_string(d.enc.vertex_count())));
+      d.edges = garment_edges(d.mesh);
+      for (const auto& e : d.edges) d.rest.push_back((d.mesh.positions[e[0]] - d.mesh.positions[e[1]]).norm());
+      auto adj = adjacency_from_edges(d.mesh.positions.size(), d.edges);
+      if (!adj) throw Error(Status(adj.status().code(), mesh_file.string() + ": " + adj.status().message()));
+      d.adjacency = std::move(*adj);
+      auto clear = encode_clearance(d.mesh.positions, cb, ctx);
+      if (!clear) throw Error(Status(clear.status().code(), mesh_file.string() + ": " + clear.status().message()));
+      d.clearance = std::move(*clear);
+      job.details.push_back(std::move(d));
+    }
+  }
   for (const auto& t : job.templates) {
     if (t.model.nodes.slots.capacity() != t.encodings.nodes.size())
       throw Error(Status(ErrorCode::kMismatch, t.name + ": encodings do not match the template's nodes"));
@@ -136,6 +349,49 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   job.bodies_dir = opt.out / "bodies";
   fs::create_directories(job.bodies_dir);
   return job;
+}
+
+/// A detail template on one body: decode (seed 001 eqs. 11-12), then the
+/// collision pass back to the clearance it had on the reference body.
+/// Returns the garment positions and fills the quality record.
+std::vector<Vec3d> regen_detail(const RegenJob& job, const DetailJob& d, std::span<const Vec3d> body,
+                                nlohmann::json& quality, const ExecContext& ctx) {
+  std::vector<Vec3d> g(d.mesh.positions.size());
+  if (Status s = decode_detail(d.enc, job.poly, body, g, ctx); !s) throw Error(s);
+  CollisionBody cb;
+  if (Status s = cb.build(job.collide, body, {}, ctx); !s) throw Error(s);
+  const CollisionParams cp;
+  auto pass = resolve_collisions(g, d.adjacency, d.clearance, cb, cp, ctx);
+  if (!pass) throw Error(pass.status());
+  // Measured again, independently of the pass's own report.
+  std::size_t inside = 0;
+  double depth = 0, min_c = std::numeric_limits<double>::infinity(), clear_err = 0;
+  for (std::size_t v = 0; v < g.size(); ++v) {
+    const double sd = cb.query(g[v], d.clearance.triangle[v]).distance;
+    if (sd < 0) {
+      ++inside;
+      depth = std::max(depth, -sd);
+    }
+    min_c = std::min(min_c, sd);
+    const double target = std::clamp(static_cast<double>(d.clearance.clearance[v]), cp.min_clearance, cp.max_clearance);
+    clear_err = std::max(clear_err, std::abs(sd - target));
+  }
+  std::vector<double> strain(d.edges.size());
+  double strain_max = 0;
+  for (std::size_t e = 0; e < d.edges.size(); ++e) {
+    strain[e] = d.rest[e] > 0 ? std::abs((g[d.edges[e][0]] - g[d.edges[e][1]]).norm() / d.rest[e] - 1.0) : 0.0;
+    strain_max = std::max(strain_max, strain[e]);
+  }
+  double p95 = 0;
+  if (!strain.empty()) {
+    const std::size_t k = std::min(strain.size() - 1, strain.size() * 95 / 100);
+    std::nth_element(strain.begin(), strain.begin() + static_cast<std::ptrdiff_t>(k), strain.end());
+    p95 = strain[k];
+  }
+  quality = {{"vertices", g.size()},      {"inside_nodes", inside},      {"max_depth_m", depth},
+             {"min_clearance_m", min_c},  {"clearance_error_m", clear_err}, {"strain_max", strain_max},
+             {"strain_p95", p95},         {"pushed", pass->pushed}};
+  return g;
 }
 
 /// Regenerates the bodies of this rank's chunks (mpi::regen_share) that have
@@ -206,12 +462,28 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
       const std::vector<Vec3d> body = chunk.positions(b);
       nlohmann::json rec = {{"body", chunk.name(b)}, {"ok", true}};
       try {
-        auto regen = regenerate_on_body(templates, *ref, body, roi, rp, {.use_grid = false}, inner);
-        if (!regen) throw Error(regen.status());
+        std::vector<RegenResult> regen;
+        if (!templates.empty()) {
+          auto r = regenerate_on_body(templates, *ref, body, roi, rp, {.use_grid = false}, inner);
+          if (!r) throw Error(r.status());
+          regen = std::move(*r);
+        }
         nlohmann::json per = nlohmann::json::object();
+        for (const DetailJob& d : job.details) {
+          nlohmann::json q;
+          const std::vector<Vec3d> g = regen_detail(job, d, body, q, inner);
+          if (q["inside_nodes"].get<std::size_t>() > 0)
+            throw Error(Status(ErrorCode::kDegenerate, d.name + ": " + q["inside_nodes"].dump() +
+                                                           " vertices could not be pushed out of the body"));
+          per[d.name] = std::move(q);
+          if (index < opt.meshes) {
+            fs::create_directories(bodies_dir / chunk.name(b));
+            write_garment_obj(d.mesh, g, bodies_dir / chunk.name(b) / (d.name + ".obj"));
+          }
+        }
         for (std::size_t k = 0; k < templates.size(); ++k) {
           const ProfileTemplate& t = templates[k];
-          const RegenResult& r = (*regen)[k];
+          const RegenResult& r = regen[k];
           if (r.quality.inside > 0)
             throw Error(Status(ErrorCode::kDegenerate, t.name + ": " + std::to_string(r.quality.inside) +
                                                            " nodes could not be pushed out of the body"));
@@ -236,7 +508,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
         log.warn(chunk.name(b) + ": " + errors[b]);
       } else if (ms[b] > 0) {
         ++job.done;
-        job.body_ms.push_back(ms[b]);
+        job.body_ms_sum += ms[b];
       }
     }
     if (show) log.progress("bodies", share_seen, share);
@@ -251,38 +523,62 @@ struct MergeCounts {
 
 /// Merges every body's record, in body order, into report.json (the records
 /// of earlier runs and of other ranks included). Rank 0 only.
+///
+/// Streamed: each record is read, counted and written out before the next
+/// is read, so the merge holds one record and the summary's counters
+/// whatever the number of bodies. The output is what nlohmann's dump(1) of
+/// the whole report would be: the keys in its (sorted) order, "bodies" first,
+/// so the summary, known only at the end, comes after the rows.
 MergeCounts merge_report(const Common& common, const RegenOptions& opt, const RegenJob& job) {
   const std::size_t n = job.src->size();
-  nlohmann::json report;
-  report["tool"] = "atelier regen";
-  report["seed"] = common.seed;
-  report["source"] = opt.bodies.source;
-  nlohmann::json names = nlohmann::json::array();
-  for (const auto& t : job.templates) names.push_back(t.name);
-  report["templates"] = names;
-  nlohmann::json rows = nlohmann::json::array();
   MergeCounts m;
-  for (std::size_t i = 0; i < n; ++i) {
-    const fs::path rec = job.bodies_dir / (job.src->body_name(i) + ".json");
-    if (!fs::exists(rec)) continue;  // cancelled before it
-    std::ifstream in(rec);
-    nlohmann::json r = nlohmann::json::parse(in, nullptr, false);
-    if (r.is_discarded()) throw Error(Status(ErrorCode::kParse, rec.string() + ": not valid JSON"));
-    if (r.value("ok", false)) {
-      ++m.ok;
-      for (auto& [k, q] : r["templates"].items()) {
-        m.inside += q.value("inside_nodes", std::size_t{0});
-        m.crack = std::max(m.crack, q.value("crack_m", 0.0));
+  write_atomically(opt.out / "report.json", [&](AtomicFile& f) {
+    f.write("{\n \"bodies\": [");
+    bool first = true;
+    std::string text;
+    for (std::size_t i = 0; i < n; ++i) {
+      const fs::path rec = job.bodies_dir / (job.src->body_name(i) + ".json");
+      if (!fs::exists(rec)) continue;  // cancelled before it
+      std::ifstream in(rec);
+      const nlohmann::json r = nlohmann::json::parse(in, nullptr, false);
+      if (r.is_discarded()) throw Error(Status(ErrorCode::kParse, rec.string() + ": not valid JSON"));
+      if (r.value("ok", false)) {
+        ++m.ok;
+        for (const auto& [k, q] : r["templates"].items()) {
+          m.inside += q.value("inside_nodes", std::size_t{0});
+          m.crack = std::max(m.crack, q.value("crack_m", 0.0));
+        }
+      } else {
+        ++m.failed;
       }
-    } else {
-      ++m.failed;
+      // The row at depth 2 of the report: its own dump(1), indented by 2.
+      text = first ? "\n  " : ",\n  ";
+      first = false;
+      for (const char c : r.dump(1)) {
+        text += c;
+        if (c == '\n') text += "  ";
+      }
+      f.write(text);
     }
-    rows.push_back(std::move(r));
-  }
-  report["summary"] = {{"bodies", n}, {"completed", m.ok}, {"failed", m.failed}, {"inside_nodes_total", m.inside},
+    f.write(first ? "]" : "\n ]");
+    nlohmann::json rest;
+    rest["tool"] = "atelier regen";
+    rest["seed"] = common.seed;
+    rest["source"] = opt.bodies.source;
+    nlohmann::json names = nlohmann::json::array();
+    for (const auto& t : job.templates) names.push_back(t.name);
+    for (const auto& d : job.details) names.push_back(d.name);
+    rest["templates"] = names;
+    rest["summary"] = {{"bodies", n},
+                       {"completed", m.ok},
+                       {"failed", m.failed},
+                       {"inside_nodes_total", m.inside},
                        {"max_crack_m", m.crack}};
-  report["bodies"] = rows;
-  write_atomically(opt.out / "report.json", [&](AtomicFile& f) { f.write(report.dump(1)); });
+    // rest's dump(1) without its braces: the remaining members, in order.
+    const std::string tail = rest.dump(1);
+    f.write(",");
+    f.write(tail.substr(1));
+  });
   return m;
 }
 
@@ -328,10 +624,7 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
   // Per-rank work for timing.json: gathered on every rank (one collective,
   // which is also the barrier before the merge: all records are written).
   double mean_ms = 0;
-  if (job) {
-    for (double x : job->body_ms) mean_ms += x;
-    mean_ms /= std::max<double>(1, static_cast<double>(job->body_ms.size()));
-  }
+  if (job) mean_ms = job->body_ms_sum / std::max<double>(1, static_cast<double>(job->done));
   const std::array<double, 4> mine = {static_cast<double>(code), job ? static_cast<double>(job->done) : 0.0,
                                       job ? static_cast<double>(job->skipped) : 0.0, mean_ms};
   const std::vector<double> all = group.all_gather(mine);
@@ -362,7 +655,7 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
       const std::size_t n = job->src->size();
       std::printf("atelier regen: %zu bodies x %zu templates: %zu complete (%zu now, %zu from an earlier run), %zu "
                   "failed; %zu nodes inside, max crack %.1e m; %.1f s",
-                  n, job->templates.size(), m.ok, done, skipped, m.failed, m.inside, m.crack, total_s);
+                  n, job->templates.size() + job->details.size(), m.ok, done, skipped, m.failed, m.inside, m.crack, total_s);
       if (group.distributed()) std::printf(" on %d ranks", group.size());
       std::printf("\n  report: %s\n", fs::absolute(opt.out / "report.json").string().c_str());
       std::fflush(stdout);

@@ -3,11 +3,19 @@
 //   atelier encode --template all --reference mannequin --out templates/
 //       encodes the project's profile templates on a reference body and
 //       writes <name>.template.json (systems/template_json.h) and <name>.obj;
+//   atelier encode --garment shorts.obj --reference mannequin --out templates/
+//       encodes a garment mesh (OBJ, or a MakeHuman .mhclo binding with
+//       --reference makehuman) as a detail template (seed 001 section 6,
+//       systems/detail_template.h): templates/shorts.atd and, beside it,
+//       templates/shorts.obj, the garment on the reference body (its faces,
+//       and the clearance the collision pass restores, systems/collision_pass.h);
 //   atelier regen --template templates/top.template.json --source mannequin
 //       --count 1000 --out run/
 //       regenerates every template on every body of a body set, streamed in
-//       chunks. Per body, run/bodies/<body>/<template>.obj (first --meshes
-//       bodies) and run/bodies/<body>.json, the body's quality record,
+//       chunks (a .atd template is decoded, then put through the collision
+//       pass; its record has inside nodes, clearance error and strain). Per
+//       body, run/bodies/<body>/<template>.obj (first --meshes bodies) and
+//       run/bodies/<body>.json, the body's quality record,
 //       written last and atomically: it marks the body complete, so a rerun
 //       skips it (resume after a kill). A failing body is recorded with its
 //       reason and the others go on (exit code 1). run/report.json merges
@@ -32,10 +40,12 @@
 namespace atelier::cli {
 
 struct EncodeOptions {
-  std::string name = "all";                 // top | skirt | trousers | all
+  std::string name;                         // top | skirt | trousers | all ("" = all, or none with --garment)
   std::string reference = "mannequin";      // mannequin | makehuman
   std::filesystem::path data = "../shared/data";
   std::filesystem::path out = "templates";
+  std::filesystem::path garment;            // .obj or .mhclo: encode as a detail template
+  double scale = 1.0;                       // garment OBJ units to metres
 };
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt);
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log);

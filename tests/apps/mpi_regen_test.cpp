@@ -55,7 +55,7 @@ CommandResult mpirun_cli(int ranks, const std::string& args) {
 
 const fs::path& top_template() {
   static const fs::path f = [] {
-    const fs::path d = scratch_dir("mpi_regen_templates");
+    const fs::path d = atelier::testing::process_scratch_dir("mpi_regen_templates");
     const CommandResult r = run_cli("encode --template top --out " + d.string());
     EXPECT_EQ(r.code, 0) << r.out;
     return d / "top.template.json";

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -35,7 +36,7 @@ std::string slurp(const fs::path& p) {
 
 const fs::path& templates() {
   static const fs::path d = [] {
-    fs::path t = dir("regen_templates");
+    fs::path t = atelier::testing::process_scratch_dir("regen_templates");
     const CliRun r = run("encode --template all --out " + t.string());
     EXPECT_EQ(r.code, 0) << r.out;
     return t;
@@ -77,6 +78,8 @@ TEST(RegenCli, ByteIdenticalForOneAndTwoThreads) {
   }
   EXPECT_EQ(meshes, 2u * 3u);
   const auto rep = nlohmann::json::parse(slurp(a / "report.json"));
+  // The streamed merge writes what a dump of the whole report would be.
+  EXPECT_EQ(slurp(a / "report.json"), rep.dump(1));
   EXPECT_EQ(rep["summary"]["completed"], 6);
   EXPECT_EQ(rep["summary"]["inside_nodes_total"], 0);
   EXPECT_EQ(rep["summary"]["max_crack_m"], 0.0);
@@ -114,7 +117,9 @@ TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
   const CliRun again = run("--threads 2 regen" + template_args() + " --count 60 --chunk 4 --out " + out.string());
   ASSERT_EQ(again.code, 0) << again.out;
   const auto timing = nlohmann::json::parse(slurp(out / "timing.json"));
-  if (before < 60) EXPECT_GE(timing["skipped_complete"].get<std::size_t>(), before);
+  if (before < 60) {
+    EXPECT_GE(timing["skipped_complete"].get<std::size_t>(), before);
+  }
   const auto rep = nlohmann::json::parse(slurp(out / "report.json"));
   EXPECT_EQ(rep["summary"]["completed"], 60);
   EXPECT_EQ(rep["bodies"].size(), 60u);
@@ -146,4 +151,69 @@ TEST(RegenCli, BadInputIsReportedWithExitCodes) {
           (out / "objs" / "ref.obj").string() + " --out " + (out / "run").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("atelier encode"), std::string::npos) << r.out;
+}
+
+TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheBody) {
+  // Any garment mesh on the reference body (here the coarse top the profile
+  // encoder writes) becomes a detail template (seed 001 section 6) and is
+  // regenerated, then put through the collision pass, on every body.
+  const fs::path d = dir("regen_garment");
+  CliRun r = run("encode --garment " + (templates() / "top.obj").string() + " --out " + (d / "g").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(fs::exists(d / "g" / "top.atd"));
+  ASSERT_TRUE(fs::exists(d / "g" / "top.obj"));
+  const std::string args =
+      " --seed 4 regen --template " + (d / "g" / "top.atd").string() + " --count 5 --meshes 1 --chunk 2 --out ";
+  const CliRun r1 = run("--threads 1" + args + (d / "t1").string());
+  const CliRun r2 = run("--threads 2" + args + (d / "t2").string());
+  ASSERT_EQ(r1.code, 0) << r1.out;
+  ASSERT_EQ(r2.code, 0) << r2.out;
+  EXPECT_EQ(slurp(d / "t1" / "report.json"), slurp(d / "t2" / "report.json"));
+  const auto rep = nlohmann::json::parse(slurp(d / "t1" / "report.json"));
+  EXPECT_EQ(rep["summary"]["completed"], 5) << rep.dump();
+  EXPECT_EQ(rep["templates"], nlohmann::json::array({"top"}));
+  for (const auto& b : rep["bodies"]) {
+    const auto& q = b["templates"]["top"];
+    EXPECT_EQ(q["inside_nodes"], 0) << b.dump();
+    EXPECT_GE(q["min_clearance_m"].get<double>(), 0.0) << b.dump();
+    EXPECT_GT(q["vertices"].get<int>(), 10) << b.dump();
+  }
+  // The first body's garment mesh, with the encoded garment's face count.
+  std::size_t faces_in = 0, faces_out = 0;
+  {
+    std::istringstream a(slurp(d / "g" / "top.obj")), b(slurp(d / "t1" / "bodies" / "mannequin-00000" / "top.obj"));
+    for (std::string l; std::getline(a, l);) faces_in += l.rfind("f ", 0) == 0;
+    for (std::string l; std::getline(b, l);) faces_out += l.rfind("f ", 0) == 0;
+  }
+  EXPECT_GT(faces_in, 0u);
+  EXPECT_EQ(faces_in, faces_out);
+  // Bad input: the template without its garment mesh names what is missing.
+  fs::create_directories(d / "lone");
+  fs::copy_file(d / "g" / "top.atd", d / "lone" / "top.atd");
+  r = run("regen --template " + (d / "lone" / "top.atd").string() + " --count 2 --out " + (d / "bad").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("top.obj"), std::string::npos) << r.out;
+  // A garment file that does not exist.
+  r = run("encode --garment " + (d / "none.obj").string() + " --out " + (d / "g2").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("none.obj"), std::string::npos) << r.out;
+}
+
+TEST(RegenCli, ADirectoryOfMannequinBodiesKeepsTheMannequinFeatures) {
+  // OBJ files carry no features; bodies with the mannequin's topology take
+  // the mannequin's, so profile templates regenerate on them.
+  const fs::path d = dir("regen_objdir");
+  CliRun r = run("--seed 2 bodies --count 3 --meshes 3 --out " + (d / "set").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::vector<fs::path> objs;
+  for (const auto& e : fs::directory_iterator(d / "set"))
+    if (e.path().extension() == ".obj") objs.push_back(e.path());
+  ASSERT_EQ(objs.size(), 3u);
+  std::sort(objs.begin(), objs.end());
+  r = run("--threads 2 regen" + template_args() + " --source " + (d / "set").string() + " --reference " +
+          objs[0].string() + " --out " + (d / "run").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto rep = nlohmann::json::parse(slurp(d / "run" / "report.json"));
+  EXPECT_EQ(rep["summary"]["completed"], 3) << rep.dump();
+  EXPECT_EQ(rep["summary"]["inside_nodes_total"], 0) << rep.dump();
 }

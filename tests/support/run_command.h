@@ -3,6 +3,7 @@
 #pragma once
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -40,6 +41,13 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   std::filesystem::remove_all(d);
   std::filesystem::create_directories(d);
   return d;
+}
+
+/// scratch_dir(name) private to this process: for set-up shared by the
+/// tests of one binary (ctest runs each test in its own process, in
+/// parallel, so a shared name would be wiped under a running test).
+inline std::filesystem::path process_scratch_dir(const std::string& name) {
+  return scratch_dir(name + "-" + std::to_string(static_cast<long>(getpid())));
 }
 
 }  // namespace atelier::testing
