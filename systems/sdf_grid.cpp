@@ -79,6 +79,9 @@ struct SdfGrid::Impl {
     double d = 0.0;
     bool valid = false;       // p maps to representable voxel coordinates
     bool all_active = false;  // every corner is a band voxel
+    unsigned active = 0;      // bit n: corner n is a band voxel
+    float v[8] = {};          // corner values, corner n at offset ((n >> 2) & 1, (n >> 1) & 1, n & 1)
+    double tx = 0, ty = 0, tz = 0;  // p in its cell, in [0, 1)
   };
 
   /// Trilinear interpolation of the 8 voxel values around p.
@@ -90,9 +93,10 @@ struct SdfGrid::Impl {
     if (!(std::abs(x) < kLimit && std::abs(y) < kLimit && std::abs(z) < kLimit)) return r;
     const double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
     const int i = static_cast<int>(fx), j = static_cast<int>(fy), k = static_cast<int>(fz);
-    const double tx = x - fx, ty = y - fy, tz = z - fz;
-    float v[8];
-    bool all = true;
+    r.tx = x - fx;
+    r.ty = y - fy;
+    r.tz = z - fz;
+    unsigned on = 0;
     // Fast path: the 8 corners in one leaf (7/8 of the cells per axis).
     if ((i & 7) != 7 && (j & 7) != 7 && (k & 7) != 7) {
       if (const auto* leaf = acc.probeConstLeaf(vdb::Coord(i, j, k))) {
@@ -101,32 +105,49 @@ struct SdfGrid::Impl {
         const float* buf = leaf->buffer().data();
         const auto& mask = leaf->getValueMask();
         for (int n = 0; n < 8; ++n) {
-          v[n] = buf[o + kOff[n]];
-          all &= mask.isOn(o + kOff[n]);
+          r.v[n] = buf[o + kOff[n]];
+          on |= static_cast<unsigned>(mask.isOn(o + kOff[n])) << n;
         }
-        return finish(v, all, tx, ty, tz);
+        return finish(r, on);
       }
     }
-    all &= acc.probeValue(vdb::Coord(i, j, k), v[0]);
-    all &= acc.probeValue(vdb::Coord(i, j, k + 1), v[1]);
-    all &= acc.probeValue(vdb::Coord(i, j + 1, k), v[2]);
-    all &= acc.probeValue(vdb::Coord(i, j + 1, k + 1), v[3]);
-    all &= acc.probeValue(vdb::Coord(i + 1, j, k), v[4]);
-    all &= acc.probeValue(vdb::Coord(i + 1, j, k + 1), v[5]);
-    all &= acc.probeValue(vdb::Coord(i + 1, j + 1, k), v[6]);
-    all &= acc.probeValue(vdb::Coord(i + 1, j + 1, k + 1), v[7]);
-    return finish(v, all, tx, ty, tz);
+    for (int n = 0; n < 8; ++n) {
+      const vdb::Coord c(i + ((n >> 2) & 1), j + ((n >> 1) & 1), k + (n & 1));
+      on |= static_cast<unsigned>(acc.probeValue(c, r.v[n])) << n;
+    }
+    return finish(r, on);
   }
 
-  [[nodiscard]] static Probe finish(const float* v, bool all, double tx, double ty, double tz) noexcept {
-    Probe r;
+  [[nodiscard]] static Probe finish(Probe& r, unsigned on) noexcept {
+    const float* v = r.v;
+    const double tx = r.tx, ty = r.ty, tz = r.tz;
     const double a00 = v[0] + tz * (v[1] - v[0]), a01 = v[2] + tz * (v[3] - v[2]);
     const double a10 = v[4] + tz * (v[5] - v[4]), a11 = v[6] + tz * (v[7] - v[6]);
     const double b0 = a00 + ty * (a01 - a00), b1 = a10 + ty * (a11 - a10);
     r.d = b0 + tx * (b1 - b0);
     r.valid = true;
-    r.all_active = all;
+    r.active = on;
+    r.all_active = on == 0xffu;
     return r;
+  }
+
+  /// Certified sign from an exact corner (see exact_world): a band voxel
+  /// whose stored |value| is below the exact band holds the exact signed
+  /// distance D(c) (recomputed at build), and a signed distance is
+  /// 1-Lipschitz, so |D(c)| > |p - c| puts p strictly on c's side of the
+  /// surface. Returns -1 inside, +1 outside, 0 when no corner decides.
+  [[nodiscard]] int corner_sign(const Probe& r) const noexcept {
+    for (int n = 0; n < 8; ++n) {
+      if (!((r.active >> n) & 1u)) continue;
+      const double a = std::abs(double(r.v[n]));
+      if (!(a < exact_world)) continue;
+      // Float storage rounds by 2^-24 relative; keep a margin well above it.
+      const double m = a * (1.0 - 1e-6) - 1e-9 * h;
+      if (m <= 0.0) continue;
+      const double dx = r.tx - ((n >> 2) & 1), dy = r.ty - ((n >> 1) & 1), dz = r.tz - (n & 1);
+      if (m * m > (dx * dx + dy * dy + dz * dz) * h * h) return r.v[n] < 0.0f ? -1 : 1;
+    }
+    return 0;
   }
 
   template <class Accessor>
@@ -191,6 +212,12 @@ struct SdfGrid::Impl {
       if (r.valid && (!roi || r.all_active) && std::abs(r.d) >= exact_world) {
         ++st.from_grid;
         return r.d < 0.0;
+      }
+      if (r.valid) {
+        if (const int s = corner_sign(r); s != 0) {
+          ++st.from_grid;
+          return s < 0;
+        }
       }
       if (r.valid && roi && !r.all_active) {
         for (const Box3d& b : walk_boxes) {
@@ -331,6 +358,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     const float off_value = static_cast<float>(im->band_world);
     const double h = params.voxel_size;
     const double slack = 1e-6 * h;
+    const double bound_slack = 1e-3 * h;
     std::atomic<bool> stopped{false};
     ExecContext c = ctx;
     c.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / 64);
@@ -362,12 +390,49 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
           leaf.setValueOff(off, off_value);
           continue;
         }
+        if (double(v) < im->exact_world) {  // exact corner (see below)
+          leaf.setValueOnly(off, static_cast<float>(body.signed_distance(q, double(v) + bound_slack).distance));
+          continue;
+        }
         const double s = body.signed_distance_to(q, sel[static_cast<std::size_t>(sub)]).distance;
         leaf.setValueOnly(off, s < 0.0 ? -v : v);
       }
     });
     if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
     par::in_arena(ctx, [&] { vdb::tools::pruneInactive(im->grid->tree(), ctx.threads != 1); });
+  }
+
+  if (!im->roi && mesh.num_polygons > 0 && im->exact_world > 0.0) {
+    // Exact corners: every band voxel whose value is below the exact band
+    // gets the exact signed distance of the BVH (OpenVDB's value is the
+    // distance to some triangle, an upper bound: a tight first radius). Then
+    // a stored |value| below the band is exact, which inside() uses to
+    // certify signs by the 1-Lipschitz bound instead of asking the BVH.
+    using LeafT = vdb::FloatTree::LeafNodeType;
+    std::vector<LeafT*> leaves;
+    leaves.reserve(im->grid->tree().leafCount());
+    im->grid->tree().getNodes(leaves);
+    const double h = params.voxel_size;
+    const double bound_slack = 1e-3 * h;
+    std::atomic<bool> stopped{false};
+    ExecContext c = ctx;
+    c.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / 64);
+    c.grain = ctx.grain ? ctx.grain : 8;
+    par::for_each_n(c, leaves.size(), [&](std::size_t li) {
+      if (ctx.cancelled()) {
+        stopped.store(true, std::memory_order_relaxed);
+        return;
+      }
+      LeafT& leaf = *leaves[li];
+      for (auto it = leaf.beginValueOn(); it; ++it) {
+        const double v = std::abs(double(*it));
+        if (!(v < im->exact_world)) continue;
+        const vdb::Coord ijk = it.getCoord();
+        const Vec3d q(ijk.x() * h, ijk.y() * h, ijk.z() * h);
+        it.setValue(static_cast<float>(body.signed_distance(q, v + bound_slack).distance));
+      }
+    });
+    if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
   }
 
   im->stats.active_voxels = static_cast<std::size_t>(im->grid->activeVoxelCount());

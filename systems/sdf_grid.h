@@ -10,7 +10,8 @@
 // e = exact band in voxels, mesh closed and consistently oriented):
 //  * whenever the trilinear value d satisfies |d| < e h, or p is outside the
 //    grid's region of interest, or (ROI grids) a corner of p's voxel is
-//    outside the narrow band, the answer is BodyBvh::signed_distance(p) < 0:
+//    outside the narrow band, and no exact corner decides (below), the
+//    answer is BodyBvh::signed_distance(p) < 0:
 //    exact up to rounding (Baerentzen & Aanaes pseudo-normal);
 //  * otherwise the answer is the sign of d. Voxel values are distances to a
 //    triangle (OpenVDB voxelises each triangle near it and widens the band
@@ -24,6 +25,14 @@
 //    covers it (zero wrong answers over 150k test points, half within a
 //    voxel of the surface). Far from the surface (outside the band) full
 //    grids take the sign from OpenVDB's signed flood fill of the interior.
+//  * exact corners: at build every band voxel whose value is below e h is
+//    replaced by BodyBvh::signed_distance of its centre (so a stored |value|
+//    below e h is exact), and before asking the BVH, inside() looks for a
+//    band corner c of p's cell with such an exact value and
+//    |D(c)| > |p - c|: a signed distance is 1-Lipschitz, so p is strictly on
+//    c's side of the surface and the sign of D(c) is the exact answer. This
+//    leaves to the BVH only points within a fraction of a voxel of the
+//    surface (about 1/5 of the former fallbacks on the benchmark sphere).
 // sample(p) is the raw trilinear value (negative inside, +-w h outside the
 // band) and carries no such guarantee near the surface.
 //
