@@ -74,15 +74,30 @@ struct FairReport {
   std::uint64_t refused_moves = 0;     // moves cut short by the collision test
 };
 
-/// The per-mesh part of a fairing run: 1/n and 1/nu per node, the free
-/// nodes, and the nodes whose umbrella they need. Like OpenMesh's smoother
+/// The per-mesh part of a fairing run, like OpenMesh's smoother
 /// initialize(): make it once per mesh and fixed set, fair many times.
+/// The nodes a run touches are renumbered into a compact local range so the
+/// iterations stream through contiguous arrays with no indirection:
+/// local [0, active) are the nodes whose umbrella U is needed (the free
+/// nodes and their neighbours), in the order of smaller bandwidth among slot
+/// order and a Cuthill-McKee order; [active, local.size()) the remaining
+/// neighbours of those (positions only). The local CSR keeps ring order, so
+/// the sums are those over `adj`. With the bandwidth b (largest |i - j| over
+/// the rings of free nodes), U of a node's neighbours is computed at most b
+/// places ahead of it, so one pass fuses U and U2 with a small rolling
+/// window of U values that stays in cache (see fairing.cpp).
 struct FairPlan {
-  std::size_t nodes = 0;
-  std::uint64_t adjacency_version = 0;
+  std::size_t nodes = 0;                // node slots of the adjacency
+  std::uint64_t adjacency_version = 0;  // of the adjacency it was made from
   double relaxation = 0.5;
-  std::vector<double> inv_deg, inv_nu;
-  std::vector<std::uint32_t> free_nodes, u_nodes;
+  std::uint32_t active = 0;             // see above
+  std::uint32_t free = 0;               // free nodes (among the active ones)
+  std::uint32_t bandwidth = 0;          // b above
+  std::vector<std::uint32_t> local;     // local index -> node slot
+  std::vector<std::uint32_t> offset;    // local CSR over [0, active), size active + 1
+  std::vector<std::uint32_t> neighbor;  // local indices
+  std::vector<double> inv_degree;       // 1/n by valence n (a table: the same bits as 1.0 / n)
+  std::vector<double> inv_nu;           // relaxation / nu (Kobbelt's diagonal) of free nodes, 0 for the others
 };
 [[nodiscard]] Expected<FairPlan> make_fair_plan(const NodeAdjacency& adj, std::span<const std::uint8_t> fixed,
                                                 const FairParams& params, const ExecContext& ctx = {});
