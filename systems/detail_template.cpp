@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <immintrin.h>
 #include <limits>
 #include <sstream>
 
@@ -57,59 +58,105 @@ struct FrameD {
 // average otherwise). Y is p_1 - p_c with its normal component removed, so
 // the frame is orthonormal even for non-planar quads and encoding then
 // decoding on the same body returns q exactly.
-FrameD polygon_frame(const BodyPolygons& b, std::span<const Vec3d> p, std::size_t f) {
+//
+// With `ref` (fitted frames), Y is then turned by the best-fit rotation of
+// the polygon's corners onto their reference shape (2D Procrustes: the angle
+// maximising sum r_k . R d_k, whose cosine and sine are (sdot, scross)
+// normalised). Scalar code over a local copy of the corners: this runs for
+// every polygon of every decoded body.
+//
+// `p.get(node, xyz)` gives a node's position (from a span of doubles, or a
+// body set's float columns read in place).
+template <class Pos>
+FrameD polygon_frame(const BodyPolygons& b, const Pos& p, std::size_t f, std::span<const Eigen::Vector2f> ref = {}) {
   const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
-  FrameD fr{};
-  Vec3d c = Vec3d::Zero(), n = Vec3d::Zero();
-  double scale = 0;
-  for (std::uint32_t k = s; k < e; ++k) {
-    const Vec3d& a = p[b.face_nodes[k]];
-    const Vec3d& q = p[b.face_nodes[k + 1 < e ? k + 1 : s]];
-    c += a;
-    n += a.cross(q);
-    scale = std::max(scale, (q - a).squaredNorm());
+  const std::size_t n = e - s;
+  constexpr std::size_t kLocal = 16;
+  double local[3 * kLocal];
+  std::vector<double> big;
+  double* P = local;
+  if (n > kLocal) {
+    big.resize(3 * n);
+    P = big.data();
   }
-  c /= static_cast<double>(e - s);
-  fr.c = c;
-  const double nn = n.norm();
-  Vec3d y = p[b.face_nodes[s]] - c;
+  for (std::size_t k = 0; k < n; ++k) p.get(b.face_nodes[s + k], P + 3 * k);
+  double c[3] = {0, 0, 0}, nr[3] = {0, 0, 0}, scale = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double* A = P + 3 * k;
+    const double* Q = P + 3 * (k + 1 < n ? k + 1 : 0);
+    c[0] += A[0];
+    c[1] += A[1];
+    c[2] += A[2];
+    nr[0] += A[1] * Q[2] - A[2] * Q[1];
+    nr[1] += A[2] * Q[0] - A[0] * Q[2];
+    nr[2] += A[0] * Q[1] - A[1] * Q[0];
+    const double d0 = Q[0] - A[0], d1 = Q[1] - A[1], d2 = Q[2] - A[2];
+    scale = std::max(scale, d0 * d0 + d1 * d1 + d2 * d2);
+  }
+  const double inv_n = 1.0 / static_cast<double>(n);
+  c[0] *= inv_n;
+  c[1] *= inv_n;
+  c[2] *= inv_n;
+  FrameD fr;  // every field is set below (a zeroing constructor costs more than the arithmetic)
+  fr.c = Vec3d(c[0], c[1], c[2]);
+  fr.x = fr.y = fr.z = Vec3d::Zero();
+  const double nn = std::sqrt(nr[0] * nr[0] + nr[1] * nr[1] + nr[2] * nr[2]);
   if (!(nn > 1e-12 * scale) || !(scale > 0)) {
     fr.degenerate = true;
     return fr;
   }
-  fr.x = n / nn;
-  y -= y.dot(fr.x) * fr.x;
-  const double yn = y.norm();
+  const double inv_nn = 1.0 / nn;
+  const double x[3] = {nr[0] * inv_nn, nr[1] * inv_nn, nr[2] * inv_nn};
+  double y[3] = {P[0] - c[0], P[1] - c[1], P[2] - c[2]};
+  const double yx = y[0] * x[0] + y[1] * x[1] + y[2] * x[2];
+  y[0] -= yx * x[0];
+  y[1] -= yx * x[1];
+  y[2] -= yx * x[2];
+  const double yn = std::sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+  fr.x = Vec3d(x[0], x[1], x[2]);
   if (!(yn > 1e-9 * std::sqrt(scale))) {
     fr.degenerate = true;
     return fr;
   }
-  fr.y = y / yn;
-  fr.z = fr.x.cross(fr.y);
+  const double inv_yn = 1.0 / yn;
+  y[0] *= inv_yn;
+  y[1] *= inv_yn;
+  y[2] *= inv_yn;
+  double z[3] = {x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+  if (!ref.empty()) {
+    double sdot = 0, scross = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double q[3] = {P[3 * k] - c[0], P[3 * k + 1] - c[1], P[3 * k + 2] - c[2]};
+      const double d1 = q[0] * y[0] + q[1] * y[1] + q[2] * y[2];
+      const double d2 = q[0] * z[0] + q[1] * z[1] + q[2] * z[2];
+      const double r1 = ref[s + k].x(), r2 = ref[s + k].y();
+      sdot += r1 * d1 + r2 * d2;
+      scross += r1 * d2 - r2 * d1;
+    }
+    const double r = std::sqrt(sdot * sdot + scross * scross);  // sums of squared lengths: no overflow to fear
+    if (r > 0) {  // else no preferred angle (atan2(0, 0) = 0)
+      const double inv_r = 1.0 / r, cs = sdot * inv_r, sn = scross * inv_r;
+      for (int i = 0; i < 3; ++i) y[i] = cs * y[i] + sn * z[i];
+      z[0] = x[1] * y[2] - x[2] * y[1];
+      z[1] = x[2] * y[0] - x[0] * y[2];
+      z[2] = x[0] * y[1] - x[1] * y[0];
+    }
+  }
+  fr.y = Vec3d(y[0], y[1], y[2]);
+  fr.z = Vec3d(z[0], z[1], z[2]);
   fr.degenerate = false;
   return fr;
 }
 
-}  // namespace
-
-namespace {
-// Y turned by the best-fit rotation of the polygon's corners onto their
-// reference shape (2D Procrustes: the angle maximising sum r_k . R d_k).
-void fit_rotation(const BodyPolygons& b, std::span<const Vec3d> p, std::size_t f,
-                  std::span<const Eigen::Vector2f> ref, FrameD& fr) {
-  double sdot = 0, scross = 0;
-  for (std::uint32_t k = b.face_offsets[f]; k < b.face_offsets[f + 1]; ++k) {
-    const Vec3d q = p[b.face_nodes[k]] - fr.c;
-    const double d1 = q.dot(fr.y), d2 = q.dot(fr.z);
-    const double r1 = ref[k].x(), r2 = ref[k].y();
-    sdot += r1 * d1 + r2 * d2;
-    scross += r1 * d2 - r2 * d1;
+struct SpanPos {
+  std::span<const Vec3d> p;
+  void get(std::uint32_t n, double* out) const noexcept {
+    out[0] = p[n].x();
+    out[1] = p[n].y();
+    out[2] = p[n].z();
   }
-  const double phi = std::atan2(scross, sdot);
-  const Vec3d y = std::cos(phi) * fr.y + std::sin(phi) * fr.z;
-  fr.y = y;
-  fr.z = fr.x.cross(y);
-}
+};
+
 }  // namespace
 
 void compute_frames(const BodyPolygons& b, std::span<const Vec3d> p, PolygonFrames& out, const ExecContext& ctx,
@@ -120,10 +167,9 @@ void compute_frames(const BodyPolygons& b, std::span<const Vec3d> p, PolygonFram
   out.y.resize(n);
   out.z.resize(n);
   out.degenerate.resize(n);
-  const bool fitted = !ref.empty();
+  const SpanPos pos{p};
   par::for_each_n(ctx, n, [&](std::size_t f) {
-    FrameD fr = polygon_frame(b, p, f);
-    if (fitted && !fr.degenerate) fit_rotation(b, p, f, ref, fr);
+    const FrameD fr = polygon_frame(b, pos, f, ref);
     out.centroid[f] = fr.c.cast<float>();
     out.x[f] = fr.x.cast<float>();
     out.y[f] = fr.y.cast<float>();
@@ -163,9 +209,11 @@ void CentroidGrid::build(std::span<const Vec3d> c, std::span<const std::uint8_t>
     start_.assign(2, 0);
     ids_.clear();
     exact_.clear();
+    by_id_.clear();
     nx_ = ny_ = nz_ = 1;
     return;
   }
+  k_hint_ = std::max<std::size_t>(k_hint, 8);
   if (cell <= 0) {
     // Cell = half the typical distance to the k-th nearest centroid, measured
     // on a deterministic sample, so a query touches a few rings of boxes.
@@ -182,7 +230,10 @@ void CentroidGrid::build(std::span<const Vec3d> c, std::span<const std::uint8_t>
       radii.push_back(std::sqrt(d2[k - 1]));
     }
     std::sort(radii.begin(), radii.end());
-    cell = radii[radii.size() / 2] * 0.5;
+    radius_ = radii[radii.size() / 2];
+    cell = radius_ * 0.5;
+  } else {
+    radius_ = 2 * cell;
   }
   // Never more boxes than about 4 per centroid (duplicates or a degenerate
   // sample must not blow the grid up).
@@ -215,6 +266,7 @@ void CentroidGrid::build(std::span<const Vec3d> c, std::span<const std::uint8_t>
   // Keep exact doubles for the distances (ties must match brute force).
   exact_.resize(live.size());
   for (std::size_t s = 0; s < live.size(); ++s) exact_[s] = c[ids_[s]];
+  by_id_.assign(c.begin(), c.end());
 }
 
 void CentroidGrid::nearest(const Vec3d& q, std::size_t k, std::vector<std::uint32_t>& out,
@@ -234,22 +286,43 @@ double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound
     // With a bound no heap is needed: collect every centroid inside the
     // bound from the boxes the bound's cube overlaps, then select the k
     // smallest (distance, index) pairs: the same set and order as brute force.
-    auto box = [&](double c, double l, int n) {
-      return std::pair<int, int>{std::clamp(static_cast<int>(std::floor((c - bound - l) / cell_)), 0, n - 1),
-                                 std::clamp(static_cast<int>(std::floor((c + bound - l) / cell_)), 0, n - 1)};
+    auto span_of = [&](double c, double r, double l, int n) {
+      return std::pair<int, int>{std::clamp(static_cast<int>(std::floor((c - r - l) / cell_)), 0, n - 1),
+                                 std::clamp(static_cast<int>(std::floor((c + r - l) / cell_)), 0, n - 1)};
     };
-    const auto [i_lo, i_hi] = box(q.x(), lo_.x(), nx_);
-    const auto [j_lo, j_hi] = box(q.y(), lo_.y(), ny_);
-    const auto [k_lo, k_hi] = box(q.z(), lo_.z(), nz_);
-    for (int kk = k_lo; kk <= k_hi; ++kk)
+    // Squared distance from coordinate c to box interval i along one axis.
+    auto gap2 = [&](double c, double l, int i) {
+      const double a = l + cell_ * i, b = a + cell_;
+      const double g = c < a ? a - c : (c > b ? c - b : 0.0);
+      return g * g;
+    };
+    // Boxes are pruned with a little slack: a centroid's box comes from
+    // rounded arithmetic and may sit a rounding error outside it.
+    const double reach = bound * (1 + 1e-9) + 1e-12 * cell_, reach2 = reach * reach;
+    const auto [k_lo, k_hi] = span_of(q.z(), reach, lo_.z(), nz_);
+    const auto [j_lo, j_hi] = span_of(q.y(), reach, lo_.y(), ny_);
+    for (int kk = k_lo; kk <= k_hi; ++kk) {
+      const double gz = gap2(q.z(), lo_.z(), kk);
+      if (gz > reach2) continue;
       for (int j = j_lo; j <= j_hi; ++j) {
+        // Only the boxes of this row the bound's sphere reaches (a cube
+        // scans about twice as many centroids).
+        const double gyz = gz + gap2(q.y(), lo_.y(), j);
+        if (gyz > reach2) continue;
+        const double half = std::sqrt(reach2 - gyz);
+        const auto [i_lo, i_hi] = span_of(q.x(), half, lo_.x(), nx_);
         const std::size_t row = (static_cast<std::size_t>(kk) * ny_ + j) * nx_;
         const std::uint32_t b = start_[row + i_lo], e = start_[row + i_hi + 1];  // cells i_lo..i_hi are contiguous
-        for (std::uint32_t s = b; s < e; ++s) {
+        std::size_t n = heap.size();
+        heap.resize(n + (e - b));
+        for (std::uint32_t s = b; s < e; ++s) {  // branch-free: most tests are unpredictable
           const double d2 = (exact_[s] - q).squaredNorm();
-          if (d2 <= bound2) heap.emplace_back(d2, ids_[s]);
+          heap[n] = Cand(d2, ids_[s]);
+          n += d2 <= bound2;
         }
+        heap.resize(n);
       }
+    }
     if (heap.size() < k) return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
     std::nth_element(heap.begin(), heap.begin() + static_cast<std::ptrdiff_t>(k - 1), heap.end());
     heap.resize(k);
@@ -320,6 +393,43 @@ double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound
   return kth;
 }
 
+void CentroidGrid::nearest_many(std::span<const Vec3d> queries, std::size_t k, std::span<std::uint32_t> out,
+                                const ExecContext& ctx) const {
+  k = std::min(k, ids_.size());
+  if (k == 0) return;
+  ExecContext c = ctx;
+  c.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
+  c.grain = ctx.grain ? ctx.grain : 256;
+  par::for_each_block(c, queries.size(), [&](std::size_t begin, std::size_t end) {
+    std::vector<std::uint32_t> near;
+    std::vector<Cand> scratch;
+    scratch.reserve(8 * k);
+    for (std::size_t v = begin; v < end; ++v) {
+      if (ctx.cancelled()) return;
+      const Vec3d& q = queries[v];
+      double bound;
+      if (v > begin) {
+        // The previous query's k centroids all lie within their farthest
+        // distance from q, so the k-th nearest of q does too (tighter than
+        // the triangle inequality's k-th distance plus the step).
+        double far2 = 0;
+        for (const std::uint32_t id : out.subspan((v - 1) * k, k)) far2 = std::max(far2, (by_id_[id] - q).squaredNorm());
+        bound = std::sqrt(far2) * (1 + 1e-12) + 1e-300;
+      } else {
+        // First query of a block: twice the typical k-th distance from the
+        // nearest point of the centroids' box; a bound that holds fewer than
+        // k centroids is detected and the search redone without it.
+        const Vec3d hi = lo_ + cell_ * Vec3d(nx_, ny_, nz_);
+        const double out_of_box = (lo_ - q).cwiseMax(q - hi).cwiseMax(0.0).norm();
+        bound = out_of_box + 2 * radius_ * std::sqrt(static_cast<double>(std::max<std::size_t>(k, 8)) /
+                                                         static_cast<double>(k_hint_));
+      }
+      (void)nearest_bounded(q, k, bound, near, scratch);
+      std::copy(near.begin(), near.end(), out.begin() + static_cast<std::ptrdiff_t>(v * k));
+    }
+  });
+}
+
 // ------------------------------------------------------------------ encode
 
 Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const Vec3d> bp,
@@ -339,7 +449,7 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
       return Status(ErrorCode::kDegenerate, s.str());
     }
   std::vector<FrameD> frames(np);
-  par::for_each_n(ctx, np, [&](std::size_t f) { frames[f] = polygon_frame(body, bp, f); });
+  par::for_each_n(ctx, np, [&](std::size_t f) { frames[f] = polygon_frame(body, SpanPos{bp}, f); });
   std::vector<Vec3d> centroids(np);
   std::vector<std::uint8_t> skip(np);
   std::size_t usable = 0;
@@ -384,24 +494,21 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
   enc.c.resize(nv * k);
   enc.d.resize(nv * k);
   const double eps = params.epsilon;
+  const bool taper = params.tapered_weights && usable > k;
+  const std::size_t kq = taper ? k + 1 : k;
+  std::vector<std::uint32_t> nearest(nv * kq);
+  grid.nearest_many(garment, kq, nearest, ctx);
+  if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "encode_detail cancelled");
   ExecContext c = ctx;
   c.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
-  c.grain = ctx.grain ? ctx.grain : 64;
+  c.grain = ctx.grain ? ctx.grain : 256;
   par::for_each_block(c, nv, [&](std::size_t begin, std::size_t end) {
     std::vector<std::uint32_t> near;
-    std::vector<std::pair<double, std::uint32_t>> heap;
     std::vector<std::array<double, 5>> coef;
-    Vec3d prev_q = Vec3d::Zero();
-    double prev_kth = std::numeric_limits<double>::infinity();
     for (std::size_t v = begin; v < end; ++v) {
-      if (ctx.cancelled()) return;
       const Vec3d& q = garment[v];
-      const bool taper = params.tapered_weights && usable > k;
-      // Consecutive vertices are usually neighbours: by the triangle
-      // inequality the previous k-th distance plus the step bounds this one.
-      const double bound = prev_kth + (q - prev_q).norm();
-      prev_kth = grid.nearest_bounded(q, taper ? k + 1 : k, bound * (1 + 1e-12) + 1e-15, near, heap);
-      prev_q = q;
+      near.assign(nearest.begin() + static_cast<std::ptrdiff_t>(v * kq),
+                  nearest.begin() + static_cast<std::ptrdiff_t>((v + 1) * kq));
       double w_cut = 0;
       if (taper) {
         w_cut = 1.0 / (eps + std::pow((q - frames[near.back()].c).norm(), 3));
@@ -456,56 +563,157 @@ Status check_topology(const DetailEncoding& enc, const BodyPolygons& body) {
 
 namespace {
 
-// Eqs. (11)-(12) with precombined coefficients. target_clones lets one binary
-// use AVX-512/AVX2 where the CPU has them.
-__attribute__((target_clones("avx512f", "avx2", "default"))) void decode_rows(
-    const DetailEncoding& enc, const PolygonFrames& fr, std::size_t begin, std::size_t end, Vec3d* out) {
+bool have_avx2_fma() noexcept {
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return yes;
+}
+
+// Frames of one body packed per polygon as 16 floats, (p_c, 0, X, 0, Y, 0,
+// Z, 0), on 64-byte lines: one entry of eq. (12) reads one cache line and
+// two 8-float halves, [p_c | X] and [Y | Z].
+struct PackedFrames {
+  std::vector<float> storage;
+  float* data = nullptr;
+  void pack(const PolygonFrames& fr, const ExecContext& ctx) {
+    const std::size_t n = fr.centroid.size();
+    storage.assign(n * 16 + 16, 0.0f);
+    const auto addr = reinterpret_cast<std::uintptr_t>(storage.data());
+    data = storage.data() + ((64 - addr % 64) % 64) / sizeof(float);
+    par::for_each_n(ctx, n, [&](std::size_t p) {
+      float* f = data + p * 16;
+      const Vec3f* v[4] = {&fr.centroid[p], &fr.x[p], &fr.y[p], &fr.z[p]};
+      for (int j = 0; j < 4; ++j)
+        for (int k = 0; k < 3; ++k) f[4 * j + k] = (*v[j])[k];
+    });
+  }
+};
+
+// Eqs. (11)-(12) with precombined coefficients, one body: per entry two
+// 8-wide FMAs ([a a a a b b b b] * [p_c | X], [c c c c d d d d] * [Y | Z]);
+// two entries in flight so the FMA latency does not serialise a row.
+__attribute__((target("avx2,fma"))) void decode_rows_avx2(const DetailEncoding& enc, const float* frames,
+                                                          std::size_t begin, std::size_t end, Vec3d* out) {
   const std::uint32_t* poly = enc.polygon.data();
   const float *A = enc.a.data(), *B = enc.b.data(), *C = enc.c.data(), *D = enc.d.data();
-  const Vec3f *pc = fr.centroid.data(), *X = fr.x.data(), *Y = fr.y.data(), *Z = fr.z.data();
   for (std::size_t v = begin; v < end; ++v) {
-    float sx = 0, sy = 0, sz = 0;
-    for (std::uint32_t e = enc.row[v]; e < enc.row[v + 1]; ++e) {
-      const std::uint32_t p = poly[e];
-      const float a = A[e], b = B[e], c = C[e], d = D[e];
-      sx += a * pc[p].x() + b * X[p].x() + c * Y[p].x() + d * Z[p].x();
-      sy += a * pc[p].y() + b * X[p].y() + c * Y[p].y() + d * Z[p].y();
-      sz += a * pc[p].z() + b * X[p].z() + c * Y[p].z() + d * Z[p].z();
+    __m256 s0 = _mm256_setzero_ps(), s1 = s0, t0 = s0, t1 = s0;
+    std::uint32_t e = enc.row[v];
+    const std::uint32_t e1 = enc.row[v + 1];
+    for (; e + 1 < e1; e += 2) {
+      const float* f = frames + static_cast<std::size_t>(poly[e]) * 16;
+      const float* g = frames + static_cast<std::size_t>(poly[e + 1]) * 16;
+      s0 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(B + e), _mm_broadcast_ss(A + e)), _mm256_load_ps(f), s0);
+      s1 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e), _mm_broadcast_ss(C + e)), _mm256_load_ps(f + 8), s1);
+      t0 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(B + e + 1), _mm_broadcast_ss(A + e + 1)),
+                           _mm256_load_ps(g), t0);
+      t1 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e + 1), _mm_broadcast_ss(C + e + 1)),
+                           _mm256_load_ps(g + 8), t1);
     }
-    out[v] = Vec3d(sx, sy, sz);
+    if (e < e1) {
+      const float* f = frames + static_cast<std::size_t>(poly[e]) * 16;
+      s0 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(B + e), _mm_broadcast_ss(A + e)), _mm256_load_ps(f), s0);
+      s1 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e), _mm_broadcast_ss(C + e)), _mm256_load_ps(f + 8), s1);
+    }
+    const __m256 s = _mm256_add_ps(_mm256_add_ps(s0, s1), _mm256_add_ps(t0, t1));
+    alignas(16) float r[4];
+    _mm_store_ps(r, _mm_add_ps(_mm256_castps256_ps128(s), _mm256_extractf128_ps(s, 1)));
+    out[v] = Vec3d(r[0], r[1], r[2]);
   }
 }
 
-// Batched kernel over W bodies: frames laid out [polygon][12][W], outputs
-// [vertex][3][W]; the inner loops over bodies vectorise.
-template <int W>
-__attribute__((target_clones("avx512f", "avx2", "default"))) void decode_rows_batch(
-    const DetailEncoding& enc, const float* frames, std::size_t begin, std::size_t end, float* out) {
-  const std::uint32_t* poly = enc.polygon.data();
-  const float *A = enc.a.data(), *B = enc.b.data(), *C = enc.c.data(), *D = enc.d.data();
+void decode_rows_scalar(const DetailEncoding& enc, const float* frames, std::size_t begin, std::size_t end,
+                        Vec3d* out) {
   for (std::size_t v = begin; v < end; ++v) {
-    float acc[3][W] = {};
+    float s[4] = {0, 0, 0, 0};
     for (std::uint32_t e = enc.row[v]; e < enc.row[v + 1]; ++e) {
-      const float* f = frames + static_cast<std::size_t>(poly[e]) * 12 * W;
-      const float a = A[e], b = B[e], c = C[e], d = D[e];
+      const float* f = frames + static_cast<std::size_t>(enc.polygon[e]) * 16;
       for (int k = 0; k < 3; ++k)
-        for (int w = 0; w < W; ++w)
-          acc[k][w] += a * f[k * W + w] + b * f[(3 + k) * W + w] + c * f[(6 + k) * W + w] + d * f[(9 + k) * W + w];
+        s[k] += enc.a[e] * f[k] + enc.b[e] * f[4 + k] + enc.c[e] * f[8 + k] + enc.d[e] * f[12 + k];
     }
-    float* o = out + v * 3 * W;
-    for (int k = 0; k < 3; ++k)
-      for (int w = 0; w < W; ++w) o[k * W + w] = acc[k][w];
+    out[v] = Vec3d(s[0], s[1], s[2]);
   }
 }
+
+// Batched frames: per polygon 12 rows (p_c, X, Y, Z; x, y, z) of kLanes
+// bodies, so one entry applies to kLanes bodies with 12 8-wide FMAs.
+constexpr std::size_t kLanes = 8;
+constexpr std::size_t kFrameFloats = 12 * kLanes;
+
+// One tile of vertices for one group of kLanes bodies: per run (a polygon
+// used by several tile vertices) its frames are loaded once and applied to
+// every entry of the run. acc: [tile vertex][x, y, z][lane].
+__attribute__((target("avx2,fma"))) void decode_tile_avx2(const std::uint32_t* run_polygon,
+                                                          const std::uint32_t* run_entry, std::size_t run_begin,
+                                                          std::size_t run_end, const std::uint8_t* vertex,
+                                                          const float* coef, const float* frames, float* acc) {
+  for (std::size_t r = run_begin; r < run_end; ++r) {
+    const float* F = frames + static_cast<std::size_t>(run_polygon[r]) * kFrameFloats;
+    __m256 f[12];
+    for (int j = 0; j < 12; ++j) f[j] = _mm256_load_ps(F + 8 * j);
+    for (std::uint32_t e = run_entry[r]; e < run_entry[r + 1]; ++e) {
+      float* o = acc + static_cast<std::size_t>(vertex[e]) * 3 * kLanes;
+      const float* c = coef + 4 * static_cast<std::size_t>(e);
+      const __m256 a = _mm256_broadcast_ss(c), b = _mm256_broadcast_ss(c + 1), cc = _mm256_broadcast_ss(c + 2),
+                   d = _mm256_broadcast_ss(c + 3);
+      for (int k = 0; k < 3; ++k) {
+        __m256 x = _mm256_load_ps(o + 8 * k);
+        x = _mm256_fmadd_ps(a, f[k], x);
+        x = _mm256_fmadd_ps(b, f[3 + k], x);
+        x = _mm256_fmadd_ps(cc, f[6 + k], x);
+        x = _mm256_fmadd_ps(d, f[9 + k], x);
+        _mm256_store_ps(o + 8 * k, x);
+      }
+    }
+  }
+}
+
+void decode_tile_scalar(const std::uint32_t* run_polygon, const std::uint32_t* run_entry, std::size_t run_begin,
+                        std::size_t run_end, const std::uint8_t* vertex, const float* coef, const float* frames,
+                        float* acc) {
+  for (std::size_t r = run_begin; r < run_end; ++r) {
+    const float* F = frames + static_cast<std::size_t>(run_polygon[r]) * kFrameFloats;
+    for (std::uint32_t e = run_entry[r]; e < run_entry[r + 1]; ++e) {
+      float* o = acc + static_cast<std::size_t>(vertex[e]) * 3 * kLanes;
+      const float* c = coef + 4 * static_cast<std::size_t>(e);
+      for (std::size_t k = 0; k < 3; ++k)
+        for (std::size_t w = 0; w < kLanes; ++w) {
+          float x = o[k * kLanes + w];
+          x += c[0] * F[k * kLanes + w];
+          x += c[1] * F[(3 + k) * kLanes + w];
+          x += c[2] * F[(6 + k) * kLanes + w];
+          x += c[3] * F[(9 + k) * kLanes + w];
+          o[k * kLanes + w] = x;
+        }
+    }
+  }
+}
+
+// A body's node positions read in place from a body set's float columns
+// (the same doubles BodySet::positions gives).
+struct SetPos {
+  const float *x, *y, *z;
+  void get(std::uint32_t n, double* out) const noexcept {
+    out[0] = x[n];
+    out[1] = y[n];
+    out[2] = z[n];
+  }
+};
 
 }  // namespace
 
 void decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::span<Vec3d> out,
                    const ExecContext& ctx) {
+  PackedFrames packed;
+  packed.pack(frames, ctx);
   ExecContext c = ctx;
   c.grain = ctx.grain ? ctx.grain : 256;
-  par::for_each_block(c, enc.vertex_count(),
-                      [&](std::size_t b, std::size_t e) { decode_rows(enc, frames, b, e, out.data()); });
+  const bool fast = have_avx2_fma();
+  par::for_each_block(c, enc.vertex_count(), [&](std::size_t b, std::size_t e) {
+    if (fast)
+      decode_rows_avx2(enc, packed.data, b, e, out.data());
+    else
+      decode_rows_scalar(enc, packed.data, b, e, out.data());
+  });
 }
 
 Status decode_detail(const DetailEncoding& enc, const BodyPolygons& body, std::span<const Vec3d> bp,
@@ -519,42 +727,147 @@ Status decode_detail(const DetailEncoding& enc, const BodyPolygons& body, std::s
   return {};
 }
 
-Status decode_detail_batch(const DetailEncoding& enc, const BodyPolygons& body, const BodySet& bodies,
+DetailDecoder::DetailDecoder(const DetailEncoding& enc, const ExecContext& ctx)
+    : polygon_count_(enc.polygon_count),
+      body_node_count_(enc.body_node_count),
+      topology_hash_(enc.topology_hash),
+      vertex_count_(static_cast<std::uint32_t>(enc.vertex_count())),
+      reference_corners_(enc.reference_corners) {
+  const std::size_t nv = enc.vertex_count(), ne = enc.entries(), np = enc.polygon_count;
+  const std::size_t tiles = (nv + kTile - 1) / kTile;
+  vertex_.resize(ne);
+  coef_.resize(4 * ne);
+  // Per tile, a counting sort of its entries by polygon; within a run the
+  // tile's vertices stay in increasing order, so every vertex still sums
+  // its entries in row order.
+  std::vector<std::vector<std::uint32_t>> polys(tiles), ends(tiles);
+  ExecContext c = ctx;
+  c.grain = 4;
+  c.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 8);
+  par::for_each_block(c, tiles, [&](std::size_t t0, std::size_t t1) {
+    std::vector<std::uint32_t> slot(np, 0);
+    std::vector<std::uint32_t> touched;
+    for (std::size_t t = t0; t < t1; ++t) {
+      const std::size_t v0 = t * kTile, v1 = std::min(nv, v0 + kTile);
+      const std::uint32_t base = enc.row[v0];
+      touched.clear();
+      for (std::uint32_t e = base; e < enc.row[v1]; ++e)
+        if (slot[enc.polygon[e]]++ == 0) touched.push_back(enc.polygon[e]);
+      std::sort(touched.begin(), touched.end());
+      std::uint32_t at = base;
+      for (const std::uint32_t p : touched) {
+        const std::uint32_t n = slot[p];
+        slot[p] = at;  // count -> next free position of the run
+        at += n;
+        ends[t].push_back(at);
+      }
+      polys[t] = touched;
+      for (std::size_t v = v0; v < v1; ++v)
+        for (std::uint32_t e = enc.row[v]; e < enc.row[v + 1]; ++e) {
+          const std::uint32_t pos = slot[enc.polygon[e]]++;
+          vertex_[pos] = static_cast<std::uint8_t>(v - v0);
+          coef_[4 * std::size_t{pos}] = enc.a[e];
+          coef_[4 * std::size_t{pos} + 1] = enc.b[e];
+          coef_[4 * std::size_t{pos} + 2] = enc.c[e];
+          coef_[4 * std::size_t{pos} + 3] = enc.d[e];
+        }
+      for (const std::uint32_t p : touched) slot[p] = 0;
+    }
+  });
+  tile_run_.assign(tiles + 1, 0);
+  for (std::size_t t = 0; t < tiles; ++t) tile_run_[t + 1] = tile_run_[t] + static_cast<std::uint32_t>(polys[t].size());
+  run_polygon_.resize(tile_run_.back());
+  run_entry_.resize(tile_run_.back() + 1);
+  run_entry_[0] = 0;
+  for (std::size_t t = 0; t < tiles; ++t) {
+    std::copy(polys[t].begin(), polys[t].end(), run_polygon_.begin() + tile_run_[t]);
+    std::copy(ends[t].begin(), ends[t].end(), run_entry_.begin() + tile_run_[t] + 1);
+  }
+}
+
+Status DetailDecoder::check_topology(const BodyPolygons& body) const {
+  if (polygon_count_ != body.size() || body_node_count_ != body.node_count || topology_hash_ != body.topology_hash) {
+    std::ostringstream s;
+    s << "the body's topology (" << body.node_count << " nodes, " << body.size()
+      << " polygons) differs from the one the detail template was encoded on (" << body_node_count_ << " nodes, "
+      << polygon_count_ << " polygons)";
+    return {ErrorCode::kMismatch, s.str()};
+  }
+  return {};
+}
+
+Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
                            std::size_t first, std::size_t count, std::span<Vec3f> out, const ExecContext& ctx) {
-  if (Status s = check_topology(enc, body); !s) return s;
+  if (Status s = dec.check_topology(body); !s) return s;
   if (bodies.node_count() != body.node_count)
     return {ErrorCode::kMismatch, "decode_detail_batch: the body set has another node count than the template's body"};
   if (first + count > bodies.size()) return {ErrorCode::kInvalidArgument, "decode_detail_batch: body range out of bounds"};
-  const std::size_t nv = enc.vertex_count();
+  const std::size_t nv = dec.vertex_count();
   if (out.size() != count * nv) return {ErrorCode::kMismatch, "decode_detail_batch: output has the wrong size"};
-  constexpr int W = 16;
+  if (count == 0 || nv == 0) return {};
   const std::size_t np = body.size();
-  std::vector<float> frames(np * 12 * W);
-  std::vector<float> res(nv * 3 * W);
-  PolygonFrames fr;
-  std::vector<Vec3d> pos(bodies.node_count());
-  for (std::size_t g = 0; g < count; g += W) {
-    const std::size_t n = std::min<std::size_t>(W, count - g);
-    std::fill(frames.begin(), frames.end(), 0.0f);
-    for (std::size_t w = 0; w < n; ++w) {
-      bodies.positions(first + g + w, pos);
-      compute_frames(body, pos, fr, ctx, enc.reference_corners);
-      par::for_each_n(ctx, np, [&](std::size_t p) {
-        float* f = frames.data() + p * 12 * W;
-        const Vec3f* v[4] = {&fr.centroid[p], &fr.x[p], &fr.y[p], &fr.z[p]};
-        for (int j = 0; j < 4; ++j)
-          for (int k = 0; k < 3; ++k) f[(3 * j + k) * W + w] = (*v[j])[k];
-      });
-    }
-    ExecContext c = ctx;
-    c.grain = ctx.grain ? ctx.grain : 128;
-    par::for_each_block(c, nv, [&](std::size_t b, std::size_t e) { decode_rows_batch<W>(enc, frames.data(), b, e, res.data()); });
-    par::for_each_n(ctx, nv, [&](std::size_t v) {
-      const float* r = res.data() + v * 3 * W;
-      for (std::size_t w = 0; w < n; ++w) out[(g + w) * nv + v] = Vec3f(r[w], r[W + w], r[2 * W + w]);
+  // Groups of kLanes bodies; kGroups groups share one pass over the matrix
+  // (a tile's entries stay in L2 while each group's frames stream through).
+  constexpr std::size_t kGroups = 2;
+  const std::size_t pass_groups = std::min(kGroups, (count + kLanes - 1) / kLanes);
+  std::vector<float> storage(pass_groups * np * kFrameFloats + 16, 0.0f);
+  const auto addr = reinterpret_cast<std::uintptr_t>(storage.data());
+  float* frames = storage.data() + ((64 - addr % 64) % 64) / sizeof(float);
+  const bool fast = have_avx2_fma();
+  const std::size_t tiles = (nv + DetailDecoder::kTile - 1) / DetailDecoder::kTile;
+  for (std::size_t g0 = 0; g0 < count; g0 += pass_groups * kLanes) {
+    const std::size_t nb = std::min(pass_groups * kLanes, count - g0);
+    const std::size_t groups = (nb + kLanes - 1) / kLanes;
+    // Frames of every body of the pass, written straight into the lanes.
+    par::for_each_n(ctx, np, [&](std::size_t p) {
+      for (std::size_t i = 0; i < groups * kLanes; ++i) {
+        float* f = frames + ((i / kLanes) * np + p) * kFrameFloats + i % kLanes;
+        if (i >= nb) {
+          for (std::size_t j = 0; j < 12; ++j) f[j * kLanes] = 0.0f;
+          continue;
+        }
+        const std::size_t b = first + g0 + i;
+        const SetPos pos{bodies.x(b).data(), bodies.y(b).data(), bodies.z(b).data()};
+        const FrameD fr = polygon_frame(body, pos, p, dec.reference_corners_);
+        const Vec3d* v[4] = {&fr.c, &fr.x, &fr.y, &fr.z};
+        for (std::size_t j = 0; j < 4; ++j)
+          for (std::size_t k = 0; k < 3; ++k) f[(3 * j + k) * kLanes] = static_cast<float>((*v[j])[static_cast<int>(k)]);
+      }
     });
+    ExecContext c = ctx;
+    c.grain = 2;
+    c.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 4);
+    par::for_each_block(c, tiles, [&](std::size_t t0, std::size_t t1) {
+      alignas(64) float acc[DetailDecoder::kTile * 3 * kLanes];
+      for (std::size_t t = t0; t < t1; ++t) {
+        const std::size_t v0 = t * DetailDecoder::kTile, v1 = std::min(nv, v0 + DetailDecoder::kTile);
+        for (std::size_t g = 0; g < groups; ++g) {
+          std::fill(acc, acc + (v1 - v0) * 3 * kLanes, 0.0f);
+          const float* fg = frames + g * np * kFrameFloats;
+          if (fast)
+            decode_tile_avx2(dec.run_polygon_.data(), dec.run_entry_.data(), dec.tile_run_[t], dec.tile_run_[t + 1],
+                             dec.vertex_.data(), dec.coef_.data(), fg, acc);
+          else
+            decode_tile_scalar(dec.run_polygon_.data(), dec.run_entry_.data(), dec.tile_run_[t], dec.tile_run_[t + 1],
+                               dec.vertex_.data(), dec.coef_.data(), fg, acc);
+          const std::size_t lanes = std::min(kLanes, nb - g * kLanes);
+          for (std::size_t v = v0; v < v1; ++v) {
+            const float* r = acc + (v - v0) * 3 * kLanes;
+            for (std::size_t w = 0; w < lanes; ++w)
+              out[(g0 + g * kLanes + w) * nv + v] = Vec3f(r[w], r[kLanes + w], r[2 * kLanes + w]);
+          }
+        }
+      }
+    });
+    if (ctx.cancelled()) return {ErrorCode::kCancelled, "decode_detail_batch cancelled"};
   }
   return {};
+}
+
+Status decode_detail_batch(const DetailEncoding& enc, const BodyPolygons& body, const BodySet& bodies,
+                           std::size_t first, std::size_t count, std::span<Vec3f> out, const ExecContext& ctx) {
+  if (Status s = check_topology(enc, body); !s) return s;
+  return decode_detail_batch(DetailDecoder(enc, ctx), body, bodies, first, count, out, ctx);
 }
 
 // -------------------------------------------------------------------- files

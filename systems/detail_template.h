@@ -85,6 +85,14 @@ class CentroidGrid {
   /// Returns the k-th distance found.
   double nearest_bounded(const Vec3d& q, std::size_t k, double bound, std::vector<std::uint32_t>& out,
                          std::vector<std::pair<double, std::uint32_t>>& scratch) const;
+  /// The k nearest centroids of every query (nearest first, as nearest()),
+  /// k per query in `out` (size queries.size() * k), in parallel over blocks
+  /// of consecutive queries. Each query is bounded by the previous query's
+  /// result (the farthest of its k centroids from the new query bounds the
+  /// new k-th distance), so garment vertices in mesh order cost little more
+  /// than k distance evaluations each. Exact and independent of thread count.
+  void nearest_many(std::span<const Vec3d> queries, std::size_t k, std::span<std::uint32_t> out,
+                    const ExecContext& ctx = {}) const;
   [[nodiscard]] double cell() const noexcept { return cell_; }
   [[nodiscard]] std::array<int, 3> dims() const noexcept { return {nx_, ny_, nz_}; }
   [[nodiscard]] std::size_t size() const noexcept { return ids_.size(); }
@@ -96,6 +104,9 @@ class CentroidGrid {
   std::vector<std::uint32_t> start_;  // cell -> first entry (CSR)
   std::vector<std::uint32_t> ids_;    // polygon index per entry, in cell order
   std::vector<Vec3d> exact_;          // centroid per entry in double (exact distances)
+  std::vector<Vec3d> by_id_;          // centroid per polygon index (bounds from a previous result)
+  double radius_ = 0;                 // typical k_hint-th distance (first bound of a block of queries)
+  std::size_t k_hint_ = 8;
 };
 
 /// Brute-force k nearest centroids (reference for tests and benchmarks).
@@ -156,9 +167,54 @@ struct DetailEncoding {
 void decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::span<Vec3d> out,
                    const ExecContext& ctx = {});
 
-/// Decodes bodies [first, first+count) of a body set in one pass over the
-/// matrix. out is body-major: out[(b - first) * V + v]. Deterministic: every
-/// output is summed in entry order, whatever the thread count.
+/// An encoding rearranged for batched decoding, built once per encoding (as
+/// FairPlan is per mesh). Garment vertices are cut into tiles of kTile; in
+/// a tile, entries are grouped by polygon ("runs", polygons increasing, the
+/// tile's vertices increasing within a run), so a polygon's frames for 8
+/// bodies are loaded once per tile and applied to every tile vertex that uses
+/// it, and each vertex still sums its entries in row order. Same entries and
+/// coefficients as the encoding (float, no loss); 17 bytes per entry.
+class DetailDecoder {
+ public:
+  static constexpr std::size_t kTile = 64;  // vertices per tile (a tile's entries stay in L2)
+  DetailDecoder() = default;
+  /// Reads the encoding's matrix; O(entries), parallel over tiles.
+  explicit DetailDecoder(const DetailEncoding& enc, const ExecContext& ctx = {});
+  [[nodiscard]] std::size_t vertex_count() const noexcept { return vertex_count_; }
+  [[nodiscard]] std::size_t entries() const noexcept { return vertex_.size(); }
+  [[nodiscard]] std::size_t runs() const noexcept { return run_polygon_.size(); }
+  /// Bytes one pass over the matrix streams.
+  [[nodiscard]] std::size_t bytes() const noexcept {
+    return entries() * 17 + runs() * 8 + tile_run_.size() * 4 + reference_corners_.size() * 8;
+  }
+  /// Checks that `body` has the topology the encoding was made on.
+  [[nodiscard]] Status check_topology(const BodyPolygons& body) const;
+
+ private:
+  friend Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
+                                    std::size_t first, std::size_t count, std::span<Vec3f> out,
+                                    const ExecContext& ctx);
+  std::uint32_t polygon_count_ = 0;
+  std::uint32_t body_node_count_ = 0;
+  std::uint64_t topology_hash_ = 0;
+  std::uint32_t vertex_count_ = 0;
+  std::vector<Eigen::Vector2f> reference_corners_;
+  std::vector<std::uint32_t> tile_run_{0};  // tile -> first run (size tiles + 1)
+  std::vector<std::uint32_t> run_polygon_;  // per run
+  std::vector<std::uint32_t> run_entry_{0};  // run -> first entry (size runs + 1)
+  std::vector<std::uint8_t> vertex_;        // per entry: its vertex within the tile
+  std::vector<float> coef_;                 // per entry: a, b, c, d (see top)
+};
+
+/// Decodes bodies [first, first+count) of a body set, 16 bodies per pass
+/// over the matrix. out is body-major: out[(b - first) * V + v].
+/// Deterministic: every output is summed in entry order, whatever the thread
+/// count; equal to decode_detail on each body to float rounding.
+[[nodiscard]] Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
+                                         std::size_t first, std::size_t count, std::span<Vec3f> out,
+                                         const ExecContext& ctx = {});
+/// The same, building the DetailDecoder on each call (O(entries)): callers
+/// decoding several batches with one encoding should build it once.
 [[nodiscard]] Status decode_detail_batch(const DetailEncoding& enc, const BodyPolygons& body, const BodySet& bodies,
                                          std::size_t first, std::size_t count, std::span<Vec3f> out,
                                          const ExecContext& ctx = {});

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -86,6 +87,46 @@ TEST(PPolygonSearch, EqualsBruteForceOnRandomPoints) {
         ASSERT_EQ(got, want) << "bounded, k=" << k << " query " << q;
         ASSERT_DOUBLE_EQ(got_kth, kth);
       }
+    }
+  }
+}
+
+TEST(PPolygonSearch, NearestManyEqualsBruteForceWhateverTheThreads) {
+  // Centroids on a bumpy closed surface (as a body's), queries as a garment:
+  // a coherent walk near the surface, with jumps and far points, so blocks
+  // start anywhere and bounds from the previous query are tight or loose.
+  SplitMix64 r(11);
+  std::vector<Vec3d> c(4000);
+  for (auto& p : c) {
+    Vec3d d(r.normal(), r.normal(), r.normal());
+    d.normalize();
+    p = d.cwiseProduct(Vec3d(0.3, 0.2, 0.9)) * (1 + 0.05 * std::sin(9 * d.x()));
+  }
+  for (int i = 0; i < 100; ++i) c[3000 + i] = c[i];  // exact ties break by index
+  std::vector<std::uint8_t> skip(c.size(), 0);
+  for (std::size_t i = 0; i < c.size(); i += 13) skip[i] = 1;
+  std::vector<Vec3d> q;
+  Vec3d walk = c[1] * 1.05;
+  for (int i = 0; i < 1500; ++i) {
+    if (i % 400 == 399) walk = Vec3d(r.uniform(-2, 2), r.uniform(-2, 2), r.uniform(-2, 2));  // a jump
+    walk += 0.01 * Vec3d(r.normal(), r.normal(), r.normal());
+    q.push_back(i % 97 == 0 ? c[static_cast<std::size_t>(i) % c.size()] : walk);
+  }
+  for (std::size_t k : {1u, 9u, 40u, 134u}) {
+    CentroidGrid g;
+    g.build(c, skip, k);
+    std::vector<std::uint32_t> one(q.size() * k), two(q.size() * k, 7), want;
+    ExecContext seq = ExecContext::sequential(), par2;
+    par2.threads = 2;
+    par2.grain = 37;  // many blocks, each starting without a previous query
+    par2.sequential_threshold = 1;
+    g.nearest_many(q, k, one, seq);
+    g.nearest_many(q, k, two, par2);
+    ASSERT_EQ(one, two) << "k=" << k;
+    for (std::size_t v = 0; v < q.size(); ++v) {
+      nearest_brute_force(c, skip, q[v], k, want);
+      ASSERT_TRUE(std::equal(want.begin(), want.end(), one.begin() + static_cast<std::ptrdiff_t>(v * k)))
+          << "k=" << k << " query " << v;
     }
   }
 }
@@ -235,6 +276,81 @@ TEST(DetailTemplate, BatchedDecodingMatchesSingleAndIsDeterministic) {
     for (std::size_t v = 0; v < g.size(); ++v)
       ASSERT_LT((batch1[k * g.size() + v].cast<double>() - single[v]).norm(), 1e-5) << k << " " << v;
   }
+}
+
+TEST(DetailTemplate, DecodingEqualsEquations11And12InDouble) {
+  // The vectorised decoder against eqs. (11)-(12) summed in double from the
+  // same float coefficients and frames, on a deformed body.
+  const Body b = sphere_body();
+  const auto g = shell_points(700, 9);
+  DetailParams prm;
+  prm.polygons_per_vertex = 23;  // odd: rows end on an unpaired entry
+  auto enc = encode_detail(b.poly, b.pos, g, prm);
+  ASSERT_TRUE(enc);
+  std::vector<Vec3d> bent(b.pos.size());
+  for (std::size_t v = 0; v < bent.size(); ++v)
+    bent[v] = Vec3d(b.pos[v].x() * 1.3, b.pos[v].y() + 0.2 * b.pos[v].z() * b.pos[v].z(), b.pos[v].z());
+  PolygonFrames fr;
+  compute_frames(b.poly, bent, fr, {}, enc->reference_corners);
+  std::vector<Vec3d> got(g.size());
+  decode_detail(*enc, fr, got);
+  double worst = 0;
+  for (std::size_t v = 0; v < g.size(); ++v) {
+    Vec3d want = Vec3d::Zero();
+    for (std::uint32_t e = enc->row[v]; e < enc->row[v + 1]; ++e) {
+      const std::uint32_t p = enc->polygon[e];
+      want += double{enc->a[e]} * fr.centroid[p].cast<double>() + double{enc->b[e]} * fr.x[p].cast<double>() +
+              double{enc->c[e]} * fr.y[p].cast<double>() + double{enc->d[e]} * fr.z[p].cast<double>();
+    }
+    worst = std::max(worst, (got[v] - want).norm());
+  }
+  EXPECT_LT(worst, 2e-6);  // float sums of 23 terms at unit scale
+}
+
+TEST(DetailTemplate, DecoderForBatchesIsThreadIndependentAndMatchesSingleBodies) {
+  // A garment whose size is not a multiple of the tile, 19 bodies (two
+  // passes of 16, the last group partly filled), decoders built and run
+  // with 1 and 2 threads.
+  const Body b = sphere_body(30, 20);
+  const auto g = shell_points(DetailDecoder::kTile * 5 + 17, 12);
+  DetailParams prm;
+  prm.polygons_per_vertex = 17;
+  auto enc = encode_detail(b.poly, b.pos, g, prm);
+  ASSERT_TRUE(enc);
+  ExecContext one = ExecContext::sequential(), two;
+  two.threads = 2;
+  two.sequential_threshold = 1;
+  const DetailDecoder d1(*enc, one), d2(*enc, two);
+  EXPECT_EQ(d1.entries(), enc->entries());
+  EXPECT_EQ(d1.runs(), d2.runs());
+  BodySet set(b.ref);
+  SplitMix64 r(21);
+  for (int k = 0; k < 19; ++k) {
+    std::vector<Vec3d> p(b.pos.size());
+    const double t = r.uniform(-0.3, 0.3);
+    const Mat3d R = Eigen::AngleAxisd(r.uniform(0, 3), Vec3d(1, 1, 0).normalized()).toRotationMatrix();
+    for (std::size_t v = 0; v < p.size(); ++v)
+      p[v] = R * Vec3d(b.pos[v].x() * (1 + t * b.pos[v].z()), b.pos[v].y(), b.pos[v].z() * (1 - t)) + Vec3d(k, 0, 1);
+    ASSERT_TRUE(set.add("b" + std::to_string(k), std::span<const Vec3d>(p)));
+  }
+  const std::size_t nv = g.size();
+  std::vector<Vec3f> a(18 * nv), c(18 * nv);
+  ASSERT_TRUE(decode_detail_batch(d1, b.poly, set, 1, 18, a, one));
+  ASSERT_TRUE(decode_detail_batch(d2, b.poly, set, 1, 18, c, two));
+  EXPECT_EQ(std::memcmp(a.data(), c.data(), a.size() * sizeof(Vec3f)), 0);
+  std::vector<Vec3d> single(nv);
+  double worst = 0;
+  for (std::size_t k = 0; k < 18; ++k) {
+    ASSERT_TRUE(decode_detail(*enc, b.poly, set.positions(1 + k), single));
+    for (std::size_t v = 0; v < nv; ++v) worst = std::max(worst, (a[k * nv + v].cast<double>() - single[v]).norm());
+  }
+  EXPECT_LT(worst, 2e-5);  // float sums at a scale of up to 19 (translated bodies)
+  // Errors: another topology, wrong output size, range out of bounds.
+  const Body other = sphere_body(31, 20);
+  EXPECT_EQ(decode_detail_batch(d1, other.poly, set, 0, 1, std::span<Vec3f>(a.data(), nv)).code(), ErrorCode::kMismatch);
+  EXPECT_EQ(decode_detail_batch(d1, b.poly, set, 0, 2, std::span<Vec3f>(a.data(), nv)).code(), ErrorCode::kMismatch);
+  EXPECT_EQ(decode_detail_batch(d1, b.poly, set, 18, 2, std::span<Vec3f>(a.data(), 2 * nv)).code(),
+            ErrorCode::kInvalidArgument);
 }
 
 TEST(DetailTemplate, FileRoundTripAndCorruption) {
