@@ -414,6 +414,9 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
   // collider and one regenerated template at a time.
   BodySet chunk(ref);
   std::vector<BodyFailure> failures;
+  // One collider per worker, refit per body instead of rebuilt (results are
+  // identical to fresh builds: Regenerate.PooledCollidersGiveTheSameResults...).
+  ColliderPool colliders;
   const std::size_t n = src.size();
   // Progress counts this rank's share; only rank 0 draws it (one bar).
   const bool show = group.rank() == 0;
@@ -464,7 +467,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
       try {
         std::vector<RegenResult> regen;
         if (!templates.empty()) {
-          auto r = regenerate_on_body(templates, *ref, body, roi, rp, {.use_grid = false}, inner);
+          auto r = regenerate_on_body(templates, *ref, body, roi, rp, {.use_grid = false}, inner, colliders);
           if (!r) throw Error(r.status());
           regen = std::move(*r);
         }
