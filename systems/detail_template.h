@@ -98,6 +98,14 @@ class CentroidGrid {
   [[nodiscard]] std::size_t size() const noexcept { return ids_.size(); }
 
  private:
+  // Calls f(begin, end) for the ranges of entries in the boxes the ball of
+  // squared radius r2 around q reaches (with a rounding slack).
+  template <class F>
+  void scan_ball(const Vec3d& q, double r2, F&& f) const;
+  // nearest_bounded with the selection's bucket counts as scratch.
+  double nearest_bounded(const Vec3d& q, std::size_t k, double bound, std::vector<std::uint32_t>& out,
+                         std::vector<std::pair<double, std::uint32_t>>& scratch,
+                         std::vector<std::uint32_t>& count) const;
   double cell_ = 1;
   Vec3d lo_ = Vec3d::Zero();
   int nx_ = 1, ny_ = 1, nz_ = 1;
