@@ -310,9 +310,9 @@ double select_sorted(std::vector<Cand>& cand, std::size_t k, double max2, std::v
   // The k smallest (distance, index) pairs in order, all distances at most
   // max2. A counting sort into buckets of equal width in d2 (centroids on a
   // surface are about uniform in d2 around a query) keeps only the buckets
-  // up to the one holding the k-th pair; each bucket, a few pairs, is then
-  // sorted exactly. Unlike nth_element and sort, this has few unpredictable
-  // branches. Buckets are monotone in d2, so the cut drops none of the k.
+  // up to the one holding the k-th pair, which are then put in exact order.
+  // Unlike nth_element and sort, this has few unpredictable branches.
+  // Buckets are monotone in d2, so the cut drops none of the k.
   const std::size_t n = cand.size();
   double lo = max2;
   for (const Cand& c : cand) lo = std::min(lo, c.first);
@@ -329,25 +329,31 @@ double select_sorted(std::vector<Cand>& cand, std::size_t k, double max2, std::v
       count[b + 1] += count[b];
       if (count[b] < k) last = b;
     }
-    // The kept pairs go after the candidates, then move to the front.
+    // The kept pairs go after the candidates, then move to the front; the
+    // others land (branch-free) on one spare slot past them.
     const std::size_t keep = count[last + 1];
-    cand.resize(n + keep);
+    cand.resize(n + keep + 1);
     Cand* sorted = cand.data() + n;
+    count[nb] = static_cast<std::uint32_t>(keep);
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t b = bucket(cand[i].first);
-      if (b <= last) sorted[count[b]++] = cand[i];
+      const bool kept = b <= last;
+      const std::size_t slot = kept ? b : nb;
+      sorted[count[slot]] = cand[i];
+      count[slot] += kept;
     }
-    // count[b] is now the end of bucket b.
-    for (std::size_t b = 0, begin = 0; b <= last; begin = count[b++]) {
-      const std::size_t end = count[b];
-      if (end - begin > 24) {
-        std::sort(sorted + begin, sorted + end);
-        continue;
-      }
-      for (std::size_t i = begin + 1; i < end; ++i) {
+    // Only pairs of one bucket can be out of order: an insertion sort
+    // rarely moves anything, and its branches are predictable. A crowded
+    // bucket (many equal distances) would make it quadratic: sort then.
+    std::size_t crowded = 0;
+    for (std::size_t b = 0, begin = 0; b <= last; begin = count[b++]) crowded = std::max(crowded, count[b] - begin);
+    if (crowded > 32) {
+      std::sort(sorted, sorted + keep);
+    } else {
+      for (std::size_t i = 1; i < keep; ++i) {
         const Cand x = sorted[i];
         std::size_t j = i;
-        for (; j > begin && x < sorted[j - 1]; --j) sorted[j] = sorted[j - 1];
+        for (; j > 0 && x < sorted[j - 1]; --j) sorted[j] = sorted[j - 1];
         sorted[j] = x;
       }
     }
@@ -808,9 +814,10 @@ void decode_tile_scalar(const std::uint32_t* run_polygon, const std::uint32_t* r
 // polygons x bodies frames per pass; the scalar version's serial chain of
 // square roots and divisions cost as much as a fifth of the whole decode.
 //
-// col[i]: body i's x column (y and z follow at +stride and +2 stride, as a
-// BodySet stores them). out: rows (p_c, X, Y, Z; x, y, z) of kLanes floats,
-// written at lanes lane0 .. lane0 + 3. Polygons of at most kMaxCorners.
+// pos: node positions of the pass's bodies, node-major ([node][x, y, z]
+// [lanes] floats), read at lanes lane .. lane + 3. out: rows (p_c, X, Y,
+// Z; x, y, z) of kLanes floats, written at lanes lane0 .. lane0 + 3.
+// Polygons of at most kMaxCorners.
 constexpr std::size_t kMaxCorners = 16;
 // (a . b) and (a x b) of 4 lanes, in polygon_frame's order of operations.
 __attribute__((target("avx2"), always_inline)) inline __m256d dot_x4(__m256d a0, __m256d a1, __m256d a2, __m256d b0,
@@ -824,19 +831,16 @@ __attribute__((target("avx2"), always_inline)) inline void cross_x4(__m256d a0, 
   r[2] = _mm256_sub_pd(_mm256_mul_pd(a0, b1), _mm256_mul_pd(a1, b0));
 }
 
-__attribute__((target("avx2"))) void polygon_frame_x4(const BodyPolygons& b, const float* const col[4],
-                                                       std::size_t stride, std::size_t f,
+__attribute__((target("avx2"))) void polygon_frame_x4(const BodyPolygons& b, const float* pos, std::size_t lanes,
+                                                       std::size_t lane, std::size_t f,
                                                        std::span<const Eigen::Vector2f> ref, float* out,
                                                        std::size_t lane0) {
   const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
   const std::size_t n = e - s;
   __m256d P[3 * kMaxCorners];
   for (std::size_t k = 0; k < n; ++k) {
-    const std::size_t node = b.face_nodes[s + k];
-    for (std::size_t d = 0; d < 3; ++d) {
-      const std::size_t o = d * stride + node;
-      P[3 * k + d] = _mm256_cvtps_pd(_mm_set_ps(col[3][o], col[2][o], col[1][o], col[0][o]));
-    }
+    const float* node = pos + std::size_t{b.face_nodes[s + k]} * 3 * lanes + lane;
+    for (std::size_t d = 0; d < 3; ++d) P[3 * k + d] = _mm256_cvtps_pd(_mm_loadu_ps(node + d * lanes));
   }
   const __m256d zero = _mm256_setzero_pd();
   __m256d c0 = zero, c1 = zero, c2 = zero, nr0 = zero, nr1 = zero, nr2 = zero, scale = zero;
@@ -1043,6 +1047,7 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   const auto addr = reinterpret_cast<std::uintptr_t>(storage.get());
   float* frames = storage.get() + ((64 - addr % 64) % 64) / sizeof(float);
   const bool fast = have_avx2_fma();
+  const std::unique_ptr<float[]> tpos(new float[fast ? body.node_count * 3 * pass_groups * kLanes : 0]);
   const std::size_t tiles = (nv + DetailDecoder::kTile - 1) / DetailDecoder::kTile;
   for (std::size_t g0 = 0; g0 < count; g0 += pass_groups * kLanes) {
     const std::size_t nb = std::min(pass_groups * kLanes, count - g0);
@@ -1051,13 +1056,27 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
     // 4 bodies per vector. Lanes past the last body repeat it (never output).
     const float* col[kGroups * kLanes];
     for (std::size_t i = 0; i < groups * kLanes; ++i) col[i] = bodies.x(first + g0 + std::min(i, nb - 1)).data();
-    const std::size_t stride = bodies.node_count();
+    const std::size_t stride = bodies.node_count(), lanes = groups * kLanes;
+    if (fast) {
+      // The bodies' columns transposed node-major, so a polygon corner's
+      // coordinate for 4 bodies is one load (a body set is body-major: 48
+      // columns read at once would defeat the hardware prefetchers).
+      ExecContext tc = ctx;
+      tc.grain = 2048;
+      par::for_each_block(tc, stride, [&](std::size_t n0, std::size_t n1) {
+        for (std::size_t i = 0; i < lanes; ++i)
+          for (std::size_t d = 0; d < 3; ++d) {
+            const float* src = col[i] + d * stride;
+            for (std::size_t n = n0; n < n1; ++n) tpos[(n * 3 + d) * lanes + i] = src[n];
+          }
+      });
+    }
     par::for_each_n(ctx, np, [&](std::size_t p) {
       const bool small = body.face_offsets[p + 1] - body.face_offsets[p] <= kMaxCorners;
       for (std::size_t i = 0; i < groups * kLanes; i += 4) {
         float* f = frames + ((i / kLanes) * np + p) * kFrameFloats;
         if (fast && small) {
-          polygon_frame_x4(body, col + i, stride, p, dec.reference_corners_, f, i % kLanes);
+          polygon_frame_x4(body, tpos.get(), lanes, i, p, dec.reference_corners_, f, i % kLanes);
           continue;
         }
         for (std::size_t l = i; l < i + 4; ++l) {
