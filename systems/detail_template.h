@@ -184,7 +184,7 @@ void decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::
 /// coefficients as the encoding (float, no loss); 17 bytes per entry.
 class DetailDecoder {
  public:
-  static constexpr std::size_t kTile = 64;  // vertices per tile (a tile's entries stay in L2)
+  static constexpr std::size_t kTile = 128;  // vertices per tile (a tile's entries stay in L2)
   DetailDecoder() = default;
   /// Reads the encoding's matrix; O(entries), parallel over tiles.
   explicit DetailDecoder(const DetailEncoding& enc, const ExecContext& ctx = {});
