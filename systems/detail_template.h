@@ -178,10 +178,12 @@ void decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::
 /// An encoding rearranged for batched decoding, built once per encoding (as
 /// FairPlan is per mesh). Garment vertices are cut into tiles of kTile; in
 /// a tile, entries are grouped by polygon ("runs", polygons increasing, the
-/// tile's vertices increasing within a run), so a polygon's frames for 8
-/// bodies are loaded once per tile and applied to every tile vertex that uses
-/// it, and each vertex still sums its entries in row order. Same entries and
-/// coefficients as the encoding (float, no loss); 17 bytes per entry.
+/// tile's vertices increasing within a run), so a polygon's frames for 16
+/// bodies are fetched once per tile and applied to every tile vertex that
+/// uses it (12 FMA-unit operations per entry and 8 bodies, the minimum for
+/// eqs. 11-12), and each vertex still sums its entries in row order. Same
+/// entries and coefficients as the encoding (float, no loss); 17 bytes per
+/// entry.
 class DetailDecoder {
  public:
   static constexpr std::size_t kTile = 128;  // vertices per tile (a tile's entries stay in L2)
