@@ -1071,7 +1071,9 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
           }
       });
     }
-    par::for_each_n(ctx, np, [&](std::size_t p) {
+    ExecContext fc = ctx;
+    fc.grain = 256;  // 13k polygons: enough blocks to balance 2 threads
+    par::for_each_n(fc, np, [&](std::size_t p) {
       const bool small = body.face_offsets[p + 1] - body.face_offsets[p] <= kMaxCorners;
       for (std::size_t i = 0; i < groups * kLanes; i += 4) {
         float* f = frames + ((i / kLanes) * np + p) * kFrameFloats;
