@@ -1030,6 +1030,13 @@ Status DetailDecoder::check_topology(const BodyPolygons& body) const {
 
 Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
                            std::size_t first, std::size_t count, std::span<Vec3f> out, const ExecContext& ctx) {
+  DecodeWorkspace ws;
+  return decode_detail_batch(dec, body, bodies, first, count, out, ws, ctx);
+}
+
+Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
+                           std::size_t first, std::size_t count, std::span<Vec3f> out, DecodeWorkspace& ws,
+                           const ExecContext& ctx) {
   if (Status s = dec.check_topology(body); !s) return s;
   if (bodies.node_count() != body.node_count)
     return {ErrorCode::kMismatch, "decode_detail_batch: the body set has another node count than the template's body"};
@@ -1042,12 +1049,14 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   // (a tile's entries stay in L2 while each group's frames stream through).
   constexpr std::size_t kGroups = 2;
   const std::size_t pass_groups = std::min(kGroups, (count + kLanes - 1) / kLanes);
-  // Not zeroed: every lane of every frame is written below (megabytes a call).
-  const std::unique_ptr<float[]> storage(new float[pass_groups * np * kFrameFloats + 16]);
-  const auto addr = reinterpret_cast<std::uintptr_t>(storage.get());
-  float* frames = storage.get() + ((64 - addr % 64) % 64) / sizeof(float);
+  // Every lane of every frame is written below before it is read.
+  if (ws.frames.size() < pass_groups * np * kFrameFloats + 16) ws.frames.resize(pass_groups * np * kFrameFloats + 16);
+  const auto addr = reinterpret_cast<std::uintptr_t>(ws.frames.data());
+  float* frames = ws.frames.data() + ((64 - addr % 64) % 64) / sizeof(float);
   const bool fast = have_avx2_fma();
-  const std::unique_ptr<float[]> tpos(new float[fast ? body.node_count * 3 * pass_groups * kLanes : 0]);
+  if (fast && ws.positions.size() < std::size_t{body.node_count} * 3 * pass_groups * kLanes)
+    ws.positions.resize(std::size_t{body.node_count} * 3 * pass_groups * kLanes);
+  float* tpos = ws.positions.data();
   const std::size_t tiles = (nv + DetailDecoder::kTile - 1) / DetailDecoder::kTile;
   for (std::size_t g0 = 0; g0 < count; g0 += pass_groups * kLanes) {
     const std::size_t nb = std::min(pass_groups * kLanes, count - g0);
@@ -1078,7 +1087,7 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
       for (std::size_t i = 0; i < groups * kLanes; i += 4) {
         float* f = frames + ((i / kLanes) * np + p) * kFrameFloats;
         if (fast && small) {
-          polygon_frame_x4(body, tpos.get(), lanes, i, p, dec.reference_corners_, f, i % kLanes);
+          polygon_frame_x4(body, tpos, lanes, i, p, dec.reference_corners_, f, i % kLanes);
           continue;
         }
         for (std::size_t l = i; l < i + 4; ++l) {

@@ -30,6 +30,7 @@
 namespace atelier {
 
 class BodySet;
+struct DecodeWorkspace;
 
 /// The polygons of a body surface (all live faces of the model, in index
 /// order) over node indices; what encoding and decoding need of a body.
@@ -202,7 +203,7 @@ class DetailDecoder {
 
  private:
   friend Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
-                                    std::size_t first, std::size_t count, std::span<Vec3f> out,
+                                    std::size_t first, std::size_t count, std::span<Vec3f> out, DecodeWorkspace& ws,
                                     const ExecContext& ctx);
   std::uint32_t polygon_count_ = 0;
   std::uint32_t body_node_count_ = 0;
@@ -216,6 +217,14 @@ class DetailDecoder {
   std::vector<float> coef_;                 // per entry: a, b, c, d (see top)
 };
 
+/// Buffers of batched decoding (a pass's frames, the bodies' positions
+/// transposed): megabytes that a caller decoding batch after batch keeps
+/// here instead of allocating (and page-faulting) them on every call.
+/// One workspace per concurrent caller.
+struct DecodeWorkspace {
+  std::vector<float> frames, positions;
+};
+
 /// Decodes bodies [first, first+count) of a body set, 16 bodies per pass
 /// over the matrix. out is body-major: out[(b - first) * V + v].
 /// Deterministic: every output is summed in entry order, whatever the thread
@@ -223,6 +232,10 @@ class DetailDecoder {
 [[nodiscard]] Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
                                          std::size_t first, std::size_t count, std::span<Vec3f> out,
                                          const ExecContext& ctx = {});
+/// The same with the buffers kept in `ws` between calls (same results).
+[[nodiscard]] Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
+                                         std::size_t first, std::size_t count, std::span<Vec3f> out,
+                                         DecodeWorkspace& ws, const ExecContext& ctx = {});
 /// The same, building the DetailDecoder on each call (O(entries)): callers
 /// decoding several batches with one encoding should build it once.
 [[nodiscard]] Status decode_detail_batch(const DetailEncoding& enc, const BodyPolygons& body, const BodySet& bodies,

@@ -345,6 +345,14 @@ TEST(DetailTemplate, DecoderForBatchesIsThreadIndependentAndMatchesSingleBodies)
     for (std::size_t v = 0; v < nv; ++v) worst = std::max(worst, (a[k * nv + v].cast<double>() - single[v]).norm());
   }
   EXPECT_LT(worst, 2e-5);  // float sums at a scale of up to 19 (translated bodies)
+  // A workspace kept between calls of different sizes gives the same bits.
+  DecodeWorkspace ws;
+  std::vector<Vec3f> w1(5 * nv), w2(18 * nv);
+  ASSERT_TRUE(decode_detail_batch(d1, b.poly, set, 1, 5, w1, ws, two));
+  ASSERT_TRUE(decode_detail_batch(d1, b.poly, set, 1, 18, w2, ws, one));
+  ASSERT_TRUE(decode_detail_batch(d1, b.poly, set, 1, 5, w1, ws, two));
+  EXPECT_EQ(std::memcmp(w2.data(), a.data(), a.size() * sizeof(Vec3f)), 0);
+  EXPECT_EQ(std::memcmp(w1.data(), a.data(), w1.size() * sizeof(Vec3f)), 0);
   // Errors: another topology, wrong output size, range out of bounds.
   const Body other = sphere_body(31, 20);
   EXPECT_EQ(decode_detail_batch(d1, other.poly, set, 0, 1, std::span<Vec3f>(a.data(), nv)).code(), ErrorCode::kMismatch);
