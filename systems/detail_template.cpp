@@ -485,7 +485,8 @@ void CentroidGrid::nearest_many(std::span<const Vec3d> queries, std::size_t k, s
         // distance from q, so the k-th nearest of q does too (tighter than
         // the triangle inequality's k-th distance plus the step).
         double far2 = 0;
-        for (const std::uint32_t id : out.subspan((v - 1) * k, k)) far2 = std::max(far2, (by_id_[id] - q).squaredNorm());
+        for (const std::uint32_t id : out.subspan((v - 1) * k, k))
+          far2 = std::max(far2, (by_id_[id] - q).squaredNorm());
         bound = std::sqrt(far2) * (1 + 1e-12) + 1e-300;
       } else {
         // First query of a block: twice the typical k-th distance from the
@@ -723,7 +724,8 @@ __attribute__((target("avx2,fma"))) void decode_tile_avx2(const std::uint32_t* r
     // The frames of a tile's polygons come from L3 (a pass's frames are
     // megabytes): fetch the next run's six lines while this run computes.
     if (r + 1 < run_end) {
-      const char* next = reinterpret_cast<const char*>(frames + static_cast<std::size_t>(run_polygon[r + 1]) * kFrameFloats);
+      const char* next =
+          reinterpret_cast<const char*>(frames + static_cast<std::size_t>(run_polygon[r + 1]) * kFrameFloats);
       for (int l = 0; l < 6; ++l) _mm_prefetch(next + 64 * l, _MM_HINT_T0);
     }
     __m256 f[12];
@@ -779,7 +781,8 @@ __attribute__((target("avx2,fma"))) void decode_tile2_avx2(const std::uint32_t* 
         _mm256_store_ps(o + 8 * k, _mm256_add_ps(_mm256_load_ps(o + 8 * k), _mm256_add_ps(s, t)));
       }
       for (int k = 0; k < 3; ++k) {
-        const __m256 s = _mm256_fmadd_ps(b, _mm256_load_ps(G + 8 * (3 + k)), _mm256_mul_ps(a, _mm256_load_ps(G + 8 * k)));
+        const __m256 s =
+            _mm256_fmadd_ps(b, _mm256_load_ps(G + 8 * (3 + k)), _mm256_mul_ps(a, _mm256_load_ps(G + 8 * k)));
         const __m256 t =
             _mm256_fmadd_ps(d, _mm256_load_ps(G + 8 * (9 + k)), _mm256_mul_ps(cc, _mm256_load_ps(G + 8 * (6 + k))));
         _mm256_store_ps(o + 8 * (3 + k), _mm256_add_ps(_mm256_load_ps(o + 8 * (3 + k)), _mm256_add_ps(s, t)));
@@ -832,9 +835,9 @@ __attribute__((target("avx2"), always_inline)) inline void cross_x4(__m256d a0, 
 }
 
 __attribute__((target("avx2"))) void polygon_frame_x4(const BodyPolygons& b, const float* pos, std::size_t lanes,
-                                                       std::size_t lane, std::size_t f,
-                                                       std::span<const Eigen::Vector2f> ref, float* out,
-                                                       std::size_t lane0) {
+                                                      std::size_t lane, std::size_t f,
+                                                      std::span<const Eigen::Vector2f> ref, float* out,
+                                                      std::size_t lane0) {
   const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
   const std::size_t n = e - s;
   __m256d P[3 * kMaxCorners];
@@ -1034,9 +1037,8 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   return decode_detail_batch(dec, body, bodies, first, count, out, ws, ctx);
 }
 
-Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
-                           std::size_t first, std::size_t count, std::span<Vec3f> out, DecodeWorkspace& ws,
-                           const ExecContext& ctx) {
+Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies, std::size_t first,
+                           std::size_t count, std::span<Vec3f> out, DecodeWorkspace& ws, const ExecContext& ctx) {
   if (Status s = dec.check_topology(body); !s) return s;
   if (bodies.node_count() != body.node_count)
     return {ErrorCode::kMismatch, "decode_detail_batch: the body set has another node count than the template's body"};

@@ -450,11 +450,16 @@ TEST(PPolygonSearch, NearestManyWithRepeatedQueriesAndLatticeTies) {
   SplitMix64 r(17);
   for (int i = 0; i < 600; ++i) {
     const int step = i % 5;
-    if (step == 0) q.push_back(c[static_cast<std::size_t>(r.uniform(0, 359.9))]);
-    else if (step == 1) q.push_back(q.back());
-    else if (step == 2) q.push_back(q.back() + Vec3d(0.1, 0, 0));
-    else if (step == 3) q.push_back(q.back() + Vec3d(0.05, 0.05, 0.05));
-    else q.push_back(Vec3d(r.uniform(-0.2, 1.3), r.uniform(-0.2, 1.1), r.uniform(-0.2, 0.4)));
+    if (step == 0)
+      q.push_back(c[static_cast<std::size_t>(r.uniform(0, 359.9))]);
+    else if (step == 1)
+      q.push_back(q.back());
+    else if (step == 2)
+      q.push_back(q.back() + Vec3d(0.1, 0, 0));
+    else if (step == 3)
+      q.push_back(q.back() + Vec3d(0.05, 0.05, 0.05));
+    else
+      q.push_back(Vec3d(r.uniform(-0.2, 1.3), r.uniform(-0.2, 1.1), r.uniform(-0.2, 0.4)));
   }
   for (std::size_t k : {1u, 6u, 27u, 100u}) {
     CentroidGrid g;
