@@ -7,6 +7,7 @@
 #include <fstream>
 #include <immintrin.h>
 #include <limits>
+#include <memory>
 #include <sstream>
 
 #include "engine/parallel.h"
@@ -269,6 +270,101 @@ void CentroidGrid::build(std::span<const Vec3d> c, std::span<const std::uint8_t>
   by_id_.assign(c.begin(), c.end());
 }
 
+template <class F>
+void CentroidGrid::scan_ball(const Vec3d& q, double r2, F&& f) const {
+  auto span_of = [&](double c, double r, double l, int n) {
+    return std::pair<int, int>{std::clamp(static_cast<int>(std::floor((c - r - l) / cell_)), 0, n - 1),
+                               std::clamp(static_cast<int>(std::floor((c + r - l) / cell_)), 0, n - 1)};
+  };
+  // Squared distance from coordinate c to box interval i along one axis.
+  auto gap2 = [&](double c, double l, int i) {
+    const double a = l + cell_ * i, b = a + cell_;
+    const double g = c < a ? a - c : (c > b ? c - b : 0.0);
+    return g * g;
+  };
+  // Boxes are pruned with a little slack: a centroid's box comes from
+  // rounded arithmetic and may sit a rounding error outside it.
+  const double reach = std::sqrt(r2) * (1 + 1e-9) + 1e-12 * cell_, reach2 = reach * reach;
+  const auto [k_lo, k_hi] = span_of(q.z(), reach, lo_.z(), nz_);
+  const auto [j_lo, j_hi] = span_of(q.y(), reach, lo_.y(), ny_);
+  for (int kk = k_lo; kk <= k_hi; ++kk) {
+    const double gz = gap2(q.z(), lo_.z(), kk);
+    if (gz > reach2) continue;
+    for (int j = j_lo; j <= j_hi; ++j) {
+      // Only the boxes of this row the ball reaches (a cube scans about
+      // twice as many centroids).
+      const double gyz = gz + gap2(q.y(), lo_.y(), j);
+      if (gyz > reach2) continue;
+      const double half = std::sqrt(reach2 - gyz);
+      const auto [i_lo, i_hi] = span_of(q.x(), half, lo_.x(), nx_);
+      const std::size_t row = (static_cast<std::size_t>(kk) * ny_ + j) * nx_;
+      const std::uint32_t b = start_[row + i_lo], e = start_[row + i_hi + 1];  // cells i_lo..i_hi are contiguous
+      if (b < e) f(b, e);
+    }
+  }
+}
+
+namespace {
+double select_sorted(std::vector<Cand>& cand, std::size_t k, double max2, std::vector<std::uint32_t>& count,
+                     std::vector<std::uint32_t>& out) {
+  // The k smallest (distance, index) pairs in order, all distances at most
+  // max2. A counting sort into buckets of equal width in d2 (centroids on a
+  // surface are about uniform in d2 around a query) keeps only the buckets
+  // up to the one holding the k-th pair, which are then put in exact order.
+  // Unlike nth_element and sort, this has few unpredictable branches.
+  // Buckets are monotone in d2, so the cut drops none of the k.
+  const std::size_t n = cand.size();
+  double lo = max2;
+  for (const Cand& c : cand) lo = std::min(lo, c.first);
+  const std::size_t nb = 2 * n;
+  const double scale = static_cast<double>(nb) / (max2 - lo);
+  if (!(max2 > lo) || !std::isfinite(scale)) {
+    std::sort(cand.begin(), cand.end());
+  } else {
+    count.assign(nb + 1, 0);
+    auto bucket = [&](double d2) { return std::min(nb - 1, static_cast<std::size_t>((d2 - lo) * scale)); };
+    for (const Cand& c : cand) ++count[bucket(c.first) + 1];
+    std::size_t last = 0;  // bucket holding the k-th pair
+    for (std::size_t b = 0; b < nb; ++b) {
+      count[b + 1] += count[b];
+      if (count[b] < k) last = b;
+    }
+    // The kept pairs go after the candidates, then move to the front; the
+    // others land (branch-free) on one spare slot past them.
+    const std::size_t keep = count[last + 1];
+    cand.resize(n + keep + 1);
+    Cand* sorted = cand.data() + n;
+    count[nb] = static_cast<std::uint32_t>(keep);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t b = bucket(cand[i].first);
+      const bool kept = b <= last;
+      const std::size_t slot = kept ? b : nb;
+      sorted[count[slot]] = cand[i];
+      count[slot] += kept;
+    }
+    // Only pairs of one bucket can be out of order: an insertion sort
+    // rarely moves anything, and its branches are predictable. A crowded
+    // bucket (many equal distances) would make it quadratic: sort then.
+    std::size_t crowded = 0;
+    for (std::size_t b = 0, begin = 0; b <= last; begin = count[b++]) crowded = std::max(crowded, count[b] - begin);
+    if (crowded > 32) {
+      std::sort(sorted, sorted + keep);
+    } else {
+      for (std::size_t i = 1; i < keep; ++i) {
+        const Cand x = sorted[i];
+        std::size_t j = i;
+        for (; j > 0 && x < sorted[j - 1]; --j) sorted[j] = sorted[j - 1];
+        sorted[j] = x;
+      }
+    }
+    std::copy(sorted, sorted + k, cand.begin());
+  }
+  cand.resize(k);
+  for (const auto& c : cand) out.push_back(c.second);
+  return std::sqrt(cand.back().first);
+}
+}  // namespace
+
 void CentroidGrid::nearest(const Vec3d& q, std::size_t k, std::vector<std::uint32_t>& out,
                            std::vector<std::pair<double, std::uint32_t>>& heap) const {
   (void)nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
@@ -276,6 +372,13 @@ void CentroidGrid::nearest(const Vec3d& q, std::size_t k, std::vector<std::uint3
 
 double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound, std::vector<std::uint32_t>& out,
                                      std::vector<std::pair<double, std::uint32_t>>& heap) const {
+  std::vector<std::uint32_t> count;
+  return nearest_bounded(q, k, bound, out, heap, count);
+}
+
+double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound, std::vector<std::uint32_t>& out,
+                                     std::vector<std::pair<double, std::uint32_t>>& heap,
+                                     std::vector<std::uint32_t>& count) const {
   out.clear();
   heap.clear();
   k = std::min(k, ids_.size());
@@ -286,49 +389,18 @@ double CentroidGrid::nearest_bounded(const Vec3d& q, std::size_t k, double bound
     // With a bound no heap is needed: collect every centroid inside the
     // bound from the boxes the bound's cube overlaps, then select the k
     // smallest (distance, index) pairs: the same set and order as brute force.
-    auto span_of = [&](double c, double r, double l, int n) {
-      return std::pair<int, int>{std::clamp(static_cast<int>(std::floor((c - r - l) / cell_)), 0, n - 1),
-                                 std::clamp(static_cast<int>(std::floor((c + r - l) / cell_)), 0, n - 1)};
-    };
-    // Squared distance from coordinate c to box interval i along one axis.
-    auto gap2 = [&](double c, double l, int i) {
-      const double a = l + cell_ * i, b = a + cell_;
-      const double g = c < a ? a - c : (c > b ? c - b : 0.0);
-      return g * g;
-    };
-    // Boxes are pruned with a little slack: a centroid's box comes from
-    // rounded arithmetic and may sit a rounding error outside it.
-    const double reach = bound * (1 + 1e-9) + 1e-12 * cell_, reach2 = reach * reach;
-    const auto [k_lo, k_hi] = span_of(q.z(), reach, lo_.z(), nz_);
-    const auto [j_lo, j_hi] = span_of(q.y(), reach, lo_.y(), ny_);
-    for (int kk = k_lo; kk <= k_hi; ++kk) {
-      const double gz = gap2(q.z(), lo_.z(), kk);
-      if (gz > reach2) continue;
-      for (int j = j_lo; j <= j_hi; ++j) {
-        // Only the boxes of this row the bound's sphere reaches (a cube
-        // scans about twice as many centroids).
-        const double gyz = gz + gap2(q.y(), lo_.y(), j);
-        if (gyz > reach2) continue;
-        const double half = std::sqrt(reach2 - gyz);
-        const auto [i_lo, i_hi] = span_of(q.x(), half, lo_.x(), nx_);
-        const std::size_t row = (static_cast<std::size_t>(kk) * ny_ + j) * nx_;
-        const std::uint32_t b = start_[row + i_lo], e = start_[row + i_hi + 1];  // cells i_lo..i_hi are contiguous
-        std::size_t n = heap.size();
-        heap.resize(n + (e - b));
-        for (std::uint32_t s = b; s < e; ++s) {  // branch-free: most tests are unpredictable
-          const double d2 = (exact_[s] - q).squaredNorm();
-          heap[n] = Cand(d2, ids_[s]);
-          n += d2 <= bound2;
-        }
-        heap.resize(n);
+    scan_ball(q, bound2, [&](std::uint32_t b, std::uint32_t e) {
+      std::size_t n = heap.size();
+      heap.resize(n + (e - b));
+      for (std::uint32_t s = b; s < e; ++s) {  // branch-free: most tests are unpredictable
+        const double d2 = (exact_[s] - q).squaredNorm();
+        heap[n] = Cand(d2, ids_[s]);
+        n += d2 <= bound2;
       }
-    }
-    if (heap.size() < k) return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap);
-    std::nth_element(heap.begin(), heap.begin() + static_cast<std::ptrdiff_t>(k - 1), heap.end());
-    heap.resize(k);
-    std::sort(heap.begin(), heap.end());
-    for (const auto& c : heap) out.push_back(c.second);
-    return std::sqrt(heap.back().first);
+      heap.resize(n);
+    });
+    if (heap.size() < k) return nearest_bounded(q, k, std::numeric_limits<double>::infinity(), out, heap, count);
+    return select_sorted(heap, k, bound2, count, out);
   }
   const int i0 = std::clamp(static_cast<int>(std::floor((q.x() - lo_.x()) / cell_)), 0, nx_ - 1);
   const int j0 = std::clamp(static_cast<int>(std::floor((q.y() - lo_.y()) / cell_)), 0, ny_ - 1);
@@ -401,7 +473,7 @@ void CentroidGrid::nearest_many(std::span<const Vec3d> queries, std::size_t k, s
   c.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
   c.grain = ctx.grain ? ctx.grain : 256;
   par::for_each_block(c, queries.size(), [&](std::size_t begin, std::size_t end) {
-    std::vector<std::uint32_t> near;
+    std::vector<std::uint32_t> near, count;
     std::vector<Cand> scratch;
     scratch.reserve(8 * k);
     for (std::size_t v = begin; v < end; ++v) {
@@ -413,7 +485,8 @@ void CentroidGrid::nearest_many(std::span<const Vec3d> queries, std::size_t k, s
         // distance from q, so the k-th nearest of q does too (tighter than
         // the triangle inequality's k-th distance plus the step).
         double far2 = 0;
-        for (const std::uint32_t id : out.subspan((v - 1) * k, k)) far2 = std::max(far2, (by_id_[id] - q).squaredNorm());
+        for (const std::uint32_t id : out.subspan((v - 1) * k, k))
+          far2 = std::max(far2, (by_id_[id] - q).squaredNorm());
         bound = std::sqrt(far2) * (1 + 1e-12) + 1e-300;
       } else {
         // First query of a block: twice the typical k-th distance from the
@@ -424,7 +497,7 @@ void CentroidGrid::nearest_many(std::span<const Vec3d> queries, std::size_t k, s
         bound = out_of_box + 2 * radius_ * std::sqrt(static_cast<double>(std::max<std::size_t>(k, 8)) /
                                                          static_cast<double>(k_hint_));
       }
-      (void)nearest_bounded(q, k, bound, near, scratch);
+      (void)nearest_bounded(q, k, bound, near, scratch, count);
       std::copy(near.begin(), near.end(), out.begin() + static_cast<std::ptrdiff_t>(v * k));
     }
   });
@@ -648,6 +721,13 @@ __attribute__((target("avx2,fma"))) void decode_tile_avx2(const std::uint32_t* r
                                                           const float* coef, const float* frames, float* acc) {
   for (std::size_t r = run_begin; r < run_end; ++r) {
     const float* F = frames + static_cast<std::size_t>(run_polygon[r]) * kFrameFloats;
+    // The frames of a tile's polygons come from L3 (a pass's frames are
+    // megabytes): fetch the next run's six lines while this run computes.
+    if (r + 1 < run_end) {
+      const char* next =
+          reinterpret_cast<const char*>(frames + static_cast<std::size_t>(run_polygon[r + 1]) * kFrameFloats);
+      for (int l = 0; l < 6; ++l) _mm_prefetch(next + 64 * l, _MM_HINT_T0);
+    }
     __m256 f[12];
     for (int j = 0; j < 12; ++j) f[j] = _mm256_load_ps(F + 8 * j);
     for (std::uint32_t e = run_entry[r]; e < run_entry[r + 1]; ++e) {
@@ -655,13 +735,57 @@ __attribute__((target("avx2,fma"))) void decode_tile_avx2(const std::uint32_t* r
       const float* c = coef + 4 * static_cast<std::size_t>(e);
       const __m256 a = _mm256_broadcast_ss(c), b = _mm256_broadcast_ss(c + 1), cc = _mm256_broadcast_ss(c + 2),
                    d = _mm256_broadcast_ss(c + 3);
+      // A tree, (a p_c + b X) + (c Y + d Z), added to the accumulator last:
+      // the products do not wait for the accumulator's load, and the
+      // chains are half as deep, so more entries overlap.
       for (int k = 0; k < 3; ++k) {
-        __m256 x = _mm256_load_ps(o + 8 * k);
-        x = _mm256_fmadd_ps(a, f[k], x);
-        x = _mm256_fmadd_ps(b, f[3 + k], x);
-        x = _mm256_fmadd_ps(cc, f[6 + k], x);
-        x = _mm256_fmadd_ps(d, f[9 + k], x);
-        _mm256_store_ps(o + 8 * k, x);
+        const __m256 s = _mm256_fmadd_ps(b, f[3 + k], _mm256_mul_ps(a, f[k]));
+        const __m256 t = _mm256_fmadd_ps(d, f[9 + k], _mm256_mul_ps(cc, f[6 + k]));
+        _mm256_store_ps(o + 8 * k, _mm256_add_ps(_mm256_load_ps(o + 8 * k), _mm256_add_ps(s, t)));
+      }
+    }
+  }
+}
+
+// The same for two groups (16 bodies) at once, with the same arithmetic per
+// lane (bit-identical to decode_tile_avx2 on each group): an entry's
+// coefficients, index and loop overhead are shared by both groups. Group
+// 0's X, Y, Z stay in registers; its p_c and group 1's frame are read from
+// L1 (the run's 768 bytes). acc: [tile vertex][group][x, y, z][lane].
+__attribute__((target("avx2,fma"))) void decode_tile2_avx2(const std::uint32_t* run_polygon,
+                                                           const std::uint32_t* run_entry, std::size_t run_begin,
+                                                           std::size_t run_end, const std::uint8_t* vertex,
+                                                           const float* coef, const float* frames0,
+                                                           const float* frames1, float* acc) {
+  for (std::size_t r = run_begin; r < run_end; ++r) {
+    const float* F = frames0 + static_cast<std::size_t>(run_polygon[r]) * kFrameFloats;
+    const float* G = frames1 + static_cast<std::size_t>(run_polygon[r]) * kFrameFloats;
+    if (r + 1 < run_end) {
+      const std::size_t next = static_cast<std::size_t>(run_polygon[r + 1]) * kFrameFloats;
+      for (int l = 0; l < 6; ++l) {
+        _mm_prefetch(reinterpret_cast<const char*>(frames0 + next) + 64 * l, _MM_HINT_T0);
+        _mm_prefetch(reinterpret_cast<const char*>(frames1 + next) + 64 * l, _MM_HINT_T0);
+      }
+    }
+    __m256 f[9];
+    for (int j = 0; j < 9; ++j) f[j] = _mm256_load_ps(F + 8 * (3 + j));
+    const std::uint32_t e_end = run_entry[r + 1];
+    for (std::uint32_t e = run_entry[r]; e < e_end; ++e) {
+      float* o = acc + static_cast<std::size_t>(vertex[e]) * 6 * kLanes;
+      const float* c = coef + 4 * static_cast<std::size_t>(e);
+      const __m256 a = _mm256_broadcast_ss(c), b = _mm256_broadcast_ss(c + 1), cc = _mm256_broadcast_ss(c + 2),
+                   d = _mm256_broadcast_ss(c + 3);
+      for (int k = 0; k < 3; ++k) {
+        const __m256 s = _mm256_fmadd_ps(b, f[k], _mm256_mul_ps(a, _mm256_load_ps(F + 8 * k)));
+        const __m256 t = _mm256_fmadd_ps(d, f[6 + k], _mm256_mul_ps(cc, f[3 + k]));
+        _mm256_store_ps(o + 8 * k, _mm256_add_ps(_mm256_load_ps(o + 8 * k), _mm256_add_ps(s, t)));
+      }
+      for (int k = 0; k < 3; ++k) {
+        const __m256 s =
+            _mm256_fmadd_ps(b, _mm256_load_ps(G + 8 * (3 + k)), _mm256_mul_ps(a, _mm256_load_ps(G + 8 * k)));
+        const __m256 t =
+            _mm256_fmadd_ps(d, _mm256_load_ps(G + 8 * (9 + k)), _mm256_mul_ps(cc, _mm256_load_ps(G + 8 * (6 + k))));
+        _mm256_store_ps(o + 8 * (3 + k), _mm256_add_ps(_mm256_load_ps(o + 8 * (3 + k)), _mm256_add_ps(s, t)));
       }
     }
   }
@@ -677,15 +801,126 @@ void decode_tile_scalar(const std::uint32_t* run_polygon, const std::uint32_t* r
       const float* c = coef + 4 * static_cast<std::size_t>(e);
       for (std::size_t k = 0; k < 3; ++k)
         for (std::size_t w = 0; w < kLanes; ++w) {
-          float x = o[k * kLanes + w];
-          x += c[0] * F[k * kLanes + w];
-          x += c[1] * F[(3 + k) * kLanes + w];
-          x += c[2] * F[(6 + k) * kLanes + w];
-          x += c[3] * F[(9 + k) * kLanes + w];
-          o[k * kLanes + w] = x;
+          const float s = std::fma(c[1], F[(3 + k) * kLanes + w], c[0] * F[k * kLanes + w]);
+          const float t = std::fma(c[3], F[(9 + k) * kLanes + w], c[2] * F[(6 + k) * kLanes + w]);
+          o[k * kLanes + w] += s + t;
         }
     }
   }
+}
+
+// Frames of one polygon on 4 bodies at once (AVX2 doubles, one body per
+// lane): polygon_frame's operations in the same order, with the branches as
+// lane masks. This function is compiled without FMA, so no product is fused
+// and every lane is bit-identical to polygon_frame on that body (sqrt and
+// division are correctly rounded in both). Batched decoding computes
+// polygons x bodies frames per pass; the scalar version's serial chain of
+// square roots and divisions cost as much as a fifth of the whole decode.
+//
+// pos: node positions of the pass's bodies, node-major ([node][x, y, z]
+// [lanes] floats), read at lanes lane .. lane + 3. out: rows (p_c, X, Y,
+// Z; x, y, z) of kLanes floats, written at lanes lane0 .. lane0 + 3.
+// Polygons of at most kMaxCorners.
+constexpr std::size_t kMaxCorners = 16;
+// (a . b) and (a x b) of 4 lanes, in polygon_frame's order of operations.
+__attribute__((target("avx2"), always_inline)) inline __m256d dot_x4(__m256d a0, __m256d a1, __m256d a2, __m256d b0,
+                                                                     __m256d b1, __m256d b2) {
+  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a0, b0), _mm256_mul_pd(a1, b1)), _mm256_mul_pd(a2, b2));
+}
+__attribute__((target("avx2"), always_inline)) inline void cross_x4(__m256d a0, __m256d a1, __m256d a2, __m256d b0,
+                                                                    __m256d b1, __m256d b2, __m256d* r) {
+  r[0] = _mm256_sub_pd(_mm256_mul_pd(a1, b2), _mm256_mul_pd(a2, b1));
+  r[1] = _mm256_sub_pd(_mm256_mul_pd(a2, b0), _mm256_mul_pd(a0, b2));
+  r[2] = _mm256_sub_pd(_mm256_mul_pd(a0, b1), _mm256_mul_pd(a1, b0));
+}
+
+__attribute__((target("avx2"))) void polygon_frame_x4(const BodyPolygons& b, const float* pos, std::size_t lanes,
+                                                      std::size_t lane, std::size_t f,
+                                                      std::span<const Eigen::Vector2f> ref, float* out,
+                                                      std::size_t lane0) {
+  const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
+  const std::size_t n = e - s;
+  __m256d P[3 * kMaxCorners];
+  for (std::size_t k = 0; k < n; ++k) {
+    const float* node = pos + std::size_t{b.face_nodes[s + k]} * 3 * lanes + lane;
+    for (std::size_t d = 0; d < 3; ++d) P[3 * k + d] = _mm256_cvtps_pd(_mm_loadu_ps(node + d * lanes));
+  }
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d c0 = zero, c1 = zero, c2 = zero, nr0 = zero, nr1 = zero, nr2 = zero, scale = zero;
+  for (std::size_t k = 0; k < n; ++k) {
+    const __m256d* A = P + 3 * k;
+    const __m256d* Q = P + 3 * (k + 1 < n ? k + 1 : 0);
+    c0 = _mm256_add_pd(c0, A[0]);
+    c1 = _mm256_add_pd(c1, A[1]);
+    c2 = _mm256_add_pd(c2, A[2]);
+    nr0 = _mm256_add_pd(nr0, _mm256_sub_pd(_mm256_mul_pd(A[1], Q[2]), _mm256_mul_pd(A[2], Q[1])));
+    nr1 = _mm256_add_pd(nr1, _mm256_sub_pd(_mm256_mul_pd(A[2], Q[0]), _mm256_mul_pd(A[0], Q[2])));
+    nr2 = _mm256_add_pd(nr2, _mm256_sub_pd(_mm256_mul_pd(A[0], Q[1]), _mm256_mul_pd(A[1], Q[0])));
+    const __m256d d0 = _mm256_sub_pd(Q[0], A[0]), d1 = _mm256_sub_pd(Q[1], A[1]), d2 = _mm256_sub_pd(Q[2], A[2]);
+    const __m256d l2 =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(d0, d0), _mm256_mul_pd(d1, d1)), _mm256_mul_pd(d2, d2));
+    scale = _mm256_max_pd(scale, l2);
+  }
+  const __m256d inv_n = _mm256_set1_pd(1.0 / static_cast<double>(n));
+  c0 = _mm256_mul_pd(c0, inv_n);
+  c1 = _mm256_mul_pd(c1, inv_n);
+  c2 = _mm256_mul_pd(c2, inv_n);
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d nn = _mm256_sqrt_pd(dot_x4(nr0, nr1, nr2, nr0, nr1, nr2));
+  const __m256d ok1 = _mm256_and_pd(_mm256_cmp_pd(nn, _mm256_mul_pd(_mm256_set1_pd(1e-12), scale), _CMP_GT_OQ),
+                                    _mm256_cmp_pd(scale, zero, _CMP_GT_OQ));
+  const __m256d inv_nn = _mm256_div_pd(one, nn);
+  const __m256d x0 = _mm256_mul_pd(nr0, inv_nn), x1 = _mm256_mul_pd(nr1, inv_nn), x2 = _mm256_mul_pd(nr2, inv_nn);
+  __m256d y0 = _mm256_sub_pd(P[0], c0), y1 = _mm256_sub_pd(P[1], c1), y2 = _mm256_sub_pd(P[2], c2);
+  const __m256d yx = dot_x4(y0, y1, y2, x0, x1, x2);
+  y0 = _mm256_sub_pd(y0, _mm256_mul_pd(yx, x0));
+  y1 = _mm256_sub_pd(y1, _mm256_mul_pd(yx, x1));
+  y2 = _mm256_sub_pd(y2, _mm256_mul_pd(yx, x2));
+  const __m256d yn = _mm256_sqrt_pd(dot_x4(y0, y1, y2, y0, y1, y2));
+  const __m256d ok2 =
+      _mm256_and_pd(ok1, _mm256_cmp_pd(yn, _mm256_mul_pd(_mm256_set1_pd(1e-9), _mm256_sqrt_pd(scale)), _CMP_GT_OQ));
+  const __m256d inv_yn = _mm256_div_pd(one, yn);
+  y0 = _mm256_mul_pd(y0, inv_yn);
+  y1 = _mm256_mul_pd(y1, inv_yn);
+  y2 = _mm256_mul_pd(y2, inv_yn);
+  __m256d z[3];
+  cross_x4(x0, x1, x2, y0, y1, y2, z);
+  if (!ref.empty()) {
+    __m256d sdot = zero, scross = zero;
+    for (std::size_t k = 0; k < n; ++k) {
+      const __m256d q0 = _mm256_sub_pd(P[3 * k], c0), q1 = _mm256_sub_pd(P[3 * k + 1], c1),
+                    q2 = _mm256_sub_pd(P[3 * k + 2], c2);
+      const __m256d d1 = dot_x4(q0, q1, q2, y0, y1, y2), d2 = dot_x4(q0, q1, q2, z[0], z[1], z[2]);
+      const __m256d r1 = _mm256_set1_pd(ref[s + k].x()), r2 = _mm256_set1_pd(ref[s + k].y());
+      sdot = _mm256_add_pd(sdot, _mm256_add_pd(_mm256_mul_pd(r1, d1), _mm256_mul_pd(r2, d2)));
+      scross = _mm256_add_pd(scross, _mm256_sub_pd(_mm256_mul_pd(r1, d2), _mm256_mul_pd(r2, d1)));
+    }
+    const __m256d r = _mm256_sqrt_pd(dot_x4(sdot, scross, zero, sdot, scross, zero));
+    const __m256d turn = _mm256_cmp_pd(r, zero, _CMP_GT_OQ);
+    const __m256d inv_r = _mm256_div_pd(one, r), cs = _mm256_mul_pd(sdot, inv_r), sn = _mm256_mul_pd(scross, inv_r);
+    const __m256d t0 = _mm256_add_pd(_mm256_mul_pd(cs, y0), _mm256_mul_pd(sn, z[0]));
+    const __m256d t1 = _mm256_add_pd(_mm256_mul_pd(cs, y1), _mm256_mul_pd(sn, z[1]));
+    const __m256d t2 = _mm256_add_pd(_mm256_mul_pd(cs, y2), _mm256_mul_pd(sn, z[2]));
+    __m256d tz[3];
+    cross_x4(x0, x1, x2, t0, t1, t2, tz);
+    y0 = _mm256_blendv_pd(y0, t0, turn);
+    y1 = _mm256_blendv_pd(y1, t1, turn);
+    y2 = _mm256_blendv_pd(y2, t2, turn);
+    for (int i = 0; i < 3; ++i) z[i] = _mm256_blendv_pd(z[i], tz[i], turn);
+  }
+  const __m256d rows[12] = {c0,
+                            c1,
+                            c2,
+                            _mm256_and_pd(x0, ok1),
+                            _mm256_and_pd(x1, ok1),
+                            _mm256_and_pd(x2, ok1),
+                            _mm256_and_pd(y0, ok2),
+                            _mm256_and_pd(y1, ok2),
+                            _mm256_and_pd(y2, ok2),
+                            _mm256_and_pd(z[0], ok2),
+                            _mm256_and_pd(z[1], ok2),
+                            _mm256_and_pd(z[2], ok2)};
+  for (std::size_t j = 0; j < 12; ++j) _mm_storeu_ps(out + j * kLanes + lane0, _mm256_cvtpd_ps(rows[j]));
 }
 
 // A body's node positions read in place from a body set's float columns
@@ -798,6 +1033,12 @@ Status DetailDecoder::check_topology(const BodyPolygons& body) const {
 
 Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
                            std::size_t first, std::size_t count, std::span<Vec3f> out, const ExecContext& ctx) {
+  DecodeWorkspace ws;
+  return decode_detail_batch(dec, body, bodies, first, count, out, ws, ctx);
+}
+
+Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies, std::size_t first,
+                           std::size_t count, std::span<Vec3f> out, DecodeWorkspace& ws, const ExecContext& ctx) {
   if (Status s = dec.check_topology(body); !s) return s;
   if (bodies.node_count() != body.node_count)
     return {ErrorCode::kMismatch, "decode_detail_batch: the body set has another node count than the template's body"};
@@ -810,37 +1051,78 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   // (a tile's entries stay in L2 while each group's frames stream through).
   constexpr std::size_t kGroups = 2;
   const std::size_t pass_groups = std::min(kGroups, (count + kLanes - 1) / kLanes);
-  std::vector<float> storage(pass_groups * np * kFrameFloats + 16, 0.0f);
-  const auto addr = reinterpret_cast<std::uintptr_t>(storage.data());
-  float* frames = storage.data() + ((64 - addr % 64) % 64) / sizeof(float);
+  // Every lane of every frame is written below before it is read.
+  if (ws.frames.size() < pass_groups * np * kFrameFloats + 16) ws.frames.resize(pass_groups * np * kFrameFloats + 16);
+  const auto addr = reinterpret_cast<std::uintptr_t>(ws.frames.data());
+  float* frames = ws.frames.data() + ((64 - addr % 64) % 64) / sizeof(float);
   const bool fast = have_avx2_fma();
+  if (fast && ws.positions.size() < std::size_t{body.node_count} * 3 * pass_groups * kLanes)
+    ws.positions.resize(std::size_t{body.node_count} * 3 * pass_groups * kLanes);
+  float* tpos = ws.positions.data();
   const std::size_t tiles = (nv + DetailDecoder::kTile - 1) / DetailDecoder::kTile;
   for (std::size_t g0 = 0; g0 < count; g0 += pass_groups * kLanes) {
     const std::size_t nb = std::min(pass_groups * kLanes, count - g0);
     const std::size_t groups = (nb + kLanes - 1) / kLanes;
-    // Frames of every body of the pass, written straight into the lanes.
-    par::for_each_n(ctx, np, [&](std::size_t p) {
-      for (std::size_t i = 0; i < groups * kLanes; ++i) {
-        float* f = frames + ((i / kLanes) * np + p) * kFrameFloats + i % kLanes;
-        if (i >= nb) {
-          for (std::size_t j = 0; j < 12; ++j) f[j * kLanes] = 0.0f;
+    // Frames of every body of the pass, written straight into the lanes,
+    // 4 bodies per vector. Lanes past the last body repeat it (never output).
+    const float* col[kGroups * kLanes];
+    for (std::size_t i = 0; i < groups * kLanes; ++i) col[i] = bodies.x(first + g0 + std::min(i, nb - 1)).data();
+    const std::size_t stride = bodies.node_count(), lanes = groups * kLanes;
+    if (fast) {
+      // The bodies' columns transposed node-major, so a polygon corner's
+      // coordinate for 4 bodies is one load (a body set is body-major: 48
+      // columns read at once would defeat the hardware prefetchers).
+      ExecContext tc = ctx;
+      tc.grain = 2048;
+      par::for_each_block(tc, stride, [&](std::size_t n0, std::size_t n1) {
+        for (std::size_t i = 0; i < lanes; ++i)
+          for (std::size_t d = 0; d < 3; ++d) {
+            const float* src = col[i] + d * stride;
+            for (std::size_t n = n0; n < n1; ++n) tpos[(n * 3 + d) * lanes + i] = src[n];
+          }
+      });
+    }
+    ExecContext fc = ctx;
+    fc.grain = 256;  // 13k polygons: enough blocks to balance 2 threads
+    par::for_each_n(fc, np, [&](std::size_t p) {
+      const bool small = body.face_offsets[p + 1] - body.face_offsets[p] <= kMaxCorners;
+      for (std::size_t i = 0; i < groups * kLanes; i += 4) {
+        float* f = frames + ((i / kLanes) * np + p) * kFrameFloats;
+        if (fast && small) {
+          polygon_frame_x4(body, tpos, lanes, i, p, dec.reference_corners_, f, i % kLanes);
           continue;
         }
-        const std::size_t b = first + g0 + i;
-        const SetPos pos{bodies.x(b).data(), bodies.y(b).data(), bodies.z(b).data()};
-        const FrameD fr = polygon_frame(body, pos, p, dec.reference_corners_);
-        const Vec3d* v[4] = {&fr.c, &fr.x, &fr.y, &fr.z};
-        for (std::size_t j = 0; j < 4; ++j)
-          for (std::size_t k = 0; k < 3; ++k) f[(3 * j + k) * kLanes] = static_cast<float>((*v[j])[static_cast<int>(k)]);
+        for (std::size_t l = i; l < i + 4; ++l) {
+          const SetPos pos{col[l], col[l] + stride, col[l] + 2 * stride};
+          const FrameD fr = polygon_frame(body, pos, p, dec.reference_corners_);
+          const Vec3d* v[4] = {&fr.c, &fr.x, &fr.y, &fr.z};
+          for (std::size_t j = 0; j < 4; ++j)
+            for (std::size_t k = 0; k < 3; ++k)
+              f[(3 * j + k) * kLanes + l % kLanes] = static_cast<float>((*v[j])[static_cast<int>(k)]);
+        }
       }
     });
     ExecContext c = ctx;
     c.grain = 2;
     c.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 4);
     par::for_each_block(c, tiles, [&](std::size_t t0, std::size_t t1) {
-      alignas(64) float acc[DetailDecoder::kTile * 3 * kLanes];
+      alignas(64) float acc[DetailDecoder::kTile * 3 * kGroups * kLanes];
       for (std::size_t t = t0; t < t1; ++t) {
         const std::size_t v0 = t * DetailDecoder::kTile, v1 = std::min(nv, v0 + DetailDecoder::kTile);
+        if (fast && groups == 2) {
+          std::fill(acc, acc + (v1 - v0) * 6 * kLanes, 0.0f);
+          decode_tile2_avx2(dec.run_polygon_.data(), dec.run_entry_.data(), dec.tile_run_[t], dec.tile_run_[t + 1],
+                            dec.vertex_.data(), dec.coef_.data(), frames, frames + np * kFrameFloats, acc);
+          for (std::size_t g = 0; g < 2; ++g) {
+            const std::size_t lanes = std::min(kLanes, nb - g * kLanes);
+            for (std::size_t v = v0; v < v1; ++v) {
+              const float* r = acc + ((v - v0) * 2 + g) * 3 * kLanes;
+              for (std::size_t w = 0; w < lanes; ++w)
+                out[(g0 + g * kLanes + w) * nv + v] = Vec3f(r[w], r[kLanes + w], r[2 * kLanes + w]);
+            }
+          }
+          continue;
+        }
         for (std::size_t g = 0; g < groups; ++g) {
           std::fill(acc, acc + (v1 - v0) * 3 * kLanes, 0.0f);
           const float* fg = frames + g * np * kFrameFloats;

@@ -30,6 +30,7 @@
 namespace atelier {
 
 class BodySet;
+struct DecodeWorkspace;
 
 /// The polygons of a body surface (all live faces of the model, in index
 /// order) over node indices; what encoding and decoding need of a body.
@@ -98,6 +99,14 @@ class CentroidGrid {
   [[nodiscard]] std::size_t size() const noexcept { return ids_.size(); }
 
  private:
+  // Calls f(begin, end) for the ranges of entries in the boxes the ball of
+  // squared radius r2 around q reaches (with a rounding slack).
+  template <class F>
+  void scan_ball(const Vec3d& q, double r2, F&& f) const;
+  // nearest_bounded with the selection's bucket counts as scratch.
+  double nearest_bounded(const Vec3d& q, std::size_t k, double bound, std::vector<std::uint32_t>& out,
+                         std::vector<std::pair<double, std::uint32_t>>& scratch,
+                         std::vector<std::uint32_t>& count) const;
   double cell_ = 1;
   Vec3d lo_ = Vec3d::Zero();
   int nx_ = 1, ny_ = 1, nz_ = 1;
@@ -170,13 +179,15 @@ void decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::
 /// An encoding rearranged for batched decoding, built once per encoding (as
 /// FairPlan is per mesh). Garment vertices are cut into tiles of kTile; in
 /// a tile, entries are grouped by polygon ("runs", polygons increasing, the
-/// tile's vertices increasing within a run), so a polygon's frames for 8
-/// bodies are loaded once per tile and applied to every tile vertex that uses
-/// it, and each vertex still sums its entries in row order. Same entries and
-/// coefficients as the encoding (float, no loss); 17 bytes per entry.
+/// tile's vertices increasing within a run), so a polygon's frames for 16
+/// bodies are fetched once per tile and applied to every tile vertex that
+/// uses it (12 FMA-unit operations per entry and 8 bodies, the minimum for
+/// eqs. 11-12), and each vertex still sums its entries in row order. Same
+/// entries and coefficients as the encoding (float, no loss); 17 bytes per
+/// entry.
 class DetailDecoder {
  public:
-  static constexpr std::size_t kTile = 64;  // vertices per tile (a tile's entries stay in L2)
+  static constexpr std::size_t kTile = 128;  // vertices per tile (a tile's entries stay in L2)
   DetailDecoder() = default;
   /// Reads the encoding's matrix; O(entries), parallel over tiles.
   explicit DetailDecoder(const DetailEncoding& enc, const ExecContext& ctx = {});
@@ -192,7 +203,7 @@ class DetailDecoder {
 
  private:
   friend Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
-                                    std::size_t first, std::size_t count, std::span<Vec3f> out,
+                                    std::size_t first, std::size_t count, std::span<Vec3f> out, DecodeWorkspace& ws,
                                     const ExecContext& ctx);
   std::uint32_t polygon_count_ = 0;
   std::uint32_t body_node_count_ = 0;
@@ -206,6 +217,14 @@ class DetailDecoder {
   std::vector<float> coef_;                 // per entry: a, b, c, d (see top)
 };
 
+/// Buffers of batched decoding (a pass's frames, the bodies' positions
+/// transposed): megabytes that a caller decoding batch after batch keeps
+/// here instead of allocating (and page-faulting) them on every call.
+/// One workspace per concurrent caller.
+struct DecodeWorkspace {
+  std::vector<float> frames, positions;
+};
+
 /// Decodes bodies [first, first+count) of a body set, 16 bodies per pass
 /// over the matrix. out is body-major: out[(b - first) * V + v].
 /// Deterministic: every output is summed in entry order, whatever the thread
@@ -213,6 +232,10 @@ class DetailDecoder {
 [[nodiscard]] Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
                                          std::size_t first, std::size_t count, std::span<Vec3f> out,
                                          const ExecContext& ctx = {});
+/// The same with the buffers kept in `ws` between calls (same results).
+[[nodiscard]] Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
+                                         std::size_t first, std::size_t count, std::span<Vec3f> out,
+                                         DecodeWorkspace& ws, const ExecContext& ctx = {});
 /// The same, building the DetailDecoder on each call (O(entries)): callers
 /// decoding several batches with one encoding should build it once.
 [[nodiscard]] Status decode_detail_batch(const DetailEncoding& enc, const BodyPolygons& body, const BodySet& bodies,

@@ -345,12 +345,133 @@ TEST(DetailTemplate, DecoderForBatchesIsThreadIndependentAndMatchesSingleBodies)
     for (std::size_t v = 0; v < nv; ++v) worst = std::max(worst, (a[k * nv + v].cast<double>() - single[v]).norm());
   }
   EXPECT_LT(worst, 2e-5);  // float sums at a scale of up to 19 (translated bodies)
+  // A workspace kept between calls of different sizes gives the same bits.
+  DecodeWorkspace ws;
+  std::vector<Vec3f> w1(5 * nv), w2(18 * nv);
+  ASSERT_TRUE(decode_detail_batch(d1, b.poly, set, 1, 5, w1, ws, two));
+  ASSERT_TRUE(decode_detail_batch(d1, b.poly, set, 1, 18, w2, ws, one));
+  ASSERT_TRUE(decode_detail_batch(d1, b.poly, set, 1, 5, w1, ws, two));
+  EXPECT_EQ(std::memcmp(w2.data(), a.data(), a.size() * sizeof(Vec3f)), 0);
+  EXPECT_EQ(std::memcmp(w1.data(), a.data(), w1.size() * sizeof(Vec3f)), 0);
   // Errors: another topology, wrong output size, range out of bounds.
   const Body other = sphere_body(31, 20);
   EXPECT_EQ(decode_detail_batch(d1, other.poly, set, 0, 1, std::span<Vec3f>(a.data(), nv)).code(), ErrorCode::kMismatch);
   EXPECT_EQ(decode_detail_batch(d1, b.poly, set, 0, 2, std::span<Vec3f>(a.data(), nv)).code(), ErrorCode::kMismatch);
   EXPECT_EQ(decode_detail_batch(d1, b.poly, set, 18, 2, std::span<Vec3f>(a.data(), 2 * nv)).code(),
             ErrorCode::kInvalidArgument);
+}
+
+TEST(DetailTemplate, BatchedFramesHandleLargeAndCollapsedPolygons) {
+  // A prism with 20-gon caps (more corners than the vectorised frame code
+  // takes: those polygons use the scalar path) and quad sides; on some
+  // bodies a cap or a side collapses (degenerate frames on that body only).
+  // Batched decoding must match decoding each body on its own.
+  constexpr int kSides = 20;
+  shapes::Soup s;
+  for (int h = 0; h < 2; ++h)
+    for (int i = 0; i < kSides; ++i) {
+      const double a = 2 * M_PI * i / kSides;
+      s.p.emplace_back(0.4 * std::cos(a), 0.3 * std::sin(a), h ? 0.5 : -0.5);
+    }
+  std::vector<std::uint32_t> bottom, top;
+  for (int i = 0; i < kSides; ++i) {
+    const auto j = static_cast<std::uint32_t>((i + 1) % kSides), k = static_cast<std::uint32_t>(i);
+    s.face({k, j, j + kSides, k + kSides});
+    bottom.push_back(static_cast<std::uint32_t>(kSides - 1 - i));
+    top.push_back(static_cast<std::uint32_t>(kSides + i));
+  }
+  s.idx.insert(s.idx.end(), bottom.begin(), bottom.end());
+  s.off.push_back(static_cast<std::uint32_t>(s.idx.size()));
+  s.idx.insert(s.idx.end(), top.begin(), top.end());
+  s.off.push_back(static_cast<std::uint32_t>(s.idx.size()));
+  Body b;
+  b.ref = shapes::body_from(s);
+  b.poly = BodyPolygons::from_model(b.ref->model);
+  b.pos = skin_positions(*b.ref);
+  std::size_t big = 0;
+  for (std::size_t f = 0; f < b.poly.size(); ++f) big += b.poly.face_offsets[f + 1] - b.poly.face_offsets[f] > 16;
+  ASSERT_EQ(big, 2u);
+  SplitMix64 r(8);
+  std::vector<Vec3d> g;
+  for (int i = 0; i < 400; ++i) {
+    const double a = r.uniform(0, 2 * M_PI), z = r.uniform(-0.6, 0.6);
+    g.emplace_back(0.45 * std::cos(a), 0.35 * std::sin(a), z);
+  }
+  DetailParams prm;
+  prm.polygons_per_vertex = 6;
+  auto enc = encode_detail(b.poly, b.pos, g, prm);
+  ASSERT_TRUE(enc);
+  BodySet set(b.ref);
+  std::vector<std::size_t> cap_nodes;  // model node indices of the top cap
+  for (std::uint32_t k = b.poly.face_offsets[b.poly.size() - 1]; k < b.poly.face_offsets[b.poly.size()]; ++k)
+    cap_nodes.push_back(b.poly.face_nodes[k]);
+  for (int k = 0; k < 11; ++k) {
+    std::vector<Vec3d> p = b.pos;
+    for (auto& x : p) x = Vec3d(x.x() * r.uniform(0.9, 1.1), x.y() + 0.05 * x.z() * k, x.z() * (1 + 0.02 * k));
+    if (k % 3 == 1)  // the top cap shrinks to a point: zero area
+      for (const std::size_t n : cap_nodes) p[n] = Vec3d(0, 0, 0.5);
+    if (k % 4 == 2) {  // one side quad folds onto a segment
+      const std::uint32_t* q = b.poly.face_nodes.data() + b.poly.face_offsets[3];
+      p[q[1]] = p[q[0]];
+      p[q[2]] = p[q[3]];
+    }
+    ASSERT_TRUE(set.add("b" + std::to_string(k), std::span<const Vec3d>(p)));
+  }
+  const std::size_t nv = g.size();
+  std::vector<Vec3f> one_out(11 * nv), two_out(11 * nv);
+  ExecContext one = ExecContext::sequential(), two;
+  two.threads = 2;
+  two.sequential_threshold = 1;
+  const DetailDecoder dec(*enc, one);
+  ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 11, one_out, one));
+  ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 11, two_out, two));
+  EXPECT_EQ(std::memcmp(one_out.data(), two_out.data(), one_out.size() * sizeof(Vec3f)), 0);
+  std::vector<Vec3d> single(nv);
+  for (std::size_t k = 0; k < 11; ++k) {
+    ASSERT_TRUE(decode_detail(*enc, b.poly, set.positions(k), single));
+    for (std::size_t v = 0; v < nv; ++v) {
+      ASSERT_TRUE(single[v].allFinite()) << k << " " << v;
+      ASSERT_LT((one_out[k * nv + v].cast<double>() - single[v]).norm(), 1e-5) << "body " << k << " vertex " << v;
+    }
+  }
+}
+
+TEST(PPolygonSearch, NearestManyWithRepeatedQueriesAndLatticeTies) {
+  // Centroids on a lattice (many exactly equal distances) and queries that
+  // repeat, step by lattice units or sit on centroids: each query's result
+  // is built from the previous one, and ties must still break by index.
+  std::vector<Vec3d> c;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 10; ++j)
+      for (int k = 0; k < 3; ++k) c.emplace_back(0.1 * i, 0.1 * j, 0.1 * k);
+  std::vector<std::uint8_t> skip(c.size(), 0);
+  for (std::size_t i = 5; i < c.size(); i += 31) skip[i] = 1;
+  std::vector<Vec3d> q;
+  SplitMix64 r(17);
+  for (int i = 0; i < 600; ++i) {
+    const int step = i % 5;
+    if (step == 0)
+      q.push_back(c[static_cast<std::size_t>(r.uniform(0, 359.9))]);
+    else if (step == 1)
+      q.push_back(q.back());
+    else if (step == 2)
+      q.push_back(q.back() + Vec3d(0.1, 0, 0));
+    else if (step == 3)
+      q.push_back(q.back() + Vec3d(0.05, 0.05, 0.05));
+    else
+      q.push_back(Vec3d(r.uniform(-0.2, 1.3), r.uniform(-0.2, 1.1), r.uniform(-0.2, 0.4)));
+  }
+  for (std::size_t k : {1u, 6u, 27u, 100u}) {
+    CentroidGrid g;
+    g.build(c, skip, k);
+    std::vector<std::uint32_t> got(q.size() * k), want;
+    g.nearest_many(q, k, got, ExecContext::sequential());
+    for (std::size_t v = 0; v < q.size(); ++v) {
+      nearest_brute_force(c, skip, q[v], k, want);
+      ASSERT_TRUE(std::equal(want.begin(), want.end(), got.begin() + static_cast<std::ptrdiff_t>(v * k)))
+          << "k=" << k << " query " << v;
+    }
+  }
 }
 
 TEST(DetailTemplate, FileRoundTripAndCorruption) {
