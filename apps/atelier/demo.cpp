@@ -148,6 +148,10 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   std::vector<BodyFailure> failures;
   std::vector<BodyQuality> quality;
   std::vector<Vec3f> decoded;
+  // The encoding rearranged for batches and the pass buffers: made once for
+  // the whole job, not per chunk.
+  const DetailDecoder decoder(*enc, ctx);
+  DecodeWorkspace workspace;
   std::ostringstream csv;
   const std::size_t nv = g0.size();
   log.progress("bodies", 0, src.size());
@@ -156,7 +160,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     src.generate(first, opt.chunk, chunk, failures, ctx);
     const auto t0 = std::chrono::steady_clock::now();
     decoded.resize(chunk.size() * nv);
-    if (Status s = decode_detail_batch(*enc, poly, chunk, 0, chunk.size(), decoded, ctx); !s) throw Error(s);
+    if (Status s = decode_detail_batch(decoder, poly, chunk, 0, chunk.size(), decoded, workspace, ctx); !s) throw Error(s);
     const double per_body_ms = 1000.0 * seconds_since(t0) / static_cast<double>(std::max<std::size_t>(1, chunk.size()));
     // Quality of each body, in parallel over bodies.
     std::vector<BodyQuality> q(chunk.size());
