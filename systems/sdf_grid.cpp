@@ -100,6 +100,42 @@ struct SdfGrid::Impl {
     return false;
   }
 
+  /// Flat table of the 8^3 blocks over the band's bounding box (grown by
+  /// two blocks): each entry is the block's leaf, or its tile value and
+  /// state. A query reads its block in one array access instead of walking
+  /// the tree (root map, two internal nodes), whose nodes are cache misses
+  /// for scattered queries: the tree is the cost of an inside test far more
+  /// than the arithmetic. Outside the box (or for boxes of more than 2^22
+  /// blocks, where the table is not made) queries use the accessor.
+  /// The entry holds the leaf's value array itself, so a query's loads do
+  /// not wait on the leaf node first (the leaf is in table_leaf, for its
+  /// value mask, read only when needed: see value_mask_needed).
+  struct BlockRef {
+    const float* values = nullptr;  // the leaf's 512 voxels, or null: a tile
+    float tile = 0.0f;
+    bool tile_on = false;
+  };
+  std::vector<BlockRef> table;
+  std::vector<const vdb::FloatTree::LeafNodeType*> table_leaf;
+  std::array<int, 3> table_lo{}, table_dim{};
+  /// False when every inactive voxel of a full grid holds |value| >= the
+  /// exact band (checked at build; OpenVDB sets them to +-background): then
+  /// a corner is an exact band voxel iff |value| < exact band, and nothing
+  /// else needs the active state, so queries skip the value masks.
+  bool value_mask_needed = true;
+
+  /// The entry of block (bx, by, bz), or null outside the table.
+  [[nodiscard]] const BlockRef* block_ref(int bx, int by, int bz) const noexcept {
+    const auto x = static_cast<unsigned>(bx - table_lo[0]), y = static_cast<unsigned>(by - table_lo[1]),
+               z = static_cast<unsigned>(bz - table_lo[2]);
+    if (x >= static_cast<unsigned>(table_dim[0]) || y >= static_cast<unsigned>(table_dim[1]) ||
+        z >= static_cast<unsigned>(table_dim[2]))
+      return nullptr;
+    return &table[(static_cast<std::size_t>(x) * static_cast<std::size_t>(table_dim[1]) + y) *
+                      static_cast<std::size_t>(table_dim[2]) +
+                  z];
+  }
+
   struct Probe {
     double d = 0.0;
     bool valid = false;       // p maps to representable voxel coordinates
@@ -125,11 +161,53 @@ struct SdfGrid::Impl {
     // Corner n sits at offset ((n >> 2) & 1, (n >> 1) & 1, n & 1); along an
     // axis whose index is 7 mod 8 the cell crosses into the next 8^3 block.
     const unsigned sx = (i & 7) == 7, sy = (j & 7) == 7, sz = (k & 7) == 7;
+    constexpr vdb::Index kOff[8] = {0, 1, 8, 9, 64, 65, 72, 73};
+    if (!table.empty()) {
+      // Through the block table when the cell's blocks are in it (the
+      // table is a box: the first and last corner's blocks suffice).
+      const BlockRef* b0 = block_ref(i >> 3, j >> 3, k >> 3);
+      if (b0 && block_ref((i + 1) >> 3, (j + 1) >> 3, (k + 1) >> 3)) {
+        unsigned on = 0;
+        if (!(sx | sy | sz)) {
+          if (const float* values = b0->values) {
+            const vdb::Index o = static_cast<vdb::Index>(((i & 7) << 6) | ((j & 7) << 3) | (k & 7));
+            for (int n = 0; n < 8; ++n) r.v[n] = values[o + kOff[n]];
+            if (value_mask_needed) {
+              const auto& mask = table_leaf[static_cast<std::size_t>(b0 - table.data())]->getValueMask();
+              for (int n = 0; n < 8; ++n) on |= static_cast<unsigned>(mask.isOn(o + kOff[n])) << n;
+            } else {
+              on = 0xffu;
+            }
+          } else {
+            std::fill(std::begin(r.v), std::end(r.v), b0->tile);
+            on = b0->tile_on ? 0xffu : 0u;
+          }
+          return finish(r, on);
+        }
+        for (unsigned n = 0; n < 8; ++n) {
+          const int ci = i + static_cast<int>((n >> 2) & 1), cj = j + static_cast<int>((n >> 1) & 1),
+                    ck = k + static_cast<int>(n & 1);
+          const BlockRef* b = block_ref(ci >> 3, cj >> 3, ck >> 3);
+          if (b->values) {
+            const vdb::Index o = static_cast<vdb::Index>(((ci & 7) << 6) | ((cj & 7) << 3) | (ck & 7));
+            r.v[n] = b->values[o];
+            on |= (value_mask_needed
+                       ? static_cast<unsigned>(
+                             table_leaf[static_cast<std::size_t>(b - table.data())]->getValueMask().isOn(o))
+                       : 1u)
+                  << n;
+          } else {
+            r.v[n] = b->tile;
+            on |= static_cast<unsigned>(b->tile_on) << n;
+          }
+        }
+        return finish(r, on);
+      }
+    }
     if (!(sx | sy | sz)) {
       // The 8 corners in one block (7/8 of the cells per axis): one leaf...
       if (const LeafT* leaf = acc.probeConstLeaf(vdb::Coord(i, j, k))) {
         const vdb::Index o = static_cast<vdb::Index>(((i & 7) << 6) | ((j & 7) << 3) | (k & 7));
-        constexpr vdb::Index kOff[8] = {0, 1, 8, 9, 64, 65, 72, 73};
         const auto& mask = leaf->getValueMask();
         unsigned on = 0;
         for (int n = 0; n < 8; ++n) {
@@ -539,8 +617,65 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
   }
 
+  // The block table (see BlockRef) over the leaves' bounding box grown by
+  // two blocks, so cells next to the band and the flood-filled tiles around
+  // it are read from it too.
+  if (vdb::CoordBBox leaf_box; im->grid->tree().evalLeafBoundingBox(leaf_box)) {
+    std::size_t count = 1;
+    for (int a = 0; a < 3; ++a) {
+      im->table_lo[a] = (leaf_box.min()[a] >> 3) - 2;
+      im->table_dim[a] = (leaf_box.max()[a] >> 3) + 2 - im->table_lo[a] + 1;
+      count *= static_cast<std::size_t>(im->table_dim[a]);
+    }
+    if (count <= (std::size_t{1} << 22)) {
+      im->table.resize(count);
+      im->table_leaf.assign(count, nullptr);
+      const std::size_t nyz = static_cast<std::size_t>(im->table_dim[1]) * static_cast<std::size_t>(im->table_dim[2]);
+      std::atomic<bool> stopped{false};
+      ExecContext c = ctx;
+      c.grain = ctx.grain ? ctx.grain : 256;
+      par::for_each_block(c, count, [&](std::size_t begin, std::size_t end) {
+        if (ctx.cancelled()) {
+          stopped.store(true, std::memory_order_relaxed);
+          return;
+        }
+        auto acc = im->grid->getConstUnsafeAccessor();
+        for (std::size_t at = begin; at < end; ++at) {
+          const vdb::Coord origin(
+              (im->table_lo[0] + static_cast<int>(at / nyz)) * 8,
+              (im->table_lo[1] + static_cast<int>((at / static_cast<std::size_t>(im->table_dim[2])) %
+                                                  static_cast<std::size_t>(im->table_dim[1]))) * 8,
+              (im->table_lo[2] + static_cast<int>(at % static_cast<std::size_t>(im->table_dim[2]))) * 8);
+          Impl::BlockRef& b = im->table[at];
+          const auto* leaf = acc.probeConstLeaf(origin);
+          im->table_leaf[at] = leaf;
+          if (leaf)
+            b.values = leaf->buffer().data();
+          else
+            b.tile_on = acc.probeValue(origin, b.tile);
+        }
+      });
+      if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+    }
+  }
+  if (!im->roi) {
+    // Full grids: can the value masks be skipped (see value_mask_needed)?
+    using LeafT = vdb::FloatTree::LeafNodeType;
+    std::vector<const LeafT*> leaves;
+    leaves.reserve(im->grid->tree().leafCount());
+    im->grid->tree().getNodes(leaves);
+    std::atomic<bool> low{false};
+    const double exact = im->exact_world;
+    par::for_each_n(ctx, leaves.size(), [&](std::size_t li) {
+      for (auto it = leaves[li]->cbeginValueOff(); it; ++it)
+        if (!(std::abs(double(*it)) >= exact)) low.store(true, std::memory_order_relaxed);
+    });
+    // Tiles carry their own state in the table; the accessor path reads masks.
+    im->value_mask_needed = low.load();
+  }
+
   im->stats.active_voxels = static_cast<std::size_t>(im->grid->activeVoxelCount());
-  im->stats.memory_bytes = static_cast<std::size_t>(im->grid->memUsage());
+  im->stats.memory_bytes = static_cast<std::size_t>(im->grid->memUsage()) + im->table.size() * (sizeof(Impl::BlockRef) + sizeof(void*));
   impl_ = std::move(im);
   return Status::ok();
 }
