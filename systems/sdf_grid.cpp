@@ -162,8 +162,8 @@ struct SdfGrid::Impl {
     if (const float* v = b->values) {
       const int o = ((i & 7) << 6) | ((j & 7) << 3) | (k & 7);
       __builtin_prefetch(v + o);
-      __builtin_prefetch(v + o + 9);
-      if ((i & 7) != 7) {
+      if ((i & 7) != 7 && (j & 7) != 7 && (k & 7) != 7) {  // corners o .. o + 73, all in this leaf
+        __builtin_prefetch(v + o + 9);
         __builtin_prefetch(v + o + 64);
         __builtin_prefetch(v + o + 73);
       }
