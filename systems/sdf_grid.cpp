@@ -136,40 +136,6 @@ struct SdfGrid::Impl {
                   z];
   }
 
-  /// Prefetch for batched queries. Scattered points miss the cache on
-  /// their table entry and then on the leaf values, one after the other;
-  /// the batched loops ask for the entry of a point kFar ahead (stage 0) and
-  /// the values of one kNear ahead (stage 1, its entry fetched by then), so
-  /// the misses of several queries overlap. A hint only: no result depends
-  /// on it.
-  static constexpr std::size_t kFar = 16, kNear = 8;
-  void prefetch(const Vec3d& p, int stage) const noexcept {
-    if (table.empty()) return;
-    const double x = p.x() * inv_h, y = p.y() * inv_h, z = p.z() * inv_h;
-    constexpr double kLimit = 1 << 30;
-    if (!(std::abs(x) < kLimit && std::abs(y) < kLimit && std::abs(z) < kLimit)) return;
-    auto floor_int = [](double v) {
-      const int t = static_cast<int>(v);
-      return v < t ? t - 1 : t;
-    };
-    const int i = floor_int(x), j = floor_int(y), k = floor_int(z);
-    const BlockRef* b = block_ref(i >> 3, j >> 3, k >> 3);
-    if (!b) return;
-    if (stage == 0) {
-      __builtin_prefetch(b);
-      return;
-    }
-    if (const float* v = b->values) {
-      const int o = ((i & 7) << 6) | ((j & 7) << 3) | (k & 7);
-      __builtin_prefetch(v + o);
-      if ((i & 7) != 7 && (j & 7) != 7 && (k & 7) != 7) {  // corners o .. o + 73, all in this leaf
-        __builtin_prefetch(v + o + 9);
-        __builtin_prefetch(v + o + 64);
-        __builtin_prefetch(v + o + 73);
-      }
-    }
-  }
-
   struct Probe {
     double d = 0.0;
     bool valid = false;       // p maps to representable voxel coordinates
@@ -768,11 +734,7 @@ Status SdfGrid::sample_many(std::span<const Vec3d> in, std::span<double> out, co
       return;
     }
     auto acc = impl_->grid->getConstUnsafeAccessor();
-    for (std::size_t i = b; i < e; ++i) {
-      if (i + Impl::kFar < e) impl_->prefetch(in[i + Impl::kFar], 0);
-      if (i + Impl::kNear < e) impl_->prefetch(in[i + Impl::kNear], 1);
-      out[i] = impl_->sample(acc, in[i]);
-    }
+    for (std::size_t i = b; i < e; ++i) out[i] = impl_->sample(acc, in[i]);
   });
   if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid::sample_many: cancelled"};
   return Status::ok();
@@ -791,11 +753,7 @@ Status SdfGrid::inside_many(std::span<const Vec3d> in, std::span<std::uint8_t> o
     }
     auto acc = impl_->grid->getConstUnsafeAccessor();
     InsideStats st;
-    for (std::size_t i = b; i < e; ++i) {
-      if (i + Impl::kFar < e) impl_->prefetch(in[i + Impl::kFar], 0);
-      if (i + Impl::kNear < e) impl_->prefetch(in[i + Impl::kNear], 1);
-      out[i] = impl_->inside(acc, in[i], st) ? 1 : 0;
-    }
+    for (std::size_t i = b; i < e; ++i) out[i] = impl_->inside(acc, in[i], st) ? 1 : 0;
     from_grid.fetch_add(st.from_grid, std::memory_order_relaxed);
     exact.fetch_add(st.exact, std::memory_order_relaxed);
   });
