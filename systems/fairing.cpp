@@ -4,9 +4,15 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <new>
 #include <sstream>
+#include <utility>
 
 #include "engine/parallel.h"
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace atelier {
 
@@ -219,27 +225,44 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
 namespace {
 
 // Working positions and umbrellas: xyz plus a zero lane, so a point is two
-// aligned SSE packets (or one AVX register) and the per-component arithmetic
-// is exactly that of Vec3d.
+// SSE packets or one AVX register and the per-component arithmetic is
+// exactly that of Vec3d.
 using P4 = Eigen::Vector4d;
 
-/// sum_j x[j] over a ring, in ring order (regular valence 6 unrolled).
-inline P4 ring_sum(const P4* x, const std::uint32_t* nb, std::uint32_t b, std::uint32_t e) noexcept {
-  if (e - b == 6) {
-    const std::uint32_t* r = nb + b;
-    return ((((x[r[0]] + x[r[1]]) + x[r[2]]) + x[r[3]]) + x[r[4]]) + x[r[5]];
+/// 64-byte aligned storage: an AVX load of a point never splits a cache line.
+template <class T>
+struct Aligned64 {
+  using value_type = T;
+  Aligned64() = default;
+  template <class U>
+  Aligned64(const Aligned64<U>&) noexcept {}  // NOLINT: allocators rebind implicitly
+  [[nodiscard]] T* allocate(std::size_t n) {
+    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{64}));
   }
-  P4 s = x[nb[b]];
-  for (std::uint32_t k = b + 1; k < e; ++k) s += x[nb[k]];
-  return s;
-}
+  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, std::align_val_t{64}); }
+  /// Default-initialises (no zero fill: every entry is written before it is read).
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... A>
+  void construct(U* p, A&&... a) {
+    ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+  }
+  friend bool operator==(const Aligned64&, const Aligned64&) noexcept { return true; }
+};
+using P4Array = std::vector<P4, Aligned64<P4>>;
 
-/// The same over a rolling window (index & mask).
-inline P4 ring_sum_masked(const P4* x, const std::uint32_t* nb, std::uint32_t b, std::uint32_t e,
-                          std::size_t mask) noexcept {
+/// sum_j x[j & mask] over a ring (regular valence 6 unrolled as a tree of
+/// three levels instead of a chain of five dependent adds; other valences
+/// in ring order). mask = ~0 for positions, window - 1 for the rolling
+/// window of U.
+inline P4 ring_sum(const P4* x, const std::uint32_t* nb, std::uint32_t b, std::uint32_t e,
+                   std::uint32_t mask) noexcept {
   if (e - b == 6) {
     const std::uint32_t* r = nb + b;
-    return ((((x[r[0] & mask] + x[r[1] & mask]) + x[r[2] & mask]) + x[r[3] & mask]) + x[r[4] & mask]) + x[r[5] & mask];
+    return ((x[r[0] & mask] + x[r[1] & mask]) + (x[r[2] & mask] + x[r[3] & mask])) +
+           (x[r[4] & mask] + x[r[5] & mask]);
   }
   P4 s = x[nb[b] & mask];
   for (std::uint32_t k = b + 1; k < e; ++k) s += x[nb[k] & mask];
@@ -293,6 +316,117 @@ Vec3d collide_move(const FairParams& prm, CollisionState& cs, std::size_t i, con
   return last;
 }
 
+/// One block [b, e) of active nodes in one Jacobi iteration. U(j) is made
+/// when the sweep reaches j - band and read until j + band, so a rolling
+/// window of 2 band + 1 entries (u, index & mask) holds every U a node's
+/// U2 needs: U and U2 in one streaming pass (seed 000 section 4.2).
+struct Sweep {
+  const P4* cur = nullptr;
+  P4* nxt = nullptr;
+  P4* u = nullptr;  // the block's window
+  const std::uint32_t* off = nullptr;
+  const std::uint32_t* nb = nullptr;
+  const double* inv_deg = nullptr;
+  const double* inv_nu = nullptr;
+  std::size_t band = 0, nactive = 0;
+  std::uint32_t mask = 0;
+};
+
+/// Portable kernel (SSE2 through Eigen); with Collide, every move goes
+/// through collide_move. Returns the largest squared move.
+template <bool Collide>
+double sweep_portable(const Sweep& s, std::size_t b, std::size_t e, const FairParams* prm,
+                      CollisionState* cs) {
+  std::size_t next_u = b > s.band ? b - s.band : 0;  // next U to make
+  const std::size_t u_end = std::min(s.nactive, e + s.band);
+  double mx = 0;
+  for (std::size_t i = b; i < e; ++i) {
+    // U(p) = 1/n sum_j p_j - p up to i + band.
+    for (const std::size_t last = std::min(u_end, i + s.band + 1); next_u < last; ++next_u) {
+      const std::uint32_t k0 = s.off[next_u], k1 = s.off[next_u + 1];
+      s.u[next_u & s.mask] = ring_sum(s.cur, s.nb, k0, k1, ~0u) * s.inv_deg[k1 - k0] - s.cur[next_u];
+    }
+    if (!(s.inv_nu[i] > 0.0)) continue;  // not free
+    // p <- p - w U2(p) / nu, U2 = 1/n sum_j U(p_j) - U(p).
+    const std::uint32_t k0 = s.off[i], k1 = s.off[i + 1];
+    const P4 step = -s.inv_nu[i] * (ring_sum(s.u, s.nb, k0, k1, s.mask) * s.inv_deg[k1 - k0] - s.u[i & s.mask]);
+    P4 q = s.cur[i] + step;
+    if constexpr (Collide) {
+      const Vec3d q3 = collide_move(*prm, *cs, i, s.cur[i].head<3>(), step.head<3>());
+      q = P4(q3.x(), q3.y(), q3.z(), 0.0);
+    }
+    const P4 d = q - s.cur[i];
+    mx = std::max(mx, (d.x() * d.x() + d.y() * d.y()) + d.z() * d.z());
+    s.nxt[i] = q;
+  }
+  return mx;
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define ATELIER_FAIR_AVX2 1
+
+// The AVX2 kernel: a point is one 256-bit register, so each ring term is
+// one load and one add instead of two of each. The operations and their
+// order are those of sweep_portable and "avx2" does not enable FMA, so no
+// multiply-add is contracted: the results are bit-identical to the
+// portable kernel (tests check it).
+#define ATELIER_AVX2_FN __attribute__((target("avx2"), always_inline)) inline
+
+bool have_avx2() noexcept {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+
+ATELIER_AVX2_FN __m256d ring_sum_avx2(const double* x, const std::uint32_t* nb, std::uint32_t b, std::uint32_t e,
+                                      std::uint32_t mask) noexcept {
+  if (e - b == 6) {
+    const std::uint32_t* r = nb + b;
+    auto at = [&](int k) { return x + 4 * std::size_t(r[k] & mask); };
+    const __m256d s01 = _mm256_add_pd(_mm256_load_pd(at(0)), _mm256_load_pd(at(1)));
+    const __m256d s23 = _mm256_add_pd(_mm256_load_pd(at(2)), _mm256_load_pd(at(3)));
+    const __m256d s45 = _mm256_add_pd(_mm256_load_pd(at(4)), _mm256_load_pd(at(5)));
+    return _mm256_add_pd(_mm256_add_pd(s01, s23), s45);
+  }
+  __m256d s = _mm256_load_pd(x + 4 * std::size_t(nb[b] & mask));
+  for (std::uint32_t k = b + 1; k < e; ++k) s = _mm256_add_pd(s, _mm256_load_pd(x + 4 * std::size_t(nb[k] & mask)));
+  return s;
+}
+
+__attribute__((target("avx2"))) double sweep_avx2(const Sweep& s, std::size_t b, std::size_t e) noexcept {
+  const double* cur = s.cur->data();
+  double* nxt = s.nxt->data();
+  double* u = s.u->data();
+  std::size_t next_u = b > s.band ? b - s.band : 0;
+  const std::size_t u_end = std::min(s.nactive, e + s.band);
+  __m128d mx = _mm_setzero_pd();
+  for (std::size_t i = b; i < e; ++i) {
+    for (const std::size_t last = std::min(u_end, i + s.band + 1); next_u < last; ++next_u) {
+      const std::uint32_t k0 = s.off[next_u], k1 = s.off[next_u + 1];
+      const __m256d sum = ring_sum_avx2(cur, s.nb, k0, k1, ~0u);
+      _mm256_store_pd(u + 4 * (next_u & s.mask),
+                      _mm256_sub_pd(_mm256_mul_pd(sum, _mm256_set1_pd(s.inv_deg[k1 - k0])),
+                                    _mm256_load_pd(cur + 4 * next_u)));
+    }
+    if (!(s.inv_nu[i] > 0.0)) continue;
+    const std::uint32_t k0 = s.off[i], k1 = s.off[i + 1];
+    const __m256d su = ring_sum_avx2(u, s.nb, k0, k1, s.mask);
+    const __m256d u2 = _mm256_sub_pd(_mm256_mul_pd(su, _mm256_set1_pd(s.inv_deg[k1 - k0])),
+                                     _mm256_load_pd(u + 4 * (i & s.mask)));
+    const __m256d step = _mm256_mul_pd(_mm256_set1_pd(-s.inv_nu[i]), u2);
+    const __m256d c = _mm256_load_pd(cur + 4 * i);
+    const __m256d q = _mm256_add_pd(c, step);
+    const __m256d d = _mm256_sub_pd(q, c);
+    const __m256d d2 = _mm256_mul_pd(d, d);
+    const __m128d xy = _mm256_castpd256_pd128(d2);
+    // (dx dx + dy dy) + dz dz, as the portable kernel sums it.
+    const __m128d n2 = _mm_add_sd(_mm_add_sd(xy, _mm_unpackhi_pd(xy, xy)), _mm256_extractf128_pd(d2, 1));
+    mx = _mm_max_sd(n2, mx);  // max(mx, n2) for non-NaN moves
+    _mm256_store_pd(nxt + 4 * i, q);
+  }
+  return _mm_cvtsd_f64(mx);
+}
+#endif
+
 }  // namespace
 
 Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj, const FairPlan& plan,
@@ -318,6 +452,12 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
   const std::uint32_t* local = plan.local.data();
   FairReport rep;
   if (plan.free == 0) return rep;
+#ifdef ATELIER_FAIR_AVX2
+  const bool avx2 = !collide && prm.allow_avx2 && have_avx2();
+#else
+  const bool avx2 = false;
+#endif
+  rep.avx2 = avx2;
 
   // Collision state per active node (used by the free ones only).
   CollisionState cs;
@@ -331,74 +471,71 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
     cs.refused.assign(nactive, 0);
   }
 
-  // Blocks of active nodes, a fixed partition (results are per node, the
-  // partition only shapes the work). Each block computes U over its own
-  // nodes widened by the bandwidth into a rolling window: U(j) is made when
-  // the sweep reaches j - b and read until j + b, so a window of 2b + 1
-  // entries suffices; U and U2 then cost one streaming pass over positions
-  // and rings instead of two, and no array of U for the whole mesh. Wide
-  // bands (poorly local meshes) use blocks as wide as the band.
+  // Blocks of active nodes (see Sweep), a partition that only shapes the
+  // work: every U is the same function of the positions in any block, so
+  // results do not depend on it. Equal blocks, a fixed number per thread so
+  // no thread idles on an odd last block; each block recomputes the U of
+  // the band before and after it, so blocks stay wider than a few bands.
   const std::size_t band = plan.bandwidth;
   std::size_t window = 1;
   while (window < 2 * band + 2) window <<= 1;
-  const std::size_t block = std::max<std::size_t>(8192, 4 * band);
-  const std::size_t blocks = (nactive + block - 1) / block;
-  const std::size_t mask = window - 1;
+  const bool sequential = ctx.threads == 1 || nactive < ctx.sequential_threshold;
+  const std::size_t threads =
+      ctx.threads > 0 ? static_cast<std::size_t>(ctx.threads)
+                      : static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  constexpr std::size_t kBlocksPerThread = 2;
+  std::size_t blocks = sequential ? 1 : threads * kBlocksPerThread;
+  std::size_t block = (nactive + blocks - 1) / blocks;
+  if (blocks > 1 && block < std::max<std::size_t>(1024, 4 * band)) block = std::max<std::size_t>(1024, 4 * band);
+  blocks = (nactive + block - 1) / block;
 
   // Double buffer over the local range: nodes that do not move hold the same
   // value in both and free nodes are rewritten every iteration, so no copy
   // pass is needed. First touch by block, as the sweeps will read them.
-  std::vector<P4> buf_a(nlocal), buf_b(nlocal), rings(blocks * window);
-  par::for_each_block(ctx, nlocal, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) buf_a[i] = buf_b[i] = P4(p[local[i]].x(), p[local[i]].y(), p[local[i]].z(), 0.0);
-  });
+  P4Array buf_a(nlocal), buf_b(nlocal), rings(blocks * window);
   P4* cur = buf_a.data();
   P4* nxt = buf_b.data();
-  const std::uint32_t* off = plan.offset.data();
-  const std::uint32_t* nb = plan.neighbor.data();
-  const double* inv_deg = plan.inv_degree.data();
   const double* inv_nu = plan.inv_nu.data();
 
   std::vector<double> block_max(blocks);
   bool cancelled = false;
   // One arena for the whole run (not one per loop): the workers stay in it
-  // across iterations.
+  // from the first copy to the last.
   par::in_arena(ctx, [&] {
-    ExecContext bctx = ctx;
-    if (ctx.threads > 1) bctx.threads = 0;  // run in the enclosing arena
+    ExecContext ictx = ctx;
+    if (ctx.threads > 1) ictx.threads = 0;  // run in the enclosing arena
+    par::for_each_block(ictx, nlocal, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) cur[i] = nxt[i] = P4(p[local[i]].x(), p[local[i]].y(), p[local[i]].z(), 0.0);
+    });
+    ExecContext bctx = ictx;
     bctx.grain = 1;
-    bctx.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / block);
+    bctx.sequential_threshold = 2;
     for (int it = 0; it < prm.iterations; ++it) {
       if (ctx.cancelled()) {
         cancelled = true;
         return;
       }
       par::for_each_n(bctx, blocks, [&](std::size_t blk) {
-        P4* u = rings.data() + blk * window;
+        Sweep s;
+        s.cur = cur;
+        s.nxt = nxt;
+        s.u = rings.data() + blk * window;
+        s.off = plan.offset.data();
+        s.nb = plan.neighbor.data();
+        s.inv_deg = plan.inv_degree.data();
+        s.inv_nu = inv_nu;
+        s.band = band;
+        s.nactive = nactive;
+        s.mask = static_cast<std::uint32_t>(window - 1);
         const std::size_t b = blk * block, e = std::min(nactive, b + block);
-        std::size_t next_u = b > band ? b - band : 0;  // next U to make
-        const std::size_t u_end = std::min(nactive, e + band);
-        double mx = 0;
-        for (std::size_t i = b; i < e; ++i) {
-          // U(p) = 1/n sum_j p_j - p (seed 000 section 4.2) up to i + b.
-          for (const std::size_t last = std::min(u_end, i + band + 1); next_u < last; ++next_u) {
-            const std::uint32_t k0 = off[next_u], k1 = off[next_u + 1];
-            u[next_u & mask] = ring_sum(cur, nb, k0, k1) * inv_deg[k1 - k0] - cur[next_u];
-          }
-          if (!(inv_nu[i] > 0.0)) continue;  // not free
-          // p <- p - w U2(p) / nu, U2 = 1/n sum_j U(p_j) - U(p).
-          const std::uint32_t k0 = off[i], k1 = off[i + 1];
-          const P4 step = -inv_nu[i] * (ring_sum_masked(u, nb, k0, k1, mask) * inv_deg[k1 - k0] - u[i & mask]);
-          P4 q = cur[i] + step;
-          if (collide) {
-            const Vec3d q3 = collide_move(prm, cs, i, cur[i].head<3>(), step.head<3>());
-            q = P4(q3.x(), q3.y(), q3.z(), 0.0);
-          }
-          const double dx = q.x() - cur[i].x(), dy = q.y() - cur[i].y(), dz = q.z() - cur[i].z();
-          mx = std::max(mx, dx * dx + dy * dy + dz * dz);
-          nxt[i] = q;
-        }
-        block_max[blk] = mx;
+        if (collide)
+          block_max[blk] = sweep_portable<true>(s, b, e, &prm, &cs);
+#ifdef ATELIER_FAIR_AVX2
+        else if (avx2)
+          block_max[blk] = sweep_avx2(s, b, e);
+#endif
+        else
+          block_max[blk] = sweep_portable<false>(s, b, e, nullptr, nullptr);
       });
       std::swap(cur, nxt);
       rep.iterations = it + 1;
@@ -407,11 +544,12 @@ Expected<FairReport> fair_umbrella(std::span<Vec3d> p, const NodeAdjacency& adj,
       rep.last_max_move = std::sqrt(mx);
       if (rep.last_max_move <= prm.tolerance) break;
     }
+    par::for_each_block(ictx, nactive, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i)
+        if (inv_nu[i] > 0.0) p[local[i]] = cur[i].head<3>();
+    });
   });
   if (cancelled) return Status(ErrorCode::kCancelled, "fair_umbrella cancelled");
-  par::for_each_n(ctx, nactive, [&](std::size_t i) {
-    if (inv_nu[i] > 0.0) p[local[i]] = cur[i].head<3>();
-  });
   if (collide) {
     for (std::size_t i = 0; i < nactive; ++i) {
       if (bounds_io && inv_nu[i] > 0.0) prm.distance_bounds[local[i]] = cs.lower[i];

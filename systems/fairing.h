@@ -65,6 +65,11 @@ struct FairParams {
   double relaxation = 0.5;
   /// Sub-steps of a move near the body (seed 000: "subdivided into several steps").
   int substeps = 4;
+  /// Use the AVX2 kernel when the CPU has it (runs without collision only).
+  /// It computes the same operations in the same order without FMA, so the
+  /// result is bit-identical to the portable SSE2 kernel; false forces the
+  /// portable one (tests compare the two).
+  bool allow_avx2 = true;
 };
 
 struct FairReport {
@@ -72,6 +77,7 @@ struct FairReport {
   double last_max_move = 0;
   std::uint64_t distance_queries = 0;  // body queries made by the collision test
   std::uint64_t refused_moves = 0;     // moves cut short by the collision test
+  bool avx2 = false;                   // the AVX2 kernel ran
 };
 
 /// The per-mesh part of a fairing run, like OpenMesh's smoother

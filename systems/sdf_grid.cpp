@@ -67,12 +67,73 @@ struct SdfGrid::Impl {
   double band_world = 0.0;   // half width in world units
   std::vector<Box3d> walk_boxes;  // ROI boxes grown by 2h: where the band is complete
 
+  /// ROI grids: the sign of every 8^3 block without a leaf (a tile, no band
+  /// voxel) that meets a walk box, found once at build by walk_sign, so a
+  /// query off the band reads it instead of walking. Within a walk box the
+  /// band is complete, so the block's voxels there (a box of lattice points,
+  /// each at least w h >= 2 h from the surface, neighbours h apart) are all
+  /// on one side. 0: the block has a leaf, or the walk did not decide.
+  struct BlockSigns {
+    std::array<int, 3> vlo{}, vhi{};  // voxel index range of the walk box
+    std::array<int, 3> blo{}, dim{};  // its blocks: [blo, blo + dim)
+    std::vector<std::int8_t> sign;
+  };
+  std::vector<BlockSigns> block_signs;  // one per walk box
+
+  [[nodiscard]] int block_sign(std::size_t box, const vdb::Coord& c0) const noexcept {
+    if (box >= block_signs.size()) return 0;
+    const BlockSigns& t = block_signs[box];
+    if (t.sign.empty()) return 0;
+    std::size_t at = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (c0[a] < t.vlo[a] || c0[a] > t.vhi[a]) return 0;
+      at = at * static_cast<std::size_t>(t.dim[a]) + static_cast<std::size_t>((c0[a] >> 3) - t.blo[a]);
+    }
+    return t.sign[at];
+  }
+
   [[nodiscard]] bool covers(const Vec3d& p) const noexcept {
     if (!roi) return true;
     for (const Box3d& b : params.roi) {
       if ((p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all()) return true;
     }
     return false;
+  }
+
+  /// Flat table of the 8^3 blocks over the band's bounding box (grown by
+  /// two blocks): each entry is the block's leaf, or its tile value and
+  /// state. A query reads its block in one array access instead of walking
+  /// the tree (root map, two internal nodes), whose nodes are cache misses
+  /// for scattered queries: the tree is the cost of an inside test far more
+  /// than the arithmetic. Outside the box (or for boxes of more than 2^22
+  /// blocks, where the table is not made) queries use the accessor.
+  /// The entry holds the leaf's value array itself, so a query's loads do
+  /// not wait on the leaf node first (the leaf is in table_leaf, for its
+  /// value mask, read only when needed: see value_mask_needed).
+  struct BlockRef {
+    const float* values = nullptr;  // the leaf's 512 voxels, or null: a tile
+    float tile = 0.0f;
+    bool tile_on = false;
+  };
+  std::vector<BlockRef> table;
+  std::vector<const vdb::FloatTree::LeafNodeType*> table_leaf;
+  std::array<int, 3> table_lo{}, table_dim{};
+  /// False when every inactive voxel of a full grid holds |value| >= the
+  /// exact band (checked at build; OpenVDB sets them to +-background): then
+  /// a corner is an exact band voxel iff |value| < exact band, and nothing
+  /// else needs the active state, so queries skip the value masks.
+  bool value_mask_needed = true;
+
+  /// The entry of block (bx, by, bz), or null outside the table.
+  [[nodiscard]] const BlockRef* block_ref(int bx, int by, int bz) const noexcept {
+    const auto x = static_cast<unsigned>(bx - table_lo[0]), y = static_cast<unsigned>(by - table_lo[1]),
+               z = static_cast<unsigned>(bz - table_lo[2]);
+    if (x >= static_cast<unsigned>(table_dim[0]) || y >= static_cast<unsigned>(table_dim[1]) ||
+        z >= static_cast<unsigned>(table_dim[2]))
+      return nullptr;
+    return &table[(static_cast<std::size_t>(x) * static_cast<std::size_t>(table_dim[1]) + y) *
+                      static_cast<std::size_t>(table_dim[2]) +
+                  z];
   }
 
   struct Probe {
@@ -96,24 +157,96 @@ struct SdfGrid::Impl {
     r.tx = x - fx;
     r.ty = y - fy;
     r.tz = z - fz;
-    unsigned on = 0;
-    // Fast path: the 8 corners in one leaf (7/8 of the cells per axis).
-    if ((i & 7) != 7 && (j & 7) != 7 && (k & 7) != 7) {
-      if (const auto* leaf = acc.probeConstLeaf(vdb::Coord(i, j, k))) {
-        const vdb::Index o = static_cast<vdb::Index>(((i & 7) << 6) | ((j & 7) << 3) | (k & 7));
-        constexpr vdb::Index kOff[8] = {0, 1, 8, 9, 64, 65, 72, 73};
-        const float* buf = leaf->buffer().data();
-        const auto& mask = leaf->getValueMask();
-        for (int n = 0; n < 8; ++n) {
-          r.v[n] = buf[o + kOff[n]];
-          on |= static_cast<unsigned>(mask.isOn(o + kOff[n])) << n;
+    using LeafT = vdb::FloatTree::LeafNodeType;
+    // Corner n sits at offset ((n >> 2) & 1, (n >> 1) & 1, n & 1); along an
+    // axis whose index is 7 mod 8 the cell crosses into the next 8^3 block.
+    const unsigned sx = (i & 7) == 7, sy = (j & 7) == 7, sz = (k & 7) == 7;
+    constexpr vdb::Index kOff[8] = {0, 1, 8, 9, 64, 65, 72, 73};
+    if (!table.empty()) {
+      // Through the block table when the cell's blocks are in it (the
+      // table is a box: the first and last corner's blocks suffice).
+      const BlockRef* b0 = block_ref(i >> 3, j >> 3, k >> 3);
+      if (b0 && block_ref((i + 1) >> 3, (j + 1) >> 3, (k + 1) >> 3)) {
+        unsigned on = 0;
+        if (!(sx | sy | sz)) {
+          if (const float* values = b0->values) {
+            const vdb::Index o = static_cast<vdb::Index>(((i & 7) << 6) | ((j & 7) << 3) | (k & 7));
+            for (int n = 0; n < 8; ++n) r.v[n] = values[o + kOff[n]];
+            if (value_mask_needed) {
+              const auto& mask = table_leaf[static_cast<std::size_t>(b0 - table.data())]->getValueMask();
+              for (int n = 0; n < 8; ++n) on |= static_cast<unsigned>(mask.isOn(o + kOff[n])) << n;
+            } else {
+              on = 0xffu;
+            }
+          } else {
+            std::fill(std::begin(r.v), std::end(r.v), b0->tile);
+            on = b0->tile_on ? 0xffu : 0u;
+          }
+          return finish(r, on);
+        }
+        for (unsigned n = 0; n < 8; ++n) {
+          const int ci = i + static_cast<int>((n >> 2) & 1), cj = j + static_cast<int>((n >> 1) & 1),
+                    ck = k + static_cast<int>(n & 1);
+          const BlockRef* b = block_ref(ci >> 3, cj >> 3, ck >> 3);
+          if (b->values) {
+            const vdb::Index o = static_cast<vdb::Index>(((ci & 7) << 6) | ((cj & 7) << 3) | (ck & 7));
+            r.v[n] = b->values[o];
+            on |= (value_mask_needed
+                       ? static_cast<unsigned>(
+                             table_leaf[static_cast<std::size_t>(b - table.data())]->getValueMask().isOn(o))
+                       : 1u)
+                  << n;
+          } else {
+            r.v[n] = b->tile;
+            on |= static_cast<unsigned>(b->tile_on) << n;
+          }
         }
         return finish(r, on);
       }
     }
-    for (int n = 0; n < 8; ++n) {
-      const vdb::Coord c(i + ((n >> 2) & 1), j + ((n >> 1) & 1), k + (n & 1));
-      on |= static_cast<unsigned>(acc.probeValue(c, r.v[n])) << n;
+    if (!(sx | sy | sz)) {
+      // The 8 corners in one block (7/8 of the cells per axis): one leaf...
+      if (const LeafT* leaf = acc.probeConstLeaf(vdb::Coord(i, j, k))) {
+        const vdb::Index o = static_cast<vdb::Index>(((i & 7) << 6) | ((j & 7) << 3) | (k & 7));
+        const auto& mask = leaf->getValueMask();
+        unsigned on = 0;
+        for (int n = 0; n < 8; ++n) {
+          r.v[n] = leaf->getValue(o + kOff[n]);
+          on |= static_cast<unsigned>(mask.isOn(o + kOff[n])) << n;
+        }
+        return finish(r, on);
+      }
+      // ...or no leaf: the whole block is one tile (most queries away from
+      // the surface), whose value and state every corner shares. One lookup
+      // instead of eight.
+      float v = 0.0f;
+      const bool on = acc.probeValue(vdb::Coord(i, j, k), v);
+      std::fill(std::begin(r.v), std::end(r.v), v);
+      return finish(r, on ? 0xffu : 0u);
+    }
+    // The cell spans 2, 4 or 8 blocks: one leaf or tile lookup per block.
+    // Block bn of corner n keeps the bits of n along the crossing axes; it is
+    // first met at corner bn (bn <= n), so one pass fills both.
+    const LeafT* leaf[8] = {};
+    float tile[8] = {};
+    bool tile_on[8] = {};
+    unsigned on = 0;
+    for (unsigned n = 0; n < 8; ++n) {
+      const vdb::Coord c(i + static_cast<int>((n >> 2) & 1), j + static_cast<int>((n >> 1) & 1),
+                         k + static_cast<int>(n & 1));
+      const unsigned bn = (n & (sx << 2)) | (n & (sy << 1)) | (n & sz);
+      if (bn == n) {
+        leaf[n] = acc.probeConstLeaf(c);
+        if (!leaf[n]) tile_on[n] = acc.probeValue(c, tile[n]);
+      }
+      if (const LeafT* l = leaf[bn]) {
+        const vdb::Index o = LeafT::coordToOffset(c);
+        r.v[n] = l->getValue(o);
+        on |= static_cast<unsigned>(l->isValueOn(o)) << n;
+      } else {
+        r.v[n] = tile[bn];
+        on |= static_cast<unsigned>(tile_on[bn]) << n;
+      }
     }
     return finish(r, on);
   }
@@ -135,17 +268,21 @@ struct SdfGrid::Impl {
   /// whose stored |value| is below the exact band holds the exact signed
   /// distance D(c) (recomputed at build), and a signed distance is
   /// 1-Lipschitz, so |D(c)| > |p - c| puts p strictly on c's side of the
-  /// surface. Returns -1 inside, +1 outside, 0 when no corner decides.
-  [[nodiscard]] int corner_sign(const Probe& r) const noexcept {
+  /// surface. Returns -1 inside, +1 outside, 0 when no corner decides; then
+  /// `bound` is lowered to min |D(c)| + |p - c| over the exact corners, an
+  /// upper bound on p's distance (the same Lipschitz bound the other way),
+  /// which keeps the BVH's first search radius within a voxel.
+  [[nodiscard]] int corner_sign(const Probe& r, double& bound) const noexcept {
     for (int n = 0; n < 8; ++n) {
       if (!((r.active >> n) & 1u)) continue;
       const double a = std::abs(double(r.v[n]));
       if (!(a < exact_world)) continue;
+      const double dx = r.tx - ((n >> 2) & 1), dy = r.ty - ((n >> 1) & 1), dz = r.tz - (n & 1);
+      const double dist2 = (dx * dx + dy * dy + dz * dz) * h * h;
       // Float storage rounds by 2^-24 relative; keep a margin well above it.
       const double m = a * (1.0 - 1e-6) - 1e-9 * h;
-      if (m <= 0.0) continue;
-      const double dx = r.tx - ((n >> 2) & 1), dy = r.ty - ((n >> 1) & 1), dz = r.tz - (n & 1);
-      if (m * m > (dx * dx + dy * dy + dz * dz) * h * h) return r.v[n] < 0.0f ? -1 : 1;
+      if (m > 0.0 && m * m > dist2) return r.v[n] < 0.0f ? -1 : 1;
+      bound = std::min(bound, a * (1.0 + 1e-6) + 1e-9 * h + std::sqrt(dist2) * (1.0 + 1e-12));
     }
     return 0;
   }
@@ -213,15 +350,23 @@ struct SdfGrid::Impl {
         ++st.from_grid;
         return r.d < 0.0;
       }
+      double corner_bound = std::numeric_limits<double>::infinity();
       if (r.valid) {
-        if (const int s = corner_sign(r); s != 0) {
+        if (const int s = corner_sign(r, corner_bound); s != 0) {
           ++st.from_grid;
           return s < 0;
         }
       }
       if (r.valid && roi && !r.all_active) {
-        for (const Box3d& b : walk_boxes) {
+        for (std::size_t bi = 0; bi < walk_boxes.size(); ++bi) {
+          const Box3d& b = walk_boxes[bi];
           if ((p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all()) {
+            const vdb::Coord c0(static_cast<int>(std::lround(p.x() * inv_h)), static_cast<int>(std::lround(p.y() * inv_h)),
+                                static_cast<int>(std::lround(p.z() * inv_h)));
+            if (const int s = block_sign(bi, c0); s != 0) {  // what walk_sign(p) would find
+              ++st.from_grid;
+              return s < 0;
+            }
             const int s = walk_sign(acc, p, b);
             if (s != 0) {
               ++st.from_grid;
@@ -234,6 +379,7 @@ struct SdfGrid::Impl {
       // |d - distance| <= sqrt(3) h + value error: a tight first radius
       // for the exact query (the answer does not depend on it).
       if (r.valid && (!roi || r.all_active)) bound = std::abs(r.d) + 2.5 * h;
+      bound = std::min(bound, corner_bound);
     }
     ++st.exact;
     return body->signed_distance(p, bound).distance < 0.0;
@@ -400,6 +546,42 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     });
     if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
     par::in_arena(ctx, [&] { vdb::tools::pruneInactive(im->grid->tree(), ctx.threads != 1); });
+
+    // Block signs (see BlockSigns), from a voxel of each leafless block
+    // inside the walk box. Skipped for boxes of more than 2^24 blocks.
+    for (const Box3d& b : im->walk_boxes) {
+      Impl::BlockSigns& t = im->block_signs.emplace_back();
+      std::size_t count = 1;
+      for (int a = 0; a < 3; ++a) {
+        t.vlo[a] = static_cast<int>(std::ceil(b.lo[a] * im->inv_h));
+        t.vhi[a] = static_cast<int>(std::floor(b.hi[a] * im->inv_h));
+        t.blo[a] = t.vlo[a] >> 3;  // floor division (arithmetic shift)
+        t.dim[a] = std::max(0, (t.vhi[a] >> 3) - t.blo[a] + 1);
+        count *= static_cast<std::size_t>(t.dim[a]);
+      }
+      if (count == 0 || count > (std::size_t{1} << 24)) continue;
+      t.sign.assign(count, 0);
+      const std::size_t nyz = static_cast<std::size_t>(t.dim[1]) * static_cast<std::size_t>(t.dim[2]);
+      ExecContext c = ctx;
+      c.grain = ctx.grain ? ctx.grain : 64;
+      par::for_each_block(c, count, [&](std::size_t begin, std::size_t end) {
+        if (ctx.cancelled()) {
+          stopped.store(true, std::memory_order_relaxed);
+          return;
+        }
+        auto acc = im->grid->getConstUnsafeAccessor();
+        for (std::size_t at = begin; at < end; ++at) {
+          const std::array<std::size_t, 3> blk{at / nyz, (at / static_cast<std::size_t>(t.dim[2])) % t.dim[1],
+                                               at % static_cast<std::size_t>(t.dim[2])};
+          vdb::Coord v;
+          for (int a = 0; a < 3; ++a)
+            v[a] = std::max(t.vlo[a], (t.blo[a] + static_cast<int>(blk[a])) * 8);  // in the block and the box
+          if (acc.probeConstLeaf(v)) continue;
+          t.sign[at] = static_cast<std::int8_t>(im->walk_sign(acc, Vec3d(v.x() * h, v.y() * h, v.z() * h), b));
+        }
+      });
+      if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+    }
   }
 
   if (!im->roi && mesh.num_polygons > 0 && im->exact_world > 0.0) {
@@ -435,8 +617,65 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
   }
 
+  // The block table (see BlockRef) over the leaves' bounding box grown by
+  // two blocks, so cells next to the band and the flood-filled tiles around
+  // it are read from it too.
+  if (vdb::CoordBBox leaf_box; im->grid->tree().evalLeafBoundingBox(leaf_box)) {
+    std::size_t count = 1;
+    for (int a = 0; a < 3; ++a) {
+      im->table_lo[a] = (leaf_box.min()[a] >> 3) - 2;
+      im->table_dim[a] = (leaf_box.max()[a] >> 3) + 2 - im->table_lo[a] + 1;
+      count *= static_cast<std::size_t>(im->table_dim[a]);
+    }
+    if (count <= (std::size_t{1} << 22)) {
+      im->table.resize(count);
+      im->table_leaf.assign(count, nullptr);
+      const std::size_t nyz = static_cast<std::size_t>(im->table_dim[1]) * static_cast<std::size_t>(im->table_dim[2]);
+      std::atomic<bool> stopped{false};
+      ExecContext c = ctx;
+      c.grain = ctx.grain ? ctx.grain : 256;
+      par::for_each_block(c, count, [&](std::size_t begin, std::size_t end) {
+        if (ctx.cancelled()) {
+          stopped.store(true, std::memory_order_relaxed);
+          return;
+        }
+        auto acc = im->grid->getConstUnsafeAccessor();
+        for (std::size_t at = begin; at < end; ++at) {
+          const vdb::Coord origin(
+              (im->table_lo[0] + static_cast<int>(at / nyz)) * 8,
+              (im->table_lo[1] + static_cast<int>((at / static_cast<std::size_t>(im->table_dim[2])) %
+                                                  static_cast<std::size_t>(im->table_dim[1]))) * 8,
+              (im->table_lo[2] + static_cast<int>(at % static_cast<std::size_t>(im->table_dim[2]))) * 8);
+          Impl::BlockRef& b = im->table[at];
+          const auto* leaf = acc.probeConstLeaf(origin);
+          im->table_leaf[at] = leaf;
+          if (leaf)
+            b.values = leaf->buffer().data();
+          else
+            b.tile_on = acc.probeValue(origin, b.tile);
+        }
+      });
+      if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+    }
+  }
+  if (!im->roi) {
+    // Full grids: can the value masks be skipped (see value_mask_needed)?
+    using LeafT = vdb::FloatTree::LeafNodeType;
+    std::vector<const LeafT*> leaves;
+    leaves.reserve(im->grid->tree().leafCount());
+    im->grid->tree().getNodes(leaves);
+    std::atomic<bool> low{false};
+    const double exact = im->exact_world;
+    par::for_each_n(ctx, leaves.size(), [&](std::size_t li) {
+      for (auto it = leaves[li]->cbeginValueOff(); it; ++it)
+        if (!(std::abs(double(*it)) >= exact)) low.store(true, std::memory_order_relaxed);
+    });
+    // Tiles carry their own state in the table; the accessor path reads masks.
+    im->value_mask_needed = low.load();
+  }
+
   im->stats.active_voxels = static_cast<std::size_t>(im->grid->activeVoxelCount());
-  im->stats.memory_bytes = static_cast<std::size_t>(im->grid->memUsage());
+  im->stats.memory_bytes = static_cast<std::size_t>(im->grid->memUsage()) + im->table.size() * (sizeof(Impl::BlockRef) + sizeof(void*));
   impl_ = std::move(im);
   return Status::ok();
 }

@@ -45,7 +45,12 @@
 // voxel touches the outside of the band takes the sign of the first band
 // voxel met walking along a grid line (exact: the band is complete there, so
 // an inactive run of voxels cannot cross the surface), or the BVH's answer
-// when the walk leaves the ROI.
+// when the walk leaves the ROI. The walk is made once per leafless 8^3 block
+// at build (all its voxels in the walk box are on one side) and looked up.
+//
+// Queries read voxels through a flat table of the 8^3 blocks over the
+// band's bounding box (leaf values or tile value per block), not a tree
+// walk: scattered queries are bound by cache misses on the tree's nodes.
 //
 // OpenVDB headers stay in sdf_grid.cpp (MeshToVolume.h alone costs ~11 s of
 // compile time); this header is plain C++ over a pimpl.
