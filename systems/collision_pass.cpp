@@ -93,10 +93,10 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
   struct Task {
     std::uint32_t node, lo, hi;
   };
-  std::vector<Task> todo{{0, 0, static_cast<std::uint32_t>(nt)}};
-  while (!todo.empty()) {
-    const Task k = todo.back();
-    todo.pop_back();
+  std::vector<Task> open_tasks{{0, 0, static_cast<std::uint32_t>(nt)}};
+  while (!open_tasks.empty()) {
+    const Task k = open_tasks.back();
+    open_tasks.pop_back();
     if (k.hi - k.lo <= 4) {
       tree_[k.node] = {k.lo, k.hi - k.lo};
       continue;
@@ -114,8 +114,8 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
     tree_[k.node] = {child, 0};
     tree_.push_back({});
     tree_.push_back({});
-    todo.push_back({child + 1, mid, k.hi});
-    todo.push_back({child, k.lo, mid});
+    open_tasks.push_back({child + 1, mid, k.hi});
+    open_tasks.push_back({child, k.lo, mid});
   }
 }
 
