@@ -54,6 +54,28 @@ Box3d grow(const Box3d& b, double r) {
   return g;
 }
 
+/// Runs fn(leaf) on every leaf of the grid in parallel (leaves are
+/// independent), a few leaves per task. False when cancelled.
+template <class Fn>
+[[nodiscard]] bool for_each_leaf(vdb::FloatGrid& grid, const ExecContext& ctx, Fn&& fn) {
+  using LeafT = vdb::FloatTree::LeafNodeType;
+  std::vector<LeafT*> leaves;
+  leaves.reserve(grid.tree().leafCount());
+  grid.tree().getNodes(leaves);
+  std::atomic<bool> stopped{false};
+  ExecContext c = ctx;
+  c.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / 64);
+  c.grain = ctx.grain ? ctx.grain : 8;
+  par::for_each_n(c, leaves.size(), [&](std::size_t li) {
+    if (ctx.cancelled()) {
+      stopped.store(true, std::memory_order_relaxed);
+      return;
+    }
+    fn(*leaves[li]);
+  });
+  return !stopped.load();
+}
+
 }  // namespace
 
 struct SdfGrid::Impl {
@@ -497,24 +519,12 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     // (exact when the voxel's distance ball lies in a grown box, so every
     // triangle that could be closer was voxelised); drop the others.
     using LeafT = vdb::FloatTree::LeafNodeType;
-    std::vector<LeafT*> leaves;
-    leaves.reserve(im->grid->tree().leafCount());
-    im->grid->tree().getNodes(leaves);
     const vdb::Int32Tree& itree = index_grid->tree();
     const float off_value = static_cast<float>(im->band_world);
     const double h = params.voxel_size;
     const double slack = 1e-6 * h;
     const double bound_slack = 1e-3 * h;
-    std::atomic<bool> stopped{false};
-    ExecContext c = ctx;
-    c.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / 64);
-    c.grain = ctx.grain ? ctx.grain : 8;
-    par::for_each_n(c, leaves.size(), [&](std::size_t li) {
-      if (ctx.cancelled()) {
-        stopped.store(true, std::memory_order_relaxed);
-        return;
-      }
-      LeafT& leaf = *leaves[li];
+    const bool done = for_each_leaf(*im->grid, ctx, [&](LeafT& leaf) {
       const vdb::Int32Tree::LeafNodeType* ileaf = itree.probeConstLeaf(leaf.origin());
       for (vdb::Index off = 0; off < LeafT::SIZE; ++off) {
         if (!leaf.isValueOn(off)) continue;
@@ -544,7 +554,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
         leaf.setValueOnly(off, s < 0.0 ? -v : v);
       }
     });
-    if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+    if (!done) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
     par::in_arena(ctx, [&] { vdb::tools::pruneInactive(im->grid->tree(), ctx.threads != 1); });
 
     // Block signs (see BlockSigns), from a voxel of each leafless block
@@ -562,6 +572,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
       if (count == 0 || count > (std::size_t{1} << 24)) continue;
       t.sign.assign(count, 0);
       const std::size_t nyz = static_cast<std::size_t>(t.dim[1]) * static_cast<std::size_t>(t.dim[2]);
+      std::atomic<bool> stopped{false};
       ExecContext c = ctx;
       c.grain = ctx.grain ? ctx.grain : 64;
       par::for_each_block(c, count, [&](std::size_t begin, std::size_t end) {
@@ -591,21 +602,9 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     // a stored |value| below the band is exact, which inside() uses to
     // certify signs by the 1-Lipschitz bound instead of asking the BVH.
     using LeafT = vdb::FloatTree::LeafNodeType;
-    std::vector<LeafT*> leaves;
-    leaves.reserve(im->grid->tree().leafCount());
-    im->grid->tree().getNodes(leaves);
     const double h = params.voxel_size;
     const double bound_slack = 1e-3 * h;
-    std::atomic<bool> stopped{false};
-    ExecContext c = ctx;
-    c.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / 64);
-    c.grain = ctx.grain ? ctx.grain : 8;
-    par::for_each_n(c, leaves.size(), [&](std::size_t li) {
-      if (ctx.cancelled()) {
-        stopped.store(true, std::memory_order_relaxed);
-        return;
-      }
-      LeafT& leaf = *leaves[li];
+    const bool done = for_each_leaf(*im->grid, ctx, [&](LeafT& leaf) {
       for (auto it = leaf.beginValueOn(); it; ++it) {
         const double v = std::abs(double(*it));
         if (!(v < im->exact_world)) continue;
@@ -614,7 +613,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
         it.setValue(static_cast<float>(body.signed_distance(q, v + bound_slack).distance));
       }
     });
-    if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+    if (!done) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
   }
 
   // The block table (see BlockRef) over the leaves' bounding box grown by
