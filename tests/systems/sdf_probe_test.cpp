@@ -10,23 +10,12 @@
 #include <numbers>
 #include <vector>
 
+#include "engine/random.h"
 #include "systems/body_bvh.h"
 #include "systems/sdf_grid.h"
 
 namespace atelier {
 namespace {
-
-struct Rng {
-  std::uint64_t s;
-  std::uint64_t next() {
-    std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * double(next() >> 11) * 0x1.0p-53; }
-  int integer(int lo, int hi) { return lo + static_cast<int>(next() % static_cast<std::uint64_t>(hi - lo + 1)); }
-};
 
 /// Closed UV sphere (radius r, centre c), counter-clockwise from outside.
 struct Sphere {
@@ -95,7 +84,7 @@ double trilinear_from_lattice(SdfGrid::Sampler& s, const Vec3d& p) {
 /// Points whose cell crosses blocks along the axes in `cross` (bit a: axis
 /// a), within `near` of the sphere when near > 0, anywhere in `box` otherwise.
 std::vector<Vec3d> crossing_points(const Sphere& s, const Box3d& box, unsigned cross, double near, std::size_t n,
-                                   Rng& rng) {
+                                   SplitMix64& rng) {
   std::vector<Vec3d> out;
   const std::array<int, 3> lo{static_cast<int>(std::ceil(box.lo.x() / kH)), static_cast<int>(std::ceil(box.lo.y() / kH)),
                               static_cast<int>(std::ceil(box.lo.z() / kH))};
@@ -105,7 +94,7 @@ std::vector<Vec3d> crossing_points(const Sphere& s, const Box3d& box, unsigned c
   while (out.size() < n) {
     Vec3d p;
     for (int a = 0; a < 3; ++a) {
-      int i = rng.integer(lo[a], hi[a]);
+      int i = lo[a] + static_cast<int>(rng.next() % static_cast<std::uint64_t>(hi[a] - lo[a] + 1));
       const bool want = (cross >> a) & 1;
       if (want) i = (i & ~7) + 7;
       if (!want && (i & 7) == 7) --i;
@@ -122,7 +111,7 @@ std::vector<Vec3d> crossing_points(const Sphere& s, const Box3d& box, unsigned c
 
 void check_grid(const Sphere& s, const BodyBvh& bvh, const SdfGrid& grid, const Box3d& box) {
   SdfGrid::Sampler sampler = grid.sampler();
-  Rng rng{17};
+  SplitMix64 rng(17);
   std::size_t checked = 0, tiles = 0, fallbacks = 0;
   const double background = double(float(grid.params().half_width * kH));
   for (unsigned cross = 0; cross < 8; ++cross) {
