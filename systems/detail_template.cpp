@@ -809,118 +809,131 @@ void decode_tile_scalar(const std::uint32_t* run_polygon, const std::uint32_t* r
   }
 }
 
-// Frames of one polygon on 4 bodies at once (AVX2 doubles, one body per
-// lane): polygon_frame's operations in the same order, with the branches as
-// lane masks. This function is compiled without FMA, so no product is fused
-// and every lane is bit-identical to polygon_frame on that body (sqrt and
-// division are correctly rounded in both). Batched decoding computes
-// polygons x bodies frames per pass; the scalar version's serial chain of
-// square roots and divisions cost as much as a fifth of the whole decode.
+// Frames of one polygon on 8 bodies at once (AVX2 floats, one body per
+// lane): polygon_frame's steps with the branches as lane masks. Batched
+// decoding computes polygons x bodies frames per pass; in doubles they cost
+// a fifth of the whole decode. Floats keep the frames' precision because
+// every product is taken on corners relative to the polygon's first corner
+// (exact differences of nearby floats): the cross-product sum is invariant
+// under that shift for a closed polygon, so no product of two metre-sized
+// coordinates loses the centimetre-sized area to cancellation. Frames then
+// differ from polygon_frame's by float rounding (a few 1e-7 relative).
 //
 // pos: node positions of the pass's bodies, node-major ([node][x, y, z]
-// [lanes] floats), read at lanes lane .. lane + 3. out: rows (p_c, X, Y,
-// Z; x, y, z) of kLanes floats, written at lanes lane0 .. lane0 + 3.
-// Polygons of at most kMaxCorners.
+// [lanes] floats), read at lanes lane .. lane + 7. out: rows (p_c, X, Y,
+// Z; x, y, z) of kLanes floats. Polygons of at most kMaxCorners.
 constexpr std::size_t kMaxCorners = 16;
-// (a . b) and (a x b) of 4 lanes, in polygon_frame's order of operations.
-__attribute__((target("avx2"), always_inline)) inline __m256d dot_x4(__m256d a0, __m256d a1, __m256d a2, __m256d b0,
-                                                                     __m256d b1, __m256d b2) {
-  return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a0, b0), _mm256_mul_pd(a1, b1)), _mm256_mul_pd(a2, b2));
+__attribute__((target("avx2,fma"), always_inline)) inline __m256 dot_x8(__m256 a0, __m256 a1, __m256 a2, __m256 b0,
+                                                                        __m256 b1, __m256 b2) {
+  return _mm256_fmadd_ps(a2, b2, _mm256_fmadd_ps(a1, b1, _mm256_mul_ps(a0, b0)));
 }
-__attribute__((target("avx2"), always_inline)) inline void cross_x4(__m256d a0, __m256d a1, __m256d a2, __m256d b0,
-                                                                    __m256d b1, __m256d b2, __m256d* r) {
-  r[0] = _mm256_sub_pd(_mm256_mul_pd(a1, b2), _mm256_mul_pd(a2, b1));
-  r[1] = _mm256_sub_pd(_mm256_mul_pd(a2, b0), _mm256_mul_pd(a0, b2));
-  r[2] = _mm256_sub_pd(_mm256_mul_pd(a0, b1), _mm256_mul_pd(a1, b0));
+// Without FMA: a x a is then exactly zero, so a polygon folded onto a
+// segment (repeated corners) has an exactly zero normal, as in doubles.
+__attribute__((target("avx2"), always_inline)) inline void cross_x8(__m256 a0, __m256 a1, __m256 a2, __m256 b0,
+                                                                    __m256 b1, __m256 b2, __m256* out) {
+  out[0] = _mm256_sub_ps(_mm256_mul_ps(a1, b2), _mm256_mul_ps(a2, b1));
+  out[1] = _mm256_sub_ps(_mm256_mul_ps(a2, b0), _mm256_mul_ps(a0, b2));
+  out[2] = _mm256_sub_ps(_mm256_mul_ps(a0, b1), _mm256_mul_ps(a1, b0));
 }
 
-__attribute__((target("avx2"))) void polygon_frame_x4(const BodyPolygons& b, const float* pos, std::size_t lanes,
-                                                      std::size_t lane, std::size_t f,
-                                                      std::span<const Eigen::Vector2f> ref, float* out,
-                                                      std::size_t lane0) {
+__attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b, const float* pos, std::size_t lanes,
+                                                          std::size_t lane, std::size_t f,
+                                                          std::span<const Eigen::Vector2f> ref, float* out) {
   const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
   const std::size_t n = e - s;
-  __m256d P[3 * kMaxCorners];
-  for (std::size_t k = 0; k < n; ++k) {
+  __m256 O[3];
+  __m256 P[3 * kMaxCorners];  // corners relative to corner 0
+  {
+    const float* node = pos + std::size_t{b.face_nodes[s]} * 3 * lanes + lane;
+    for (std::size_t d = 0; d < 3; ++d) O[d] = _mm256_loadu_ps(node + d * lanes);
+  }
+  P[0] = P[1] = P[2] = _mm256_setzero_ps();
+  for (std::size_t k = 1; k < n; ++k) {
     const float* node = pos + std::size_t{b.face_nodes[s + k]} * 3 * lanes + lane;
-    for (std::size_t d = 0; d < 3; ++d) P[3 * k + d] = _mm256_cvtps_pd(_mm_loadu_ps(node + d * lanes));
+    for (std::size_t d = 0; d < 3; ++d) P[3 * k + d] = _mm256_sub_ps(_mm256_loadu_ps(node + d * lanes), O[d]);
   }
-  const __m256d zero = _mm256_setzero_pd();
-  __m256d c0 = zero, c1 = zero, c2 = zero, nr0 = zero, nr1 = zero, nr2 = zero, scale = zero;
+  const __m256 zero = _mm256_setzero_ps();
+  __m256 c0 = zero, c1 = zero, c2 = zero, nr0 = zero, nr1 = zero, nr2 = zero, scale = zero;
   for (std::size_t k = 0; k < n; ++k) {
-    const __m256d* A = P + 3 * k;
-    const __m256d* Q = P + 3 * (k + 1 < n ? k + 1 : 0);
-    c0 = _mm256_add_pd(c0, A[0]);
-    c1 = _mm256_add_pd(c1, A[1]);
-    c2 = _mm256_add_pd(c2, A[2]);
-    nr0 = _mm256_add_pd(nr0, _mm256_sub_pd(_mm256_mul_pd(A[1], Q[2]), _mm256_mul_pd(A[2], Q[1])));
-    nr1 = _mm256_add_pd(nr1, _mm256_sub_pd(_mm256_mul_pd(A[2], Q[0]), _mm256_mul_pd(A[0], Q[2])));
-    nr2 = _mm256_add_pd(nr2, _mm256_sub_pd(_mm256_mul_pd(A[0], Q[1]), _mm256_mul_pd(A[1], Q[0])));
-    const __m256d d0 = _mm256_sub_pd(Q[0], A[0]), d1 = _mm256_sub_pd(Q[1], A[1]), d2 = _mm256_sub_pd(Q[2], A[2]);
-    const __m256d l2 =
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(d0, d0), _mm256_mul_pd(d1, d1)), _mm256_mul_pd(d2, d2));
-    scale = _mm256_max_pd(scale, l2);
+    const __m256* A = P + 3 * k;
+    const __m256* Q = P + 3 * (k + 1 < n ? k + 1 : 0);
+    c0 = _mm256_add_ps(c0, A[0]);
+    c1 = _mm256_add_ps(c1, A[1]);
+    c2 = _mm256_add_ps(c2, A[2]);
+    __m256 x[3];
+    cross_x8(A[0], A[1], A[2], Q[0], Q[1], Q[2], x);
+    nr0 = _mm256_add_ps(nr0, x[0]);
+    nr1 = _mm256_add_ps(nr1, x[1]);
+    nr2 = _mm256_add_ps(nr2, x[2]);
+    const __m256 d0 = _mm256_sub_ps(Q[0], A[0]), d1 = _mm256_sub_ps(Q[1], A[1]), d2 = _mm256_sub_ps(Q[2], A[2]);
+    scale = _mm256_max_ps(scale, dot_x8(d0, d1, d2, d0, d1, d2));
   }
-  const __m256d inv_n = _mm256_set1_pd(1.0 / static_cast<double>(n));
-  c0 = _mm256_mul_pd(c0, inv_n);
-  c1 = _mm256_mul_pd(c1, inv_n);
-  c2 = _mm256_mul_pd(c2, inv_n);
-  const __m256d one = _mm256_set1_pd(1.0);
-  const __m256d nn = _mm256_sqrt_pd(dot_x4(nr0, nr1, nr2, nr0, nr1, nr2));
-  const __m256d ok1 = _mm256_and_pd(_mm256_cmp_pd(nn, _mm256_mul_pd(_mm256_set1_pd(1e-12), scale), _CMP_GT_OQ),
-                                    _mm256_cmp_pd(scale, zero, _CMP_GT_OQ));
-  const __m256d inv_nn = _mm256_div_pd(one, nn);
-  const __m256d x0 = _mm256_mul_pd(nr0, inv_nn), x1 = _mm256_mul_pd(nr1, inv_nn), x2 = _mm256_mul_pd(nr2, inv_nn);
-  __m256d y0 = _mm256_sub_pd(P[0], c0), y1 = _mm256_sub_pd(P[1], c1), y2 = _mm256_sub_pd(P[2], c2);
-  const __m256d yx = dot_x4(y0, y1, y2, x0, x1, x2);
-  y0 = _mm256_sub_pd(y0, _mm256_mul_pd(yx, x0));
-  y1 = _mm256_sub_pd(y1, _mm256_mul_pd(yx, x1));
-  y2 = _mm256_sub_pd(y2, _mm256_mul_pd(yx, x2));
-  const __m256d yn = _mm256_sqrt_pd(dot_x4(y0, y1, y2, y0, y1, y2));
-  const __m256d ok2 =
-      _mm256_and_pd(ok1, _mm256_cmp_pd(yn, _mm256_mul_pd(_mm256_set1_pd(1e-9), _mm256_sqrt_pd(scale)), _CMP_GT_OQ));
-  const __m256d inv_yn = _mm256_div_pd(one, yn);
-  y0 = _mm256_mul_pd(y0, inv_yn);
-  y1 = _mm256_mul_pd(y1, inv_yn);
-  y2 = _mm256_mul_pd(y2, inv_yn);
-  __m256d z[3];
-  cross_x4(x0, x1, x2, y0, y1, y2, z);
+  const __m256 inv_n = _mm256_set1_ps(1.0f / static_cast<float>(n));
+  c0 = _mm256_mul_ps(c0, inv_n);  // the centroid relative to corner 0
+  c1 = _mm256_mul_ps(c1, inv_n);
+  c2 = _mm256_mul_ps(c2, inv_n);
+  const __m256 one = _mm256_set1_ps(1.0f);
+  const __m256 nn = _mm256_sqrt_ps(dot_x8(nr0, nr1, nr2, nr0, nr1, nr2));
+  // polygon_frame's degeneracy tests, with bounds raised from double's
+  // rounding level (1e-12, 1e-9) to float's: a polygon with collinear
+  // corners has a normal of float noise, about 1e-7 of its squared size.
+  // Only slivers with aspect ratios between 1e6 and 1e12 are judged
+  // differently from polygon_frame.
+  const __m256 ok1 = _mm256_and_ps(_mm256_cmp_ps(nn, _mm256_mul_ps(_mm256_set1_ps(1e-6f), scale), _CMP_GT_OQ),
+                                   _mm256_cmp_ps(scale, zero, _CMP_GT_OQ));
+  const __m256 inv_nn = _mm256_div_ps(one, nn);
+  const __m256 x0 = _mm256_mul_ps(nr0, inv_nn), x1 = _mm256_mul_ps(nr1, inv_nn), x2 = _mm256_mul_ps(nr2, inv_nn);
+  // Y: corner 0 minus the centroid, made orthogonal to X.
+  __m256 y0 = _mm256_sub_ps(zero, c0), y1 = _mm256_sub_ps(zero, c1), y2 = _mm256_sub_ps(zero, c2);
+  const __m256 yx = dot_x8(y0, y1, y2, x0, x1, x2);
+  y0 = _mm256_fnmadd_ps(yx, x0, y0);
+  y1 = _mm256_fnmadd_ps(yx, x1, y1);
+  y2 = _mm256_fnmadd_ps(yx, x2, y2);
+  const __m256 yn = _mm256_sqrt_ps(dot_x8(y0, y1, y2, y0, y1, y2));
+  const __m256 ok2 =
+      _mm256_and_ps(ok1, _mm256_cmp_ps(yn, _mm256_mul_ps(_mm256_set1_ps(1e-6f), _mm256_sqrt_ps(scale)), _CMP_GT_OQ));
+  const __m256 inv_yn = _mm256_div_ps(one, yn);
+  y0 = _mm256_mul_ps(y0, inv_yn);
+  y1 = _mm256_mul_ps(y1, inv_yn);
+  y2 = _mm256_mul_ps(y2, inv_yn);
+  __m256 z[3];
+  cross_x8(x0, x1, x2, y0, y1, y2, z);
   if (!ref.empty()) {
-    __m256d sdot = zero, scross = zero;
+    __m256 sdot = zero, scross = zero;
     for (std::size_t k = 0; k < n; ++k) {
-      const __m256d q0 = _mm256_sub_pd(P[3 * k], c0), q1 = _mm256_sub_pd(P[3 * k + 1], c1),
-                    q2 = _mm256_sub_pd(P[3 * k + 2], c2);
-      const __m256d d1 = dot_x4(q0, q1, q2, y0, y1, y2), d2 = dot_x4(q0, q1, q2, z[0], z[1], z[2]);
-      const __m256d r1 = _mm256_set1_pd(ref[s + k].x()), r2 = _mm256_set1_pd(ref[s + k].y());
-      sdot = _mm256_add_pd(sdot, _mm256_add_pd(_mm256_mul_pd(r1, d1), _mm256_mul_pd(r2, d2)));
-      scross = _mm256_add_pd(scross, _mm256_sub_pd(_mm256_mul_pd(r1, d2), _mm256_mul_pd(r2, d1)));
+      const __m256 q0 = _mm256_sub_ps(P[3 * k], c0), q1 = _mm256_sub_ps(P[3 * k + 1], c1),
+                   q2 = _mm256_sub_ps(P[3 * k + 2], c2);
+      const __m256 d1 = dot_x8(q0, q1, q2, y0, y1, y2), d2 = dot_x8(q0, q1, q2, z[0], z[1], z[2]);
+      const __m256 r1 = _mm256_set1_ps(ref[s + k].x()), r2 = _mm256_set1_ps(ref[s + k].y());
+      sdot = _mm256_fmadd_ps(r2, d2, _mm256_fmadd_ps(r1, d1, sdot));
+      scross = _mm256_fnmadd_ps(r2, d1, _mm256_fmadd_ps(r1, d2, scross));
     }
-    const __m256d r = _mm256_sqrt_pd(dot_x4(sdot, scross, zero, sdot, scross, zero));
-    const __m256d turn = _mm256_cmp_pd(r, zero, _CMP_GT_OQ);
-    const __m256d inv_r = _mm256_div_pd(one, r), cs = _mm256_mul_pd(sdot, inv_r), sn = _mm256_mul_pd(scross, inv_r);
-    const __m256d t0 = _mm256_add_pd(_mm256_mul_pd(cs, y0), _mm256_mul_pd(sn, z[0]));
-    const __m256d t1 = _mm256_add_pd(_mm256_mul_pd(cs, y1), _mm256_mul_pd(sn, z[1]));
-    const __m256d t2 = _mm256_add_pd(_mm256_mul_pd(cs, y2), _mm256_mul_pd(sn, z[2]));
-    __m256d tz[3];
-    cross_x4(x0, x1, x2, t0, t1, t2, tz);
-    y0 = _mm256_blendv_pd(y0, t0, turn);
-    y1 = _mm256_blendv_pd(y1, t1, turn);
-    y2 = _mm256_blendv_pd(y2, t2, turn);
-    for (int i = 0; i < 3; ++i) z[i] = _mm256_blendv_pd(z[i], tz[i], turn);
+    const __m256 r = _mm256_sqrt_ps(_mm256_fmadd_ps(scross, scross, _mm256_mul_ps(sdot, sdot)));
+    const __m256 turn = _mm256_cmp_ps(r, zero, _CMP_GT_OQ);
+    const __m256 inv_r = _mm256_div_ps(one, r), cs = _mm256_mul_ps(sdot, inv_r), sn = _mm256_mul_ps(scross, inv_r);
+    const __m256 t0 = _mm256_fmadd_ps(sn, z[0], _mm256_mul_ps(cs, y0));
+    const __m256 t1 = _mm256_fmadd_ps(sn, z[1], _mm256_mul_ps(cs, y1));
+    const __m256 t2 = _mm256_fmadd_ps(sn, z[2], _mm256_mul_ps(cs, y2));
+    __m256 tz[3];
+    cross_x8(x0, x1, x2, t0, t1, t2, tz);
+    y0 = _mm256_blendv_ps(y0, t0, turn);
+    y1 = _mm256_blendv_ps(y1, t1, turn);
+    y2 = _mm256_blendv_ps(y2, t2, turn);
+    for (int i = 0; i < 3; ++i) z[i] = _mm256_blendv_ps(z[i], tz[i], turn);
   }
-  const __m256d rows[12] = {c0,
-                            c1,
-                            c2,
-                            _mm256_and_pd(x0, ok1),
-                            _mm256_and_pd(x1, ok1),
-                            _mm256_and_pd(x2, ok1),
-                            _mm256_and_pd(y0, ok2),
-                            _mm256_and_pd(y1, ok2),
-                            _mm256_and_pd(y2, ok2),
-                            _mm256_and_pd(z[0], ok2),
-                            _mm256_and_pd(z[1], ok2),
-                            _mm256_and_pd(z[2], ok2)};
-  for (std::size_t j = 0; j < 12; ++j) _mm_storeu_ps(out + j * kLanes + lane0, _mm256_cvtpd_ps(rows[j]));
+  const __m256 rows[12] = {_mm256_add_ps(O[0], c0),
+                           _mm256_add_ps(O[1], c1),
+                           _mm256_add_ps(O[2], c2),
+                           _mm256_and_ps(x0, ok1),
+                           _mm256_and_ps(x1, ok1),
+                           _mm256_and_ps(x2, ok1),
+                           _mm256_and_ps(y0, ok2),
+                           _mm256_and_ps(y1, ok2),
+                           _mm256_and_ps(y2, ok2),
+                           _mm256_and_ps(z[0], ok2),
+                           _mm256_and_ps(z[1], ok2),
+                           _mm256_and_ps(z[2], ok2)};
+  for (std::size_t j = 0; j < 12; ++j) _mm256_store_ps(out + j * kLanes, rows[j]);
 }
 
 // A body's node positions read in place from a body set's float columns
@@ -1064,13 +1077,13 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
     const std::size_t nb = std::min(pass_groups * kLanes, count - g0);
     const std::size_t groups = (nb + kLanes - 1) / kLanes;
     // Frames of every body of the pass, written straight into the lanes,
-    // 4 bodies per vector. Lanes past the last body repeat it (never output).
+    // 8 bodies per vector. Lanes past the last body repeat it (never output).
     const float* col[kGroups * kLanes];
     for (std::size_t i = 0; i < groups * kLanes; ++i) col[i] = bodies.x(first + g0 + std::min(i, nb - 1)).data();
     const std::size_t stride = bodies.node_count(), lanes = groups * kLanes;
     if (fast) {
       // The bodies' columns transposed node-major, so a polygon corner's
-      // coordinate for 4 bodies is one load (a body set is body-major: 48
+      // coordinate for 8 bodies is one load (a body set is body-major: 48
       // columns read at once would defeat the hardware prefetchers).
       ExecContext tc = ctx;
       tc.grain = 2048;
@@ -1086,13 +1099,13 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
     fc.grain = 256;  // 13k polygons: enough blocks to balance 2 threads
     par::for_each_n(fc, np, [&](std::size_t p) {
       const bool small = body.face_offsets[p + 1] - body.face_offsets[p] <= kMaxCorners;
-      for (std::size_t i = 0; i < groups * kLanes; i += 4) {
+      for (std::size_t i = 0; i < groups * kLanes; i += kLanes) {
         float* f = frames + ((i / kLanes) * np + p) * kFrameFloats;
         if (fast && small) {
-          polygon_frame_x4(body, tpos, lanes, i, p, dec.reference_corners_, f, i % kLanes);
+          polygon_frame_x8(body, tpos, lanes, i, p, dec.reference_corners_, f);
           continue;
         }
-        for (std::size_t l = i; l < i + 4; ++l) {
+        for (std::size_t l = i; l < i + kLanes; ++l) {
           const SetPos pos{col[l], col[l] + stride, col[l] + 2 * stride};
           const FrameD fr = polygon_frame(body, pos, p, dec.reference_corners_);
           const Vec3d* v[4] = {&fr.c, &fr.x, &fr.y, &fr.z};
