@@ -19,32 +19,17 @@ namespace vdb = openvdb;
 
 namespace {
 
-/// OpenVDB's MeshDataAdapter over the BVH's double positions (no copy);
-/// `sel` picks a subset of the triangles (ROI grids).
-struct MeshAdapter {
-  const Vec3d* pos = nullptr;
-  const Triangle* tris = nullptr;
-  const std::uint32_t* sel = nullptr;
-  std::size_t num_polygons = 0;
-  std::size_t num_points = 0;
-  double inv_h = 1.0;
-
-  [[nodiscard]] std::size_t polygonCount() const { return num_polygons; }
-  [[nodiscard]] std::size_t pointCount() const { return num_points; }
-  [[nodiscard]] std::size_t vertexCount(std::size_t) const { return 3; }
-  void getIndexSpacePoint(std::size_t n, std::size_t v, vdb::Vec3d& out) const {
-    const std::uint32_t t = sel ? sel[n] : static_cast<std::uint32_t>(n);
-    const Vec3d& p = pos[tris[t][v]];
-    out = vdb::Vec3d(p.x() * inv_h, p.y() * inv_h, p.z() * inv_h);
-  }
-};
-
-/// OpenVDB interrupter wired to the CancelToken.
-struct CancelInterrupter {
+/// OpenVDB interrupter wired to the CancelToken. It is passed to OpenVDB as
+/// its base class, util::NullInterrupter (virtual calls), so that
+/// meshToVolume is the instantiation libopenvdb already holds (declared
+/// `extern template` by MeshToVolume.h) for QuadAndTriangleDataAdapter<
+/// Vec3s, Vec3I>: instantiating it here with our own adapter and
+/// interrupter types cost 70 s of this file's 95 s compile, most of a
+/// fresh `make demo`'s critical path.
+struct CancelInterrupter final : vdb::util::NullInterrupter {
+  explicit CancelInterrupter(const ExecContext* c) : ctx(c) {}
   const ExecContext* ctx = nullptr;
-  void start(const char* = nullptr) {}
-  void end() {}
-  bool wasInterrupted(int = -1) { return ctx->cancelled(); }
+  bool wasInterrupted(int = -1) override { return ctx->cancelled(); }
 };
 
 Box3d grow(const Box3d& b, double r) {
@@ -485,17 +470,31 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     }
   }
 
-  MeshAdapter mesh{pos.data(), tris.data(), im->roi ? sel.data() : nullptr, im->roi ? sel.size() : tris.size(),
-                   pos.size(), im->inv_h};
-  im->stats.source_triangles = mesh.num_polygons;
+  // OpenVDB's adapter takes float index-space points: rounding moves them by
+  // at most 2^-24 of the body's extent in voxels (about 1e-4 h), far inside
+  // the slacks below that treat OpenVDB's values as distance bounds.
+  const std::size_t num_polygons = im->roi ? sel.size() : tris.size();
+  std::vector<vdb::Vec3s> index_points(pos.size());
+  std::vector<vdb::Vec3I> index_tris(num_polygons);
+  par::for_each_n(ctx, pos.size(), [&](std::size_t v) {
+    const Vec3d p = pos[v] * im->inv_h;
+    index_points[v] = vdb::Vec3s(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  });
+  for (std::size_t n = 0; n < num_polygons; ++n) {
+    const Triangle& t = tris[im->roi ? sel[n] : n];
+    index_tris[n] = vdb::Vec3I(t[0], t[1], t[2]);
+  }
+  const vdb::tools::QuadAndTriangleDataAdapter<vdb::Vec3s, vdb::Vec3I> mesh(index_points, index_tris);
+  im->stats.source_triangles = num_polygons;
   const vdb::math::Transform::Ptr xform = vdb::math::Transform::createLinearTransform(params.voxel_size);
-  CancelInterrupter interrupter{&ctx};
+  CancelInterrupter cancel(&ctx);
+  vdb::util::NullInterrupter& interrupter = cancel;
   const auto w = static_cast<float>(params.half_width);
   vdb::Int32Grid::Ptr index_grid;
   if (im->roi) index_grid = vdb::Int32Grid::create();
 
   par::in_arena(ctx, [&] {
-    if (mesh.num_polygons == 0) {
+    if (num_polygons == 0) {
       im->grid = vdb::FloatGrid::create(static_cast<float>(im->band_world));
       im->grid->setTransform(xform);
       return;
@@ -504,7 +503,8 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
       // Signed conversion with OpenVDB's interior classification and flood
       // fill (meshToLevelSet with renormalisation off: exact distances).
       im->grid = vdb::tools::meshToVolume<vdb::FloatGrid>(interrupter, mesh, *xform, w, w,
-                                                          vdb::tools::DISABLE_RENORMALIZATION, nullptr);
+                                                          vdb::tools::DISABLE_RENORMALIZATION,
+                                                          static_cast<vdb::Int32Grid*>(nullptr));
     } else {
       im->grid = vdb::tools::meshToVolume<vdb::FloatGrid>(
           interrupter, mesh, *xform, w, w, vdb::tools::UNSIGNED_DISTANCE_FIELD | vdb::tools::DISABLE_RENORMALIZATION,
@@ -514,7 +514,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
   if (ctx.cancelled()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
   if (!im->grid) return {ErrorCode::kInternal, "SdfGrid: OpenVDB returned no grid"};
 
-  if (im->roi && mesh.num_polygons > 0) {
+  if (im->roi && num_polygons > 0) {
     // Sign each band voxel with the pseudo-normal of its closest triangle
     // (exact when the voxel's distance ball lies in a grown box, so every
     // triangle that could be closer was voxelised); drop the others.
@@ -522,7 +522,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     const vdb::Int32Tree& itree = index_grid->tree();
     const float off_value = static_cast<float>(im->band_world);
     const double h = params.voxel_size;
-    const double slack = 1e-6 * h;
+    const double slack = 1e-3 * h;  // OpenVDB's values, from float points, may be short by ~1e-4 h
     const double bound_slack = 1e-3 * h;
     const bool done = for_each_leaf(*im->grid, ctx, [&](LeafT& leaf) {
       const vdb::Int32Tree::LeafNodeType* ileaf = itree.probeConstLeaf(leaf.origin());
@@ -595,7 +595,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     }
   }
 
-  if (!im->roi && mesh.num_polygons > 0 && im->exact_world > 0.0) {
+  if (!im->roi && num_polygons > 0 && im->exact_world > 0.0) {
     // Exact corners: every band voxel whose value is below the exact band
     // gets the exact signed distance of the BVH (OpenVDB's value is the
     // distance to some triangle, an upper bound: a tight first radius). Then
