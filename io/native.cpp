@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "io/atomic_file.h"
+#include "io/crc32.h"
 #include "io/mesh_arrays.h"
 #include "storage/validate.h"
 
@@ -38,22 +39,8 @@ std::string tag_name(std::uint32_t t) {
   return s;
 }
 
-// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320).
-constexpr std::array<std::uint32_t, 256> make_crc_table() {
-  std::array<std::uint32_t, 256> t{};
-  for (std::uint32_t i = 0; i < 256; ++i) {
-    std::uint32_t c = i;
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-    t[i] = c;
-  }
-  return t;
-}
-constexpr std::array<std::uint32_t, 256> kCrcTable = make_crc_table();
-
 std::uint32_t crc32(std::string_view bytes) noexcept {
-  std::uint32_t c = 0xFFFFFFFFu;
-  for (char ch : bytes) c = kCrcTable[(c ^ static_cast<std::uint8_t>(ch)) & 0xffu] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFu;
+  return io_detail::crc32(bytes.data(), bytes.size());
 }
 
 // ------------------------------------------------------------------ writing
@@ -69,7 +56,9 @@ class Out {
     s_.append(b, sizeof(T));
   }
   template <class Tag>
-  void put(Idx<Tag> i) { put<std::uint32_t>(i.value); }
+  void put(Idx<Tag> i) {
+    put<std::uint32_t>(i.value);
+  }
   void put(const Vec3d& v) { put(v.x()), put(v.y()), put(v.z()); }
   void put(const Vec2d& v) { put(v.x()), put(v.y()); }
   void put(const std::string& s) {
@@ -147,9 +136,9 @@ std::string serialize_compact(const Model& m) {
   {
     Out o;
     o.put<std::int64_t>(m.complex_holes);
-    for (std::size_t n : {nn, ne, nf, m.surfaces.slots.capacity(), m.mesh_edges.slots.capacity(),
-                          m.mesh_loops.slots.capacity(), m.joints.slots.capacity(), m.attrib_nodes.slots.capacity(),
-                          m.attrib_edges.slots.capacity()})
+    for (std::size_t n :
+         {nn, ne, nf, m.surfaces.slots.capacity(), m.mesh_edges.slots.capacity(), m.mesh_loops.slots.capacity(),
+          m.joints.slots.capacity(), m.attrib_nodes.slots.capacity(), m.attrib_edges.slots.capacity()})
       o.put<std::uint64_t>(n);
     add_section(file, kSections[0], o);
   }
@@ -322,17 +311,20 @@ class In {
     }
   }
   void expect_end() const {
-    if (pos_ != b_.size())
-      fail("section has " + std::to_string(b_.size() - pos_) + " unexpected trailing bytes");
+    if (pos_ != b_.size()) fail("section has " + std::to_string(b_.size() - pos_) + " unexpected trailing bytes");
   }
   [[nodiscard]] std::size_t left() const noexcept { return b_.size() - pos_; }
 
   template <class T>
   static constexpr std::size_t wire_size() {
-    if constexpr (std::is_same_v<T, Vec3d>) return 24;
-    else if constexpr (std::is_same_v<T, Vec2d>) return 16;
-    else if constexpr (requires(T t) { t.value; }) return 4;
-    else return sizeof(T);
+    if constexpr (std::is_same_v<T, Vec3d>)
+      return 24;
+    else if constexpr (std::is_same_v<T, Vec2d>)
+      return 16;
+    else if constexpr (requires(T t) { t.value; })
+      return 4;
+    else
+      return sizeof(T);
   }
 
  private:
@@ -386,8 +378,8 @@ void check_ragged_refs(const In& in, const RaggedColumn<T>& r, std::size_t limit
   for (std::size_t i = 0; i < r.rows(); ++i)
     for (const T& v : r.row(i))
       if (v.value >= limit)
-        in.fail("bad index: " + std::string(what) + " list " + std::to_string(i) + " refers to " + std::to_string(v.value) +
-                " (" + std::to_string(limit) + " rows)");
+        in.fail("bad index: " + std::string(what) + " list " + std::to_string(i) + " refers to " +
+                std::to_string(v.value) + " (" + std::to_string(limit) + " rows)");
 }
 
 Model deserialize_impl(std::string_view bytes, std::string_view file) {
@@ -397,11 +389,13 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
   const auto version = head.get<std::uint32_t>();
   const auto nsec = head.get<std::uint32_t>();
   if (version != kVersion)
-    throw parse_error(file, "byte offset 8", "unsupported version " + std::to_string(version) + " (this reader knows " +
-                                                 std::to_string(kVersion) + ")");
+    throw parse_error(
+        file, "byte offset 8",
+        "unsupported version " + std::to_string(version) + " (this reader knows " + std::to_string(kVersion) + ")");
   if (nsec != kSections.size())
-    throw parse_error(file, "byte offset 12", "wrong header: " + std::to_string(nsec) + " sections, expected " +
-                                                  std::to_string(kSections.size()));
+    throw parse_error(
+        file, "byte offset 12",
+        "wrong header: " + std::to_string(nsec) + " sections, expected " + std::to_string(kSections.size()));
   // Split and checksum every section first: nothing is built from bytes
   // that fail their CRC.
   std::vector<In> sec;
@@ -442,7 +436,8 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
     if (x >= kInvalid / 2) hd.fail("table size " + std::to_string(x) + " is too large");
   }
   hd.expect_end();
-  const std::size_t nn = n[0], ne = n[1], nf = n[2], ns = n[3], nme = n[4], nl = n[5], nj = n[6], nan = n[7], nae = n[8];
+  const std::size_t nn = n[0], ne = n[1], nf = n[2], ns = n[3], nme = n[4], nl = n[5], nj = n[6], nan = n[7],
+                    nae = n[8];
   const std::size_t nh = 2 * ne;
 
   // Columns are read into the model's own vectors; slots come last, once
@@ -599,8 +594,7 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
     s.expect_end();
   }
   ++m.topology_version;
-  if (Status st = validate(m); !st)
-    throw parse_error(file, "", "the model read is not valid: " + st.message());
+  if (Status st = validate(m); !st) throw parse_error(file, "", "the model read is not valid: " + st.message());
   return m;
 }
 

@@ -10,6 +10,7 @@
 
 #include "engine/status.h"
 #include "io/atomic_file.h"
+#include "io/crc32.h"
 #include "io/mesh_arrays.h"
 
 namespace atelier {
@@ -18,20 +19,8 @@ namespace {
 
 constexpr std::array<std::uint8_t, 8> kSignature = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 
-constexpr std::array<std::uint32_t, 256> make_crc_table() noexcept {
-  std::array<std::uint32_t, 256> t{};
-  for (std::uint32_t n = 0; n < 256; ++n) {
-    std::uint32_t c = n;
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-    t[n] = c;
-  }
-  return t;
-}
-constexpr auto kCrcTable = make_crc_table();
-
 std::uint32_t crc_update(std::uint32_t crc, const std::uint8_t* p, std::size_t n) noexcept {
-  for (std::size_t i = 0; i < n; ++i) crc = kCrcTable[(crc ^ p[i]) & 0xffu] ^ (crc >> 8);
-  return crc;
+  return io_detail::crc32_update(crc, p, n);
 }
 
 void put_u32(std::string& out, std::uint32_t v) {
@@ -73,11 +62,20 @@ void filter_row(int f, const std::uint8_t* row, const std::uint8_t* prev, std::s
     const int c = i >= bpp ? prev[i - bpp] : 0;
     int pred = 0;
     switch (f) {
-      case 1: pred = a; break;
-      case 2: pred = b; break;
-      case 3: pred = (a + b) / 2; break;
-      case 4: pred = paeth(a, b, c); break;
-      default: break;
+      case 1:
+        pred = a;
+        break;
+      case 2:
+        pred = b;
+        break;
+      case 3:
+        pred = (a + b) / 2;
+        break;
+      case 4:
+        pred = paeth(a, b, c);
+        break;
+      default:
+        break;
     }
     out[i] = static_cast<std::uint8_t>(row[i] - pred);
   }
@@ -173,11 +171,20 @@ RgbImage decode_png(std::string_view bytes, std::string_view name) {
         throw png_error(name, "unsupported image size");
       if (depth != 8) throw png_error(name, "unsupported bit depth " + std::to_string(depth) + " (8 only)");
       switch (colour) {
-        case 0: channels = 1; break;
-        case 2: channels = 3; break;
-        case 4: channels = 2; break;
-        case 6: channels = 4; break;
-        default: throw png_error(name, "unsupported colour type " + std::to_string(colour));
+        case 0:
+          channels = 1;
+          break;
+        case 2:
+          channels = 3;
+          break;
+        case 4:
+          channels = 2;
+          break;
+        case 6:
+          channels = 4;
+          break;
+        default:
+          throw png_error(name, "unsupported colour type " + std::to_string(colour));
       }
       if (data[10] != 0 || data[11] != 0) throw png_error(name, "unknown compression or filter method");
       if (data[12] != 0) throw png_error(name, "interlaced images are not supported");
@@ -222,11 +229,20 @@ RgbImage decode_png(std::string_view bytes, std::string_view name) {
       const int c = i >= bpp ? prev[i - bpp] : 0;
       int pred = 0;
       switch (f) {
-        case 1: pred = a; break;
-        case 2: pred = b; break;
-        case 3: pred = (a + b) / 2; break;
-        case 4: pred = paeth(a, b, c); break;
-        default: break;
+        case 1:
+          pred = a;
+          break;
+        case 2:
+          pred = b;
+          break;
+        case 3:
+          pred = (a + b) / 2;
+          break;
+        case 4:
+          pred = paeth(a, b, c);
+          break;
+        default:
+          break;
       }
       cur[i] = static_cast<std::uint8_t>(src[1 + i] + pred);
     }

@@ -594,6 +594,13 @@ Expected<CollisionReport> resolve_collisions(std::span<Vec3d> garment, const Nod
   return resolve_impl(garment, adjacency, encoding, body, params, {}, nullptr, ctx);
 }
 
+Expected<CollisionReport> resolve_collisions(std::span<Vec3d> garment, const NodeAdjacency& adjacency,
+                                             const ClearanceEncoding& encoding, const CollisionBody& body,
+                                             const CollisionParams& params, std::vector<BodyDistance>& final_distance,
+                                             const ExecContext& ctx) {
+  return resolve_impl(garment, adjacency, encoding, body, params, {}, &final_distance, ctx);
+}
+
 Expected<std::vector<CollisionReport>> resolve_layers(std::span<GarmentLayer> layers, const CollisionBody& body,
                                                       const CollisionParams& params, const ExecContext& ctx) {
   if (body.empty()) return Status(ErrorCode::kInvalidArgument, "resolve_layers: collision body not built");

@@ -139,7 +139,7 @@ class CollisionBody {
   struct NodeBox {
     float lo[3], hi[3];
   };
-  std::vector<NodeBox> box_;                    // per hierarchy node
+  std::vector<NodeBox> box_;                   // per hierarchy node
   std::vector<std::array<Vec3d, 3>> corners_;  // per leaf slot: the triangle's corners
 };
 
@@ -194,6 +194,14 @@ struct CollisionReport {
 [[nodiscard]] Expected<CollisionReport> resolve_collisions(std::span<Vec3d> garment, const NodeAdjacency& adjacency,
                                                            const ClearanceEncoding& encoding, const CollisionBody& body,
                                                            const CollisionParams& params, const ExecContext& ctx = {});
+/// The same, also giving each vertex's exact distance to the body at its
+/// final position (the pass's own last query of it), so that a caller
+/// reporting clearance does not query every vertex again.
+[[nodiscard]] Expected<CollisionReport> resolve_collisions(std::span<Vec3d> garment, const NodeAdjacency& adjacency,
+                                                           const ClearanceEncoding& encoding, const CollisionBody& body,
+                                                           const CollisionParams& params,
+                                                           std::vector<BodyDistance>& final_distance,
+                                                           const ExecContext& ctx = {});
 
 /// One garment of a layered outfit.
 struct GarmentLayer {

@@ -1,11 +1,12 @@
 #include "systems/detail_template.h"
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <immintrin.h>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -25,7 +26,9 @@ std::uint64_t fnv1a(std::uint64_t h, const void* data, std::size_t n) {
 }
 }  // namespace
 
-BodyPolygons BodyPolygons::from_model(const Model& body) { return from_model(body, SurfaceIdx{}); }
+BodyPolygons BodyPolygons::from_model(const Model& body) {
+  return from_model(body, SurfaceIdx{});
+}
 
 BodyPolygons BodyPolygons::from_model(const Model& body, SurfaceIdx surface) {
   BodyPolygons b;
@@ -135,7 +138,7 @@ FrameD polygon_frame(const BodyPolygons& b, const Pos& p, std::size_t f, std::sp
       scross += r1 * d2 - r2 * d1;
     }
     const double r = std::sqrt(sdot * sdot + scross * scross);  // sums of squared lengths: no overflow to fear
-    if (r > 0) {  // else no preferred angle (atan2(0, 0) = 0)
+    if (r > 0) {                                                // else no preferred angle (atan2(0, 0) = 0)
       const double inv_r = 1.0 / r, cs = sdot * inv_r, sn = scross * inv_r;
       for (int i = 0; i < 3; ++i) y[i] = cs * y[i] + sn * z[i];
       z[0] = x[1] * y[2] - x[2] * y[1];
@@ -494,8 +497,9 @@ void CentroidGrid::nearest_many(std::span<const Vec3d> queries, std::size_t k, s
         // k centroids is detected and the search redone without it.
         const Vec3d hi = lo_ + cell_ * Vec3d(nx_, ny_, nz_);
         const double out_of_box = (lo_ - q).cwiseMax(q - hi).cwiseMax(0.0).norm();
-        bound = out_of_box + 2 * radius_ * std::sqrt(static_cast<double>(std::max<std::size_t>(k, 8)) /
-                                                         static_cast<double>(k_hint_));
+        bound =
+            out_of_box +
+            2 * radius_ * std::sqrt(static_cast<double>(std::max<std::size_t>(k, 8)) / static_cast<double>(k_hint_));
       }
       (void)nearest_bounded(q, k, bound, near, scratch, count);
       std::copy(near.begin(), near.end(), out.begin() + static_cast<std::ptrdiff_t>(v * k));
@@ -531,7 +535,7 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
     skip[f] = frames[f].degenerate;
     usable += !skip[f];
   }
-  std::size_t k = params.single_polygon ? 1
+  std::size_t k = params.single_polygon        ? 1
                   : params.polygons_per_vertex ? params.polygons_per_vertex
                                                : static_cast<std::size_t>(std::lround(np / 100.0));
   k = std::max<std::size_t>(k, 1);
@@ -550,8 +554,8 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
       if (frames[f].degenerate) continue;
       for (std::uint32_t k = body.face_offsets[f]; k < body.face_offsets[f + 1]; ++k) {
         const Vec3d q = bp[body.face_nodes[k]] - frames[f].c;
-        enc.reference_corners[k] = Eigen::Vector2f(static_cast<float>(q.dot(frames[f].y)),
-                                                   static_cast<float>(q.dot(frames[f].z)));
+        enc.reference_corners[k] =
+            Eigen::Vector2f(static_cast<float>(q.dot(frames[f].y)), static_cast<float>(q.dot(frames[f].z)));
       }
     }
   }
@@ -595,7 +599,7 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
         const FrameD& fr = frames[near[i]];
         const Vec3d dq = q - fr.c;
         const double w = 1.0 / (eps + std::pow(dq.norm(), 3)) - w_cut;  // eq. (10), tapered
-        coef[i] = {w, dq.dot(fr.x), dq.dot(fr.y), dq.dot(fr.z), 0};      // eq. (9)
+        coef[i] = {w, dq.dot(fr.x), dq.dot(fr.y), dq.dot(fr.z), 0};     // eq. (9)
         wsum += w;
       }
       if (!(wsum > 0)) {  // all k as far as the cut-off: plain eq. (10)
@@ -625,8 +629,8 @@ Status check_topology(const DetailEncoding& enc, const BodyPolygons& body) {
       enc.topology_hash != body.topology_hash) {
     std::ostringstream s;
     s << "the body's topology (" << body.node_count << " nodes, " << body.size()
-      << " polygons) differs from the one the detail template was encoded on (" << enc.body_node_count
-      << " nodes, " << enc.polygon_count << " polygons)";
+      << " polygons) differs from the one the detail template was encoded on (" << enc.body_node_count << " nodes, "
+      << enc.polygon_count << " polygons)";
     return {ErrorCode::kMismatch, s.str()};
   }
   return {};
@@ -676,16 +680,18 @@ __attribute__((target("avx2,fma"))) void decode_rows_avx2(const DetailEncoding& 
       const float* f = frames + static_cast<std::size_t>(poly[e]) * 16;
       const float* g = frames + static_cast<std::size_t>(poly[e + 1]) * 16;
       s0 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(B + e), _mm_broadcast_ss(A + e)), _mm256_load_ps(f), s0);
-      s1 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e), _mm_broadcast_ss(C + e)), _mm256_load_ps(f + 8), s1);
-      t0 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(B + e + 1), _mm_broadcast_ss(A + e + 1)),
-                           _mm256_load_ps(g), t0);
+      s1 =
+          _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e), _mm_broadcast_ss(C + e)), _mm256_load_ps(f + 8), s1);
+      t0 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(B + e + 1), _mm_broadcast_ss(A + e + 1)), _mm256_load_ps(g),
+                           t0);
       t1 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e + 1), _mm_broadcast_ss(C + e + 1)),
                            _mm256_load_ps(g + 8), t1);
     }
     if (e < e1) {
       const float* f = frames + static_cast<std::size_t>(poly[e]) * 16;
       s0 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(B + e), _mm_broadcast_ss(A + e)), _mm256_load_ps(f), s0);
-      s1 = _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e), _mm_broadcast_ss(C + e)), _mm256_load_ps(f + 8), s1);
+      s1 =
+          _mm256_fmadd_ps(_mm256_set_m128(_mm_broadcast_ss(D + e), _mm_broadcast_ss(C + e)), _mm256_load_ps(f + 8), s1);
     }
     const __m256 s = _mm256_add_ps(_mm256_add_ps(s0, s1), _mm256_add_ps(t0, t1));
     alignas(16) float r[4];
@@ -921,18 +927,10 @@ __attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b,
     y2 = _mm256_blendv_ps(y2, t2, turn);
     for (int i = 0; i < 3; ++i) z[i] = _mm256_blendv_ps(z[i], tz[i], turn);
   }
-  const __m256 rows[12] = {_mm256_add_ps(O[0], c0),
-                           _mm256_add_ps(O[1], c1),
-                           _mm256_add_ps(O[2], c2),
-                           _mm256_and_ps(x0, ok1),
-                           _mm256_and_ps(x1, ok1),
-                           _mm256_and_ps(x2, ok1),
-                           _mm256_and_ps(y0, ok2),
-                           _mm256_and_ps(y1, ok2),
-                           _mm256_and_ps(y2, ok2),
-                           _mm256_and_ps(z[0], ok2),
-                           _mm256_and_ps(z[1], ok2),
-                           _mm256_and_ps(z[2], ok2)};
+  const __m256 rows[12] = {_mm256_add_ps(O[0], c0),  _mm256_add_ps(O[1], c1),  _mm256_add_ps(O[2], c2),
+                           _mm256_and_ps(x0, ok1),   _mm256_and_ps(x1, ok1),   _mm256_and_ps(x2, ok1),
+                           _mm256_and_ps(y0, ok2),   _mm256_and_ps(y1, ok2),   _mm256_and_ps(y2, ok2),
+                           _mm256_and_ps(z[0], ok2), _mm256_and_ps(z[1], ok2), _mm256_and_ps(z[2], ok2)};
   for (std::size_t j = 0; j < 12; ++j) _mm256_store_ps(out + j * kLanes, rows[j]);
 }
 
@@ -1044,8 +1042,8 @@ Status DetailDecoder::check_topology(const BodyPolygons& body) const {
   return {};
 }
 
-Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
-                           std::size_t first, std::size_t count, std::span<Vec3f> out, const ExecContext& ctx) {
+Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies, std::size_t first,
+                           std::size_t count, std::span<Vec3f> out, const ExecContext& ctx) {
   DecodeWorkspace ws;
   return decode_detail_batch(dec, body, bodies, first, count, out, ws, ctx);
 }
@@ -1055,7 +1053,8 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   if (Status s = dec.check_topology(body); !s) return s;
   if (bodies.node_count() != body.node_count)
     return {ErrorCode::kMismatch, "decode_detail_batch: the body set has another node count than the template's body"};
-  if (first + count > bodies.size()) return {ErrorCode::kInvalidArgument, "decode_detail_batch: body range out of bounds"};
+  if (first + count > bodies.size())
+    return {ErrorCode::kInvalidArgument, "decode_detail_batch: body range out of bounds"};
   const std::size_t nv = dec.vertex_count();
   if (out.size() != count * nv) return {ErrorCode::kMismatch, "decode_detail_batch: output has the wrong size"};
   if (count == 0 || nv == 0) return {};
@@ -1245,7 +1244,8 @@ DetailEncoding read_detail(const std::filesystem::path& path) {
   get(&nv, 8, "header");
   get(&ne, 8, "header");
   get(&nc, 8, "header");
-  if (nv > s.size() || ne > s.size() || nc > s.size() || s.size() < pos + (nv + 1) * 4 + ne * 20 + nc * 8 + 8) fail("truncated file (sizes in the header exceed the file)");
+  if (nv > s.size() || ne > s.size() || nc > s.size() || s.size() < pos + (nv + 1) * 4 + ne * 20 + nc * 8 + 8)
+    fail("truncated file (sizes in the header exceed the file)");
   e.row.resize(nv + 1);
   e.polygon.resize(ne);
   for (auto* v : {&e.a, &e.b, &e.c, &e.d}) v->resize(ne);

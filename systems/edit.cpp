@@ -3,20 +3,16 @@
 #include <algorithm>
 #include <sstream>
 
+#include "engine/status_format.h"
 #include "systems/euler.h"
 
 namespace atelier {
 
 namespace {
 
-template <class... A>
-Status fail(ErrorCode c, const A&... parts) {
-  std::ostringstream s;
-  (s << ... << parts);
-  return {c, s.str()};
+bool contains(std::span<const FaceIdx> set, FaceIdx f) {
+  return std::find(set.begin(), set.end(), f) != set.end();
 }
-
-bool contains(std::span<const FaceIdx> set, FaceIdx f) { return std::find(set.begin(), set.end(), f) != set.end(); }
 
 /// Refuses when a ring node lies in one of `faces` (one scan of the node table).
 Status check_no_rings(const Model& m, std::span<const FaceIdx> faces, const EditOptions& opt) {
@@ -24,7 +20,7 @@ Status check_no_rings(const Model& m, std::span<const FaceIdx> faces, const Edit
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v) {
     const FaceIdx f = m.nodes.in_face[v];
     if (f.valid() && m.nodes.slots.alive(NodeIdx{v}) && contains(faces, f))
-      return fail(ErrorCode::kTopology, "face ", f.value, " holds ring node ", v, " (kill it first)");
+      return status_of(ErrorCode::kTopology, "face ", f.value, " holds ring node ", v, " (kill it first)");
   }
   return {};
 }
@@ -124,10 +120,10 @@ Status collapse_ok(const Model& m, HalfedgeIdx h) {
   const EdgeIdx e = edge_of(h);
   const NodeIdx a = m.tail(h), b = m.head(h);
   const FaceIdx fl = m.face(h), fr = m.face(t);
-  if (!fl.valid() && !fr.valid()) return fail(ErrorCode::kTopology, "edge ", e.value, " is a wire edge (no face)");
+  if (!fl.valid() && !fr.valid()) return status_of(ErrorCode::kTopology, "edge ", e.value, " is a wire edge (no face)");
   if (fl.valid() && fr.valid() && node_on_boundary(m, a) && node_on_boundary(m, b))
-    return fail(ErrorCode::kTopology, "collapsing interior edge ", e.value, " would pinch the boundary at nodes ",
-                a.value, " and ", b.value);
+    return status_of(ErrorCode::kTopology, "collapsing interior edge ", e.value, " would pinch the boundary at nodes ",
+                     a.value, " and ", b.value);
   NodeIdx opp[2];
   const HalfedgeIdx sides[2] = {h, t};
   for (int s = 0; s < 2; ++s) {
@@ -137,19 +133,19 @@ Status collapse_ok(const Model& m, HalfedgeIdx h) {
     opp[s] = m.head(x1);
     const FaceIdx g1 = m.face(twin(x1)), g2 = m.face(twin(x2));
     if (!g1.valid() && !g2.valid())
-      return fail(ErrorCode::kDegenerate, "collapsing edge ", e.value, " would leave a dangling edge of face ",
-                  f.value);
+      return status_of(ErrorCode::kDegenerate, "collapsing edge ", e.value, " would leave a dangling edge of face ",
+                       f.value);
     if (g1.valid() && g1 == g2)
-      return fail(ErrorCode::kDegenerate, "collapsing edge ", e.value, " would fold face ", g1.value);
+      return status_of(ErrorCode::kDegenerate, "collapsing edge ", e.value, " would fold face ", g1.value);
     if (m.edges.mesh_edge[edge_of(x1).value].valid() && m.edges.mesh_edge[edge_of(x2).value].valid())
-      return fail(ErrorCode::kTopology, "collapsing edge ", e.value, " would merge two mesh edge edges of face ",
-                  f.value);
+      return status_of(ErrorCode::kTopology, "collapsing edge ", e.value, " would merge two mesh edge edges of face ",
+                       f.value);
     if (!node_on_boundary(m, opp[s]) && m.degree(opp[s]) <= 3)
-      return fail(ErrorCode::kDegenerate, "collapsing edge ", e.value, " would leave node ", opp[s].value,
-                  " with valence 2");
+      return status_of(ErrorCode::kDegenerate, "collapsing edge ", e.value, " would leave node ", opp[s].value,
+                       " with valence 2");
   }
   if (opp[0].valid() && opp[0] == opp[1])
-    return fail(ErrorCode::kDegenerate, "both faces of edge ", e.value, " have the same opposite node");
+    return status_of(ErrorCode::kDegenerate, "both faces of edge ", e.value, " have the same opposite node");
   // Link condition: every common neighbour of a and b is opposite e in a triangle.
   std::vector<NodeIdx> na;
   m.for_each_outgoing(a, [&](HalfedgeIdx x) { na.push_back(m.head(x)); });
@@ -158,8 +154,8 @@ Status collapse_ok(const Model& m, HalfedgeIdx h) {
     const NodeIdx w = m.head(x);
     if (!st.is_ok()) return;
     if (w != opp[0] && w != opp[1] && std::find(na.begin(), na.end(), w) != na.end())
-      st = fail(ErrorCode::kTopology, "link condition fails for edge ", e.value, ": node ", w.value,
-                " neighbours both ends (collapse would make parallel edges)");
+      st = status_of(ErrorCode::kTopology, "link condition fails for edge ", e.value, ": node ", w.value,
+                     " neighbours both ends (collapse would make parallel edges)");
   });
   if (!st) return st;
   // A polygon around b (other than the faces of e) that also has corner a
@@ -170,8 +166,8 @@ Status collapse_ok(const Model& m, HalfedgeIdx h) {
     if (!st || !f.valid() || f == fl || f == fr || face_degree3(m, f) == 3) return;
     m.face_nodes(f, corners);
     if (std::find(corners.begin(), corners.end(), a) != corners.end())
-      st = fail(ErrorCode::kTopology, "collapsing edge ", e.value, " would make face ", f.value,
-                " visit node ", a.value, " twice");
+      st = status_of(ErrorCode::kTopology, "collapsing edge ", e.value, " would make face ", f.value, " visit node ",
+                     a.value, " twice");
   });
   return st;
 }
@@ -210,16 +206,20 @@ void collapse_one(Model& m, HalfedgeIdx h, const Vec3d& p) {
       }
       if (const MeshEdgeIdx me = m.edges.mesh_edge[re.value]; me.valid()) {
         for (HalfedgeIdx& c : m.mesh_edges.halfedges.row_mut(me.value))
-          if (c == rout) c = kin;
-          else if (c == rin) c = twin(kin);
+          if (c == rout)
+            c = kin;
+          else if (c == rin)
+            c = twin(kin);
         m.edges.mesh_edge[ke.value] = me;
       }
       m.edges.flags[ke.value] |= m.edges.flags[re.value];
       if (has_attr)
         for (std::uint32_t i = 0; i < an.slots.capacity(); ++i)
           if (an.slots.alive(AttribNodeIdx{i}) && an.kind[i] == AttribNodeKind::kEdge) {
-            if (an.element[i] == rout.value) an.element[i] = kin.value;
-            else if (an.element[i] == rin.value) an.element[i] = twin(kin).value;
+            if (an.element[i] == rout.value)
+              an.element[i] = kin.value;
+            else if (an.element[i] == rin.value)
+              an.element[i] = twin(kin).value;
           }
       m.delete_edge(re);
     } else {
@@ -294,7 +294,8 @@ std::vector<HalfedgeIdx> joint_corresponding_halfedges(const Model& m, HalfedgeI
 
 Expected<EdgeSplitResult> edge_split(Model& m, Edge eh, const Vec3d& position, const EditOptions& opt) {
   if (auto r = m.resolve(eh); !r) return r.status();
-  if (!position.allFinite()) return fail(ErrorCode::kDegenerate, "non-finite split position on edge ", eh.idx.value);
+  if (!position.allFinite())
+    return status_of(ErrorCode::kDegenerate, "non-finite split position on edge ", eh.idx.value);
   const auto hs = joint_corresponding_halfedges(m, halfedge_of(eh.idx, 0));
   if (opt.check_ring_nodes) {
     std::vector<FaceIdx> faces;
@@ -310,20 +311,21 @@ Expected<EdgeSplitResult> edge_split(Model& m, Edge eh, const Vec3d& position, c
 
 Expected<EdgeCollapseResult> edge_collapse(Model& m, Edge eh, const Vec3d& position, const EditOptions& opt) {
   if (auto r = m.resolve(eh); !r) return r.status();
-  if (!position.allFinite()) return fail(ErrorCode::kDegenerate, "non-finite position for collapsing edge ", eh.idx.value);
+  if (!position.allFinite())
+    return status_of(ErrorCode::kDegenerate, "non-finite position for collapsing edge ", eh.idx.value);
   const EdgeIdx e = eh.idx;
   HalfedgeIdx h = halfedge_of(e, 0);
   Vec3d pos = position;
   std::vector<HalfedgeIdx> hs;
   if (const MeshEdgeIdx me = m.edges.mesh_edge[e.value]; me.valid()) {
     if (m.mesh_edges.halfedges.size(me.value) < 2)
-      return fail(ErrorCode::kTopology, "edge ", e.value, " is the only edge of mesh edge ", me.value);
+      return status_of(ErrorCode::kTopology, "edge ", e.value, " is the only edge of mesh edge ", me.value);
     hs = joint_corresponding_halfedges(m, h);
   } else {
     const bool a_on = node_on_mesh_edge(m, m.tail(h)), b_on = node_on_mesh_edge(m, m.head(h));
     if (a_on && b_on)
-      return fail(ErrorCode::kTopology, "both ends of edge ", e.value,
-                  " lie on mesh edges that do not hold it: collapsing would pinch them");
+      return status_of(ErrorCode::kTopology, "both ends of edge ", e.value,
+                       " lie on mesh edges that do not hold it: collapsing would pinch them");
     if (b_on) h = twin(h);
     JointIdx j;
     if (node_on_mesh_edge(m, m.tail(h), &j) && j.valid()) pos = m.position(m.tail(h));
@@ -338,7 +340,7 @@ Expected<EdgeCollapseResult> edge_collapse(Model& m, Edge eh, const Vec3d& posit
   if (Status s = check_no_rings(m, faces, opt); !s) return s;
   EdgeCollapseResult r;
   for (HalfedgeIdx x : hs) {
-    if (!m.alive(x)) return fail(ErrorCode::kInternal, "joint member edge vanished during collapse");
+    if (!m.alive(x)) return status_of(ErrorCode::kInternal, "joint member edge vanished during collapse");
     const NodeIdx a = m.tail(x);
     collapse_one(m, x, pos);
     r.kept.push_back(m.handle(a));
@@ -351,21 +353,22 @@ Expected<Edge> edge_swap(Model& m, Edge eh, const EditOptions& opt) {
   const EdgeIdx e = eh.idx;
   if (const MeshEdgeIdx me = m.edges.mesh_edge[e.value]; me.valid()) {
     if (m.mesh_edges.joint[me.value].valid())
-      return fail(ErrorCode::kJointRefused, "edge ", e.value, " is on mesh edge ", me.value, " of joint ",
-                  m.mesh_edges.joint[me.value].value, ": swapping is not allowed (seed 000 section 3)");
-    return fail(ErrorCode::kTopology, "edge ", e.value, " is on mesh edge ", me.value, ": swapping would break the chain");
+      return status_of(ErrorCode::kJointRefused, "edge ", e.value, " is on mesh edge ", me.value, " of joint ",
+                       m.mesh_edges.joint[me.value].value, ": swapping is not allowed (seed 000 section 3)");
+    return status_of(ErrorCode::kTopology, "edge ", e.value, " is on mesh edge ", me.value,
+                     ": swapping would break the chain");
   }
   const HalfedgeIdx h = halfedge_of(e, 0), t = halfedge_of(e, 1);
   const FaceIdx f0 = m.face(h), f1 = m.face(t);
-  if (!f0.valid() || !f1.valid()) return fail(ErrorCode::kTopology, "edge ", e.value, " is not interior");
+  if (!f0.valid() || !f1.valid()) return status_of(ErrorCode::kTopology, "edge ", e.value, " is not interior");
   if (face_degree3(m, f0) != 3 || face_degree3(m, f1) != 3)
-    return fail(ErrorCode::kUnsupported, "edge swap needs two triangles at edge ", e.value);
+    return status_of(ErrorCode::kUnsupported, "edge swap needs two triangles at edge ", e.value);
   const HalfedgeIdx h1 = m.next(h), h2 = m.next(h1), t1 = m.next(t), t2 = m.next(t1);
   const NodeIdx c = m.head(h1), d = m.head(t1);
-  if (c == d) return fail(ErrorCode::kDegenerate, "both faces of edge ", e.value, " have the same opposite node");
+  if (c == d) return status_of(ErrorCode::kDegenerate, "both faces of edge ", e.value, " have the same opposite node");
   if (m.find_halfedge(c, d).valid())
-    return fail(ErrorCode::kTopology, "nodes ", c.value, " and ", d.value, " are already joined: swapping edge ",
-                e.value, " would make parallel edges");
+    return status_of(ErrorCode::kTopology, "nodes ", c.value, " and ", d.value, " are already joined: swapping edge ",
+                     e.value, " would make parallel edges");
   const FaceIdx fs[2] = {f0, f1};
   if (Status s = check_no_rings(m, fs, opt); !s) return s;
   Carry carry;
@@ -393,7 +396,9 @@ Expected<FaceSplitResult> face_split_1to4(Model& m, Face fh, const EditOptions& 
   const FaceIdx f = fh.idx;
   std::vector<HalfedgeIdx> hs;
   m.face_halfedges(f, hs);
-  if (hs.size() != 3) return fail(ErrorCode::kUnsupported, "face ", f.value, " has ", hs.size(), " sides (1-to-4 split needs a triangle)");
+  if (hs.size() != 3)
+    return status_of(ErrorCode::kUnsupported, "face ", f.value, " has ", hs.size(),
+                     " sides (1-to-4 split needs a triangle)");
   // All halfedges to split, for the ring check.
   std::array<std::vector<HalfedgeIdx>, 3> corr;
   std::vector<FaceIdx> faces{f};

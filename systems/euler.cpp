@@ -4,16 +4,11 @@
 #include <limits>
 #include <sstream>
 
+#include "engine/status_format.h"
+
 namespace atelier {
 
 namespace {
-
-template <class... A>
-Status fail(ErrorCode c, const A&... parts) {
-  std::ostringstream s;
-  (s << ... << parts);
-  return {c, s.str()};
-}
 
 NodeRecord node_record(const Model& m, NodeIdx v) {
   NodeRecord r;
@@ -33,7 +28,9 @@ NodeIdx new_node_from(Model& m, const NodeRecord& r) {
   return v;
 }
 
-bool is_ring(const Model& m, NodeIdx v) { return m.nodes.in_face[v.value].valid(); }
+bool is_ring(const Model& m, NodeIdx v) {
+  return m.nodes.in_face[v.value].valid();
+}
 
 // Attribute references: O(number of attribute nodes), which is small next to
 // the mesh (profiles and feature points).
@@ -70,13 +67,13 @@ bool face_has_ring(const Model& m, FaceIdx f) {
 Status check_new_edge(const Model& m, Node a, Node b) {
   if (auto r = m.resolve(a); !r) return r.status();
   if (auto r = m.resolve(b); !r) return r.status();
-  if (a.idx == b.idx) return fail(ErrorCode::kTopology, "cannot join node ", a.idx.value, " to itself");
+  if (a.idx == b.idx) return status_of(ErrorCode::kTopology, "cannot join node ", a.idx.value, " to itself");
   if (m.nodes.surface[a.idx.value] != m.nodes.surface[b.idx.value])
-    return fail(ErrorCode::kInvalidArgument, "nodes ", a.idx.value, " and ", b.idx.value,
-                " are in different surfaces (surfaces meet only through joints)");
+    return status_of(ErrorCode::kInvalidArgument, "nodes ", a.idx.value, " and ", b.idx.value,
+                     " are in different surfaces (surfaces meet only through joints)");
   if (m.find_halfedge(a.idx, b.idx).valid())
-    return fail(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
-                " are already joined (parallel edges are invalid)");
+    return status_of(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
+                     " are already joined (parallel edges are invalid)");
   return {};
 }
 
@@ -86,10 +83,13 @@ Status check_kill_edge(const Model& m, Edge e) {
   if (auto r = m.resolve(e); !r) return r.status();
   const EdgeIdx ei = e.idx;
   if (!m.is_wire(ei))
-    return fail(ErrorCode::kTopology, "edge ", ei.value, " bounds a face; kill the face first (kill_face_make_Chole)");
+    return status_of(ErrorCode::kTopology, "edge ", ei.value,
+                     " bounds a face; kill the face first (kill_face_make_Chole)");
   if (m.edges.mesh_edge[ei.value].valid())
-    return fail(ErrorCode::kTopology, "edge ", ei.value, " belongs to mesh edge ", m.edges.mesh_edge[ei.value].value);
-  if (edge_has_attrib(m, ei)) return fail(ErrorCode::kTopology, "edge ", ei.value, " carries attribute edge-nodes");
+    return status_of(ErrorCode::kTopology, "edge ", ei.value, " belongs to mesh edge ",
+                     m.edges.mesh_edge[ei.value].value);
+  if (edge_has_attrib(m, ei))
+    return status_of(ErrorCode::kTopology, "edge ", ei.value, " carries attribute edge-nodes");
   return {};
 }
 
@@ -187,24 +187,25 @@ bool face_group_closed(const Model& m, FaceIdx f) {
 
 Expected<Node> make_vertex_complex(Model& m, Surface s, const Vec3d& position) {
   if (auto r = m.resolve(s); !r) return r.status();
-  if (!position.allFinite()) return fail(ErrorCode::kDegenerate, "non-finite position for a new node");
+  if (!position.allFinite()) return status_of(ErrorCode::kDegenerate, "non-finite position for a new node");
   return m.handle(m.new_node(s.idx, position));
 }
 
 Expected<Node> make_vertex_complex(Model& m, const NodeRecord& r) {
   if (!r.surface.valid() || !m.alive(r.surface))
-    return fail(ErrorCode::kStaleHandle, "surface ", r.surface.value, " is dead");
-  if (r.in_face.valid()) return fail(ErrorCode::kInvalidArgument, "record is a ring node: use make_vertex_ring");
+    return status_of(ErrorCode::kStaleHandle, "surface ", r.surface.value, " is dead");
+  if (r.in_face.valid()) return status_of(ErrorCode::kInvalidArgument, "record is a ring node: use make_vertex_ring");
   return m.handle(new_node_from(m, r));
 }
 
 Expected<NodeRecord> kill_vertex_complex(Model& m, Node v) {
   if (auto r = m.resolve(v); !r) return r.status();
   if (!m.is_isolated(v.idx))
-    return fail(ErrorCode::kTopology, "node ", v.idx.value, " has ", m.degree(v.idx), " edges (must be isolated)");
+    return status_of(ErrorCode::kTopology, "node ", v.idx.value, " has ", m.degree(v.idx), " edges (must be isolated)");
   if (is_ring(m, v.idx))
-    return fail(ErrorCode::kTopology, "node ", v.idx.value, " is a ring node: use kill_vertex_ring");
-  if (node_has_attrib(m, v.idx)) return fail(ErrorCode::kTopology, "node ", v.idx.value, " carries attribute nodes");
+    return status_of(ErrorCode::kTopology, "node ", v.idx.value, " is a ring node: use kill_vertex_ring");
+  if (node_has_attrib(m, v.idx))
+    return status_of(ErrorCode::kTopology, "node ", v.idx.value, " carries attribute nodes");
   NodeRecord r = node_record(m, v.idx);
   m.delete_node(v.idx);
   return r;
@@ -222,11 +223,11 @@ Expected<VertexEdge> make_vertex_edge(Model& m, Node anchor, const Vec3d& positi
 
 Expected<VertexEdge> make_vertex_edge(Model& m, const VertexEdgeRecord& r) {
   if (!r.anchor.valid() || !m.alive(r.anchor))
-    return fail(ErrorCode::kStaleHandle, "anchor node ", r.anchor.value, " is dead");
-  if (!r.node.position.allFinite()) return fail(ErrorCode::kDegenerate, "non-finite position for a new node");
+    return status_of(ErrorCode::kStaleHandle, "anchor node ", r.anchor.value, " is dead");
+  if (!r.node.position.allFinite()) return status_of(ErrorCode::kDegenerate, "non-finite position for a new node");
   if (r.node.surface != m.nodes.surface[r.anchor.value] || r.node.in_face != m.nodes.in_face[r.anchor.value])
-    return fail(ErrorCode::kInvalidArgument, "new node must lie in the surface and ring of anchor node ",
-                r.anchor.value);
+    return status_of(ErrorCode::kInvalidArgument, "new node must lie in the surface and ring of anchor node ",
+                     r.anchor.value);
   const NodeIdx v = new_node_from(m, r.node);
   const EdgeIdx e = r.from_anchor ? m.new_edge(r.anchor, v) : m.new_edge(v, r.anchor);
   m.edges.flags[e.value] = r.flags;
@@ -236,11 +237,13 @@ Expected<VertexEdge> make_vertex_edge(Model& m, const VertexEdgeRecord& r) {
 Expected<VertexEdgeRecord> kill_vertex_edge(Model& m, Node v) {
   if (auto r = m.resolve(v); !r) return r.status();
   if (m.degree(v.idx) != 1)
-    return fail(ErrorCode::kTopology, "node ", v.idx.value, " has ", m.degree(v.idx), " edges (must have exactly 1)");
+    return status_of(ErrorCode::kTopology, "node ", v.idx.value, " has ", m.degree(v.idx),
+                     " edges (must have exactly 1)");
   const HalfedgeIdx h = m.nodes.out[v.idx.value];
   const EdgeIdx e = edge_of(h);
   if (Status s = check_kill_edge(m, m.handle(e)); !s) return s;
-  if (node_has_attrib(m, v.idx)) return fail(ErrorCode::kTopology, "node ", v.idx.value, " carries attribute nodes");
+  if (node_has_attrib(m, v.idx))
+    return status_of(ErrorCode::kTopology, "node ", v.idx.value, " carries attribute nodes");
   VertexEdgeRecord r;
   r.anchor = m.head(h);
   r.node = node_record(m, v.idx);
@@ -257,11 +260,11 @@ Expected<Edge> make_edge_Chole(Model& m, Node a, Node b) {
   if (Status s = check_new_edge(m, a, b); !s) return s;
   const bool ra = is_ring(m, a.idx), rb = is_ring(m, b.idx);
   if (ra != rb || (ra && m.nodes.in_face[a.idx.value] != m.nodes.in_face[b.idx.value]))
-    return fail(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
-                " are not in the same ring (ring nodes join only nodes of their face's rings)");
+    return status_of(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
+                     " are not in the same ring (ring nodes join only nodes of their face's rings)");
   if (!edge_connected(m, a.idx, b.idx))
-    return fail(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value, " are in different ",
-                ra ? "rings (use make_edge_kill_ring)" : "components (use make_edge_kill_complex)");
+    return status_of(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value, " are in different ",
+                     ra ? "rings (use make_edge_kill_ring)" : "components (use make_edge_kill_complex)");
   const EdgeIdx e = m.new_edge(a.idx, b.idx);
   ++m.complex_holes;
   return m.handle(e);
@@ -277,9 +280,10 @@ Expected<EdgeRecord> kill_edge_Chole(Model& m, Edge e) {
   if (Status s = check_kill_edge(m, e); !s) return s;
   const EdgeRecord r = edge_record(m, e.idx);
   if (!edge_connected(m, r.tail, r.head, e.idx))
-    return fail(ErrorCode::kTopology, "edge ", e.idx.value, " is a bridge: killing it splits ",
-                is_ring(m, r.tail) ? "a ring (use kill_edge_make_ring)" : "a component (use kill_edge_make_complex)");
-  if (m.complex_holes <= 0) return fail(ErrorCode::kInternal, "complex hole count is already 0");
+    return status_of(
+        ErrorCode::kTopology, "edge ", e.idx.value, " is a bridge: killing it splits ",
+        is_ring(m, r.tail) ? "a ring (use kill_edge_make_ring)" : "a component (use kill_edge_make_complex)");
+  if (m.complex_holes <= 0) return status_of(ErrorCode::kInternal, "complex hole count is already 0");
   m.delete_edge(e.idx);
   --m.complex_holes;
   return r;
@@ -288,11 +292,11 @@ Expected<EdgeRecord> kill_edge_Chole(Model& m, Edge e) {
 Expected<Edge> make_edge_kill_complex(Model& m, Node a, Node b) {
   if (Status s = check_new_edge(m, a, b); !s) return s;
   if (is_ring(m, a.idx) || is_ring(m, b.idx))
-    return fail(ErrorCode::kTopology, "ring node ", (is_ring(m, a.idx) ? a : b).idx.value,
-                " joins only nodes of its face (use make_edge_kill_ring)");
+    return status_of(ErrorCode::kTopology, "ring node ", (is_ring(m, a.idx) ? a : b).idx.value,
+                     " joins only nodes of its face (use make_edge_kill_ring)");
   if (edge_connected(m, a.idx, b.idx))
-    return fail(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
-                " are in the same component (use make_edge_Chole)");
+    return status_of(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
+                     " are in the same component (use make_edge_Chole)");
   return m.handle(m.new_edge(a.idx, b.idx));
 }
 
@@ -305,9 +309,10 @@ Expected<Edge> make_edge_kill_complex(Model& m, const EdgeRecord& r) {
 Expected<EdgeRecord> kill_edge_make_complex(Model& m, Edge e) {
   if (Status s = check_kill_edge(m, e); !s) return s;
   const EdgeRecord r = edge_record(m, e.idx);
-  if (is_ring(m, r.tail)) return fail(ErrorCode::kTopology, "edge ", e.idx.value, " is a ring edge (use kill_edge_make_ring)");
+  if (is_ring(m, r.tail))
+    return status_of(ErrorCode::kTopology, "edge ", e.idx.value, " is a ring edge (use kill_edge_make_ring)");
   if (edge_connected(m, r.tail, r.head, e.idx))
-    return fail(ErrorCode::kTopology, "edge ", e.idx.value, " is not a bridge (use kill_edge_Chole)");
+    return status_of(ErrorCode::kTopology, "edge ", e.idx.value, " is not a bridge (use kill_edge_Chole)");
   m.delete_edge(e.idx);
   return r;
 }
@@ -315,11 +320,11 @@ Expected<EdgeRecord> kill_edge_make_complex(Model& m, Edge e) {
 Expected<Edge> make_edge_kill_ring(Model& m, Node a, Node b) {
   if (Status s = check_new_edge(m, a, b); !s) return s;
   if (!is_ring(m, a.idx) || !is_ring(m, b.idx) || m.nodes.in_face[a.idx.value] != m.nodes.in_face[b.idx.value])
-    return fail(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
-                " are not both ring nodes of one face");
+    return status_of(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
+                     " are not both ring nodes of one face");
   if (edge_connected(m, a.idx, b.idx))
-    return fail(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
-                " are in the same ring (use make_edge_Chole)");
+    return status_of(ErrorCode::kTopology, "nodes ", a.idx.value, " and ", b.idx.value,
+                     " are in the same ring (use make_edge_Chole)");
   return m.handle(m.new_edge(a.idx, b.idx));
 }
 
@@ -332,9 +337,9 @@ Expected<Edge> make_edge_kill_ring(Model& m, const EdgeRecord& r) {
 Expected<EdgeRecord> kill_edge_make_ring(Model& m, Edge e) {
   if (Status s = check_kill_edge(m, e); !s) return s;
   const EdgeRecord r = edge_record(m, e.idx);
-  if (!is_ring(m, r.tail)) return fail(ErrorCode::kTopology, "edge ", e.idx.value, " is not a ring edge");
+  if (!is_ring(m, r.tail)) return status_of(ErrorCode::kTopology, "edge ", e.idx.value, " is not a ring edge");
   if (edge_connected(m, r.tail, r.head, e.idx))
-    return fail(ErrorCode::kTopology, "edge ", e.idx.value, " is not a bridge of its ring (use kill_edge_Chole)");
+    return status_of(ErrorCode::kTopology, "edge ", e.idx.value, " is not a bridge of its ring (use kill_edge_Chole)");
   m.delete_edge(e.idx);
   return r;
 }
@@ -343,34 +348,35 @@ Expected<EdgeRecord> kill_edge_make_ring(Model& m, Edge e) {
 
 Expected<Face> make_face_kill_Chole(Model& m, std::span<const HalfedgeIdx> cycle) {
   const std::size_t n = cycle.size();
-  if (n < 3) return fail(ErrorCode::kTopology, "a face needs a closed chain of at least 3 halfedges, got ", n);
+  if (n < 3) return status_of(ErrorCode::kTopology, "a face needs a closed chain of at least 3 halfedges, got ", n);
   for (HalfedgeIdx h : cycle)
     if (!h.valid() || h.value >= m.halfedges.tail.size() || !m.alive(h))
-      return fail(ErrorCode::kStaleHandle, "halfedge ", h.value, " is dead");
+      return status_of(ErrorCode::kStaleHandle, "halfedge ", h.value, " is dead");
   std::vector<NodeIdx> corners;
   corners.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
     const HalfedgeIdx h = cycle[i];
     if (m.face(h).valid())
-      return fail(ErrorCode::kTopology, "halfedge ", h.value, " already bounds face ", m.face(h).value);
+      return status_of(ErrorCode::kTopology, "halfedge ", h.value, " already bounds face ", m.face(h).value);
     if (m.head(h) != m.tail(cycle[(i + 1) % n]))
-      return fail(ErrorCode::kTopology, "chain is not closed: halfedge ", h.value, " ends at node ", m.head(h).value,
-                  " but halfedge ", cycle[(i + 1) % n].value, " starts at node ", m.tail(cycle[(i + 1) % n]).value);
+      return status_of(ErrorCode::kTopology, "chain is not closed: halfedge ", h.value, " ends at node ",
+                       m.head(h).value, " but halfedge ", cycle[(i + 1) % n].value, " starts at node ",
+                       m.tail(cycle[(i + 1) % n]).value);
     if (is_ring(m, m.tail(h)))
-      return fail(ErrorCode::kTopology, "node ", m.tail(h).value, " is a ring node inside face ",
-                  m.nodes.in_face[m.tail(h).value].value);
+      return status_of(ErrorCode::kTopology, "node ", m.tail(h).value, " is a ring node inside face ",
+                       m.nodes.in_face[m.tail(h).value].value);
     corners.push_back(m.tail(h));
   }
   std::sort(corners.begin(), corners.end());
   if (auto it = std::adjacent_find(corners.begin(), corners.end()); it != corners.end())
-    return fail(ErrorCode::kDegenerate, "chain visits node ", it->value, " twice");
+    return status_of(ErrorCode::kDegenerate, "chain visits node ", it->value, " twice");
   const FaceIdx f = m.new_face(m.nodes.surface[m.tail(cycle[0]).value], cycle);
   // Seed 000 Table A-1: the face fills a complex hole, unless it closes a
   // shell (S+1, H unchanged): decided by the closure of its face group.
   if (!face_group_closed(m, f)) {
     if (m.complex_holes <= 0) {
       m.delete_face(f);
-      return fail(ErrorCode::kInternal, "complex hole count is already 0 (model does not satisfy Euler-Poincare)");
+      return status_of(ErrorCode::kInternal, "complex hole count is already 0 (model does not satisfy Euler-Poincare)");
     }
     --m.complex_holes;
   }
@@ -386,8 +392,9 @@ Expected<Face> make_face_kill_Chole(Model& m, const FaceRecord& r) {
 Expected<FaceRecord> kill_face_make_Chole(Model& m, Face f) {
   if (auto r = m.resolve(f); !r) return r.status();
   if (face_has_ring(m, f.idx))
-    return fail(ErrorCode::kTopology, "face ", f.idx.value, " holds ring nodes (kill them first)");
-  if (face_has_attrib(m, f.idx)) return fail(ErrorCode::kTopology, "face ", f.idx.value, " holds attribute face-nodes");
+    return status_of(ErrorCode::kTopology, "face ", f.idx.value, " holds ring nodes (kill them first)");
+  if (face_has_attrib(m, f.idx))
+    return status_of(ErrorCode::kTopology, "face ", f.idx.value, " holds attribute face-nodes");
   FaceRecord r;
   r.surface = m.faces.surface[f.idx.value];
   r.flags = m.faces.flags[f.idx.value];
@@ -411,19 +418,21 @@ Expected<Node> make_vertex_ring(Model& m, Face f, const Vec3d& position) {
 
 Expected<Node> make_vertex_ring(Model& m, const NodeRecord& r) {
   if (!r.in_face.valid() || !m.alive(r.in_face))
-    return fail(ErrorCode::kStaleHandle, "face ", r.in_face.value, " is dead");
+    return status_of(ErrorCode::kStaleHandle, "face ", r.in_face.value, " is dead");
   if (r.surface != m.faces.surface[r.in_face.value])
-    return fail(ErrorCode::kInvalidArgument, "ring node must be in the surface of face ", r.in_face.value);
-  if (!r.position.allFinite()) return fail(ErrorCode::kDegenerate, "non-finite position for a new node");
+    return status_of(ErrorCode::kInvalidArgument, "ring node must be in the surface of face ", r.in_face.value);
+  if (!r.position.allFinite()) return status_of(ErrorCode::kDegenerate, "non-finite position for a new node");
   return m.handle(new_node_from(m, r));
 }
 
 Expected<NodeRecord> kill_vertex_ring(Model& m, Node v) {
   if (auto r = m.resolve(v); !r) return r.status();
-  if (!is_ring(m, v.idx)) return fail(ErrorCode::kTopology, "node ", v.idx.value, " is not a ring node");
+  if (!is_ring(m, v.idx)) return status_of(ErrorCode::kTopology, "node ", v.idx.value, " is not a ring node");
   if (!m.is_isolated(v.idx))
-    return fail(ErrorCode::kTopology, "ring node ", v.idx.value, " has ", m.degree(v.idx), " edges (must be isolated)");
-  if (node_has_attrib(m, v.idx)) return fail(ErrorCode::kTopology, "node ", v.idx.value, " carries attribute nodes");
+    return status_of(ErrorCode::kTopology, "ring node ", v.idx.value, " has ", m.degree(v.idx),
+                     " edges (must be isolated)");
+  if (node_has_attrib(m, v.idx))
+    return status_of(ErrorCode::kTopology, "node ", v.idx.value, " carries attribute nodes");
   NodeRecord r = node_record(m, v.idx);
   m.delete_node(v.idx);
   return r;
@@ -492,8 +501,7 @@ void relocate_face_node(Model& m, AttribNodeIdx a, const Vec3d& where, std::span
   an.param[a.value] = best_b;
 }
 
-RawSplit split_edge_raw(Model& m, HalfedgeIdx h, const Vec3d& p, bool new_forward,
-                        std::vector<AttribChange>* changes) {
+RawSplit split_edge_raw(Model& m, HalfedgeIdx h, const Vec3d& p, bool new_forward, std::vector<AttribChange>* changes) {
   const HalfedgeIdx t = twin(h);
   const EdgeIdx e = edge_of(h);
   const NodeIdx a = m.tail(h), b = m.head(h);
@@ -512,7 +520,7 @@ RawSplit split_edge_raw(Model& m, HalfedgeIdx h, const Vec3d& p, bool new_forwar
       (1.0 - s) * m.nodes.position_backup[a.value] + s * m.nodes.position_backup[b.value];
   const EdgeIdx g = new_forward ? m.new_edge(v, b) : m.new_edge(b, v);
   const HalfedgeIdx gs = halfedge_of(g, new_forward ? 0u : 1u);  // v -> b, along h
-  const HalfedgeIdx gt = twin(gs);                                 // b -> v, along t
+  const HalfedgeIdx gt = twin(gs);                               // b -> v, along t
   m.edges.flags[g.value] = m.edges.flags[e.value];
   m.set_tail(t, v);
   if (fh.valid()) {
@@ -572,13 +580,13 @@ RawSplit split_edge_raw(Model& m, HalfedgeIdx h, const Vec3d& p, bool new_forwar
 }  // namespace euler_detail
 
 Expected<SplitEdgeResult> split_edge(Model& m, Halfedge hh, const Vec3d& position) {
-  if (!m.alive(hh)) return fail(ErrorCode::kStaleHandle, "halfedge ", hh.idx.value, " is dead or was reused");
+  if (!m.alive(hh)) return status_of(ErrorCode::kStaleHandle, "halfedge ", hh.idx.value, " is dead or was reused");
   const HalfedgeIdx h = hh.idx;
   const EdgeIdx e = edge_of(h);
-  if (!position.allFinite()) return fail(ErrorCode::kDegenerate, "non-finite split position on edge ", e.value);
+  if (!position.allFinite()) return status_of(ErrorCode::kDegenerate, "non-finite split position on edge ", e.value);
   if (const MeshEdgeIdx me = m.edges.mesh_edge[e.value]; me.valid() && m.mesh_edges.joint[me.value].valid())
-    return fail(ErrorCode::kJointRefused, "edge ", e.value, " is on mesh edge ", me.value, " of joint ",
-                m.mesh_edges.joint[me.value].value, ": use edge_split, which splits every joint member");
+    return status_of(ErrorCode::kJointRefused, "edge ", e.value, " is on mesh edge ", me.value, " of joint ",
+                     m.mesh_edges.joint[me.value].value, ": use edge_split, which splits every joint member");
   SplitEdgeResult r;
   const auto raw = euler_detail::split_edge_raw(m, h, position, true, &r.attribs);
   r.node = m.handle(raw.node);
@@ -593,12 +601,12 @@ Expected<SplitEdgeResult> split_edge(Model& m, Edge e, const Vec3d& position) {
 
 Expected<SplitEdgeResult> split_edge(Model& m, const MergeEdgeRecord& r) {
   if (!r.kept.valid() || r.kept.value >= m.halfedges.tail.size() || !m.alive(r.kept))
-    return fail(ErrorCode::kStaleHandle, "kept halfedge ", r.kept.value, " is dead");
+    return status_of(ErrorCode::kStaleHandle, "kept halfedge ", r.kept.value, " is dead");
   const EdgeIdx e = edge_of(r.kept);
   if (const MeshEdgeIdx me = m.edges.mesh_edge[e.value]; me.valid() && m.mesh_edges.joint[me.value].valid())
-    return fail(ErrorCode::kJointRefused, "edge ", e.value, " is on a joint mesh edge");
+    return status_of(ErrorCode::kJointRefused, "edge ", e.value, " is on a joint mesh edge");
   if (r.node.surface != m.nodes.surface[m.tail(r.kept).value])
-    return fail(ErrorCode::kInvalidArgument, "record's node is not in the surface of edge ", e.value);
+    return status_of(ErrorCode::kInvalidArgument, "record's node is not in the surface of edge ", e.value);
   const HalfedgeIdx h = r.kept, t = twin(h);
   const auto raw = euler_detail::split_edge_raw(m, h, r.node.position, r.removed_forward, nullptr);
   const NodeIdx v = raw.node;
@@ -626,26 +634,28 @@ Expected<MergeEdgeRecord> merge_edge(Model& m, Node vh, Edge keep, std::span<con
   if (auto r = m.resolve(keep); !r) return r.status();
   const NodeIdx v = vh.idx;
   if (m.degree(v) != 2)
-    return fail(ErrorCode::kTopology, "node ", v.value, " has ", m.degree(v), " edges (merge needs exactly 2)");
+    return status_of(ErrorCode::kTopology, "node ", v.value, " has ", m.degree(v), " edges (merge needs exactly 2)");
   HalfedgeIdx kt, rs;  // kt: v -> a on the kept edge; rs: v -> b on the removed edge
   m.for_each_outgoing(v, [&](HalfedgeIdx x) { (edge_of(x) == keep.idx ? kt : rs) = x; });
-  if (!kt.valid()) return fail(ErrorCode::kInvalidArgument, "edge ", keep.idx.value, " does not end at node ", v.value);
+  if (!kt.valid())
+    return status_of(ErrorCode::kInvalidArgument, "edge ", keep.idx.value, " does not end at node ", v.value);
   const HalfedgeIdx k = twin(kt), rt = twin(rs);
   const EdgeIdx re = edge_of(rs);
   const NodeIdx a = m.tail(k), b = m.head(rs);
-  if (a == b) return fail(ErrorCode::kTopology, "merging at node ", v.value, " would make a loop edge on node ", a.value);
+  if (a == b)
+    return status_of(ErrorCode::kTopology, "merging at node ", v.value, " would make a loop edge on node ", a.value);
   if (m.find_halfedge(a, b).valid())
-    return fail(ErrorCode::kTopology, "nodes ", a.value, " and ", b.value,
-                " are already joined: merging at node ", v.value, " would make parallel edges");
+    return status_of(ErrorCode::kTopology, "nodes ", a.value, " and ", b.value, " are already joined: merging at node ",
+                     v.value, " would make parallel edges");
   const MeshEdgeIdx mk = m.edges.mesh_edge[keep.idx.value], mr = m.edges.mesh_edge[re.value];
   if (mk != mr)
-    return fail(ErrorCode::kTopology, "edges ", keep.idx.value, " and ", re.value, " at node ", v.value,
-                " are not in the same mesh edge");
+    return status_of(ErrorCode::kTopology, "edges ", keep.idx.value, " and ", re.value, " at node ", v.value,
+                     " are not in the same mesh edge");
   std::size_t chain_pos = 0;
   if (mk.valid()) {
     if (m.mesh_edges.joint[mk.value].valid())
-      return fail(ErrorCode::kJointRefused, "node ", v.value, " is on mesh edge ", mk.value, " of joint ",
-                  m.mesh_edges.joint[mk.value].value);
+      return status_of(ErrorCode::kJointRefused, "node ", v.value, " is on mesh edge ", mk.value, " of joint ",
+                       m.mesh_edges.joint[mk.value].value);
     auto row = m.mesh_edges.halfedges.row(mk.value);
     std::size_t pk = row.size(), pr = row.size();
     for (std::size_t i = 0; i < row.size(); ++i) {
@@ -653,13 +663,14 @@ Expected<MergeEdgeRecord> merge_edge(Model& m, Node vh, Edge keep, std::span<con
       if (edge_of(row[i]) == re) pr = i;
     }
     if (pk + 1 != pr && pr + 1 != pk)
-      return fail(ErrorCode::kTopology, "node ", v.value, " is an end of mesh edge ", mk.value);
+      return status_of(ErrorCode::kTopology, "node ", v.value, " is an end of mesh edge ", mk.value);
     chain_pos = pr;
   }
   for (HalfedgeIdx x : {k, kt})
     if (const FaceIdx f = m.face(x); f.valid() && m.face_degree(f) <= 3)
-      return fail(ErrorCode::kDegenerate, "merging at node ", v.value, " would leave face ", f.value, " with 2 sides");
-  if (node_has_attrib(m, v)) return fail(ErrorCode::kTopology, "node ", v.value, " carries attribute nodes");
+      return status_of(ErrorCode::kDegenerate, "merging at node ", v.value, " would leave face ", f.value,
+                       " with 2 sides");
+  if (node_has_attrib(m, v)) return status_of(ErrorCode::kTopology, "node ", v.value, " carries attribute nodes");
 
   MergeEdgeRecord rec;
   rec.kept = k;
@@ -705,10 +716,14 @@ Expected<MergeEdgeRecord> merge_edge(Model& m, Node vh, Edge keep, std::span<con
     const HalfedgeIdx el{an.element[x.value]};
     const double u = an.param[x.value].x();
     double sab;  // parameter along a -> b
-    if (el == k) sab = u * s;
-    else if (el == kt) sab = (1.0 - u) * s;
-    else if (el == rs) sab = s + u * (1.0 - s);
-    else sab = 1.0 - u * (1.0 - s);  // rt: b -> v
+    if (el == k)
+      sab = u * s;
+    else if (el == kt)
+      sab = (1.0 - u) * s;
+    else if (el == rs)
+      sab = s + u * (1.0 - s);
+    else
+      sab = 1.0 - u * (1.0 - s);  // rt: b -> v
     const bool along = el == k || el == rs;
     an.element[x.value] = (along ? k : kt).value;
     an.param[x.value] = Vec3d(std::clamp(along ? sab : 1.0 - sab, 0.0, 1.0), 0, 0);

@@ -2,47 +2,37 @@
 
 #include <sstream>
 
+#include "systems/mesh_normals.h"
+
 namespace atelier {
 
 const char* to_string(NodeEncodingMode m) noexcept {
   switch (m) {
-    case NodeEncodingMode::kFeaturePoint: return "feature_point";
-    case NodeEncodingMode::kFeatureOffset: return "feature_offset";
-    case NodeEncodingMode::kVertex: return "vertex";
-    case NodeEncodingMode::kEdge: return "edge";
-    case NodeEncodingMode::kFace: return "face";
-    case NodeEncodingMode::kOneToOne: return "one_to_one";
-    case NodeEncodingMode::kNToOne: return "n_to_one";
+    case NodeEncodingMode::kFeaturePoint:
+      return "feature_point";
+    case NodeEncodingMode::kFeatureOffset:
+      return "feature_offset";
+    case NodeEncodingMode::kVertex:
+      return "vertex";
+    case NodeEncodingMode::kEdge:
+      return "edge";
+    case NodeEncodingMode::kFace:
+      return "face";
+    case NodeEncodingMode::kOneToOne:
+      return "one_to_one";
+    case NodeEncodingMode::kNToOne:
+      return "n_to_one";
   }
   return "?";
 }
 
 namespace {
 
-Status bad(const std::string& what) { return {ErrorCode::kInvalidArgument, what}; }
-Status degenerate(const std::string& what) { return {ErrorCode::kDegenerate, what}; }
-
-Vec3d face_normal(const Model& m, FaceIdx f, std::span<const Vec3d> p) {  // Newell, area-weighted
-  Vec3d n = Vec3d::Zero();
-  m.for_each_face_halfedge(f, [&](HalfedgeIdx h) { n += p[m.tail(h).value].cross(p[m.head(h).value]); });
-  return n;
+Status bad(const std::string& what) {
+  return {ErrorCode::kInvalidArgument, what};
 }
-
-// Angle-weighted vertex normal over the node's faces.
-Vec3d vertex_normal(const Model& m, NodeIdx v, std::span<const Vec3d> p) {
-  Vec3d n = Vec3d::Zero();
-  m.for_each_outgoing(v, [&](HalfedgeIdx h) {
-    const FaceIdx f = m.face(h);
-    if (!f.valid()) return;
-    const Vec3d a = p[m.head(h).value] - p[v.value];
-    const Vec3d b = p[m.tail(m.prev(h)).value] - p[v.value];
-    const double an = a.norm(), bn = b.norm();
-    if (an == 0 || bn == 0) return;
-    const double ang = std::acos(std::clamp(a.dot(b) / (an * bn), -1.0, 1.0));
-    const Vec3d fn = face_normal(m, f, p);
-    if (fn.norm() > 0) n += ang * fn.normalized();
-  });
-  return n;
+Status degenerate(const std::string& what) {
+  return {ErrorCode::kDegenerate, what};
 }
 
 std::string node_msg(std::size_t i, NodeEncodingMode mode, const std::string& what) {
@@ -82,7 +72,8 @@ Expected<ElementFrame> element_frame(const ReferenceBody& body, NodeEncodingMode
     }
     case NodeEncodingMode::kEdge: {
       const HalfedgeIdx h{element};
-      if (element >= m.halfedges.tail.size() || !m.alive(h)) return bad("edge halfedge " + std::to_string(element) + " is dead");
+      if (element >= m.halfedges.tail.size() || !m.alive(h))
+        return bad("edge halfedge " + std::to_string(element) + " is dead");
       const Vec3d a = p[m.tail(h).value], b = p[m.head(h).value];
       const Vec3d dir = b - a;
       if (!(dir.norm() > 0)) return degenerate("edge " + std::to_string(edge_of(h).value) + " has zero length");
@@ -232,8 +223,11 @@ Status decode_nodes(const NodeEncodings& enc, const ReferenceBody& body, std::sp
         deps(i, d);
         bool pushed = false;
         for (std::uint32_t j : d) {
-          if (j >= n) return {ErrorCode::kInvalidArgument, node_msg(i, e.mode, "refers to node " + std::to_string(j) + " beyond the template")};
-          if (state[j] == 1) return {ErrorCode::kTopology, node_msg(i, e.mode, "reference cycle through node " + std::to_string(j))};
+          if (j >= n)
+            return {ErrorCode::kInvalidArgument,
+                    node_msg(i, e.mode, "refers to node " + std::to_string(j) + " beyond the template")};
+          if (state[j] == 1)
+            return {ErrorCode::kTopology, node_msg(i, e.mode, "reference cycle through node " + std::to_string(j))};
           if (state[j] == 0) {
             stack.push_back(j);
             pushed = true;

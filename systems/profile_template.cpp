@@ -15,7 +15,7 @@ namespace atelier {
 
 namespace {
 
-Status bad(const std::string& what) { return {ErrorCode::kInvalidArgument, what}; }
+Status invalid(const std::string& what) { return {ErrorCode::kInvalidArgument, what}; }
 
 // How a feature node is placed; turned into NodeEncodings once the model's
 // node indices are known (build()).
@@ -65,18 +65,18 @@ Status validate_template(const ProfileTemplate& t) {
     const std::string where = "template '" + t.name + "', profile " + std::to_string(i);
     if (!p.halfedge.valid() || edge_of(p.halfedge).value >= t.model.edges.slots.capacity() ||
         !t.model.alive(p.halfedge))
-      return bad(where + ": dead or out-of-range halfedge");
+      return invalid(where + ": dead or out-of-range halfedge");
     if (p.kind == ProfileCurve::Kind::kBezier) {
-      if (p.bezier.offsets.size() < 2) return bad(where + ": a Bezier profile needs at least 2 control points");
+      if (p.bezier.offsets.size() < 2) return invalid(where + ": a Bezier profile needs at least 2 control points");
     } else {
-      if (p.points.u.size() != p.points.points.size()) return bad(where + ": point list u/points sizes differ");
+      if (p.points.u.size() != p.points.points.size()) return invalid(where + ": point list u/points sizes differ");
       for (double u : p.points.u)
-        if (!(u > 0.0 && u < 1.0)) return bad(where + ": point parameter outside (0, 1)");
-      if (!std::is_sorted(p.points.u.begin(), p.points.u.end())) return bad(where + ": parameters not increasing");
+        if (!(u > 0.0 && u < 1.0)) return invalid(where + ": point parameter outside (0, 1)");
+      if (!std::is_sorted(p.points.u.begin(), p.points.u.end())) return invalid(where + ": parameters not increasing");
     }
     for (std::size_t k = 0; k < i; ++k)
       if (edge_of(t.profiles[k].halfedge) == edge_of(p.halfedge))
-        return bad(where + ": edge " + std::to_string(edge_of(p.halfedge).value) + " already has profile " +
+        return invalid(where + ": edge " + std::to_string(edge_of(p.halfedge).value) + " already has profile " +
                    std::to_string(k));
   }
   return {};
@@ -125,7 +125,7 @@ struct TemplateBuilder::Impl {
           const double d = (bm.attrib_nodes.position[fp.node.value] - p).squaredNorm();
           if (d < bd) bd = d, best = &fp;
         }
-        if (!best) return bad("reference body has no feature points");
+        if (!best) return invalid("reference body has no feature points");
         auto e = encode_on_feature_point(body, best->id, p, mode == NodeEncodingMode::kFeatureOffset);
         if (!e) return e.status();
         f.encoding = *e;
@@ -136,7 +136,7 @@ struct TemplateBuilder::Impl {
       case NodeEncodingMode::kFace: {
         if (Status s = ensure_bvh(); !s) return s;
         const ClosestHit hit = bvh->closest_point(p);
-        if (hit.triangle == kNoTriangle) return bad("reference body has no faces");
+        if (hit.triangle == kNoTriangle) return invalid("reference body has no faces");
         const Triangle& t = tris.triangles[hit.triangle];
         Expected<NodeEncoding> e = Status{};
         if (mode == NodeEncodingMode::kFace) {
@@ -160,7 +160,7 @@ struct TemplateBuilder::Impl {
             const double d = (pa + s * ab - p).squaredNorm();
             if (d < bd) bd = d, best = edge_of(h);
           }
-          if (!best.valid()) return bad("no model edge on the closest triangle");
+          if (!best.valid()) return invalid("no model edge on the closest triangle");
           e = encode_on_edge(body, best, p);
         }
         if (!e) return e.status();
@@ -168,24 +168,24 @@ struct TemplateBuilder::Impl {
         return f;
       }
       default:
-        return bad(std::string("node_at: mode ") + to_string(mode) + " needs other nodes (use node_relative)");
+        return invalid(std::string("node_at: mode ") + to_string(mode) + " needs other nodes (use node_relative)");
     }
   }
 
   Status add_feature(const std::string& n, FeatureNode f) {
-    if (n.empty()) return bad("feature node names must not be empty");
-    if (features.count(n)) return bad("feature node '" + n + "' is defined twice");
-    if (!f.position.allFinite()) return bad("feature node '" + n + "' has a non-finite position");
+    if (n.empty()) return invalid("feature node names must not be empty");
+    if (features.count(n)) return invalid("feature node '" + n + "' is defined twice");
+    if (!f.position.allFinite()) return invalid("feature node '" + n + "' has a non-finite position");
     features.emplace(n, std::move(f));
     return {};
   }
 
   Expected<NodeIdx> node_of(std::string_view surface, std::string_view feature) const {
     auto s = surfaces.find(surface);
-    if (s == surfaces.end()) return bad("no surface '" + std::string(surface) + "'");
+    if (s == surfaces.end()) return invalid("no surface '" + std::string(surface) + "'");
     auto v = s->second.nodes.find(feature);
     if (v == s->second.nodes.end())
-      return bad("surface '" + std::string(surface) + "' has no node '" + std::string(feature) + "'");
+      return invalid("surface '" + std::string(surface) + "' has no node '" + std::string(feature) + "'");
     return v->second;
   }
 
@@ -196,14 +196,14 @@ struct TemplateBuilder::Impl {
     if (!b) return b.status();
     const HalfedgeIdx h = model.find_halfedge(*a, *b);
     if (!h.valid())
-      return bad("surface '" + std::string(surface) + "' has no edge " + std::string(from) + " - " + std::string(to));
+      return invalid("surface '" + std::string(surface) + "' has no edge " + std::string(from) + " - " + std::string(to));
     return h;
   }
 
   Status add_profile(TemplateProfile tp) {
     for (const auto& q : profiles)
       if (edge_of(q.halfedge) == edge_of(tp.halfedge))
-        return bad("edge " + std::to_string(edge_of(tp.halfedge).value) + " already has a profile");
+        return invalid("edge " + std::to_string(edge_of(tp.halfedge).value) + " already has a profile");
     profiles.push_back(std::move(tp));
     return {};
   }
@@ -218,7 +218,7 @@ void TemplateBuilder::set_levels(int levels) noexcept { impl_->levels = levels; 
 
 Status TemplateBuilder::node_on_feature_point(const std::string& name, std::string_view point, const Vec3d& abg) {
   const FeaturePoint* fp = impl_->body.find_point(point);
-  if (!fp) return bad("reference body has no feature point '" + std::string(point) + "'");
+  if (!fp) return invalid("reference body has no feature point '" + std::string(point) + "'");
   auto fr = feature_frame(impl_->body, fp->id);
   if (!fr) return fr.status();
   FeatureNode f;
@@ -236,9 +236,9 @@ Status TemplateBuilder::node_at(const std::string& name, const Vec3d& p, NodeEnc
 }
 
 Status TemplateBuilder::node_relative(const std::string& name, std::span<const std::string> others, const Vec3d& p) {
-  if (others.empty()) return bad("feature node '" + name + "': node_relative needs at least one other node");
+  if (others.empty()) return invalid("feature node '" + name + "': node_relative needs at least one other node");
   for (const auto& o : others)
-    if (!impl_->features.count(o)) return bad("feature node '" + name + "' refers to unknown node '" + o + "'");
+    if (!impl_->features.count(o)) return invalid("feature node '" + name + "' refers to unknown node '" + o + "'");
   FeatureNode f;
   f.position = p;
   f.relative = true;
@@ -248,7 +248,7 @@ Status TemplateBuilder::node_relative(const std::string& name, std::span<const s
 
 Expected<Vec3d> TemplateBuilder::position(std::string_view name) const {
   auto it = impl_->features.find(name);
-  if (it == impl_->features.end()) return bad("no feature node '" + std::string(name) + "'");
+  if (it == impl_->features.end()) return invalid("no feature node '" + std::string(name) + "'");
   return it->second.position;
 }
 
@@ -256,8 +256,8 @@ bool TemplateBuilder::has_node(std::string_view name) const { return impl_->feat
 
 Status TemplateBuilder::surface(const std::string& name, std::span<const std::vector<std::string>> faces) {
   Impl& I = *impl_;
-  if (I.surfaces.count(name)) return bad("surface '" + name + "' is defined twice");
-  if (faces.empty()) return bad("surface '" + name + "' has no faces");
+  if (I.surfaces.count(name)) return invalid("surface '" + name + "' is defined twice");
+  if (faces.empty()) return invalid("surface '" + name + "' has no faces");
   std::vector<std::string> order;  // feature nodes in first-use order
   std::map<std::string, std::uint32_t, std::less<>> local;
   std::vector<std::uint32_t> offsets{0}, ids;
@@ -266,7 +266,7 @@ Status TemplateBuilder::surface(const std::string& name, std::span<const std::ve
     for (const auto& n : faces[f]) {
       auto it = I.features.find(n);
       if (it == I.features.end())
-        return bad("surface '" + name + "', face " + std::to_string(f) + ": unknown feature node '" + n + "'");
+        return invalid("surface '" + name + "', face " + std::to_string(f) + ": unknown feature node '" + n + "'");
       auto [l, fresh] = local.emplace(n, static_cast<std::uint32_t>(order.size()));
       if (fresh) {
         order.push_back(n);
@@ -297,9 +297,9 @@ Status TemplateBuilder::surface(const std::string& name, std::span<const std::ve
 
 Status TemplateBuilder::joint(std::span<const JointChain> members) {
   Impl& I = *impl_;
-  if (members.size() < 2) return bad("a joint needs at least two members");
+  if (members.size() < 2) return invalid("a joint needs at least two members");
   const auto& ref = members[0].nodes;
-  if (ref.size() < 2) return bad("a joint chain needs at least two nodes");
+  if (ref.size() < 2) return invalid("a joint chain needs at least two nodes");
   struct Member {
     MeshEdgeIdx mesh_edge;
     bool positive;
@@ -315,10 +315,10 @@ Status TemplateBuilder::joint(std::span<const JointChain> members) {
   for (std::size_t k = 0; k < members.size(); ++k) {
     const JointChain& mc = members[k];
     if (mc.nodes != ref)
-      return bad("joint member " + std::to_string(k) + " (surface '" + mc.surface +
+      return invalid("joint member " + std::to_string(k) + " (surface '" + mc.surface +
                  "') does not name the same node chain as member 0");
     auto si = I.surfaces.find(mc.surface);
-    if (si == I.surfaces.end()) return bad("joint member " + std::to_string(k) + ": no surface '" + mc.surface + "'");
+    if (si == I.surfaces.end()) return invalid("joint member " + std::to_string(k) + ": no surface '" + mc.surface + "'");
     std::vector<HalfedgeIdx> chain;
     bool any_face_side_forward = true;
     for (std::size_t i = 0; i + 1 < mc.nodes.size(); ++i) {
@@ -338,7 +338,7 @@ Status TemplateBuilder::joint(std::span<const JointChain> members) {
     }
     for (HalfedgeIdx h : chain)
       if (I.model.edges.mesh_edge[edge_of(h).value].valid())
-        return bad("joint member " + std::to_string(k) + ": edge " + std::to_string(edge_of(h).value) +
+        return invalid("joint member " + std::to_string(k) + ": edge " + std::to_string(edge_of(h).value) +
                    " already belongs to a mesh edge");
     const MeshEdgeIdx me = I.model.new_mesh_edge(si->second.index, chain);
     // Angle of the member's sheet about the joint direction, from the first
@@ -372,7 +372,7 @@ Status TemplateBuilder::bezier_profile(std::string_view surface, std::string_vie
   c.kind = ProfileCurve::Kind::kBezier;
   c.points.push_back(I.model.position(I.model.tail(*h)));
   for (const Vec3d& p : interior) {
-    if (!p.allFinite()) return bad("Bezier profile " + std::string(from) + " - " + std::string(to) + ": non-finite control point");
+    if (!p.allFinite()) return invalid("Bezier profile " + std::string(from) + " - " + std::string(to) + ": non-finite control point");
     c.points.push_back(p);
   }
   c.points.push_back(I.model.position(I.model.head(*h)));
@@ -390,11 +390,11 @@ Status TemplateBuilder::point_list_profile(std::string_view surface, std::string
   Impl& I = *impl_;
   auto h = I.halfedge_of(surface, from, to);
   if (!h) return h.status();
-  if (u.size() != points.size() || u.empty()) return bad("point list profile: u and points must have the same, non-zero size");
+  if (u.size() != points.size() || u.empty()) return invalid("point list profile: u and points must have the same, non-zero size");
   for (std::size_t i = 0; i < u.size(); ++i) {
     if (!(u[i] > 0 && u[i] < 1) || (i && !(u[i] > u[i - 1])))
-      return bad("point list profile: parameters must increase inside (0, 1)");
-    if (!points[i].allFinite()) return bad("point list profile: non-finite point");
+      return invalid("point list profile: parameters must increase inside (0, 1)");
+    if (!points[i].allFinite()) return invalid("point list profile: non-finite point");
   }
   TemplateProfile tp;
   tp.halfedge = *h;
@@ -411,7 +411,7 @@ Expected<std::size_t> TemplateBuilder::stroke_profile(std::string_view surface, 
                                                       std::span<const Vec2d> stroke, double tol_px) {
   Impl& I = *impl_;
   auto si = I.surfaces.find(surface);
-  if (si == I.surfaces.end()) return bad("no surface '" + std::string(surface) + "'");
+  if (si == I.surfaces.end()) return invalid("no surface '" + std::string(surface) + "'");
   // Seed 000 4.1.4: only visible edges are selected; the reference body
   // occludes (a point is visible when the camera ray reaches it first).
   if (Status s = I.ensure_bvh(); !s) return s;
@@ -478,7 +478,7 @@ Expected<ProfileTemplate> TemplateBuilder::build() {
     for (const auto& o : f.others) {
       auto it = I.primary.find(o);
       if (it == I.primary.end())
-        return bad("feature node '" + fname + "' follows '" + o + "', which no surface uses");
+        return invalid("feature node '" + fname + "' follows '" + o + "', which no surface uses");
       refs.push_back(it->second.value);
       ref_pos.push_back(I.features.at(o).position);
     }

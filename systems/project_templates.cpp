@@ -83,7 +83,7 @@ void ring_band(std::vector<std::vector<std::string>>& faces, const char* lower, 
     for (int k : only) add(k);
 }
 
-Vec3d lerp(const Vec3d& a, const Vec3d& b, double t) { return a + t * (b - a); }
+Vec3d lerp_ab(const Vec3d& a, const Vec3d& b, double t) { return a + t * (b - a); }
 
 }  // namespace
 
@@ -98,9 +98,9 @@ Expected<ProfileTemplate> make_top_template(const ReferenceBody& body) {
     if (!*c) return c->status();
   const Vec3d cn = BodyProbe::centroid(*neck), cb = BodyProbe::centroid(*bust), cw = BodyProbe::centroid(*waist),
               ch = BodyProbe::centroid(*hip);
-  const Vec3d ca = lerp(cb, cn, 0.3);   // armpit level: armhole bottoms
-  const Vec3d cy = lerp(ca, cn, 0.55);  // yoke: collar seam, shoulder tops at the sides
-  const Vec3d cnl = lerp(cy, cn, 0.7);  // neckline
+  const Vec3d ca = lerp_ab(cb, cn, 0.3);   // armpit level: armhole bottoms
+  const Vec3d cy = lerp_ab(ca, cn, 0.55);  // yoke: collar seam, shoulder tops at the sides
+  const Vec3d cnl = lerp_ab(cy, cn, 0.7);  // neckline
 
   TemplateBuilder b(body, "top");
   b.set_clearance(0.004);
@@ -132,7 +132,7 @@ Expected<ProfileTemplate> make_top_template(const ReferenceBody& body) {
     ATELIER_TRY(b.node_relative("neck_0", others, *p));
   }
   // Collar ring: above the neckline, standing off the neck.
-  const Vec3d cc = lerp(cn, cn + (cn - cb), 0.12);
+  const Vec3d cc = lerp_ab(cn, cn + (cn - cb), 0.12);
   for (int k = 0; k < 8; ++k) {
     auto p = probe->around(cc, 45.0 * k, 0.03);
     if (!p) return p.status();
@@ -221,7 +221,7 @@ Expected<ProfileTemplate> make_skirt_template(const ReferenceBody& body) {
     const Vec3d a = *b.position(nm("hemline", k)), c = *b.position(nm("hemline", (k + 1) % 8));
     const Vec3d down(0, -0.025, 0);
     const Vec3d out = (0.5 * (a + c) - Vec3d(ch.x(), 0.5 * (a + c).y(), ch.z())).normalized() * 0.01;
-    const Vec3d ctrl[] = {lerp(a, c, 1.0 / 3) + down + out, lerp(a, c, 2.0 / 3) + down + out};
+    const Vec3d ctrl[] = {lerp_ab(a, c, 1.0 / 3) + down + out, lerp_ab(a, c, 2.0 / 3) + down + out};
     ATELIER_TRY(b.bezier_profile("skirt", nm("hemline", k), nm("hemline", (k + 1) % 8), ctrl));
   }
   return b.build();
@@ -282,7 +282,7 @@ Expected<ProfileTemplate> make_trousers_template(const ReferenceBody& body) {
                 ca = BodyProbe::centroid(*L.ankle);
     const R rings[] = {{"thigh", ct, 0.022, NodeEncodingMode::kFace},
                        {"knee", ck, 0.03, NodeEncodingMode::kEdge},
-                       {"cuff", lerp(ca, ck, 0.15), 0.04, NodeEncodingMode::kFace}};
+                       {"cuff", lerp_ab(ca, ck, 0.15), 0.04, NodeEncodingMode::kFace}};
     for (const R& r : rings)
       for (int k = 0; k < 6; ++k) {
         auto p = probe->around(r.centre, L.sign * phi_left[k], r.ease);

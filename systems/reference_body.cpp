@@ -5,11 +5,15 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "systems/mesh_normals.h"
+
 namespace atelier {
 
 namespace {
 
-std::string str(std::int32_t v) { return std::to_string(v); }
+std::string str(std::int32_t v) {
+  return std::to_string(v);
+}
 
 Status check_location(const Model& m, SurfaceIdx skin, const SurfaceLocation& l) {
   switch (l.kind) {
@@ -20,7 +24,8 @@ Status check_location(const Model& m, SurfaceIdx skin, const SurfaceLocation& l)
     case AttribNodeKind::kEdge:
       if (l.element >= m.halfedges.tail.size() || !m.alive(HalfedgeIdx{l.element}) ||
           m.surface_of(edge_of(HalfedgeIdx{l.element})) != skin)
-        return {ErrorCode::kInvalidArgument, "location on halfedge " + std::to_string(l.element) + " is not on the skin"};
+        return {ErrorCode::kInvalidArgument,
+                "location on halfedge " + std::to_string(l.element) + " is not on the skin"};
       if (!(l.param.x() >= 0.0 && l.param.x() <= 1.0))
         return {ErrorCode::kInvalidArgument, "edge parameter outside [0,1]"};
       return {};
@@ -34,36 +39,6 @@ Status check_location(const Model& m, SurfaceIdx skin, const SurfaceLocation& l)
       return {};
   }
   return {ErrorCode::kInvalidArgument, "unknown location kind"};
-}
-
-// Newell normal of a face (unnormalised, length = 2 * area for planar faces).
-Vec3d face_normal(const Model& m, FaceIdx f, std::span<const Vec3d> pos) {
-  Vec3d n = Vec3d::Zero();
-  m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
-    const Vec3d& a = pos[m.tail(h).value];
-    const Vec3d& b = pos[m.head(h).value];
-    n += a.cross(b);
-  });
-  return n;
-}
-
-// Angle-weighted vertex normal (Thurmer & Wuthrich): robust to the uneven
-// face sizes of ring meshes, unlike the plain average.
-Vec3d vertex_normal(const Model& m, NodeIdx v, std::span<const Vec3d> pos) {
-  Vec3d n = Vec3d::Zero();
-  m.for_each_outgoing(v, [&](HalfedgeIdx h) {
-    const FaceIdx f = m.face(h);
-    if (!f.valid()) return;
-    const Vec3d e1 = pos[m.head(h).value] - pos[v.value];
-    const Vec3d e0 = pos[m.tail(m.prev(h)).value] - pos[v.value];
-    const double den = e0.norm() * e1.norm();
-    if (den <= 0) return;
-    const double ang = std::acos(std::clamp(e0.dot(e1) / den, -1.0, 1.0));
-    const Vec3d fn = face_normal(m, f, pos);
-    const double l = fn.norm();
-    if (l > 0) n += ang * fn / l;
-  });
-  return n;
 }
 
 Vec3d location_normal(const Model& m, AttribNodeIdx a, std::span<const Vec3d> pos) {
@@ -172,12 +147,13 @@ Vec3d attrib_position(const Model& m, AttribNodeIdx a, std::span<const Vec3d> po
   return Vec3d::Zero();
 }
 
-Status add_feature_curve(ReferenceBody& body, std::int32_t id, std::string name,
-                         std::span<const SurfaceLocation> path, bool closed) {
+Status add_feature_curve(ReferenceBody& body, std::int32_t id, std::string name, std::span<const SurfaceLocation> path,
+                         bool closed) {
   if (body.find_curve(id)) return {ErrorCode::kInvalidArgument, "feature curve id " + str(id) + " already used"};
   if (body.find_curve(name)) return {ErrorCode::kInvalidArgument, "feature curve name '" + name + "' already used"};
   if (path.size() < (closed ? 3u : 2u))
-    return {ErrorCode::kInvalidArgument, "feature curve '" + name + "' needs at least " + (closed ? "3" : "2") + " points"};
+    return {ErrorCode::kInvalidArgument,
+            "feature curve '" + name + "' needs at least " + (closed ? "3" : "2") + " points"};
   Model& m = body.model;
   for (const auto& l : path)
     if (Status s = check_location(m, body.skin, l); !s)
@@ -202,7 +178,8 @@ Status add_feature_point(ReferenceBody& body, std::int32_t id, std::string name,
   Model& m = body.model;
   if (Status s = check_location(m, body.skin, where); !s)
     return {s.code(), "feature point '" + name + "': " + s.message()};
-  const AttribNodeIdx a = m.new_attrib_node(body.skin, where.kind, where.element, where.param, Vec3d::Zero(), where.corner);
+  const AttribNodeIdx a =
+      m.new_attrib_node(body.skin, where.kind, where.element, where.param, Vec3d::Zero(), where.corner);
   m.attrib_nodes.position[a.value] = m.attrib_position_on_surface(a);
   body.points.push_back({id, std::move(name), a, c1, c2});
   return {};
@@ -230,7 +207,8 @@ Expected<FeatureFrame> feature_frame(const ReferenceBody& body, std::int32_t poi
   return feature_frame(body, point_id, body.model.nodes.position);
 }
 
-Expected<FeatureFrame> feature_frame(const ReferenceBody& body, std::int32_t point_id, std::span<const Vec3d> positions) {
+Expected<FeatureFrame> feature_frame(const ReferenceBody& body, std::int32_t point_id,
+                                     std::span<const Vec3d> positions) {
   const FeaturePoint* p = body.find_point(point_id);
   if (!p) return Status(ErrorCode::kInvalidArgument, "no feature point with id " + str(point_id));
   const Model& m = body.model;
@@ -256,7 +234,9 @@ Expected<FeatureFrame> feature_frame(const ReferenceBody& body, std::int32_t poi
   return f;
 }
 
-std::vector<Vec3d> skin_positions(const ReferenceBody& body) { return body.model.nodes.position; }
+std::vector<Vec3d> skin_positions(const ReferenceBody& body) {
+  return body.model.nodes.position;
+}
 
 Status set_positions(ReferenceBody& body, std::span<const Vec3d> positions) {
   Model& m = body.model;

@@ -70,8 +70,8 @@ struct SdfGrid::Impl {
   SdfStats stats;
   bool roi = false;
   double h = 1.0, inv_h = 1.0;
-  double exact_world = 0.0;  // exact band in world units
-  double band_world = 0.0;   // half width in world units
+  double exact_world = 0.0;       // exact band in world units
+  double band_world = 0.0;        // half width in world units
   std::vector<Box3d> walk_boxes;  // ROI boxes grown by 2h: where the band is complete
 
   /// ROI grids: the sign of every 8^3 block without a leaf (a tile, no band
@@ -145,10 +145,10 @@ struct SdfGrid::Impl {
 
   struct Probe {
     double d = 0.0;
-    bool valid = false;       // p maps to representable voxel coordinates
-    bool all_active = false;  // every corner is a band voxel
-    unsigned active = 0;      // bit n: corner n is a band voxel
-    float v[8] = {};          // corner values, corner n at offset ((n >> 2) & 1, (n >> 1) & 1, n & 1)
+    bool valid = false;             // p maps to representable voxel coordinates
+    bool all_active = false;        // every corner is a band voxel
+    unsigned active = 0;            // bit n: corner n is a band voxel
+    float v[8] = {};                // corner values, corner n at offset ((n >> 2) & 1, (n >> 1) & 1, n & 1)
     double tx = 0, ty = 0, tz = 0;  // p in its cell, in [0, 1)
   };
 
@@ -198,11 +198,11 @@ struct SdfGrid::Impl {
           if (b->values) {
             const vdb::Index o = static_cast<vdb::Index>(((ci & 7) << 6) | ((cj & 7) << 3) | (ck & 7));
             r.v[n] = b->values[o];
-            on |= (value_mask_needed
-                       ? static_cast<unsigned>(
-                             table_leaf[static_cast<std::size_t>(b - table.data())]->getValueMask().isOn(o))
-                       : 1u)
-                  << n;
+            on |=
+                (value_mask_needed ? static_cast<unsigned>(
+                                         table_leaf[static_cast<std::size_t>(b - table.data())]->getValueMask().isOn(o))
+                                   : 1u)
+                << n;
           } else {
             r.v[n] = b->tile;
             on |= static_cast<unsigned>(b->tile_on) << n;
@@ -368,7 +368,8 @@ struct SdfGrid::Impl {
         for (std::size_t bi = 0; bi < walk_boxes.size(); ++bi) {
           const Box3d& b = walk_boxes[bi];
           if ((p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all()) {
-            const vdb::Coord c0(static_cast<int>(std::lround(p.x() * inv_h)), static_cast<int>(std::lround(p.y() * inv_h)),
+            const vdb::Coord c0(static_cast<int>(std::lround(p.x() * inv_h)),
+                                static_cast<int>(std::lround(p.y() * inv_h)),
                                 static_cast<int>(std::lround(p.z() * inv_h)));
             if (const int s = block_sign(bi, c0); s != 0) {  // what walk_sign(p) would find
               ++st.from_grid;
@@ -409,11 +410,12 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
   if (body.empty()) return {ErrorCode::kInvalidArgument, "SdfGrid: the BodyBvh is not built"};
   if (Status s = body.require_closed(); !s) return {s.code(), "SdfGrid: " + s.message()};
   if (!(params.voxel_size > 0.0) || !std::isfinite(params.voxel_size)) {
-    return {ErrorCode::kInvalidArgument, "SdfGrid: voxel size must be positive, got " + std::to_string(params.voxel_size)};
+    return {ErrorCode::kInvalidArgument,
+            "SdfGrid: voxel size must be positive, got " + std::to_string(params.voxel_size)};
   }
   if (!(params.half_width >= 2.0) || !std::isfinite(params.half_width)) {
-    return {ErrorCode::kInvalidArgument, "SdfGrid: half width must be at least 2 voxels, got " +
-                                             std::to_string(params.half_width)};
+    return {ErrorCode::kInvalidArgument,
+            "SdfGrid: half width must be at least 2 voxels, got " + std::to_string(params.half_width)};
   }
   if (!(params.exact_band >= 0.0) || !std::isfinite(params.exact_band)) {
     return {ErrorCode::kInvalidArgument, "SdfGrid: exact band must be >= 0 voxels"};
@@ -502,9 +504,8 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     if (!im->roi) {
       // Signed conversion with OpenVDB's interior classification and flood
       // fill (meshToLevelSet with renormalisation off: exact distances).
-      im->grid = vdb::tools::meshToVolume<vdb::FloatGrid>(interrupter, mesh, *xform, w, w,
-                                                          vdb::tools::DISABLE_RENORMALIZATION,
-                                                          static_cast<vdb::Int32Grid*>(nullptr));
+      im->grid = vdb::tools::meshToVolume<vdb::FloatGrid>(
+          interrupter, mesh, *xform, w, w, vdb::tools::DISABLE_RENORMALIZATION, static_cast<vdb::Int32Grid*>(nullptr));
     } else {
       im->grid = vdb::tools::meshToVolume<vdb::FloatGrid>(
           interrupter, mesh, *xform, w, w, vdb::tools::UNSIGNED_DISTANCE_FIELD | vdb::tools::DISABLE_RENORMALIZATION,
@@ -643,7 +644,8 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
           const vdb::Coord origin(
               (im->table_lo[0] + static_cast<int>(at / nyz)) * 8,
               (im->table_lo[1] + static_cast<int>((at / static_cast<std::size_t>(im->table_dim[2])) %
-                                                  static_cast<std::size_t>(im->table_dim[1]))) * 8,
+                                                  static_cast<std::size_t>(im->table_dim[1]))) *
+                  8,
               (im->table_lo[2] + static_cast<int>(at % static_cast<std::size_t>(im->table_dim[2]))) * 8);
           Impl::BlockRef& b = im->table[at];
           const auto* leaf = acc.probeConstLeaf(origin);
@@ -674,12 +676,15 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
   }
 
   im->stats.active_voxels = static_cast<std::size_t>(im->grid->activeVoxelCount());
-  im->stats.memory_bytes = static_cast<std::size_t>(im->grid->memUsage()) + im->table.size() * (sizeof(Impl::BlockRef) + sizeof(void*));
+  im->stats.memory_bytes =
+      static_cast<std::size_t>(im->grid->memUsage()) + im->table.size() * (sizeof(Impl::BlockRef) + sizeof(void*));
   impl_ = std::move(im);
   return Status::ok();
 }
 
-bool SdfGrid::empty() const noexcept { return !impl_; }
+bool SdfGrid::empty() const noexcept {
+  return !impl_;
+}
 const SdfParams& SdfGrid::params() const noexcept {
   static const SdfParams kNone{};
   return impl_ ? impl_->params : kNone;
@@ -688,7 +693,9 @@ const SdfStats& SdfGrid::stats() const noexcept {
   static const SdfStats kNone{};
   return impl_ ? impl_->stats : kNone;
 }
-bool SdfGrid::covers(const Vec3d& p) const noexcept { return impl_ && impl_->covers(p); }
+bool SdfGrid::covers(const Vec3d& p) const noexcept {
+  return impl_ && impl_->covers(p);
+}
 
 double SdfGrid::sample(const Vec3d& p) const {
   if (!impl_) return std::numeric_limits<double>::quiet_NaN();
@@ -711,7 +718,9 @@ double SdfGrid::Sampler::sample(const Vec3d& p) {
   if (!impl_) return std::numeric_limits<double>::quiet_NaN();
   return impl_->g->sample(impl_->acc, p);
 }
-bool SdfGrid::Sampler::inside(const Vec3d& p) { return impl_ && impl_->g->inside(impl_->acc, p, impl_->stats); }
+bool SdfGrid::Sampler::inside(const Vec3d& p) {
+  return impl_ && impl_->g->inside(impl_->acc, p, impl_->stats);
+}
 const InsideStats& SdfGrid::Sampler::stats() const noexcept {
   static const InsideStats kNone{};
   return impl_ ? impl_->stats : kNone;
@@ -719,8 +728,8 @@ const InsideStats& SdfGrid::Sampler::stats() const noexcept {
 
 SdfGrid::Sampler SdfGrid::sampler() const {
   if (!impl_) return Sampler(nullptr);  // an unbuilt grid: NaN samples, never inside
-  return Sampler(std::unique_ptr<Sampler::Impl>(
-      new Sampler::Impl{impl_.get(), impl_->grid->getConstUnsafeAccessor(), {}}));
+  return Sampler(
+      std::unique_ptr<Sampler::Impl>(new Sampler::Impl{impl_.get(), impl_->grid->getConstUnsafeAccessor(), {}}));
 }
 
 Status SdfGrid::sample_many(std::span<const Vec3d> in, std::span<double> out, const ExecContext& ctx) const {

@@ -28,7 +28,7 @@ V centroid(std::size_t n, Get&& get) {
   return s / static_cast<double>(n);
 }
 
-bool has_tombstones(const Model& m) {
+bool has_free_node_edge_face_slots(const Model& m) {
   return !m.nodes.slots.free_list().empty() || !m.edges.slots.free_list().empty() ||
          !m.faces.slots.free_list().empty();
 }
@@ -228,7 +228,7 @@ Expected<SubdivisionMap> subdivide_uniform(Model& m, const ExecContext& ctx) {
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "subdivide_uniform cancelled");
   SubdivisionMap map;
   // Index arithmetic needs dense tables.
-  if (has_tombstones(m)) {
+  if (has_free_node_edge_face_slots(m)) {
     map.compaction = m.compact();
     map.compacted = true;
   }
@@ -442,7 +442,7 @@ Expected<SubdivisionMap> subdivide_uniform(Model& m, const ExecContext& ctx) {
 
 Expected<SubdivisionMap> subdivide_uniform_naive(Model& m) {
   SubdivisionMap map;
-  if (has_tombstones(m)) {
+  if (has_free_node_edge_face_slots(m)) {
     map.compaction = m.compact();
     map.compacted = true;
   }

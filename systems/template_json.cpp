@@ -55,7 +55,7 @@ Json vec(const Vec3d& p, const std::string& tname, const char* what) {
   return Json::array({num(p.x(), tname, what), num(p.y(), tname, what), num(p.z(), tname, what)});
 }
 
-bool has_tombstones(const Model& m) {
+bool has_tombstones_in_any_table(const Model& m) {
   return m.nodes.slots.size() != m.nodes.slots.capacity() || m.edges.slots.size() != m.edges.slots.capacity() ||
          m.faces.slots.size() != m.faces.slots.capacity() || m.surfaces.slots.size() != m.surfaces.slots.capacity() ||
          m.mesh_edges.slots.size() != m.mesh_edges.slots.capacity() ||
@@ -831,7 +831,7 @@ ProfileTemplate parse(std::string_view text, std::string_view source) {
 }  // namespace
 
 std::string template_to_json_string(const ProfileTemplate& t) {
-  const Json doc = has_tombstones(t.model) ? to_json(compacted(t)) : to_json(t);
+  const Json doc = has_tombstones_in_any_table(t.model) ? to_json(compacted(t)) : to_json(t);
   std::string out;
   emit(doc, 0, out);
   out += '\n';

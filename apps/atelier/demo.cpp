@@ -49,13 +49,13 @@ double curve_height(const ReferenceBody& b, std::int32_t id) {
 
 struct BodyQuality {
   std::string name;
-  std::size_t inside = 0;       // garment vertices inside the body
-  double max_depth = 0;         // deepest penetration (m)
-  double min_clearance = 0;     // signed distance of the closest vertex (m)
+  std::size_t inside = 0;    // garment vertices inside the body
+  double max_depth = 0;      // deepest penetration (m)
+  double min_clearance = 0;  // signed distance of the closest vertex (m)
   double mean_clearance = 0;
-  double strain_p95 = 0;        // |l/l0 - 1| of garment edges, 95th percentile
+  double strain_p95 = 0;  // |l/l0 - 1| of garment edges, 95th percentile
   double decode_ms = 0;
-  std::size_t pushed = 0;  // garment vertices moved by the collision pass
+  std::size_t pushed = 0;               // garment vertices moved by the collision pass
   std::vector<RegenQuality> templates;  // one per profile template
 };
 
@@ -89,14 +89,16 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   for (std::uint32_t v = 0; v < garment->nodes.slots.capacity(); ++v) g0.push_back(garment->nodes.position[v]);
   std::vector<std::array<std::uint32_t, 2>> g_edges;
   for (std::uint32_t e = 0; e < garment->edges.slots.capacity(); ++e)
-    g_edges.push_back({garment->tail(halfedge_of(EdgeIdx{e}, 0)).value, garment->tail(halfedge_of(EdgeIdx{e}, 1)).value});
+    g_edges.push_back(
+        {garment->tail(halfedge_of(EdgeIdx{e}, 0)).value, garment->tail(halfedge_of(EdgeIdx{e}, 1)).value});
 
   const BodyPolygons poly = BodyPolygons::from_model(ref->model);
   // The collision pass of the detail garment (systems/collision_pass.h): its
   // clearance on the reference body is part of the encoding.
   auto ref_tris = fan_triangulate(ref->model);
   if (!ref_tris) throw Error(ref_tris.status());
-  auto coll_topo = CollisionTopology::build(ref_tris->triangles, static_cast<std::uint32_t>(ref->model.nodes.slots.capacity()));
+  auto coll_topo =
+      CollisionTopology::build(ref_tris->triangles, static_cast<std::uint32_t>(ref->model.nodes.slots.capacity()));
   if (!coll_topo) throw Error(coll_topo.status());
   const std::vector<Vec3d> ref_pos = skin_positions(*ref);
   Box3d g_box;
@@ -160,7 +162,8 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     src.generate(first, opt.chunk, chunk, failures, ctx);
     const auto t0 = std::chrono::steady_clock::now();
     decoded.resize(chunk.size() * nv);
-    if (Status s = decode_detail_batch(decoder, poly, chunk, 0, chunk.size(), decoded, workspace, ctx); !s) throw Error(s);
+    if (Status s = decode_detail_batch(decoder, poly, chunk, 0, chunk.size(), decoded, workspace, ctx); !s)
+      throw Error(s);
     const double per_body_ms = 1000.0 * seconds_since(t0) / static_cast<double>(std::max<std::size_t>(1, chunk.size()));
     // Quality of each body, in parallel over bodies.
     std::vector<BodyQuality> q(chunk.size());
@@ -189,14 +192,16 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
         errors[b] = s.message();
         return;
       }
-      auto pass = resolve_collisions(g, *g_adj, *clearance_enc, cb, {}, inner);
+      // The pass's last exact query of each vertex gives its clearance.
+      std::vector<BodyDistance> fin;
+      auto pass = resolve_collisions(g, *g_adj, *clearance_enc, cb, {}, fin, inner);
       if (!pass) {
         errors[b] = pass.status().message();
         return;
       }
       for (std::size_t v = 0; v < nv; ++v) decoded[b * nv + v] = g[v].cast<float>();
       std::vector<double> sd(nv);
-      for (std::size_t v = 0; v < nv; ++v) sd[v] = cb.query(g[v], clearance_enc->triangle[v]).distance;
+      for (std::size_t v = 0; v < nv; ++v) sd[v] = fin[v].distance;
       BodyQuality& r = q[b];
       r.name = chunk.name(b);
       r.pushed = pass->pushed;
@@ -245,7 +250,9 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   rep["tool"] = "atelier demo";
   rep["seed"] = common.seed;
   rep["bodies"] = opt.bodies;
-  rep["garment"] = {{"name", "shorts"}, {"vertices", nv}, {"faces", garment->num_faces()},
+  rep["garment"] = {{"name", "shorts"},
+                    {"vertices", nv},
+                    {"faces", garment->num_faces()},
                     {"p_polygons_per_vertex", enc->entries() / std::max<std::size_t>(1, nv)},
                     {"encoding_bytes", enc->bytes()}};
   std::size_t bodies_with_penetration = 0;
@@ -300,9 +307,14 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     }
     template_inside += inside;
     template_crack = std::max(template_crack, crack);
-    tsum.push_back({{"template", templates[k].name}, {"nodes", nodes}, {"inside_nodes_total", inside},
-                    {"min_distance_m", std::isfinite(min_d) ? min_d : 0.0}, {"max_crack_m", crack},
-                    {"max_profile_error_m", prof}, {"max_node_clearance_error_m", clr}, {"max_umbrella", u2},
+    tsum.push_back({{"template", templates[k].name},
+                    {"nodes", nodes},
+                    {"inside_nodes_total", inside},
+                    {"min_distance_m", std::isfinite(min_d) ? min_d : 0.0},
+                    {"max_crack_m", crack},
+                    {"max_profile_error_m", prof},
+                    {"max_node_clearance_error_m", clr},
+                    {"max_umbrella", u2},
                     {"mean_ms", ms / nq}});
   }
   rep["profile_templates"] = tsum;
@@ -322,8 +334,10 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   html["columns"] = columns;
   nlohmann::json rows = nlohmann::json::array();
   for (const auto& r : quality) {
-    nlohmann::json row = {{"body", r.name}, {"shorts_inside", r.inside},
-                          {"shorts_min_clearance_mm", 1000 * r.min_clearance}, {"shorts_strain_p95", r.strain_p95}};
+    nlohmann::json row = {{"body", r.name},
+                          {"shorts_inside", r.inside},
+                          {"shorts_min_clearance_mm", 1000 * r.min_clearance},
+                          {"shorts_strain_p95", r.strain_p95}};
     for (std::size_t k = 0; k < r.templates.size() && k < templates.size(); ++k) {
       const RegenQuality& q = r.templates[k];
       const std::string& n = templates[k].name;
@@ -417,10 +431,12 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   std::printf("  penetration: %zu of %zu bodies have garment vertices inside the body (worst %.1f mm)\n",
               bodies_with_penetration, quality.size(), 1000.0 * worst_depth);
   for (const auto& t : tsum)
-    std::printf("  %-9s %6zu nodes, %zu nodes inside over all bodies, max crack %.1e m, max profile error %.2f mm, %.1f ms per body\n",
-                t["template"].get<std::string>().c_str(), t["nodes"].get<std::size_t>(),
-                t["inside_nodes_total"].get<std::size_t>(), t["max_crack_m"].get<double>(),
-                1000 * t["max_profile_error_m"].get<double>(), t["mean_ms"].get<double>());
+    std::printf(
+        "  %-9s %6zu nodes, %zu nodes inside over all bodies, max crack %.1e m, max profile error %.2f mm, %.1f ms per "
+        "body\n",
+        t["template"].get<std::string>().c_str(), t["nodes"].get<std::size_t>(),
+        t["inside_nodes_total"].get<std::size_t>(), t["max_crack_m"].get<double>(),
+        1000 * t["max_profile_error_m"].get<double>(), t["mean_ms"].get<double>());
   std::printf("  report: %s\n", fs::absolute(opt.out / "report.html").string().c_str());
   std::printf("  data:   %s\n", fs::absolute(opt.out / "report.json").string().c_str());
   return failures.empty() ? kExitOk : kExitPartial;

@@ -12,12 +12,12 @@
 
 #include "apps/atelier/mpi_split.h"
 #include "engine/parallel.h"
-#include "systems/collision_pass.h"
-#include "systems/detail_template.h"
 #include "io/atomic_file.h"
 #include "io/makehuman.h"
 #include "io/mhclo.h"
 #include "io/obj.h"
+#include "systems/collision_pass.h"
+#include "systems/detail_template.h"
 #include "systems/makehuman_body.h"
 #include "systems/mannequin.h"
 #include "systems/project_templates.h"
@@ -82,9 +82,9 @@ void write_garment_obj(const GarmentMesh& g, std::span<const Vec3d> positions, c
   write_atomically(file, [&](AtomicFile& f) {
     char line[128];
     for (const Vec3d& p : positions) {
-      const int n = std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", static_cast<double>(static_cast<float>(p.x())),
-                                  static_cast<double>(static_cast<float>(p.y())),
-                                  static_cast<double>(static_cast<float>(p.z())));
+      const int n =
+          std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", static_cast<double>(static_cast<float>(p.x())),
+                        static_cast<double>(static_cast<float>(p.y())), static_cast<double>(static_cast<float>(p.z())));
       f.write(line, static_cast<std::size_t>(n));
     }
     std::string face;
@@ -205,11 +205,12 @@ void encode_garment(const Common& common, const EncodeOptions& opt, const Refere
   fs::create_directories(opt.out);
   write_garment_obj(g, g.positions, opt.out / (name + ".obj"));
   write_detail(*enc, opt.out / (name + ".atd"));  // last: the template is complete with its mesh
-  std::printf("%s: %zu vertices, %zu faces, %zu p-polygons per vertex, clearance on the reference %.1f mm (min), "
-              "%zu vertices inside -> %s\n",
-              name.c_str(), g.positions.size(), g.face_offsets.size() - 1,
-              enc->entries() / std::max<std::size_t>(1, g.positions.size()), 1000 * min_c, inside,
-              (opt.out / (name + ".atd")).string().c_str());
+  std::printf(
+      "%s: %zu vertices, %zu faces, %zu p-polygons per vertex, clearance on the reference %.1f mm (min), "
+      "%zu vertices inside -> %s\n",
+      name.c_str(), g.positions.size(), g.face_offsets.size() - 1,
+      enc->entries() / std::max<std::size_t>(1, g.positions.size()), 1000 * min_c, inside,
+      (opt.out / (name + ".atd")).string().c_str());
   if (inside > 0)
     log.warn(name + ": " + std::to_string(inside) +
              " vertices are inside the reference body; regeneration pushes them out to the minimum clearance");
@@ -279,7 +280,7 @@ namespace {
 struct RegenJob {
   std::vector<ProfileTemplate> templates;
   std::vector<DetailJob> details;
-  BodyPolygons poly;                                // details: the reference's polygons
+  BodyPolygons poly;                                 // details: the reference's polygons
   std::shared_ptr<const CollisionTopology> collide;  // details: the reference's skin
   std::unique_ptr<BodySource> src;
   fs::path bodies_dir;
@@ -323,9 +324,9 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
                                                " is missing (`atelier encode --garment` writes both)"));
       d.mesh = read_garment_obj(mesh_file, 1.0);
       if (d.mesh.positions.size() != d.enc.vertex_count())
-        throw Error(Status(ErrorCode::kMismatch, mesh_file.string() + " has " + std::to_string(d.mesh.positions.size()) +
-                                                     " vertices, " + f.string() + " encodes " +
-                                                     std::to_string(d.enc.vertex_count())));
+        throw Error(Status(ErrorCode::kMismatch, mesh_file.string() + " has " +
+                                                     std::to_string(d.mesh.positions.size()) + " vertices, " +
+                                                     f.string() + " encodes " + std::to_string(d.enc.vertex_count())));
       d.edges = garment_edges(d.mesh);
       for (const auto& e : d.edges) d.rest.push_back((d.mesh.positions[e[0]] - d.mesh.positions[e[1]]).norm());
       auto adj = adjacency_from_edges(d.mesh.positions.size(), d.edges);
@@ -361,13 +362,16 @@ std::vector<Vec3d> regen_detail(const RegenJob& job, const DetailJob& d, std::sp
   CollisionBody cb;
   if (Status s = cb.build(job.collide, body, {}, ctx); !s) throw Error(s);
   const CollisionParams cp;
-  auto pass = resolve_collisions(g, d.adjacency, d.clearance, cb, cp, ctx);
+  std::vector<BodyDistance> fin;
+  auto pass = resolve_collisions(g, d.adjacency, d.clearance, cb, cp, fin, ctx);
   if (!pass) throw Error(pass.status());
-  // Measured again, independently of the pass's own report.
+  // From each vertex's exact distance at its final position (the pass's
+  // last query of it; tests check these against BodyBvh), not from the
+  // pass's counters.
   std::size_t inside = 0;
   double depth = 0, min_c = std::numeric_limits<double>::infinity(), clear_err = 0;
   for (std::size_t v = 0; v < g.size(); ++v) {
-    const double sd = cb.query(g[v], d.clearance.triangle[v]).distance;
+    const double sd = fin[v].distance;
     if (sd < 0) {
       ++inside;
       depth = std::max(depth, -sd);
@@ -388,9 +392,9 @@ std::vector<Vec3d> regen_detail(const RegenJob& job, const DetailJob& d, std::sp
     std::nth_element(strain.begin(), strain.begin() + static_cast<std::ptrdiff_t>(k), strain.end());
     p95 = strain[k];
   }
-  quality = {{"vertices", g.size()},      {"inside_nodes", inside},      {"max_depth_m", depth},
-             {"min_clearance_m", min_c},  {"clearance_error_m", clear_err}, {"strain_max", strain_max},
-             {"strain_p95", p95},         {"pushed", pass->pushed}};
+  quality = {{"vertices", g.size()},     {"inside_nodes", inside},         {"max_depth_m", depth},
+             {"min_clearance_m", min_c}, {"clearance_error_m", clear_err}, {"strain_max", strain_max},
+             {"strain_p95", p95},        {"pushed", pass->pushed}};
   return g;
 }
 
@@ -600,9 +604,8 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
     throw Error(Status(ErrorCode::kInvalidArgument,
                        "started by an MPI launcher as one of several ranks, but this atelier was built without MPI "
                        "(install libopenmpi-dev and reconfigure with -DATELIER_WITH_MPI=ON)"));
-  const std::string who = group.distributed() ? "rank " + std::to_string(group.rank()) + " of " +
-                                                    std::to_string(group.size()) + ": "
-                                              : "";
+  const std::string who =
+      group.distributed() ? "rank " + std::to_string(group.rank()) + " of " + std::to_string(group.size()) + ": " : "";
   // Every rank must reach the collectives below, so on several ranks an
   // error is caught, logged and reduced instead of leaving the others
   // waiting; one process keeps the plain exception path of main().
@@ -646,7 +649,8 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
         done += d;
         skipped += s;
         weighted_ms += all[4 * r + 3] * static_cast<double>(d);
-        ranks.push_back({{"rank", r}, {"regenerated_now", d}, {"skipped_complete", s}, {"mean_ms_per_body", all[4 * r + 3]}});
+        ranks.push_back(
+            {{"rank", r}, {"regenerated_now", d}, {"skipped_complete", s}, {"mean_ms_per_body", all[4 * r + 3]}});
       }
       nlohmann::json timing = {{"total_s", total_s},
                                {"regenerated_now", done},
@@ -656,9 +660,10 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
                                {"ranks", ranks}};
       write_atomically(opt.out / "timing.json", [&](AtomicFile& f) { f.write(timing.dump(1)); });
       const std::size_t n = job->src->size();
-      std::printf("atelier regen: %zu bodies x %zu templates: %zu complete (%zu now, %zu from an earlier run), %zu "
-                  "failed; %zu nodes inside, max crack %.1e m; %.1f s",
-                  n, job->templates.size() + job->details.size(), m.ok, done, skipped, m.failed, m.inside, m.crack, total_s);
+      std::printf(
+          "atelier regen: %zu bodies x %zu templates: %zu complete (%zu now, %zu from an earlier run), %zu "
+          "failed; %zu nodes inside, max crack %.1e m; %.1f s",
+          n, job->templates.size() + job->details.size(), m.ok, done, skipped, m.failed, m.inside, m.crack, total_s);
       if (group.distributed()) std::printf(" on %d ranks", group.size());
       std::printf("\n  report: %s\n", fs::absolute(opt.out / "report.json").string().c_str());
       std::fflush(stdout);

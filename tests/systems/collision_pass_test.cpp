@@ -244,12 +244,18 @@ TEST(CollisionPass, CapsuleTubeSqueezedInsideComesOutAtItsClearance) {
     q.x() *= k;
     q.y() *= k;
   }
-  auto rep = resolve_collisions(g.p, g.adj, *enc, s->cb, CollisionParams{});
+  std::vector<BodyDistance> fin;
+  auto rep = resolve_collisions(g.p, g.adj, *enc, s->cb, CollisionParams{}, fin);
   ASSERT_TRUE(rep) << rep.status().to_string();
   EXPECT_GT(rep->inside_before, 50u);
   EXPECT_EQ(rep->inside_after, 0u);
+  EXPECT_GT(rep->faired, rep->pushed);
   const auto after = bvh_distances(s->bvh, g.p);
+  ASSERT_EQ(fin.size(), g.p.size());
   for (std::size_t v = 0; v < g.p.size(); ++v) {
+    // The pass's final distances are exact at the final positions (pushed,
+    // faired and untouched vertices alike): equal to BodyBvh's.
+    ASSERT_NEAR(fin[v].distance, after[v], 1e-9) << v;
     ASSERT_GE(after[v], enc->clearance[v] - CollisionParams{}.tolerance - 1e-9);
     // Radially: back at the tube's radius (the cylinder is exact in z).
     ASSERT_NEAR(std::hypot(g.p[v].x(), g.p[v].y()), r + c, 0.0015) << v;
