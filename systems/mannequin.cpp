@@ -746,11 +746,15 @@ double clampz(double z) { return std::clamp(z, -2.5, 2.5); }
 
 }  // namespace
 
-std::vector<MannequinParams> sample_mannequins(std::size_t n, std::uint64_t seed) {
-  std::vector<MannequinParams> out;
-  out.reserve(n);
-  Xoshiro256 rng(seed);
-  for (std::size_t i = 0; i < n; ++i) {
+MannequinParams sample_mannequin(std::uint64_t seed, std::size_t index) {
+  // Body `index` has its own stream, its seed a splitmix64 finalisation of
+  // (seed, index): any body is drawn without the ones before it, so a body
+  // source holds no per-body state.
+  std::uint64_t z = seed + (static_cast<std::uint64_t>(index) + 1) * 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  Xoshiro256 rng(z ^ (z >> 31));
+  {
     const bool female = rng.uniform() < 0.5;
     // Latent factors: stature and size (adiposity/build). Girths grow weakly
     // with stature and strongly with size; each measure adds its own noise.
@@ -810,8 +814,14 @@ std::vector<MannequinParams> sample_mannequins(std::size_t n, std::uint64_t seed
                                std::min(0.57, 0.463 * p.height - 0.135));
     if (nape - p.back_length < p.inseam + 0.13) p.inseam = nape - p.back_length - 0.13;
     p.inseam = std::max(p.inseam, 0.385 * p.height);
-    out.push_back(p);
+    return p;
   }
+}
+
+std::vector<MannequinParams> sample_mannequins(std::size_t n, std::uint64_t seed) {
+  std::vector<MannequinParams> out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) out.push_back(sample_mannequin(seed, i));
   return out;
 }
 

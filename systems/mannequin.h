@@ -154,6 +154,9 @@ struct MannequinTopology {
 /// normals): both sexes; height drives lengths, a latent size factor drives
 /// girths; every result passes validate_params.
 [[nodiscard]] std::vector<MannequinParams> sample_mannequins(std::size_t n, std::uint64_t seed);
+/// Body `index` of sample_mannequins(n, seed) for any n > index, drawn on
+/// its own (O(1), no draws of the bodies before it).
+[[nodiscard]] MannequinParams sample_mannequin(std::uint64_t seed, std::size_t index);
 
 /// Girth the mannequin was asked for on a closed feature curve (NaN when the
 /// curve has no requested girth, e.g. armholes).

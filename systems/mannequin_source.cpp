@@ -13,6 +13,10 @@ MannequinSource::MannequinSource(std::shared_ptr<const MannequinTopology> topolo
                                  std::shared_ptr<const ReferenceBody> reference)
     : topology_(std::move(topology)), params_(std::move(params)), reference_(std::move(reference)) {}
 
+MannequinSource::MannequinSource(std::shared_ptr<const MannequinTopology> topology, std::size_t count,
+                                 std::uint64_t seed, std::shared_ptr<const ReferenceBody> reference)
+    : topology_(std::move(topology)), sampled_(true), count_(count), seed_(seed), reference_(std::move(reference)) {}
+
 std::string MannequinSource::body_name(std::size_t i) const {
   std::ostringstream s;
   s << "mannequin-" << std::setw(5) << std::setfill('0') << i;
@@ -22,13 +26,13 @@ std::string MannequinSource::body_name(std::size_t i) const {
 void MannequinSource::generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                                const ExecContext& ctx) const {
   out.clear();
-  const std::size_t end = std::min(params_.size(), first + count);
+  const std::size_t end = std::min(size(), first + count);
   if (first >= end) return;
   std::vector<Expected<std::vector<Vec3d>>> bodies(end - first, Status(ErrorCode::kInternal, "not generated"));
   ExecContext c = ctx;
   c.sequential_threshold = 2;
   c.grain = 1;
-  par::for_each_n(c, end - first, [&](std::size_t k) { bodies[k] = mannequin_positions(params_[first + k], *topology_); });
+  par::for_each_n(c, end - first, [&](std::size_t k) { bodies[k] = mannequin_positions(params(first + k), *topology_); });
   out.reserve(end - first);
   for (std::size_t k = 0; k < bodies.size(); ++k) {
     const std::size_t i = first + k;

@@ -13,18 +13,28 @@ namespace atelier {
 
 class MannequinSource final : public BodySource {
  public:
+  /// Bodies with the given parameters (e.g. measured people).
   MannequinSource(std::shared_ptr<const MannequinTopology> topology, std::vector<MannequinParams> params,
                   std::shared_ptr<const ReferenceBody> reference);
-  [[nodiscard]] std::size_t size() const override { return params_.size(); }
+  /// `count` bodies of sample_mannequins(count, seed), each drawn when its
+  /// chunk is generated: the source's memory does not grow with `count`.
+  MannequinSource(std::shared_ptr<const MannequinTopology> topology, std::size_t count, std::uint64_t seed,
+                  std::shared_ptr<const ReferenceBody> reference);
+  [[nodiscard]] std::size_t size() const override { return sampled_ ? count_ : params_.size(); }
   [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
   [[nodiscard]] std::string body_name(std::size_t i) const override;
   void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                 const ExecContext& ctx) const override;
-  [[nodiscard]] const MannequinParams& params(std::size_t i) const { return params_[i]; }
+  [[nodiscard]] MannequinParams params(std::size_t i) const {
+    return sampled_ ? sample_mannequin(seed_, i) : params_[i];
+  }
 
  private:
   std::shared_ptr<const MannequinTopology> topology_;
   std::vector<MannequinParams> params_;
+  bool sampled_ = false;
+  std::size_t count_ = 0;
+  std::uint64_t seed_ = 0;
   std::shared_ptr<const ReferenceBody> reference_;
 };
 

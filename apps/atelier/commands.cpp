@@ -114,7 +114,7 @@ std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesO
     auto t = std::make_shared<const MannequinTopology>(std::move(*topo));
     auto ref = make_mannequin(MannequinParams{}, *t);
     if (!ref) throw Error(ref.status());
-    src = std::make_unique<MannequinSource>(t, sample_mannequins(opt.count, common.seed),
+    src = std::make_unique<MannequinSource>(t, opt.count, common.seed,
                                             std::make_shared<const ReferenceBody>(std::move(*ref)));
   } else if (opt.source == "makehuman") {
     auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(opt.data / "makehuman", ctx));

@@ -143,7 +143,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   };
 
   // Bodies, streamed in chunks: memory is bounded by the chunk size.
-  MannequinSource src(topology, sample_mannequins(opt.bodies, common.seed), ref);
+  MannequinSource src(topology, opt.bodies, common.seed, ref);
   auto tris = fan_triangulate(ref->model);
   if (!tris) throw Error(tris.status());
   BodySet chunk(ref);

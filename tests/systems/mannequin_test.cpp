@@ -16,6 +16,7 @@
 
 #include "storage/topology.h"
 #include "systems/mannequin.h"
+#include "systems/mannequin_source.h"
 #include "systems/measure.h"
 #include "systems/validate.h"
 
@@ -459,6 +460,36 @@ TEST(Mannequin, SamplerIsDeterministicAndPlausible) {
   // First draw of a fixed seed (guards the portability of the stream).
   const auto one = sample_mannequins(1, 42);
   EXPECT_EQ(one[0], a[0]);
+}
+
+TEST(Mannequin, SampledSourceDrawsEachBodyOnItsOwn) {
+  // Body i of a sampled source is sample_mannequins(n, seed)[i] whatever n,
+  // drawn when its chunk is generated: the same bodies as a source holding
+  // every parameter set, with no per-body state.
+  const auto all = sample_mannequins(40, 9);
+  for (const std::size_t i : {0u, 1u, 17u, 39u}) EXPECT_EQ(sample_mannequin(9, i), all[i]) << i;
+  EXPECT_EQ(sample_mannequins(18, 9)[17], all[17]);
+  auto topo = make_mannequin_topology();
+  ASSERT_TRUE(topo);
+  auto t = std::make_shared<const MannequinTopology>(std::move(*topo));
+  auto ref = make_mannequin(MannequinParams{}, *t);
+  ASSERT_TRUE(ref);
+  auto r = std::make_shared<const ReferenceBody>(std::move(*ref));
+  const MannequinSource held(t, all, r), sampled(t, 40, 9, r);
+  ASSERT_EQ(sampled.size(), 40u);
+  BodySet a(r), b(r);
+  std::vector<BodyFailure> fa, fb;
+  held.generate(21, 4, a, fa, {});
+  sampled.generate(21, 4, b, fb, {});
+  ASSERT_EQ(a.size(), 4u);
+  ASSERT_EQ(b.size(), 4u);
+  EXPECT_TRUE(fa.empty() && fb.empty());
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(a.name(k), b.name(k));
+    EXPECT_EQ(a.positions(k), b.positions(k)) << k;
+  }
+  sampled.generate(38, 10, b, fb, {});  // clipped at the end
+  EXPECT_EQ(b.size(), 2u);
 }
 
 TEST(Mannequin, RejectsBadParameters) {
