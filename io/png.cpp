@@ -52,6 +52,24 @@ std::uint8_t paeth(int a, int b, int c) noexcept {
   return static_cast<std::uint8_t>(c);
 }
 
+// The prediction of filter type f (0 none, 1 sub, 2 up, 3 average, 4 Paeth)
+// from the left (a), upper (b) and upper-left (c) bytes: filtering subtracts
+// it, decoding adds it back.
+int predictor(int f, int a, int b, int c) noexcept {
+  switch (f) {
+    case 1:
+      return a;
+    case 2:
+      return b;
+    case 3:
+      return (a + b) / 2;
+    case 4:
+      return paeth(a, b, c);
+    default:
+      return 0;
+  }
+}
+
 // Filters one row with filter `f`; bpp bytes per pixel, prev = previous raw
 // row (zeros for the first).
 void filter_row(int f, const std::uint8_t* row, const std::uint8_t* prev, std::size_t n, std::size_t bpp,
@@ -60,23 +78,7 @@ void filter_row(int f, const std::uint8_t* row, const std::uint8_t* prev, std::s
     const int a = i >= bpp ? row[i - bpp] : 0;
     const int b = prev[i];
     const int c = i >= bpp ? prev[i - bpp] : 0;
-    int pred = 0;
-    switch (f) {
-      case 1:
-        pred = a;
-        break;
-      case 2:
-        pred = b;
-        break;
-      case 3:
-        pred = (a + b) / 2;
-        break;
-      case 4:
-        pred = paeth(a, b, c);
-        break;
-      default:
-        break;
-    }
+    const int pred = predictor(f, a, b, c);
     out[i] = static_cast<std::uint8_t>(row[i] - pred);
   }
 }
@@ -227,23 +229,7 @@ RgbImage decode_png(std::string_view bytes, std::string_view name) {
       const int a = i >= bpp ? cur[i - bpp] : 0;
       const int b = prev[i];
       const int c = i >= bpp ? prev[i - bpp] : 0;
-      int pred = 0;
-      switch (f) {
-        case 1:
-          pred = a;
-          break;
-        case 2:
-          pred = b;
-          break;
-        case 3:
-          pred = (a + b) / 2;
-          break;
-        case 4:
-          pred = paeth(a, b, c);
-          break;
-        default:
-          break;
-      }
+      const int pred = predictor(f, a, b, c);
       cur[i] = static_cast<std::uint8_t>(src[1 + i] + pred);
     }
     for (std::uint32_t x = 0; x < width; ++x) {
