@@ -187,9 +187,10 @@ void decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::
 /// entry.
 class DetailDecoder {
  public:
-  // Vertices per tile, the most a byte indexes. Longer runs (41 entries per
+  // Vertices per tile, the most a byte indexes: longer runs (41 entries per
   // polygon on the 30k x 200 benchmark, against 26 with 128) fetch fewer
-  // frames; 1 thread decodes about 15% faster than with 128-vertex tiles.
+  // frames. Measured gain small, within this machine's run-to-run spread
+  // (docs/performance.md, session of 2026-11-22).
   static constexpr std::size_t kTile = 256;
   DetailDecoder() = default;
   /// Reads the encoding's matrix; O(entries), parallel over tiles.
