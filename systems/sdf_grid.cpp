@@ -61,6 +61,33 @@ template <class Fn>
   return !stopped.load();
 }
 
+/// Runs fn(at, blk, accessor) on every cell of a dim[0] x dim[1] x dim[2]
+/// table of 8^3-voxel blocks (at = row-major index, blk = its 3D index), in
+/// parallel, each task with its own read accessor. False when cancelled.
+template <class Fn>
+[[nodiscard]] bool for_each_block_cell(const vdb::FloatGrid& grid, const std::array<int, 3>& dim,
+                                       const ExecContext& ctx, std::size_t default_grain, Fn&& fn) {
+  const std::size_t count =
+      static_cast<std::size_t>(dim[0]) * static_cast<std::size_t>(dim[1]) * static_cast<std::size_t>(dim[2]);
+  const std::size_t nz = static_cast<std::size_t>(dim[2]), nyz = static_cast<std::size_t>(dim[1]) * nz;
+  std::atomic<bool> stopped{false};
+  ExecContext c = ctx;
+  c.grain = ctx.grain ? ctx.grain : default_grain;
+  par::for_each_block(c, count, [&](std::size_t begin, std::size_t end) {
+    if (ctx.cancelled()) {
+      stopped.store(true, std::memory_order_relaxed);
+      return;
+    }
+    auto acc = grid.getConstUnsafeAccessor();
+    for (std::size_t at = begin; at < end; ++at) {
+      const int blk[3] = {static_cast<int>(at / nyz), static_cast<int>((at / nz) % static_cast<std::size_t>(dim[1])),
+                          static_cast<int>(at % nz)};
+      fn(at, blk, acc);
+    }
+  });
+  return !stopped.load();
+}
+
 }  // namespace
 
 struct SdfGrid::Impl {
@@ -572,27 +599,14 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
       }
       if (count == 0 || count > (std::size_t{1} << 24)) continue;
       t.sign.assign(count, 0);
-      const std::size_t nyz = static_cast<std::size_t>(t.dim[1]) * static_cast<std::size_t>(t.dim[2]);
-      std::atomic<bool> stopped{false};
-      ExecContext c = ctx;
-      c.grain = ctx.grain ? ctx.grain : 64;
-      par::for_each_block(c, count, [&](std::size_t begin, std::size_t end) {
-        if (ctx.cancelled()) {
-          stopped.store(true, std::memory_order_relaxed);
-          return;
-        }
-        auto acc = im->grid->getConstUnsafeAccessor();
-        for (std::size_t at = begin; at < end; ++at) {
-          const std::array<std::size_t, 3> blk{at / nyz, (at / static_cast<std::size_t>(t.dim[2])) % t.dim[1],
-                                               at % static_cast<std::size_t>(t.dim[2])};
-          vdb::Coord v;
-          for (int a = 0; a < 3; ++a)
-            v[a] = std::max(t.vlo[a], (t.blo[a] + static_cast<int>(blk[a])) * 8);  // in the block and the box
-          if (acc.probeConstLeaf(v)) continue;
-          t.sign[at] = static_cast<std::int8_t>(im->walk_sign(acc, Vec3d(v.x() * h, v.y() * h, v.z() * h), b));
-        }
-      });
-      if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+      const bool done =
+          for_each_block_cell(*im->grid, t.dim, ctx, 64, [&](std::size_t at, const int(&blk)[3], auto& acc) {
+            vdb::Coord v;
+            for (int a = 0; a < 3; ++a) v[a] = std::max(t.vlo[a], (t.blo[a] + blk[a]) * 8);  // in the block and the box
+            if (acc.probeConstLeaf(v)) return;
+            t.sign[at] = static_cast<std::int8_t>(im->walk_sign(acc, Vec3d(v.x() * h, v.y() * h, v.z() * h), b));
+          });
+      if (!done) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
     }
   }
 
@@ -630,33 +644,19 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
     if (count <= (std::size_t{1} << 22)) {
       im->table.resize(count);
       im->table_leaf.assign(count, nullptr);
-      const std::size_t nyz = static_cast<std::size_t>(im->table_dim[1]) * static_cast<std::size_t>(im->table_dim[2]);
-      std::atomic<bool> stopped{false};
-      ExecContext c = ctx;
-      c.grain = ctx.grain ? ctx.grain : 256;
-      par::for_each_block(c, count, [&](std::size_t begin, std::size_t end) {
-        if (ctx.cancelled()) {
-          stopped.store(true, std::memory_order_relaxed);
-          return;
-        }
-        auto acc = im->grid->getConstUnsafeAccessor();
-        for (std::size_t at = begin; at < end; ++at) {
-          const vdb::Coord origin(
-              (im->table_lo[0] + static_cast<int>(at / nyz)) * 8,
-              (im->table_lo[1] + static_cast<int>((at / static_cast<std::size_t>(im->table_dim[2])) %
-                                                  static_cast<std::size_t>(im->table_dim[1]))) *
-                  8,
-              (im->table_lo[2] + static_cast<int>(at % static_cast<std::size_t>(im->table_dim[2]))) * 8);
-          Impl::BlockRef& b = im->table[at];
-          const auto* leaf = acc.probeConstLeaf(origin);
-          im->table_leaf[at] = leaf;
-          if (leaf)
-            b.values = leaf->buffer().data();
-          else
-            b.tile_on = acc.probeValue(origin, b.tile);
-        }
-      });
-      if (stopped.load()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
+      const bool done =
+          for_each_block_cell(*im->grid, im->table_dim, ctx, 256, [&](std::size_t at, const int(&blk)[3], auto& acc) {
+            const vdb::Coord origin((im->table_lo[0] + blk[0]) * 8, (im->table_lo[1] + blk[1]) * 8,
+                                    (im->table_lo[2] + blk[2]) * 8);
+            Impl::BlockRef& r = im->table[at];
+            const auto* leaf = acc.probeConstLeaf(origin);
+            im->table_leaf[at] = leaf;
+            if (leaf)
+              r.values = leaf->buffer().data();
+            else
+              r.tile_on = acc.probeValue(origin, r.tile);
+          });
+      if (!done) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
     }
   }
   if (!im->roi) {

@@ -144,8 +144,6 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
 
   // Bodies, streamed in chunks: memory is bounded by the chunk size.
   MannequinSource src(topology, opt.bodies, common.seed, ref);
-  auto tris = fan_triangulate(ref->model);
-  if (!tris) throw Error(tris.status());
   BodySet chunk(ref);
   std::vector<BodyFailure> failures;
   std::vector<BodyQuality> quality;
@@ -396,7 +394,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     std::vector<SurfaceTriangles> gt;
     for (const auto& r : regen) gt.push_back(fan_triangulate(r.model).value());
     std::vector<RenderTriangles> scene;
-    scene.push_back({body, tris->triangles, body_colour()});
+    scene.push_back({body, ref_tris->triangles, body_colour()});
     for (std::size_t k = 0; k < regen.size(); ++k)
       scene.push_back({regen[k].model.nodes.position, gt[k].triangles, garment_colour(k)});
     if (shorts_tris) scene.push_back({shorts_d, shorts_tris->triangles, garment_colour(regen.size())});

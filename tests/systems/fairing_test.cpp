@@ -1,3 +1,5 @@
+#include "systems/fairing.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -6,7 +8,6 @@
 #include "storage/builder.h"
 #include "storage/validate.h"
 #include "support/shapes.h"
-#include "systems/fairing.h"
 
 using namespace atelier;
 
@@ -38,6 +39,19 @@ Grid grid(int n, const std::function<double(double, double)>& f) {
     for (int j = 0; j <= n; ++j)
       if (i < 2 || j < 2 || i > n - 2 || j > n - 2) g.fixed[id(i, j)] = 1;
   return g;
+}
+
+// Moves every node by `amplitude` times a normal draw per coordinate and
+// fixes each with probability `p_fixed` (one uniform, then three normals per
+// node, from `seed`). Returns the fixed flags.
+std::vector<std::uint8_t> perturb_and_fix(Model& m, std::uint64_t seed, double p_fixed, double amplitude) {
+  SplitMix64 r(seed);
+  std::vector<std::uint8_t> fixed(m.nodes.slots.capacity(), 0);
+  for (std::size_t v = 0; v < fixed.size(); ++v) {
+    fixed[v] = r.uniform(0, 1) < p_fixed;
+    m.nodes.position[v] += amplitude * Vec3d(r.normal(), r.normal(), r.normal());
+  }
+  return fixed;
 }
 
 }  // namespace
@@ -96,12 +110,7 @@ TEST(Fairing, MatchesAReferenceJacobiOnAnIrregularMesh) {
   const NodeIdx lonely = m.new_node(m.nodes.surface[0], Vec3d(9, 9, 9));
   ASSERT_TRUE(validate(m));
   const std::size_t n = m.nodes.slots.capacity();
-  SplitMix64 r(5);
-  std::vector<std::uint8_t> fixed(n, 0);
-  for (std::size_t v = 0; v < n; ++v) {
-    fixed[v] = r.uniform(0, 1) < 0.3;
-    m.nodes.position[v] += 0.1 * Vec3d(r.normal(), r.normal(), r.normal());
-  }
+  std::vector<std::uint8_t> fixed = perturb_and_fix(m, 5, 0.3, 0.1);
   fixed[0] = 0;  // the north pole (valence 12) stays free
   std::vector<Vec3d> ref = m.nodes.position;
   FairParams prm;
@@ -281,8 +290,10 @@ TEST(Fairing, DampingKeepsQuadMeshesStable) {
   std::vector<std::uint8_t> fixed(base.nodes.slots.capacity(), 0);
   for (int i = 0; i <= n; ++i)
     for (int j = 0; j <= n; ++j) {
-      if (i < 2 || j < 2 || i > n - 2 || j > n - 2) fixed[id(i, j)] = 1;
-      else base.nodes.position[id(i, j)].z() = ((i + j) % 2 ? 1e-3 : -1e-3);
+      if (i < 2 || j < 2 || i > n - 2 || j > n - 2)
+        fixed[id(i, j)] = 1;
+      else
+        base.nodes.position[id(i, j)].z() = ((i + j) % 2 ? 1e-3 : -1e-3);
     }
   auto max_z = [&](const Model& m) {
     double z = 0;
@@ -319,12 +330,7 @@ TEST(Fairing, Avx2KernelIsBitIdenticalToThePortableKernel) {
   ASSERT_TRUE(add_polygon_surface(m, "grid", s.arrays()));
   ASSERT_TRUE(validate(m));
   const std::size_t n = m.nodes.slots.capacity();
-  SplitMix64 r(11);
-  std::vector<std::uint8_t> fixed(n, 0);
-  for (std::size_t v = 0; v < n; ++v) {
-    fixed[v] = r.uniform(0, 1) < 0.1;
-    m.nodes.position[v] += 0.05 * Vec3d(r.normal(), r.normal(), r.normal());
-  }
+  std::vector<std::uint8_t> fixed = perturb_and_fix(m, 11, 0.1, 0.05);
   const NodeAdjacency adj = build_adjacency(m);
   FairParams prm;
   prm.iterations = 9;

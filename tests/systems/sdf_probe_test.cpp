@@ -86,7 +86,8 @@ double trilinear_from_lattice(SdfGrid::Sampler& s, const Vec3d& p) {
 std::vector<Vec3d> crossing_points(const Sphere& s, const Box3d& box, unsigned cross, double near, std::size_t n,
                                    SplitMix64& rng) {
   std::vector<Vec3d> out;
-  const std::array<int, 3> lo{static_cast<int>(std::ceil(box.lo.x() / kH)), static_cast<int>(std::ceil(box.lo.y() / kH)),
+  const std::array<int, 3> lo{static_cast<int>(std::ceil(box.lo.x() / kH)),
+                              static_cast<int>(std::ceil(box.lo.y() / kH)),
                               static_cast<int>(std::ceil(box.lo.z() / kH))};
   const std::array<int, 3> hi{static_cast<int>(std::floor(box.hi.x() / kH)) - 1,
                               static_cast<int>(std::floor(box.hi.y() / kH)) - 1,
@@ -147,28 +148,27 @@ void check_grid(const Sphere& s, const BodyBvh& bvh, const SdfGrid& grid, const 
   EXPECT_GT(fallbacks, 0u);  // the exact path was exercised (points within 0.3 h)
 }
 
-TEST(SdfProbe, FullGridCellsAcrossBlocksMatchTheTrilinearFormulaAndTheExactSign) {
+// The sphere of both tests, its BVH, and a grid over it (the whole sphere
+// when `roi` is empty), then check_grid over `where`.
+void check_sphere_grid(std::vector<Box3d> roi, const Box3d& where) {
   const Sphere s = uv_sphere(Vec3d(0.03, -0.02, 0.01), 0.8, 60, 90);
   BodyBvh bvh;
   ASSERT_TRUE(bvh.build(s.positions, s.triangles).is_ok());
   SdfParams prm;
   prm.voxel_size = kH;
+  prm.roi = std::move(roi);
   SdfGrid grid;
   ASSERT_TRUE(grid.build(bvh, prm).is_ok());
-  check_grid(s, bvh, grid, Box3d{Vec3d(-1, -1, -1), Vec3d(1, 1, 1)});
+  check_grid(s, bvh, grid, where);
+}
+
+TEST(SdfProbe, FullGridCellsAcrossBlocksMatchTheTrilinearFormulaAndTheExactSign) {
+  check_sphere_grid({}, Box3d{Vec3d(-1, -1, -1), Vec3d(1, 1, 1)});
 }
 
 TEST(SdfProbe, RoiGridCellsAcrossBlocksMatchTheTrilinearFormulaAndTheExactSign) {
-  const Sphere s = uv_sphere(Vec3d(0.03, -0.02, 0.01), 0.8, 60, 90);
-  BodyBvh bvh;
-  ASSERT_TRUE(bvh.build(s.positions, s.triangles).is_ok());
-  SdfParams prm;
-  prm.voxel_size = kH;
   const Box3d roi{Vec3d(0.3, -0.5, -0.5), Vec3d(1.0, 0.5, 0.5)};
-  prm.roi = {roi};
-  SdfGrid grid;
-  ASSERT_TRUE(grid.build(bvh, prm).is_ok());
-  check_grid(s, bvh, grid, roi);
+  check_sphere_grid({roi}, roi);
 }
 
 }  // namespace
