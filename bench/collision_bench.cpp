@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <numeric>
 
 #include "io/makehuman.h"
 #include "io/mhclo.h"
@@ -122,7 +123,7 @@ void BM_CollisionPassPerBody(benchmark::State& st) {
   ExecContext ctx;
   ctx.threads = static_cast<int>(st.range(0));
   std::vector<Vec3d> g;
-  std::size_t body = 0, pushed = 0, bodies = 0;
+  std::size_t body = 0, pushed = 0, bodies = 0, queries = 0, faired = 0;
   for (auto _ : st) {
     const std::size_t b = body++ % s.skins.size();
     g = s.decoded[b];
@@ -133,14 +134,40 @@ void BM_CollisionPassPerBody(benchmark::State& st) {
     auto rep = resolve_collisions(g, s.adj, s.clear, cb, CollisionParams{}, ctx);
     if (!rep) st.SkipWithError(rep.status().to_string().c_str());
     pushed += rep->pushed;
+    queries += rep->queries;
+    faired += rep->faired;
     ++bodies;
     benchmark::DoNotOptimize(g.data());
   }
   st.counters["pushed/body"] = static_cast<double>(pushed) / std::max<std::size_t>(1, bodies);
+  st.counters["faired/body"] = static_cast<double>(faired) / std::max<std::size_t>(1, bodies);
+  st.counters["queries/body"] = static_cast<double>(queries) / std::max<std::size_t>(1, bodies);
   st.counters["vertices"] = static_cast<double>(s.vertices);
   st.SetLabel(s.label);
 }
 BENCHMARK(BM_CollisionPassPerBody)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Exact queries alone: every decoded garment vertex of one body, with its
+// encoded hint, on 1 thread (the pass's unit of work).
+void BM_CollisionQuery(benchmark::State& st) {
+  const CollisionScene& s = scene();
+  CollisionBody cb;
+  if (Status e = cb.build(s.topo, s.skins[0]); !e) st.SkipWithError(e.to_string().c_str());
+  const auto& g = s.decoded[0];
+  const bool hinted = st.range(0) != 0;
+  std::vector<std::uint32_t> order(g.size());
+  std::iota(order.begin(), order.end(), 0u);
+  if (st.range(1))
+    std::stable_sort(order.begin(), order.end(),
+                     [&](auto a, auto b) { return s.clear.triangle[a] < s.clear.triangle[b]; });
+  double sum = 0;
+  for (auto _ : st)
+    for (std::uint32_t v : order) sum += cb.query(g[v], hinted ? s.clear.triangle[v] : kNoTriangle).distance;
+  benchmark::DoNotOptimize(sum);
+  st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * g.size()));
+  st.SetLabel(hinted ? "hinted" : "no hint");
+}
+BENCHMARK(BM_CollisionQuery)->Args({1, 0})->Args({1, 1})->Args({0, 0})->Unit(benchmark::kMillisecond);
 
 // The set-up alone (grid over the garment's box).
 void BM_CollisionBodySetup(benchmark::State& st) {

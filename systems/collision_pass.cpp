@@ -1,5 +1,7 @@
 #include "systems/collision_pass.h"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -117,6 +119,41 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
     open_tasks.push_back({child + 1, mid, k.hi});
     open_tasks.push_back({child, k.lo, mid});
   }
+  // Wide nodes: the lanes of binary node b are its grandchildren (a child
+  // that is a leaf stays a lane itself). Depth-first, so a wide node's
+  // subtree is contiguous like the binary one's.
+  wide_.clear();
+  auto make_wide = [&](auto&& self, std::uint32_t b) -> std::uint32_t {
+    const auto w = static_cast<std::uint32_t>(wide_.size());
+    wide_.push_back({});
+    std::uint32_t lanes[4], nl = 0;
+    if (tree_[b].count > 0) {
+      lanes[nl++] = b;
+    } else {
+      for (std::uint32_t c : {tree_[b].first, tree_[b].first + 1}) {
+        if (tree_[c].count > 0) {
+          lanes[nl++] = c;
+        } else {
+          lanes[nl++] = tree_[c].first;
+          lanes[nl++] = tree_[c].first + 1;
+        }
+      }
+    }
+    for (std::uint32_t l = 0; l < 4; ++l) {
+      if (l >= nl) {
+        wide_[w].child[l] = 0;
+        wide_[w].source[l] = kNoTriangle;
+        wide_[w].count[l] = 0;
+        continue;
+      }
+      const TreeNode nd = tree_[lanes[l]];
+      wide_[w].source[l] = lanes[l];
+      wide_[w].count[l] = static_cast<std::uint8_t>(nd.count);
+      wide_[w].child[l] = nd.count > 0 ? nd.first : self(self, lanes[l]);
+    }
+    return w;
+  };
+  make_wide(make_wide, 0);
 }
 
 // ------------------------------------------------------------ body
@@ -145,30 +182,38 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
     const Triangle& t = tp.triangles_[tp.leaf_tri_[i]];
     corners_[i] = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
   });
-  // Refit: leaves from their corners (rounded outward to float, so a box
-  // never excludes its triangle), then inner nodes in a reverse sweep
+  // Refit: leaves from their triangles' boxes (rounded outward to float, so
+  // a box never excludes its triangle), then inner nodes in a reverse sweep
   // (children follow their parents).
   box_.resize(tree.size());
+  // At least one float ulp outward whichever way the conversion rounded
+  // (|f| 2^-23 >= ulp(f); the float minimum covers zero), without a branch.
   auto down = [](double x) {
-    float f = static_cast<float>(x);
-    return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+    const float f = static_cast<float>(x);
+    return f - (std::abs(f) * 0x1p-23f + std::numeric_limits<float>::min());
   };
   auto up = [](double x) {
-    float f = static_cast<float>(x);
-    return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+    const float f = static_cast<float>(x);
+    return f + (std::abs(f) * 0x1p-23f + std::numeric_limits<float>::min());
   };
+  tri_box_stride_ = nt + 4;
+  tri_box_.assign(6 * tri_box_stride_, 0.0f);
+  par::for_each_n(ctx, nt, [&](std::size_t i) {
+    const auto& c = corners_[i];
+    const Vec3d lo = c[0].cwiseMin(c[1]).cwiseMin(c[2]), hi = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
+    for (int a = 0; a < 3; ++a) {
+      tri_box_[a * tri_box_stride_ + i] = down(lo[a]);
+      tri_box_[(3 + a) * tri_box_stride_ + i] = up(hi[a]);
+    }
+  });
   par::for_each_n(ctx, tree.size(), [&](std::size_t n) {
     const CollisionTopology::TreeNode& nd = tree[n];
     if (nd.count == 0) return;
-    Vec3d lo = corners_[nd.first][0], hi = lo;
-    for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i)
-      for (const Vec3d& c : corners_[i]) {
-        lo = lo.cwiseMin(c);
-        hi = hi.cwiseMax(c);
-      }
     for (int a = 0; a < 3; ++a) {
-      box_[n].lo[a] = down(lo[a]);
-      box_[n].hi[a] = up(hi[a]);
+      const float* lo = &tri_box_[a * tri_box_stride_ + nd.first];
+      const float* hi = &tri_box_[(3 + a) * tri_box_stride_ + nd.first];
+      box_[n].lo[a] = *std::min_element(lo, lo + nd.count);
+      box_[n].hi[a] = *std::max_element(hi, hi + nd.count);
     }
   });
   for (std::size_t n = tree.size(); n-- > 0;) {
@@ -180,6 +225,22 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
       box_[n].hi[a] = std::max(l.hi[a], r.hi[a]);
     }
   }
+  const auto& wide = tp.wide_;
+  wide_box_.resize(wide.size());
+  constexpr float kFInf = std::numeric_limits<float>::infinity();
+  par::for_each_n(ctx, wide.size(), [&](std::size_t w) {
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t b = wide[w].source[l];
+      for (int a = 0; a < 3; ++a) {
+        wide_box_[w].lo[a][l] = b == kNoTriangle ? kFInf : box_[b].lo[a];
+        wide_box_[w].hi[a][l] = b == kNoTriangle ? -kFInf : box_[b].hi[a];
+      }
+    }
+  });
+  const NodeBox& root = box_[0];
+  extent_ = 0;
+  for (int a = 0; a < 3; ++a)
+    extent_ = std::max({extent_, std::abs(static_cast<double>(root.lo[a])), std::abs(static_cast<double>(root.hi[a]))});
   return Status::ok();
 }
 
@@ -264,35 +325,46 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
       if (best_t == from) break;
     }
   }
-  // Branch and bound over the refit hierarchy, nearer child first. Boxes
+  // Branch and bound over the wide hierarchy, nearer lanes first. Boxes
   // at exactly the best distance are still opened: ties go to the smaller
-  // triangle index, so the answer does not depend on the hint.
-  const auto& tree = topo_->tree_;
+  // triangle index, so the answer does not depend on the hint. Box
+  // distances are computed in float, four lanes at once, made conservative:
+  // each gap is shrunk by a bound on its rounding (the point rounded to
+  // float, one subtraction; boxes are already rounded outward) and the sum
+  // by a relative margin, so a box is never skipped that the exact distance
+  // would open.
+  const auto& wide = topo_->wide_;
   const auto& leaf_tri = topo_->leaf_tri_;
-  auto box_d2 = [&](std::uint32_t n) {
-    const NodeBox& b = box_[n];
-    double s = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double g = std::max({static_cast<double>(b.lo[a]) - p[a], p[a] - static_cast<double>(b.hi[a]), 0.0});
-      s += g * g;
-    }
-    return s;
-  };
+  const double scale = extent_ + std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])});
+  const __m128 slack = _mm_set1_ps(static_cast<float>(std::ldexp(scale, -21)));
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 pc[3] = {_mm_set1_ps(static_cast<float>(p[0])), _mm_set1_ps(static_cast<float>(p[1])),
+                        _mm_set1_ps(static_cast<float>(p[2]))};
   struct Item {
-    std::uint32_t node;
+    std::uint32_t ref;    // wide node, or first leaf slot
+    std::uint32_t count;  // 0: wide node
     double d2;
   };
-  Item stack[96];
+  Item stack[64];
   int top = 0;
-  stack[top++] = {0, box_d2(0)};
+  stack[top++] = {0, 0, 0.0};
   while (top > 0) {
     const Item it = stack[--top];
     if (it.d2 > best2) continue;
-    const CollisionTopology::TreeNode& nd = tree[it.node];
-    if (nd.count > 0) {
-      for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
+    if (it.count > 0) {
+      // The leaf's triangles' own boxes first, four at once, the same way.
+      __m128 s = zero;
+      for (int a = 0; a < 3; ++a) {
+        const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(&tri_box_[a * tri_box_stride_ + it.ref]), pc[a]),
+                                      _mm_sub_ps(pc[a], _mm_loadu_ps(&tri_box_[(3 + a) * tri_box_stride_ + it.ref])));
+        const __m128 g = _mm_max_ps(_mm_sub_ps(gap, slack), zero);
+        s = _mm_add_ps(s, _mm_mul_ps(g, g));
+      }
+      alignas(16) float d2[4];
+      _mm_store_ps(d2, s);
+      for (std::uint32_t i = it.ref; i < it.ref + it.count; ++i) {
         const std::uint32_t t = leaf_tri[i];
-        if (t == best_t) continue;
+        if (t == best_t || static_cast<double>(d2[i - it.ref]) * (1.0 - 1e-6) > best2) continue;
         const auto& c = corners_[i];
         const double d2 = (p - closest_point_on_triangle(p, c[0], c[1], c[2]).point).squaredNorm();
         if (d2 < best2 || (d2 == best2 && t < best_t)) {
@@ -302,12 +374,26 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
       }
       continue;
     }
-    const double dl = box_d2(nd.first), dr = box_d2(nd.first + 1);
-    const bool left_first = dl <= dr;
-    const Item near{left_first ? nd.first : nd.first + 1, left_first ? dl : dr};
-    const Item far{left_first ? nd.first + 1 : nd.first, left_first ? dr : dl};
-    if (far.d2 <= best2) stack[top++] = far;
-    if (near.d2 <= best2) stack[top++] = near;
+    const CollisionTopology::WideNode& nd = wide[it.ref];
+    const WideBox& bx = wide_box_[it.ref];
+    __m128 s = zero;
+    for (int a = 0; a < 3; ++a) {
+      const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_load_ps(bx.lo[a]), pc[a]), _mm_sub_ps(pc[a], _mm_load_ps(bx.hi[a])));
+      const __m128 g = _mm_max_ps(_mm_sub_ps(gap, slack), zero);
+      s = _mm_add_ps(s, _mm_mul_ps(g, g));
+    }
+    alignas(16) float d2[4];
+    _mm_store_ps(d2, s);
+    // Lanes within the bound, sorted far to near (pushed in that order, so
+    // the nearest is popped first).
+    const int base = top;
+    for (int l = 0; l < 4; ++l) {
+      const double dl = static_cast<double>(d2[l]) * (1.0 - 1e-6);
+      if (!(dl <= best2) || nd.source[l] == kNoTriangle) continue;
+      int k = top++;
+      for (; k > base && stack[k - 1].d2 < dl; --k) stack[k] = stack[k - 1];
+      stack[k] = {nd.child[l], nd.count[l], dl};
+    }
   }
   return query_triangle(p, best_t);
 }
@@ -432,6 +518,10 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
   std::vector<BodyDistance> d(n);
   std::vector<double> target(n);
   std::vector<std::uint32_t> queries(n, 0);
+  // exact[v]: d[v] is the exact query; otherwise d[v].distance is a positive
+  // lower bound at or above the target (see the check after fairing) and
+  // the rest of d[v] is that of the vertex's previous position.
+  std::vector<std::uint8_t> exact(n, 1);
   par::for_each_n(qctx, n, [&](std::size_t v) {
     d[v] = body.query(g[v], enc.triangle.empty() ? kNoTriangle : enc.triangle[v]);
     queries[v] = 1;
@@ -523,15 +613,21 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
       lin[i] = d[free_nodes[i]].distance;
     }
     std::vector<std::uint32_t> refused(free_nodes.size(), 0);
+    // A fairing sweep costs tens of nanoseconds per vertex: regions of a few
+    // thousand vertices are worth splitting, in blocks that amortise the
+    // task overhead.
+    ExecContext fctx = ctx;
+    fctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 1024);
+    if (ctx.grain == 0) fctx.grain = 512;
     for (int it = 0; it < prm.fair_iterations; ++it) {
       if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "resolve_collisions cancelled");
-      par::for_each_n(ctx, u_nodes.size(), [&](std::size_t i) {
+      par::for_each_n(fctx, u_nodes.size(), [&](std::size_t i) {
         const std::uint32_t v = u_nodes[i];
         Vec3d s = Vec3d::Zero();
         for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += g[adj.neighbor[k]];
         u[v] = s * inv_deg(v) - g[v];
       });
-      par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) {
+      par::for_each_n(fctx, free_nodes.size(), [&](std::size_t i) {
         const std::uint32_t v = free_nodes[i];
         Vec3d s = Vec3d::Zero();
         for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += u[adj.neighbor[k]];
@@ -555,7 +651,7 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
           next_lin[i] = dk;
         }
       });
-      par::for_each_n(ctx, free_nodes.size(), [&](std::size_t i) {
+      par::for_each_n(fctx, free_nodes.size(), [&](std::size_t i) {
         g[free_nodes[i]] = next[i];
         lin[i] = next_lin[i];
       });
@@ -565,6 +661,14 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
     // plane) goes back to where the push left it.
     par::for_each_n(qctx, free_nodes.size(), [&](std::size_t i) {
       const std::uint32_t v = free_nodes[i];
+      // A vertex that fairing moved by less than its margin over the target
+      // is still above it (1-Lipschitz distance): no query.
+      const double bound = d[v].distance - (g[v] - start[i]).norm();
+      if (bound > 0 && bound >= target[v] - prm.tolerance) {
+        d[v].distance = bound;
+        exact[v] = 0;
+        return;
+      }
       const BodyDistance q = body.query(g[v], d[v].triangle);
       ++queries[v];
       if (q.distance < target[v] - prm.tolerance && q.distance < d[v].distance) {
@@ -576,6 +680,12 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
     });
     for (auto r : refused) rep.refused_moves += r;
   }
+  if (final_out)
+    par::for_each_n(qctx, n, [&](std::size_t v) {
+      if (exact[v]) return;
+      d[v] = body.query(g[v], d[v].triangle);
+      ++queries[v];
+    });
   for (std::size_t v = 0; v < n; ++v) {
     rep.queries += queries[v];
     rep.inside_after += d[v].distance < 0;

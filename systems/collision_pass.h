@@ -88,6 +88,15 @@ class CollisionTopology {
   mutable std::once_flag tree_once_;
   mutable std::vector<TreeNode> tree_;
   mutable std::vector<std::uint32_t> leaf_tri_;  // triangles in leaf order
+  // The same hierarchy with every other level removed: each wide node holds
+  // up to four lanes (binary grandchildren), whose boxes a query tests at
+  // once. Half the depth, a quarter of the dependent loads.
+  struct WideNode {
+    std::uint32_t child[4];   // inner lane: wide node; leaf lane: first leaf slot
+    std::uint32_t source[4];  // binary node whose box the lane holds (kNoTriangle: empty lane)
+    std::uint8_t count[4];    // 0: inner lane; else the leaf's triangle count
+  };
+  mutable std::vector<WideNode> wide_;
 };
 
 /// Exact signed distance of a point to the body with its closest feature.
@@ -139,7 +148,16 @@ class CollisionBody {
   struct NodeBox {
     float lo[3], hi[3];
   };
-  std::vector<NodeBox> box_;                   // per hierarchy node
+  std::vector<NodeBox> box_;  // per hierarchy node
+  struct alignas(16) WideBox {
+    float lo[3][4], hi[3][4];  // [axis][lane]; empty lanes are inverted infinite boxes
+  };
+  std::vector<WideBox> wide_box_;  // per wide node
+  // Per leaf slot, the triangle's box (float, rounded outward), six columns
+  // lo x, y, z, hi x, y, z of stride tri_box_stride_ (padded by four).
+  std::vector<float> tri_box_;
+  std::size_t tri_box_stride_ = 0;
+  double extent_ = 0;                          // largest absolute coordinate (bounds float rounding)
   std::vector<std::array<Vec3d, 3>> corners_;  // per leaf slot: the triangle's corners
 };
 
