@@ -1,7 +1,7 @@
 // Collision pass (issue 7): the pass on one body including its per-body
-// set-up (CollisionBody grid over the garment's box, then
-// resolve_collisions), for a garment decoded by its detail template on
-// bodies it was not encoded on. Goal: <= 10 ms per body for ~10k garment
+// set-up (CollisionBody refit, then resolve_collisions), for a garment
+// regenerated as the pipeline does it on bodies it was not encoded on:
+// decoded by its detail template, then the edge transfer. Goal: <= 10 ms per body for ~10k garment
 // vertices on 2 threads.
 //
 // With ../shared/data: MakeHuman's male_casualsuit01 (8,426 vertices) fitted
@@ -19,6 +19,7 @@
 #include "io/mhclo.h"
 #include "systems/collision_pass.h"
 #include "systems/detail_template.h"
+#include "systems/edge_transfer.h"
 #include "systems/makehuman_body.h"
 #include "systems/mannequin.h"
 #include "systems/mannequin_source.h"
@@ -66,11 +67,13 @@ void finish(CollisionScene& s, const ReferenceBody& ref, std::span<const Vec3d> 
   s.clear = encode_clearance(garment, cb0).value();
   s.adj = adjacency_from_edges(garment.size(), edges).value();
   const DetailEncoding enc = encode_detail(poly, skin0, garment).value();
+  const EdgeTransfer transfer = encode_edge_transfer(garment, edges, cb0).value();
   PolygonFrames fr;
   for (const auto& skin : s.skins) {
     std::vector<Vec3d> out(garment.size());
     compute_frames(poly, skin, fr, {}, enc.reference_corners);
     decode_detail(enc, fr, out);
+    if (Status st = apply_edge_transfer(transfer, skin, tris.triangles, out); !st) throw Error(st);
     s.decoded.push_back(std::move(out));
   }
   s.vertices = garment.size();

@@ -24,10 +24,13 @@ namespace atelier::par {
   return ctx.threads == 1 || n < ctx.sequential_threshold;
 }
 
-/// Runs f inside an arena limited to ctx.threads (no-op limit when 0).
+/// Runs f inside an arena limited to ctx.threads (no-op limit when 0, or
+/// when the calling arena is no larger: making an arena costs tens of
+/// microseconds, which small loops called many times per body would pay
+/// on every call).
 template <class F>
 void in_arena(const ExecContext& ctx, F&& f) {
-  if (ctx.threads > 0) {
+  if (ctx.threads > 0 && ctx.threads < tbb::this_task_arena::max_concurrency()) {
     tbb::task_arena arena(ctx.threads);
     arena.execute(std::forward<F>(f));
   } else {

@@ -7,12 +7,12 @@
 //     distance to the source body (its clearance) and its closest source
 //     triangle (a hint: on a body of the same topology the distance to that
 //     triangle bounds the distance to the whole surface from above).
-//  2. Per body: a CollisionBody over the body triangles, with a coarse
-//     uniform grid of triangles built only where the garment lies (its box
-//     grown by the largest hint distance). Queries are exact: closest point
-//     by point-triangle distances over the grid cells within the hint's
-//     bound, sign by the angle-weighted pseudo-normal of the closest feature
-//     (Baerentzen & Aanaes 2005), computed on demand.
+//  2. Per body: a CollisionBody over the body triangles: the topology's
+//     bounding-volume hierarchy refit to the body (float boxes rounded
+//     outward), searched four boxes at a time. Queries are exact: closest
+//     point by point-triangle distances within the hint's bound, sign by the
+//     angle-weighted pseudo-normal of the closest feature (Baerentzen &
+//     Aanaes 2005), computed on demand.
 //  3. Pass: every vertex inside the body or closer than its target clearance
 //     c_v = clamp(encoded, min_clearance, max_clearance) moves to x + c_v n
 //     (x its closest body point, n the outward normal there: the distance
@@ -20,13 +20,19 @@
 //     where concave parts of the body make one push fall short. Then the
 //     moved region, grown by `fair_rings` rings, is smoothed by umbrella
 //     fairing (seed 000 section 4.2, Kobbelt's U2 Jacobi iteration, half
-//     steps, along the body normal only: it smooths the garment's offset)
-//     with all other vertices fixed, every move applied in sub-steps and cut
+//     steps, along the body normal only) with all other vertices fixed.
+//     What is faired is the pass's displacement (position minus position on
+//     entry), not the garment: the bump a push leaves is spread over its
+//     neighbours while the garment's own shape (its folds, and the skin
+//     stretch the edge transfer gave it) is kept; fairing positions would
+//     flatten it and add strain. Every move is applied in sub-steps and cut
 //     at the last one that keeps the vertex at or above its target clearance.
 //     Sub-steps are tested on the tangent plane at the closest body point
 //     (first-order signed distance, no query); the end state is verified by
-//     one exact query per vertex, and a vertex found deeper than both its
-//     target and its pre-fairing distance returns to its pushed position.
+//     one exact query per vertex that moved by more than its margin over
+//     its target (the distance is 1-Lipschitz, so the others cannot have
+//     crossed it), and a vertex found deeper than both its target and its
+//     pre-fairing distance returns to its pushed position.
 //  4. Layers: garments are resolved in z_depth order (inner first); each
 //     resolved layer leaves a clearance floor on the body vertices under it
 //     and outer layers keep at least that floor plus `layer_gap`.

@@ -22,6 +22,7 @@
 #include "systems/body_set.h"
 #include "systems/collision_pass.h"
 #include "systems/detail_template.h"
+#include "systems/edge_transfer.h"
 #include "systems/mannequin.h"
 #include "systems/mannequin_source.h"
 #include "systems/measure.h"
@@ -109,6 +110,11 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   if (!clearance_enc) throw Error(clearance_enc.status());
   auto g_adj = adjacency_from_edges(g0.size(), g_edges);
   if (!g_adj) throw Error(g_adj.status());
+  // Each decoded garment then takes on the local stretch of the skin under
+  // it (systems/edge_transfer.h) before the pass.
+  auto transfer = encode_edge_transfer(g0, g_edges, ref_coll, {}, ctx);
+  if (!transfer) throw Error(transfer.status());
+  const std::span<const Triangle> body_tris = (*coll_topo)->triangles();
   const auto t_enc = std::chrono::steady_clock::now();
   auto enc = encode_detail(poly, skin_positions(*ref), g0, {}, ctx);
   if (!enc) throw Error(enc.status());
@@ -184,6 +190,10 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       }
       std::vector<Vec3d> g(nv);
       for (std::size_t v = 0; v < nv; ++v) g[v] = decoded[b * nv + v].cast<double>();
+      if (Status s = apply_edge_transfer(*transfer, body, body_tris, g, inner); !s) {
+        errors[b] = s.message();
+        return;
+      }
       // Collision pass: out of the body, back to the encoded clearance.
       CollisionBody cb;
       if (Status s = cb.build(*coll_topo, body, {.roi = g_box}, inner); !s) {
@@ -387,6 +397,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     if (!decode_detail_batch(*enc, poly, one, 0, 1, shorts, ctx)) continue;
     std::vector<Vec3d> shorts_d(nv);
     for (std::size_t v = 0; v < nv; ++v) shorts_d[v] = shorts[v].cast<double>();
+    if (!apply_edge_transfer(*transfer, body, body_tris, shorts_d, ctx)) continue;
     CollisionBody cb;
     if (!cb.build(*coll_topo, body, {.roi = g_box}, ctx)) continue;
     if (!resolve_collisions(shorts_d, *g_adj, *clearance_enc, cb, {}, ctx)) continue;

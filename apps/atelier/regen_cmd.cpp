@@ -18,6 +18,7 @@
 #include "io/obj.h"
 #include "systems/collision_pass.h"
 #include "systems/detail_template.h"
+#include "systems/edge_transfer.h"
 #include "systems/makehuman_body.h"
 #include "systems/mannequin.h"
 #include "systems/project_templates.h"
@@ -132,6 +133,7 @@ struct DetailJob {
   std::vector<double> rest;  // edge lengths on the reference body
   NodeAdjacency adjacency;
   ClearanceEncoding clearance;
+  EdgeTransfer transfer;  // the skin's local stretch, applied after decoding
 };
 
 }  // namespace
@@ -335,6 +337,10 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
       auto clear = encode_clearance(d.mesh.positions, cb, ctx);
       if (!clear) throw Error(Status(clear.status().code(), mesh_file.string() + ": " + clear.status().message()));
       d.clearance = std::move(*clear);
+      auto transfer = encode_edge_transfer(d.mesh.positions, d.edges, cb, {}, ctx);
+      if (!transfer)
+        throw Error(Status(transfer.status().code(), mesh_file.string() + ": " + transfer.status().message()));
+      d.transfer = std::move(*transfer);
       job.details.push_back(std::move(d));
     }
   }
@@ -352,13 +358,15 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   return job;
 }
 
-/// A detail template on one body: decode (seed 001 eqs. 11-12), then the
+/// A detail template on one body: decode (seed 001 eqs. 11-12), the edge
+/// transfer (the skin's local stretch, systems/edge_transfer.h), then the
 /// collision pass back to the clearance it had on the reference body.
 /// Returns the garment positions and fills the quality record.
 std::vector<Vec3d> regen_detail(const RegenJob& job, const DetailJob& d, std::span<const Vec3d> body,
                                 nlohmann::json& quality, const ExecContext& ctx) {
   std::vector<Vec3d> g(d.mesh.positions.size());
   if (Status s = decode_detail(d.enc, job.poly, body, g, ctx); !s) throw Error(s);
+  if (Status s = apply_edge_transfer(d.transfer, body, job.collide->triangles(), g, ctx); !s) throw Error(s);
   CollisionBody cb;
   if (Status s = cb.build(job.collide, body, {}, ctx); !s) throw Error(s);
   const CollisionParams cp;

@@ -30,6 +30,7 @@
 #include "systems/body_bvh.h"
 #include "systems/collision_pass.h"
 #include "systems/detail_template.h"
+#include "systems/edge_transfer.h"
 #include "systems/makehuman_body.h"
 
 using namespace atelier;
@@ -63,6 +64,7 @@ struct Garment {
   DetailEncoding enc;
   NodeAdjacency adj;
   ClearanceEncoding clear;
+  EdgeTransfer transfer;
   double source_floor_rms = 0;  // RMS of (max(source clearance, min_clearance) - source clearance)
   // Per edge: the body triangle under its midpoint on the source body, and
   // the edge vector in that triangle's (edge 1, edge 2, unit normal) basis.
@@ -73,7 +75,8 @@ struct Garment {
 struct Stats {  // accumulated over bodies
   std::vector<double> mean_dist, max_dist, inside_ours, inside_peer, inside1_ours, inside1_peer, depth_ours, depth_peer,
       clear_rms_ours, clear_rms_peer, strain_ours, strain_peer;
-  std::vector<double> inside1_raw, depth_raw, clear_rms_raw, excess_ours, excess_peer, excess_raw, pushed, pass_ms;
+  std::vector<double> inside1_raw, depth_raw, clear_rms_raw, excess_ours, excess_peer, excess_raw, excess_transfer,
+      pushed, pass_ms;
 };
 
 // Columns: the triangle's two edges from corner 0 and its unit normal.
@@ -154,6 +157,9 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
       auto clear = encode_clearance(g.source, cb0);
       ASSERT_TRUE(clear) << g.name;
       g.clear = std::move(*clear);
+      auto xfer = encode_edge_transfer(g.source, g.edges, cb0);
+      ASSERT_TRUE(xfer) << g.name << ": " << xfer.status().to_string();
+      g.transfer = std::move(*xfer);
       for (const float c : g.clear.clearance) {
         const double lift = std::max(0.0, CollisionParams{}.min_clearance - c);
         g.source_floor_rms += lift * lift;
@@ -199,7 +205,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
   std::vector<Stats> stats(garments.size());
   std::vector<std::string> errors(params.size());
   struct PerBody {
-    std::vector<std::array<double, 20>> g;  // per garment metrics
+    std::vector<std::array<double, 21>> g;  // per garment metrics
     std::vector<std::array<double, 2>> h;   // per helper (mean, max)
   };
   std::vector<PerBody> per(params.size());
@@ -223,6 +229,11 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
       compute_frames(poly, skin, fr, seq, g.enc.reference_corners);
       decode_detail(g.enc, fr, ours, seq);
       const std::vector<Vec3d> raw = ours;
+      if (Status s = apply_edge_transfer(g.transfer, skin, T, ours, seq); !s) {
+        errors[b] = s.to_string();
+        return;
+      }
+      const std::vector<Vec3d> xfd = ours;
       // The collision pass, with its per-body set-up (grid over the decoded
       // garment's box only).
       const auto t0 = std::chrono::steady_clock::now();
@@ -252,7 +263,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
         cr += (sd_r[v] - g.source_sd[v]) * (sd_r[v] - g.source_sd[v]);
       }
       // Excess strain: garment strain minus the strain of the body under it.
-      std::vector<double> xo, xp, xr;
+      std::vector<double> xo, xp, xr, xt;
       for (std::size_t k = 0; k < g.edges.size(); ++k) {
         const auto& e = g.edges[k];
         const double l0 = (g.source[e[0]] - g.source[e[1]]).norm();
@@ -261,8 +272,9 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
         xo.push_back(std::abs((ours[e[0]] - ours[e[1]]).norm() / l0 - 1 - sb));
         xp.push_back(std::abs((peer[e[0]] - peer[e[1]]).norm() / l0 - 1 - sb));
         xr.push_back(std::abs((raw[e[0]] - raw[e[1]]).norm() / l0 - 1 - sb));
+        xt.push_back(std::abs((xfd[e[0]] - xfd[e[1]]).norm() / l0 - 1 - sb));
       }
-      std::array<double, 20> m{};
+      std::array<double, 21> m{};
       double dsum = 0, dmax = 0, co = 0, cp = 0;
       std::size_t io = 0, ip = 0, io1 = 0, ip1 = 0;
       double depo = 0, depp = 0;
@@ -306,7 +318,8 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
            p95(xp),
            p95(xr),
            static_cast<double>(pass->pushed),
-           ms};
+           ms,
+           p95(xt)};
       per[b].g.push_back(m);
     }
     for (const auto& h : helpers) {
@@ -347,6 +360,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
       s.excess_raw.push_back(m[17]);
       s.pushed.push_back(m[18]);
       s.pass_ms.push_back(m[19]);
+      s.excess_transfer.push_back(m[20]);
     }
     for (std::size_t k = 0; k < helpers.size(); ++k) {
       helpers[k].mean_err.push_back(per[b].h[k][0]);
@@ -357,10 +371,11 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
   nlohmann::json rep;
   rep["bodies"] = params.size();
   rep["method"] =
-      "ours: detail template (fitted frames, tapered weights, N_q = 134) + collision pass (systems/collision_pass.h, "
-      "default CollisionParams); raw: the detail template alone; binding: MakeHuman .mhclo";
-  std::printf("\n%-20s | %-20s | %-15s | %-20s | %-20s | %6s %6s\n", "garment (100 bodies)", "in>1mm % us/raw/mh",
-              "depth mm us/mh", "clrRMS mm us/raw/mh", "excess% us/raw/mh", "pushed", "ms");
+      "ours: detail template (fitted frames, tapered weights, N_q = 134) + edge transfer (systems/edge_transfer.h, "
+      "default anchor) + collision pass (systems/collision_pass.h, default CollisionParams); raw: the detail template "
+      "alone; transfer: the detail template and the edge transfer, before the pass; binding: MakeHuman .mhclo";
+  std::printf("\n%-20s | %-20s | %-15s | %-20s | %-27s | %6s %6s\n", "garment (100 bodies)", "in>1mm % us/raw/mh",
+              "depth mm us/mh", "clrRMS mm us/raw/mh", "excess% us/raw/xfer/mh", "pushed", "ms");
   for (std::size_t k = 0; k < garments.size(); ++k) {
     const Stats& s = stats[k];
     rep["garments"][garments[k].name] = {{"vertices", garments[k].source.size()},
@@ -385,16 +400,17 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
                                          {"excess_edge_strain_p95_ours", mean(s.excess_ours)},
                                          {"excess_edge_strain_p95_ours_worst_body", maxv(s.excess_ours)},
                                          {"excess_edge_strain_p95_raw", mean(s.excess_raw)},
+                                         {"excess_edge_strain_p95_transfer", mean(s.excess_transfer)},
                                          {"excess_edge_strain_p95_binding", mean(s.excess_peer)},
                                          {"clearance_change_rms_source_floor_m", garments[k].source_floor_rms},
                                          {"pushed_vertices_mean", mean(s.pushed)},
                                          {"pass_ms_mean_1_thread", mean(s.pass_ms)}};
-    std::printf("%-20s | %5.2f %6.2f %6.2f | %6.2f %7.2f | %6.2f %6.2f %6.2f | %6.2f %6.2f %6.2f | %6.0f %6.2f\n",
+    std::printf("%-20s | %5.2f %6.2f %6.2f | %6.2f %7.2f | %6.2f %6.2f %6.2f | %6.2f %6.2f %6.2f %6.2f | %6.0f %6.2f\n",
                 garments[k].name.c_str(), 100 * mean(s.inside1_ours), 100 * mean(s.inside1_raw),
                 100 * mean(s.inside1_peer), 1000 * maxv(s.depth_ours), 1000 * maxv(s.depth_peer),
                 1000 * mean(s.clear_rms_ours), 1000 * mean(s.clear_rms_raw), 1000 * mean(s.clear_rms_peer),
-                100 * mean(s.excess_ours), 100 * mean(s.excess_raw), 100 * mean(s.excess_peer), mean(s.pushed),
-                mean(s.pass_ms));
+                100 * mean(s.excess_ours), 100 * mean(s.excess_raw), 100 * mean(s.excess_transfer),
+                100 * mean(s.excess_peer), mean(s.pushed), mean(s.pass_ms));
     // Sanity: both methods follow the body; neither drifts centimetres apart on average.
     EXPECT_LT(mean(s.mean_dist), 0.02) << garments[k].name;
     // Issue 7: no vertex more than 1 mm inside on any body; clearance kept
@@ -402,10 +418,15 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     // the pass lifts to min_clearance: clearance_change_rms_source_floor_m).
     EXPECT_EQ(maxv(s.inside1_ours), 0.0) << garments[k].name;
     EXPECT_LE(mean(s.clear_rms_ours), 0.002) << garments[k].name;
-    // The issue asks for an excess strain p95 of at most 5%; measured this
-    // way the decode alone is at 13-15% (and the binding at 11-19%), so what
-    // is checked here is the pass's own share: at most 4 points more.
-    EXPECT_LE(mean(s.excess_ours), mean(s.excess_raw) + 0.04) << garments[k].name;
+    // The issue asks for an excess strain p95 of at most 5%. Measured this
+    // way the decode alone is at 13-15% (and the binding at 11-19%); the
+    // edge transfer brings it to 5.7-6.6% and the pass adds 0.4-2.0 points
+    // (6.3-8.7% in all, session of 2026-11-22). Checked: the transfer at
+    // least halves the decode's excess, the pass adds at most 2.5 points,
+    // and the total stays under 10% (the 5% goal is not met yet).
+    EXPECT_LE(mean(s.excess_transfer), 0.5 * mean(s.excess_raw)) << garments[k].name;
+    EXPECT_LE(mean(s.excess_ours), mean(s.excess_transfer) + 0.025) << garments[k].name;
+    EXPECT_LT(mean(s.excess_ours), 0.10) << garments[k].name;
   }
   for (const auto& h : helpers) {
     rep["helpers"][h.name] = {{"mean_error_m", mean(h.mean_err)},
