@@ -18,7 +18,9 @@
 //     (x its closest body point, n the outward normal there: the distance
 //     gradient, or the pseudo-normal on the surface); repeated a few rounds
 //     where concave parts of the body make one push fall short. Then the
-//     moved region, grown by `fair_rings` rings, is smoothed by umbrella
+//     moved region (grown by `fair_rings` rings; none by default: spreading
+//     a push over unmoved neighbours strains more edges, 0.2-0.7 points of
+//     excess strain p95 on MakeHuman garments) is smoothed by umbrella
 //     fairing (seed 000 section 4.2, Kobbelt's U2 Jacobi iteration, half
 //     steps, along the body normal only) with all other vertices fixed.
 //     What is faired is the pass's displacement (position minus position on
@@ -185,7 +187,7 @@ struct CollisionParams {
   /// does not chase rounding).
   double tolerance = 0.001;
   int push_rounds = 3;       // push, re-query, push again where concavities make it fall short
-  int fair_rings = 2;        // rings of unmoved neighbours freed around the moved region
+  int fair_rings = 0;        // rings of unmoved neighbours freed around the moved region (0: the moved region alone)
   int fair_iterations = 10;  // umbrella iterations (0: no smoothing)
   int substeps = 4;          // sub-steps of a fairing move (tested on the tangent plane)
   double layer_gap = 0.001;  // resolve_layers: outer layer at least this far outside the inner one

@@ -23,7 +23,17 @@
 //
 // The normal equations (D^T W D + A) x = D^T W T + A d have the same matrix
 // on every body: it is factored once (sparse LDL^T) at encoding and each
-// body costs one right-hand side and three triangular solve pairs.
+// body costs one right-hand side and one pair of triangular solves (the
+// three coordinates together).
+//
+// Vector targets over-constrain the garment (three equations per edge,
+// about two edges per vertex, and the targets of neighbouring edges come
+// from different skin triangles), so what is matched next is only each
+// edge's length: local-global iterations (as in as-rigid-as-possible
+// solvers) turn every target to its edge's current direction and relax the
+// same energy again, by Gauss-Seidel sweeps warm-started from the solve.
+// On the MakeHuman garments this takes the excess strain p95 from 5.5-6.4%
+// (vector targets) to 2.2-2.9%.
 //
 // On the source body T_e is the source edge and d the source garment, so
 // the source comes back exactly; under a rigid motion of the body (and the
@@ -50,7 +60,14 @@ namespace atelier {
 
 struct EdgeTransferParams {
   /// Weight of the decoded positions against the edge targets (see above).
-  double anchor = 0.05;
+  double anchor = 0.02;
+  /// Length iterations after the first solve (see apply_edge_transfer).
+  int length_iterations = 30;
+  /// Gauss-Seidel sweeps per length iteration, warm-started from the last
+  /// solution; 0: an exact solve each time (about 5x the cost per
+  /// iteration for the same gain per iteration, measured on MakeHuman
+  /// garments).
+  int length_sweeps = 1;
 };
 
 class EdgeTransferSolver;  // the factored normal matrix (shared, immutable)
@@ -63,6 +80,10 @@ struct EdgeTransfer {
   std::vector<double> weight;           // per edge: w_e (0: zero-length or degenerate, no target)
   std::vector<double> anchor;           // per vertex: a_v
   std::shared_ptr<const EdgeTransferSolver> solver;
+  int length_iterations = 0;
+  int length_sweeps = 0;
+  std::vector<std::uint32_t> vertex_edge_offset, vertex_edge;  // vertex -> incident edges (CSR)
+  std::vector<double> inv_diagonal;                            // per vertex: 1 / (a_v + sum of w_e)
 };
 
 /// Encodes a garment (`source`, its `edges`) on its source body (`body`,
