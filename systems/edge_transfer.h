@@ -64,9 +64,9 @@ struct EdgeTransferParams {
   /// Length iterations after the first solve (see apply_edge_transfer).
   int length_iterations = 30;
   /// Gauss-Seidel sweeps per length iteration, warm-started from the last
-  /// solution; 0: an exact solve each time (about 5x the cost per
-  /// iteration for the same gain per iteration, measured on MakeHuman
-  /// garments).
+  /// solution; 0: an exact solve each time (a solve costs about six sweeps;
+  /// on the MakeHuman garments 10 exact iterations reach 2.5-3.0% excess
+  /// strain p95 where 30 single sweeps reach 2.2-2.9% for half the time).
   int length_sweeps = 1;
 };
 

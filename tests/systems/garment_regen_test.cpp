@@ -205,8 +205,9 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
   std::vector<Stats> stats(garments.size());
   std::vector<std::string> errors(params.size());
   struct PerBody {
-    std::vector<std::array<double, 21>> g;  // per garment metrics
-    std::vector<std::array<double, 2>> h;   // per helper (mean, max)
+    std::vector<std::array<double, 21>> g;   // per garment metrics
+    std::vector<std::vector<float>> excess;  // per garment: ours, every edge
+    std::vector<std::array<double, 2>> h;    // per helper (mean, max)
   };
   std::vector<PerBody> per(params.size());
   ExecContext ctx;
@@ -321,6 +322,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
            ms,
            p95(xt)};
       per[b].g.push_back(m);
+      per[b].excess.emplace_back(xo.begin(), xo.end());
     }
     for (const auto& h : helpers) {
       std::vector<Vec3d> out(h.verts.size());
@@ -368,6 +370,14 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     }
   }
 
+  // Excess strain p95 over the edges of all bodies pooled (the figures
+  // above are per-body p95s, averaged).
+  std::vector<double> pooled_p95(garments.size());
+  for (std::size_t k = 0; k < garments.size(); ++k) {
+    std::vector<double> all;
+    for (const auto& pb : per) all.insert(all.end(), pb.excess[k].begin(), pb.excess[k].end());
+    pooled_p95[k] = p95(std::move(all));
+  }
   nlohmann::json rep;
   rep["bodies"] = params.size();
   rep["method"] =
@@ -400,6 +410,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
                                          {"edge_strain_p95_binding", mean(s.strain_peer)},
                                          {"excess_edge_strain_p95_ours", mean(s.excess_ours)},
                                          {"excess_edge_strain_p95_ours_worst_body", maxv(s.excess_ours)},
+                                         {"excess_edge_strain_p95_ours_all_bodies_pooled", pooled_p95[k]},
                                          {"excess_edge_strain_p95_raw", mean(s.excess_raw)},
                                          {"excess_edge_strain_p95_transfer", mean(s.excess_transfer)},
                                          {"excess_edge_strain_p95_binding", mean(s.excess_peer)},
@@ -422,9 +433,11 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     // Issue 7: excess edge strain p95 at most 5%. The decode alone is at
     // 13-15% (the binding at 11-19%); the edge transfer brings it to
     // 2.2-2.9% and the pass adds 1.1-2.4 points (3.6-4.8% in all, session
-    // of 2026-11-22).
+    // of 2026-11-22; 3.7-4.9% over the edges of all bodies pooled; the
+    // worst single body is at 5.9-7.7%).
     EXPECT_LE(mean(s.excess_transfer), 0.5 * mean(s.excess_raw)) << garments[k].name;
     EXPECT_LE(mean(s.excess_ours), 0.05) << garments[k].name;
+    EXPECT_LE(pooled_p95[k], 0.05) << garments[k].name;  // 3.7-4.9%
   }
   for (const auto& h : helpers) {
     rep["helpers"][h.name] = {{"mean_error_m", mean(h.mean_err)},
