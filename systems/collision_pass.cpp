@@ -251,7 +251,11 @@ Vec3d CollisionBody::face_normal(std::uint32_t t) const noexcept {
 
 BodyDistance CollisionBody::query_triangle(const Vec3d& p, std::uint32_t t) const noexcept {
   const Triangle& tr = topo_->triangles_[t];
-  const TrianglePoint r = closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]);
+  return signed_distance(p, t, closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]));
+}
+
+BodyDistance CollisionBody::signed_distance(const Vec3d& p, std::uint32_t t, const TrianglePoint& r) const noexcept {
+  const Triangle& tr = topo_->triangles_[t];
   // Angle-weighted pseudo-normal of the closest feature (Baerentzen & Aanaes
   // 2005): the face normal, the sum of the two unit face normals of an edge,
   // or the incident unit face normals weighted by their angles at a vertex.
@@ -304,12 +308,14 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
   const auto& tris = topo_->triangles_;
   double best2 = kInf;
   std::uint32_t best_t = kNoTriangle;
+  TrianglePoint best_r;
   if (hint < tris.size()) {
     // On a body of the same topology the hint's distance bounds the answer.
     // (A greedy walk from the hint to nearer neighbours tightened the bound
     // but cost more than it pruned: 12% slower queries on MakeHuman bodies.)
     const Triangle& tr = tris[hint];
-    best2 = (p - closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]).point).squaredNorm();
+    best_r = closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]);
+    best2 = (p - best_r.point).squaredNorm();
     best_t = hint;
   }
   // Branch and bound over the wide hierarchy, nearer lanes first. Boxes
@@ -353,10 +359,12 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
         const std::uint32_t t = leaf_tri[i];
         if (t == best_t || static_cast<double>(d2[i - it.ref]) * (1.0 - 1e-6) > best2) continue;
         const auto& c = corners_[i];
-        const double d2 = (p - closest_point_on_triangle(p, c[0], c[1], c[2]).point).squaredNorm();
+        const TrianglePoint r = closest_point_on_triangle(p, c[0], c[1], c[2]);
+        const double d2 = (p - r.point).squaredNorm();
         if (d2 < best2 || (d2 == best2 && t < best_t)) {
           best2 = d2;
           best_t = t;
+          best_r = r;
         }
       }
       continue;
@@ -382,7 +390,9 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
       stack[k] = {nd.child[l], nd.count[l], dl};
     }
   }
-  return query_triangle(p, best_t);
+  // The closest point as the leaf test found it (corners in leaf order are
+  // the triangle's corners in its own order: the same computation).
+  return signed_distance(p, best_t, best_r);
 }
 
 // ------------------------------------------------------------ encoding

@@ -150,6 +150,8 @@ class CollisionBody {
 
  private:
   [[nodiscard]] Vec3d face_normal(std::uint32_t t) const noexcept;  // area-weighted (unnormalised)
+  /// Sign and outward direction of p's closest point r on triangle t.
+  [[nodiscard]] BodyDistance signed_distance(const Vec3d& p, std::uint32_t t, const TrianglePoint& r) const noexcept;
 
   std::shared_ptr<const CollisionTopology> topo_;
   std::span<const Vec3d> pos_;
