@@ -61,6 +61,8 @@ Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
   if (body.empty()) return Status(ErrorCode::kInvalidArgument, "edge transfer: source body not built");
   if (!(params.anchor > 0) || !std::isfinite(params.anchor))
     return Status(ErrorCode::kInvalidArgument, "edge transfer: anchor must be positive");
+  if (params.length_iterations < 0 || params.length_sweeps < 0)
+    return Status(ErrorCode::kInvalidArgument, "edge transfer: length iterations and sweeps must not be negative");
   for (std::size_t v = 0; v < n; ++v)
     if (!is_finite(source[v]))
       return Status(ErrorCode::kDegenerate, "edge transfer: garment vertex " + std::to_string(v) + " is not finite");
@@ -198,11 +200,10 @@ Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_po
   solve();
   // Length iterations (local-global, as in as-rigid-as-possible solvers):
   // only an edge's length is prescribed, its direction is free, so each
-  // target is turned to the edge's current direction and the same matrix
-  // is solved again. Vector targets over-constrain the garment (three
-  // equations per edge, about two edges per vertex); lengths do not.
-  // The lengths, once: the targets' lengths never change, only their
-  // directions.
+  // target is turned to the edge's current direction and the same energy is
+  // relaxed again. Vector targets over-constrain the garment (three
+  // equations per edge, about two edges per vertex); lengths do not. The
+  // targets' lengths never change.
   std::vector<double> length(t.edges.size());
   for (std::size_t e = 0; e < t.edges.size(); ++e) length[e] = target[e].norm();
   for (int it = 0; it < t.length_iterations; ++it) {

@@ -160,6 +160,8 @@ TEST(EdgeTransfer, BadInputsGiveClearErrors) {
   EXPECT_NE(msg(encode_edge_transfer(nan, s->tube.e, s->cb).status()).find("vertex 17"), std::string::npos);
   EXPECT_NE(msg(encode_edge_transfer(s->tube.p, s->tube.e, s->cb, {.anchor = 0}).status()).find("anchor"),
             std::string::npos);
+  EXPECT_NE(msg(encode_edge_transfer(s->tube.p, s->tube.e, s->cb, {.length_iterations = -1}).status()).find("negative"),
+            std::string::npos);
   std::vector<Vec3d> g(s->tube.p.size() - 1);
   EXPECT_NE(msg(apply_edge_transfer(s->transfer, s->body.p, s->body.t, g)).find("garment vertices"), std::string::npos);
   EXPECT_NE(msg(apply_edge_transfer(s->transfer, s->body.p, std::span(s->body.t).first(10), nan)).find("triangles"),
