@@ -16,6 +16,22 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// Squared distances from a point (pc: its coordinates broadcast, in float)
+// to four boxes (lo, hi: per axis, four lanes each), made conservative:
+// every gap shrunk by `slack` (a bound on the rounding of the point to
+// float and of one subtraction; the boxes are already rounded outward).
+inline void box_distances_x4(const __m128 pc[3], const float* const lo[3], const float* const hi[3], __m128 slack,
+                             float out[4]) noexcept {
+  const __m128 zero = _mm_setzero_ps();
+  __m128 s = zero;
+  for (int a = 0; a < 3; ++a) {
+    const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(lo[a]), pc[a]), _mm_sub_ps(pc[a], _mm_loadu_ps(hi[a])));
+    const __m128 g = _mm_max_ps(_mm_sub_ps(gap, slack), zero);
+    s = _mm_add_ps(s, _mm_mul_ps(g, g));
+  }
+  _mm_storeu_ps(out, s);
+}
+
 std::string vec_str(const Vec3d& p) {
   std::ostringstream s;
   s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
@@ -87,9 +103,14 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
     centre[t] = (pos[triangles_[t][0]] + pos[triangles_[t][1]] + pos[triangles_[t][2]]) / 3.0;
   leaf_tri_.resize(nt);
   std::iota(leaf_tri_.begin(), leaf_tri_.end(), 0u);
-  tree_.clear();
-  tree_.reserve(2 * nt / 2 + 2);
-  tree_.push_back({});
+  // The binary hierarchy, kept only until it is collapsed to wide nodes.
+  struct TreeNode {
+    std::uint32_t first = 0;  // inner: children first, first + 1; leaf: first leaf slot
+    std::uint32_t count = 0;  // 0: inner node; else the leaf's triangle count
+  };
+  std::vector<TreeNode> tree;
+  tree.reserve(nt + 2);
+  tree.push_back({});
   // Median split of the centroids on the longest axis, down to leaves of at
   // most 4 triangles; children are appended as a pair after their parent.
   struct Task {
@@ -100,7 +121,7 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
     const Task k = open_tasks.back();
     open_tasks.pop_back();
     if (k.hi - k.lo <= 4) {
-      tree_[k.node] = {k.lo, k.hi - k.lo};
+      tree[k.node] = {k.lo, k.hi - k.lo};
       continue;
     }
     Box3d b;
@@ -112,10 +133,10 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
                      [&](std::uint32_t x, std::uint32_t y) {
                        return centre[x][axis] < centre[y][axis] || (centre[x][axis] == centre[y][axis] && x < y);
                      });
-    const auto child = static_cast<std::uint32_t>(tree_.size());
-    tree_[k.node] = {child, 0};
-    tree_.push_back({});
-    tree_.push_back({});
+    const auto child = static_cast<std::uint32_t>(tree.size());
+    tree[k.node] = {child, 0};
+    tree.push_back({});
+    tree.push_back({});
     open_tasks.push_back({child + 1, mid, k.hi});
     open_tasks.push_back({child, k.lo, mid});
   }
@@ -127,27 +148,25 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
     const auto w = static_cast<std::uint32_t>(wide_.size());
     wide_.push_back({});
     std::uint32_t lanes[4], nl = 0;
-    if (tree_[b].count > 0) {
+    if (tree[b].count > 0) {
       lanes[nl++] = b;
     } else {
-      for (std::uint32_t c : {tree_[b].first, tree_[b].first + 1}) {
-        if (tree_[c].count > 0) {
+      for (std::uint32_t c : {tree[b].first, tree[b].first + 1}) {
+        if (tree[c].count > 0) {
           lanes[nl++] = c;
         } else {
-          lanes[nl++] = tree_[c].first;
-          lanes[nl++] = tree_[c].first + 1;
+          lanes[nl++] = tree[c].first;
+          lanes[nl++] = tree[c].first + 1;
         }
       }
     }
     for (std::uint32_t l = 0; l < 4; ++l) {
       if (l >= nl) {
-        wide_[w].child[l] = 0;
-        wide_[w].source[l] = kNoTriangle;
+        wide_[w].child[l] = kEmptyLane;
         wide_[w].count[l] = 0;
         continue;
       }
-      const TreeNode nd = tree_[lanes[l]];
-      wide_[w].source[l] = lanes[l];
+      const TreeNode nd = tree[lanes[l]];
       wide_[w].count[l] = static_cast<std::uint8_t>(nd.count);
       wide_[w].child[l] = nd.count > 0 ? nd.first : self(self, lanes[l]);
     }
@@ -175,17 +194,16 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   pos_ = positions;
   topo_ = std::move(topology);
   const std::size_t nt = tp.triangles_.size();
-  const auto& tree = tp.tree_;
   // Corners in leaf order (the traversal reads them contiguously).
   corners_.resize(nt);
   par::for_each_n(ctx, nt, [&](std::size_t i) {
     const Triangle& t = tp.triangles_[tp.leaf_tri_[i]];
     corners_[i] = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
   });
-  // Refit: leaves from their triangles' boxes (rounded outward to float, so
-  // a box never excludes its triangle), then inner nodes in a reverse sweep
-  // (children follow their parents).
-  box_.resize(tree.size());
+  // Refit, in float rounded outward so that a box never excludes its
+  // triangle: the triangles' boxes, then the wide nodes in a reverse sweep
+  // (children follow their parents): a leaf lane is the union of its
+  // triangles' boxes, an inner lane the union of its child's lanes.
   // At least one float ulp outward whichever way the conversion rounded
   // (|f| 2^-23 >= ulp(f); the float minimum covers zero), without a branch.
   auto down = [](double x) {
@@ -206,41 +224,37 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
       tri_box_[(3 + a) * tri_box_stride_ + i] = up(hi[a]);
     }
   });
-  par::for_each_n(ctx, tree.size(), [&](std::size_t n) {
-    const CollisionTopology::TreeNode& nd = tree[n];
-    if (nd.count == 0) return;
-    for (int a = 0; a < 3; ++a) {
-      const float* lo = &tri_box_[a * tri_box_stride_ + nd.first];
-      const float* hi = &tri_box_[(3 + a) * tri_box_stride_ + nd.first];
-      box_[n].lo[a] = *std::min_element(lo, lo + nd.count);
-      box_[n].hi[a] = *std::max_element(hi, hi + nd.count);
-    }
-  });
-  for (std::size_t n = tree.size(); n-- > 0;) {
-    const CollisionTopology::TreeNode& nd = tree[n];
-    if (nd.count != 0) continue;
-    const NodeBox &l = box_[nd.first], &r = box_[nd.first + 1];
-    for (int a = 0; a < 3; ++a) {
-      box_[n].lo[a] = std::min(l.lo[a], r.lo[a]);
-      box_[n].hi[a] = std::max(l.hi[a], r.hi[a]);
-    }
-  }
   const auto& wide = tp.wide_;
   wide_box_.resize(wide.size());
   constexpr float kFInf = std::numeric_limits<float>::infinity();
-  par::for_each_n(ctx, wide.size(), [&](std::size_t w) {
+  for (std::size_t w = wide.size(); w-- > 0;) {
     for (int l = 0; l < 4; ++l) {
-      const std::uint32_t b = wide[w].source[l];
+      const std::uint32_t child = wide[w].child[l];
+      const std::uint32_t count = wide[w].count[l];
       for (int a = 0; a < 3; ++a) {
-        wide_box_[w].lo[a][l] = b == kNoTriangle ? kFInf : box_[b].lo[a];
-        wide_box_[w].hi[a][l] = b == kNoTriangle ? -kFInf : box_[b].hi[a];
+        float lo = kFInf, hi = -kFInf;  // an empty lane stays an inverted infinite box
+        if (child != CollisionTopology::kEmptyLane && count > 0) {
+          const float* tl = &tri_box_[a * tri_box_stride_ + child];
+          const float* th = &tri_box_[(3 + a) * tri_box_stride_ + child];
+          lo = *std::min_element(tl, tl + count);
+          hi = *std::max_element(th, th + count);
+        } else if (child != CollisionTopology::kEmptyLane) {
+          const WideBox& cb = wide_box_[child];
+          lo = *std::min_element(cb.lo[a], cb.lo[a] + 4);
+          hi = *std::max_element(cb.hi[a], cb.hi[a] + 4);
+        }
+        wide_box_[w].lo[a][l] = lo;
+        wide_box_[w].hi[a][l] = hi;
       }
     }
-  });
-  const NodeBox& root = box_[0];
+  }
   extent_ = 0;
-  for (int a = 0; a < 3; ++a)
-    extent_ = std::max({extent_, std::abs(static_cast<double>(root.lo[a])), std::abs(static_cast<double>(root.hi[a]))});
+  const WideBox& root = wide_box_[0];
+  for (int l = 0; l < 4; ++l)
+    if (wide[0].child[l] != CollisionTopology::kEmptyLane)
+      for (int a = 0; a < 3; ++a)
+        extent_ = std::max(
+            {extent_, std::abs(static_cast<double>(root.lo[a][l])), std::abs(static_cast<double>(root.hi[a][l]))});
   return Status::ok();
 }
 
@@ -330,7 +344,6 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
   const auto& leaf_tri = topo_->leaf_tri_;
   const double scale = extent_ + std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])});
   const __m128 slack = _mm_set1_ps(static_cast<float>(std::ldexp(scale, -21)));
-  const __m128 zero = _mm_setzero_ps();
   const __m128 pc[3] = {_mm_set1_ps(static_cast<float>(p[0])), _mm_set1_ps(static_cast<float>(p[1])),
                         _mm_set1_ps(static_cast<float>(p[2]))};
   struct Item {
@@ -346,15 +359,12 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     if (it.d2 > best2) continue;
     if (it.count > 0) {
       // The leaf's triangles' own boxes first, four at once, the same way.
-      __m128 s = zero;
-      for (int a = 0; a < 3; ++a) {
-        const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(&tri_box_[a * tri_box_stride_ + it.ref]), pc[a]),
-                                      _mm_sub_ps(pc[a], _mm_loadu_ps(&tri_box_[(3 + a) * tri_box_stride_ + it.ref])));
-        const __m128 g = _mm_max_ps(_mm_sub_ps(gap, slack), zero);
-        s = _mm_add_ps(s, _mm_mul_ps(g, g));
-      }
-      alignas(16) float d2[4];
-      _mm_store_ps(d2, s);
+      const float* tb = &tri_box_[it.ref];
+      const std::size_t stride = tri_box_stride_;
+      const float* const lo[3] = {tb, tb + stride, tb + 2 * stride};
+      const float* const hi[3] = {tb + 3 * stride, tb + 4 * stride, tb + 5 * stride};
+      float d2[4];
+      box_distances_x4(pc, lo, hi, slack, d2);
       for (std::uint32_t i = it.ref; i < it.ref + it.count; ++i) {
         const std::uint32_t t = leaf_tri[i];
         if (t == best_t || static_cast<double>(d2[i - it.ref]) * (1.0 - 1e-6) > best2) continue;
@@ -371,20 +381,16 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     }
     const CollisionTopology::WideNode& nd = wide[it.ref];
     const WideBox& bx = wide_box_[it.ref];
-    __m128 s = zero;
-    for (int a = 0; a < 3; ++a) {
-      const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_load_ps(bx.lo[a]), pc[a]), _mm_sub_ps(pc[a], _mm_load_ps(bx.hi[a])));
-      const __m128 g = _mm_max_ps(_mm_sub_ps(gap, slack), zero);
-      s = _mm_add_ps(s, _mm_mul_ps(g, g));
-    }
-    alignas(16) float d2[4];
-    _mm_store_ps(d2, s);
+    const float* const lo[3] = {bx.lo[0], bx.lo[1], bx.lo[2]};
+    const float* const hi[3] = {bx.hi[0], bx.hi[1], bx.hi[2]};
+    float d2[4];
+    box_distances_x4(pc, lo, hi, slack, d2);
     // Lanes within the bound, sorted far to near (pushed in that order, so
     // the nearest is popped first).
     const int base = top;
     for (int l = 0; l < 4; ++l) {
       const double dl = static_cast<double>(d2[l]) * (1.0 - 1e-6);
-      if (!(dl <= best2) || nd.source[l] == kNoTriangle) continue;
+      if (!(dl <= best2) || nd.child[l] == CollisionTopology::kEmptyLane) continue;
       int k = top++;
       for (; k > base && stack[k - 1].d2 < dl; --k) stack[k] = stack[k - 1];
       stack[k] = {nd.child[l], nd.count[l], dl};

@@ -75,14 +75,6 @@ class CollisionTopology {
   [[nodiscard]] std::span<const Triangle> triangles() const noexcept { return triangles_; }
   [[nodiscard]] std::uint32_t point_count() const noexcept { return point_count_; }
 
-  /// Hierarchy node: an inner node's children are nodes `first` and
-  /// `first + 1`; a leaf holds triangles leaf_tri_[first, first + count).
-  /// Children always follow their parent, so a reverse sweep refits.
-  struct TreeNode {
-    std::uint32_t first = 0;
-    std::uint32_t count = 0;  // 0: inner node
-  };
-
  private:
   friend class CollisionBody;
   void build_tree(std::span<const Vec3d> positions) const;  // once, from the first body
@@ -94,15 +86,15 @@ class CollisionTopology {
   // Hierarchy layout, made by the first CollisionBody::build (call_once):
   // the results of queries never depend on it, only their cost.
   mutable std::once_flag tree_once_;
-  mutable std::vector<TreeNode> tree_;
   mutable std::vector<std::uint32_t> leaf_tri_;  // triangles in leaf order
   // The same hierarchy with every other level removed: each wide node holds
   // up to four lanes (binary grandchildren), whose boxes a query tests at
-  // once. Half the depth, a quarter of the dependent loads.
+  // once. Half the depth, a quarter of the dependent loads. Children always
+  // follow their parent, so a reverse sweep refits.
+  static constexpr std::uint32_t kEmptyLane = std::numeric_limits<std::uint32_t>::max();
   struct WideNode {
-    std::uint32_t child[4];   // inner lane: wide node; leaf lane: first leaf slot
-    std::uint32_t source[4];  // binary node whose box the lane holds (kNoTriangle: empty lane)
-    std::uint8_t count[4];    // 0: inner lane; else the leaf's triangle count
+    std::uint32_t child[4];  // inner lane: wide node; leaf lane: first leaf slot; kEmptyLane
+    std::uint8_t count[4];   // 0: inner lane; else the leaf's triangle count
   };
   mutable std::vector<WideNode> wide_;
 };
@@ -138,7 +130,7 @@ class CollisionBody {
   [[nodiscard]] const CollisionTopology& topology() const noexcept { return *topo_; }
   [[nodiscard]] std::span<const Vec3d> positions() const noexcept { return pos_; }
   /// Nodes of the refit hierarchy (set-up size).
-  [[nodiscard]] std::size_t hierarchy_nodes() const noexcept { return box_.size(); }
+  [[nodiscard]] std::size_t hierarchy_nodes() const noexcept { return wide_box_.size(); }
 
   /// Exact signed distance. `hint`: a triangle believed near (e.g. the
   /// closest one on the source body, or kNoTriangle); it only speeds the
@@ -155,10 +147,6 @@ class CollisionBody {
 
   std::shared_ptr<const CollisionTopology> topo_;
   std::span<const Vec3d> pos_;
-  struct NodeBox {
-    float lo[3], hi[3];
-  };
-  std::vector<NodeBox> box_;  // per hierarchy node
   struct alignas(16) WideBox {
     float lo[3][4], hi[3][4];  // [axis][lane]; empty lanes are inverted infinite boxes
   };

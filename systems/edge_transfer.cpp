@@ -6,6 +6,7 @@
 #include <string>
 
 #include "engine/parallel.h"
+#include "systems/mesh_normals.h"
 
 namespace atelier {
 
@@ -37,20 +38,6 @@ class EdgeTransferSolver {
     for (std::size_t i = 0; i < n; ++i) x[i] = y[perm[i]];
   }
 };
-
-namespace {
-
-// Columns: the triangle's two edges from corner 0 and its unit normal.
-bool triangle_basis(std::span<const Vec3d> p, const Triangle& t, Mat3d& m) {
-  const Vec3d e1 = p[t[1]] - p[t[0]], e2 = p[t[2]] - p[t[0]];
-  const Vec3d n = e1.cross(e2);
-  const double l = n.norm();
-  if (!(l > 0)) return false;
-  m << e1, e2, n / l;
-  return true;
-}
-
-}  // namespace
 
 Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
                                             std::span<const std::array<std::uint32_t, 2>> edges,
@@ -88,9 +75,9 @@ Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
     const double l2 = (b - a).squaredNorm();
     if (!(l2 > 0)) return;
     const std::uint32_t tri = body.query(0.5 * (a + b)).triangle;
-    Mat3d m;
-    if (tri == kNoTriangle || !triangle_basis(pos, tris[tri], m)) return;
-    const Eigen::FullPivLU<Mat3d> lu(m);
+    if (tri == kNoTriangle) return;
+    const Mat3d m = triangle_basis(pos, tris[tri]);
+    const Eigen::FullPivLU<Mat3d> lu(m);  // a zero-area triangle (zero normal) is not invertible
     if (!lu.isInvertible()) return;
     t.triangle[e] = tri;
     t.coefficient[e] = lu.solve(b - a);
@@ -179,12 +166,11 @@ Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_po
   std::vector<Vec3d> target(t.edges.size(), Vec3d::Zero());
   par::for_each_n(ctx, t.edges.size(), [&](std::size_t e) {
     if (t.weight[e] == 0) return;
-    Mat3d m;
-    // A triangle collapsed on this body gives no stretch: the edge keeps
-    // its decoded vector.
-    target[e] = triangle_basis(body_points, body_triangles[t.triangle[e]], m)
-                    ? Vec3d(m * t.coefficient[e])
-                    : Vec3d(garment[t.edges[e][1]] - garment[t.edges[e][0]]);
+    const Mat3d m = triangle_basis(body_points, body_triangles[t.triangle[e]]);
+    // A triangle collapsed on this body (zero normal) gives no stretch: the
+    // edge keeps its decoded vector.
+    target[e] = m.col(2).squaredNorm() > 0 ? Vec3d(m * t.coefficient[e])
+                                           : Vec3d(garment[t.edges[e][1]] - garment[t.edges[e][0]]);
   });
   std::vector<Vec3d> rhs(n), x(n), scratch;
   auto solve = [&] {

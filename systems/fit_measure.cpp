@@ -5,19 +5,11 @@
 #include <string>
 
 #include "engine/parallel.h"
+#include "systems/mesh_normals.h"
 
 namespace atelier {
 
 namespace {
-
-// Columns: the triangle's two edges from corner 0 and its unit normal; the
-// affine map of a body triangle is B_new * B_source^-1.
-Mat3d triangle_basis(std::span<const Vec3d> p, const Triangle& t) {
-  Mat3d m;
-  const Vec3d e1 = p[t[1]] - p[t[0]], e2 = p[t[2]] - p[t[0]];
-  m << e1, e2, e1.cross(e2).normalized();
-  return m;
-}
 
 Status check_finite(std::span<const Vec3d> p, const char* what) {
   for (std::size_t i = 0; i < p.size(); ++i)

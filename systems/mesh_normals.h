@@ -1,8 +1,11 @@
-// Normals of a Model's faces and nodes from a position column.
+// Normals of a Model's faces and nodes from a position column, and the
+// local frame of a triangle.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <span>
 
 #include "engine/math.h"
@@ -35,6 +38,17 @@ namespace atelier {
     if (l > 0) n += ang * fn / l;
   });
   return n;
+}
+
+/// Columns: a triangle's two edges from corner 0 and its unit normal (zero
+/// for a zero-area triangle). The affine map of a body triangle from one
+/// shape to another is B_new B_source^-1, the normal kept at unit length:
+/// an offset from the skin is carried, not scaled.
+[[nodiscard]] inline Mat3d triangle_basis(std::span<const Vec3d> p, const std::array<std::uint32_t, 3>& t) {
+  Mat3d m;
+  const Vec3d e1 = p[t[1]] - p[t[0]], e2 = p[t[2]] - p[t[0]];
+  m << e1, e2, e1.cross(e2).normalized();
+  return m;
 }
 
 }  // namespace atelier
