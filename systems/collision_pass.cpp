@@ -227,27 +227,39 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   const auto& wide = tp.wide_;
   wide_box_.resize(wide.size());
   constexpr float kFInf = std::numeric_limits<float>::infinity();
-  for (std::size_t w = wide.size(); w-- > 0;) {
+  // Leaf and empty lanes in parallel (a wide node is a few hundred
+  // nanoseconds of work: split small), then inner lanes in the sweep.
+  ExecContext lctx = ctx;
+  lctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
+  if (ctx.grain == 0) lctx.grain = 128;
+  par::for_each_n(lctx, wide.size(), [&](std::size_t w) {
     for (int l = 0; l < 4; ++l) {
       const std::uint32_t child = wide[w].child[l];
       const std::uint32_t count = wide[w].count[l];
+      if (child != CollisionTopology::kEmptyLane && count == 0) continue;
       for (int a = 0; a < 3; ++a) {
         float lo = kFInf, hi = -kFInf;  // an empty lane stays an inverted infinite box
-        if (child != CollisionTopology::kEmptyLane && count > 0) {
+        if (child != CollisionTopology::kEmptyLane) {
           const float* tl = &tri_box_[a * tri_box_stride_ + child];
           const float* th = &tri_box_[(3 + a) * tri_box_stride_ + child];
           lo = *std::min_element(tl, tl + count);
           hi = *std::max_element(th, th + count);
-        } else if (child != CollisionTopology::kEmptyLane) {
-          const WideBox& cb = wide_box_[child];
-          lo = *std::min_element(cb.lo[a], cb.lo[a] + 4);
-          hi = *std::max_element(cb.hi[a], cb.hi[a] + 4);
         }
         wide_box_[w].lo[a][l] = lo;
         wide_box_[w].hi[a][l] = hi;
       }
     }
-  }
+  });
+  for (std::size_t w = wide.size(); w-- > 0;)
+    for (int l = 0; l < 4; ++l) {
+      const std::uint32_t child = wide[w].child[l];
+      if (child == CollisionTopology::kEmptyLane || wide[w].count[l] > 0) continue;
+      const WideBox& cb = wide_box_[child];
+      for (int a = 0; a < 3; ++a) {
+        wide_box_[w].lo[a][l] = *std::min_element(cb.lo[a], cb.lo[a] + 4);
+        wide_box_[w].hi[a][l] = *std::max_element(cb.hi[a], cb.hi[a] + 4);
+      }
+    }
   extent_ = 0;
   const WideBox& root = wide_box_[0];
   for (int l = 0; l < 4; ++l)
