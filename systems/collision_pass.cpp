@@ -3,6 +3,7 @@
 #include <emmintrin.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -20,8 +21,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // to four boxes (lo, hi: per axis, four lanes each), made conservative:
 // every gap shrunk by `slack` (a bound on the rounding of the point to
 // float and of one subtraction; the boxes are already rounded outward).
-inline void box_distances_x4(const __m128 pc[3], const float* const lo[3], const float* const hi[3], __m128 slack,
-                             float out[4]) noexcept {
+// Returns the mask of lanes whose distance is at most `bound`.
+inline unsigned box_within_x4(const __m128 pc[3], const float* const lo[3], const float* const hi[3], __m128 slack,
+                              float bound, float out[4]) noexcept {
   const __m128 zero = _mm_setzero_ps();
   __m128 s = zero;
   for (int a = 0; a < 3; ++a) {
@@ -29,7 +31,8 @@ inline void box_distances_x4(const __m128 pc[3], const float* const lo[3], const
     const __m128 g = _mm_max_ps(_mm_sub_ps(gap, slack), zero);
     s = _mm_add_ps(s, _mm_mul_ps(g, g));
   }
-  _mm_storeu_ps(out, s);
+  _mm_store_ps(out, s);
+  return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(s, _mm_set1_ps(bound))));
 }
 
 std::string vec_str(const Vec3d& p) {
@@ -358,33 +361,43 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
   const __m128 slack = _mm_set1_ps(static_cast<float>(std::ldexp(scale, -21)));
   const __m128 pc[3] = {_mm_set1_ps(static_cast<float>(p[0])), _mm_set1_ps(static_cast<float>(p[1])),
                         _mm_set1_ps(static_cast<float>(p[2]))};
+  // The bound in float for the lane tests, rounded up with a relative
+  // margin (2e-6, far above float rounding): a lane is opened when its
+  // conservative box distance is at most the bound, so every box the exact
+  // test would open is opened (ties included).
+  auto bound_f = [](double b2) {
+    return static_cast<float>(std::min(b2 * (1.0 + 2e-6), static_cast<double>(std::numeric_limits<float>::max())));
+  };
+  float best2f = bound_f(best2);
   struct Item {
     std::uint32_t ref;    // wide node, or first leaf slot
     std::uint32_t count;  // 0: wide node
-    double d2;
+    float d2;
   };
   Item stack[64];
   int top = 0;
-  stack[top++] = {0, 0, 0.0};
+  stack[top++] = {0, 0, 0.0f};
+  alignas(16) float d2[4];
   while (top > 0) {
     const Item it = stack[--top];
-    if (it.d2 > best2) continue;
+    if (it.d2 > best2f) continue;
     if (it.count > 0) {
       // The leaf's triangles' own boxes first, four at once, the same way.
       const float* tb = &tri_box_[it.ref];
       const std::size_t stride = tri_box_stride_;
       const float* const lo[3] = {tb, tb + stride, tb + 2 * stride};
       const float* const hi[3] = {tb + 3 * stride, tb + 4 * stride, tb + 5 * stride};
-      float d2[4];
-      box_distances_x4(pc, lo, hi, slack, d2);
-      for (std::uint32_t i = it.ref; i < it.ref + it.count; ++i) {
+      unsigned m = box_within_x4(pc, lo, hi, slack, best2f, d2) & ((1u << it.count) - 1u);
+      for (; m != 0; m &= m - 1) {
+        const std::uint32_t i = it.ref + static_cast<std::uint32_t>(std::countr_zero(m));
         const std::uint32_t t = leaf_tri[i];
-        if (t == best_t || static_cast<double>(d2[i - it.ref]) * (1.0 - 1e-6) > best2) continue;
+        if (t == best_t) continue;
         const auto& c = corners_[i];
         const TrianglePoint r = closest_point_on_triangle(p, c[0], c[1], c[2]);
-        const double d2 = (p - r.point).squaredNorm();
-        if (d2 < best2 || (d2 == best2 && t < best_t)) {
-          best2 = d2;
+        const double dd = (p - r.point).squaredNorm();
+        if (dd < best2 || (dd == best2 && t < best_t)) {
+          best2 = dd;
+          best2f = bound_f(dd);
           best_t = t;
           best_r = r;
         }
@@ -395,14 +408,12 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     const WideBox& bx = wide_box_[it.ref];
     const float* const lo[3] = {bx.lo[0], bx.lo[1], bx.lo[2]};
     const float* const hi[3] = {bx.hi[0], bx.hi[1], bx.hi[2]};
-    float d2[4];
-    box_distances_x4(pc, lo, hi, slack, d2);
-    // Lanes within the bound, sorted far to near (pushed in that order, so
-    // the nearest is popped first).
+    // Lanes within the bound (empty lanes are inverted infinite boxes,
+    // never within), pushed far to near so the nearest is popped first.
     const int base = top;
-    for (int l = 0; l < 4; ++l) {
-      const double dl = static_cast<double>(d2[l]) * (1.0 - 1e-6);
-      if (!(dl <= best2) || nd.child[l] == CollisionTopology::kEmptyLane) continue;
+    for (unsigned m = box_within_x4(pc, lo, hi, slack, best2f, d2); m != 0; m &= m - 1) {
+      const int l = std::countr_zero(m);
+      const float dl = d2[l];
       int k = top++;
       for (; k > base && stack[k - 1].d2 < dl; --k) stack[k] = stack[k - 1];
       stack[k] = {nd.child[l], nd.count[l], dl};
