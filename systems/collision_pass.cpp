@@ -188,27 +188,17 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
     return Status(ErrorCode::kMismatch, "collision body: " + std::to_string(positions.size()) +
                                             " positions for a topology of " + std::to_string(topology->point_count()) +
                                             " points");
-  const bool finite = par::transform_reduce(
-      ctx, positions.size(), true, [&](std::size_t v) { return is_finite(positions[v]); },
-      [](bool x, bool y) { return x && y; });
-  if (!finite) return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
+  // A nanosecond per point: not worth a parallel loop's start-up.
+  if (!std::all_of(positions.begin(), positions.end(), [](const Vec3d& q) { return is_finite(q); })) return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
   const CollisionTopology& tp = *topology;
   std::call_once(tp.tree_once_, [&] { tp.build_tree(positions); });
   pos_ = positions;
   topo_ = std::move(topology);
   const std::size_t nt = tp.triangles_.size();
-  // Corners in leaf order (the traversal reads them contiguously).
-  corners_.resize(nt);
-  par::for_each_n(ctx, nt, [&](std::size_t i) {
-    const Triangle& t = tp.triangles_[tp.leaf_tri_[i]];
-    corners_[i] = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
-  });
   // Refit, in float rounded outward so that a box never excludes its
-  // triangle: the triangles' boxes, then the wide nodes in a reverse sweep
-  // (children follow their parents): a leaf lane is the union of its
-  // triangles' boxes, an inner lane the union of its child's lanes.
-  // At least one float ulp outward whichever way the conversion rounded
-  // (|f| 2^-23 >= ulp(f); the float minimum covers zero), without a branch.
+  // triangle. At least one float ulp outward whichever way the conversion
+  // rounded (|f| 2^-23 >= ulp(f); the float minimum covers zero), without a
+  // branch.
   auto down = [](double x) {
     const float f = static_cast<float>(x);
     return f - (std::abs(f) * 0x1p-23f + std::numeric_limits<float>::min());
@@ -217,39 +207,50 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
     const float f = static_cast<float>(x);
     return f + (std::abs(f) * 0x1p-23f + std::numeric_limits<float>::min());
   };
+  // Columns are sized, not cleared: every slot below nt is written by the
+  // loop below; the four padding slots a leaf's four-lane load may reach
+  // are zeroed (and masked out by the leaf's count).
+  corners_.resize(nt);
   tri_box_stride_ = nt + 4;
-  tri_box_.assign(6 * tri_box_stride_, 0.0f);
-  par::for_each_n(ctx, nt, [&](std::size_t i) {
-    const auto& c = corners_[i];
-    const Vec3d lo = c[0].cwiseMin(c[1]).cwiseMin(c[2]), hi = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
-    for (int a = 0; a < 3; ++a) {
-      tri_box_[a * tri_box_stride_ + i] = down(lo[a]);
-      tri_box_[(3 + a) * tri_box_stride_ + i] = up(hi[a]);
-    }
-  });
+  tri_box_.resize(6 * tri_box_stride_);
+  for (int a = 0; a < 6; ++a) std::fill_n(&tri_box_[a * tri_box_stride_ + nt], 4, 0.0f);
   const auto& wide = tp.wide_;
   wide_box_.resize(wide.size());
   constexpr float kFInf = std::numeric_limits<float>::infinity();
-  // Leaf and empty lanes in parallel (a wide node is a few hundred
-  // nanoseconds of work: split small), then inner lanes in the sweep.
+  // One pass over the wide nodes, in parallel: each leaf lane gathers its
+  // triangles' corners in leaf order (the traversal reads them
+  // contiguously), their boxes, and its own box; empty lanes are inverted
+  // infinite boxes. Inner lanes follow in the reverse sweep below (children
+  // follow their parents). A wide node is a few hundred nanoseconds of
+  // work: split small.
   ExecContext lctx = ctx;
   lctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
   if (ctx.grain == 0) lctx.grain = 128;
+  const std::size_t st = tri_box_stride_;
   par::for_each_n(lctx, wide.size(), [&](std::size_t w) {
+    WideBox& wb = wide_box_[w];
     for (int l = 0; l < 4; ++l) {
       const std::uint32_t child = wide[w].child[l];
       const std::uint32_t count = wide[w].count[l];
       if (child != CollisionTopology::kEmptyLane && count == 0) continue;
-      for (int a = 0; a < 3; ++a) {
-        float lo = kFInf, hi = -kFInf;  // an empty lane stays an inverted infinite box
-        if (child != CollisionTopology::kEmptyLane) {
-          const float* tl = &tri_box_[a * tri_box_stride_ + child];
-          const float* th = &tri_box_[(3 + a) * tri_box_stride_ + child];
-          lo = *std::min_element(tl, tl + count);
-          hi = *std::max_element(th, th + count);
+      float lo[3] = {kFInf, kFInf, kFInf}, hi[3] = {-kFInf, -kFInf, -kFInf};
+      if (child != CollisionTopology::kEmptyLane)
+        for (std::uint32_t i = child; i < child + count; ++i) {
+          const Triangle& t = tp.triangles_[tp.leaf_tri_[i]];
+          auto& c = corners_[i];
+          c = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
+          const Vec3d tl = c[0].cwiseMin(c[1]).cwiseMin(c[2]), th = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
+          for (int a = 0; a < 3; ++a) {
+            const float fl = down(tl[a]), fh = up(th[a]);
+            tri_box_[a * st + i] = fl;
+            tri_box_[(3 + a) * st + i] = fh;
+            lo[a] = std::min(lo[a], fl);
+            hi[a] = std::max(hi[a], fh);
+          }
         }
-        wide_box_[w].lo[a][l] = lo;
-        wide_box_[w].hi[a][l] = hi;
+      for (int a = 0; a < 3; ++a) {
+        wb.lo[a][l] = lo[a];
+        wb.hi[a][l] = hi[a];
       }
     }
   });
