@@ -210,17 +210,17 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   // Columns are sized, not cleared: every slot below nt is written by the
   // loop below; the four padding slots a leaf's four-lane load may reach
   // are zeroed (and masked out by the leaf's count).
-  corners_.resize(nt);
   tri_box_stride_ = nt + 4;
   tri_box_.resize(6 * tri_box_stride_);
   for (int a = 0; a < 6; ++a) std::fill_n(&tri_box_[a * tri_box_stride_ + nt], 4, 0.0f);
   const auto& wide = tp.wide_;
   wide_box_.resize(wide.size());
   constexpr float kFInf = std::numeric_limits<float>::infinity();
-  // One pass over the wide nodes, in parallel: each leaf lane gathers its
-  // triangles' corners in leaf order (the traversal reads them
-  // contiguously), their boxes, and its own box; empty lanes are inverted
-  // infinite boxes. Inner lanes follow in the reverse sweep below (children
+  // One pass over the wide nodes, in parallel: each leaf lane computes its
+  // triangles' boxes and its own box; empty lanes are inverted infinite
+  // boxes. (The leaves read corners through the positions: a per-body copy
+  // of them in leaf order, 1.9 MB for the MakeHuman skin, cost more to
+  // write than it saved the queries.) Inner lanes follow in the reverse sweep below (children
   // follow their parents). A wide node is a few hundred nanoseconds of
   // work: split small.
   ExecContext lctx = ctx;
@@ -237,8 +237,7 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
       if (child != CollisionTopology::kEmptyLane)
         for (std::uint32_t i = child; i < child + count; ++i) {
           const Triangle& t = tp.triangles_[tp.leaf_tri_[i]];
-          auto& c = corners_[i];
-          c = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
+          const std::array<Vec3d, 3> c = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
           const Vec3d tl = c[0].cwiseMin(c[1]).cwiseMin(c[2]), th = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
           for (int a = 0; a < 3; ++a) {
             const float fl = down(tl[a]), fh = up(th[a]);
@@ -393,8 +392,8 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
         const std::uint32_t i = it.ref + static_cast<std::uint32_t>(std::countr_zero(m));
         const std::uint32_t t = leaf_tri[i];
         if (t == best_t) continue;
-        const auto& c = corners_[i];
-        const TrianglePoint r = closest_point_on_triangle(p, c[0], c[1], c[2]);
+        const Triangle& c = topo_->triangles_[t];
+        const TrianglePoint r = closest_point_on_triangle(p, pos_[c[0]], pos_[c[1]], pos_[c[2]]);
         const double dd = (p - r.point).squaredNorm();
         if (dd < best2 || (dd == best2 && t < best_t)) {
           best2 = dd;
@@ -420,8 +419,7 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
       stack[k] = {nd.child[l], nd.count[l], dl};
     }
   }
-  // The closest point as the leaf test found it (corners in leaf order are
-  // the triangle's corners in its own order: the same computation).
+  // The closest point as the leaf test found it.
   return signed_distance(p, best_t, best_r);
 }
 

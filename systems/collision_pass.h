@@ -156,7 +156,6 @@ class CollisionBody {
   std::vector<float> tri_box_;
   std::size_t tri_box_stride_ = 0;
   double extent_ = 0;                          // largest absolute coordinate (bounds float rounding)
-  std::vector<std::array<Vec3d, 3>> corners_;  // per leaf slot: the triangle's corners
 };
 
 /// Clearance encoding of a garment on its source body.
