@@ -612,55 +612,81 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
   // target clearance and cut at its last admissible sub-step (seed 000 Fig.
   // 16 tests against the body alone).
   if (prm.fair_iterations > 0 && !free_nodes.empty()) {
-    std::vector<std::uint8_t> need_u(n, 0);
-    for (std::uint32_t v : free_nodes) {
-      need_u[v] = 1;
-      for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) need_u[adj.neighbor[k]] = 1;
-    }
+    // The region in local, contiguous arrays: the free nodes F and the
+    // nodes U whose umbrella they need (F and its neighbours). Outside F the
+    // garment never moves, so its displacement from `entry` is zero and a
+    // U node's umbrella sums only its free neighbours.
+    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+    const std::size_t nf = free_nodes.size();
+    std::vector<std::uint32_t> local(n, kNone);  // vertex -> index in U
     std::vector<std::uint32_t> u_nodes;
-    for (std::size_t v = 0; v < n; ++v)
-      if (need_u[v] && adj.offset[v + 1] > adj.offset[v]) u_nodes.push_back(static_cast<std::uint32_t>(v));
-    auto inv_deg = [&](std::uint32_t v) { return 1.0 / (adj.offset[v + 1] - adj.offset[v]); };
-    std::vector<double> inv_nu(free_nodes.size());
-    for (std::size_t i = 0; i < free_nodes.size(); ++i) {
+    for (std::uint32_t v : free_nodes) {
+      if (local[v] == kNone) local[v] = static_cast<std::uint32_t>(u_nodes.size()), u_nodes.push_back(v);
+      for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) {
+        const std::uint32_t w = adj.neighbor[k];
+        if (local[w] == kNone && adj.offset[w + 1] > adj.offset[w])
+          local[w] = static_cast<std::uint32_t>(u_nodes.size()), u_nodes.push_back(w);
+      }
+    }
+    std::vector<std::uint32_t> free_index(n, kNone);  // vertex -> index in F
+    for (std::size_t i = 0; i < nf; ++i) free_index[free_nodes[i]] = static_cast<std::uint32_t>(i);
+    const std::size_t nu = u_nodes.size();
+    // U node i: its free neighbours (F indices) and whether it is free.
+    std::vector<std::uint32_t> uf_offset(nu + 1, 0), uf_list, u_self(nu);
+    std::vector<double> u_inv_deg(nu);
+    for (std::size_t i = 0; i < nu; ++i) {
+      const std::uint32_t v = u_nodes[i];
+      for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k)
+        if (free_index[adj.neighbor[k]] != kNone) uf_list.push_back(free_index[adj.neighbor[k]]);
+      uf_offset[i + 1] = static_cast<std::uint32_t>(uf_list.size());
+      u_self[i] = free_index[v];
+      u_inv_deg[i] = 1.0 / (adj.offset[v + 1] - adj.offset[v]);
+    }
+    // F node i: its U index and its neighbours' U indices.
+    std::vector<std::uint32_t> fu_self(nf), fu_offset(nf + 1, 0), fu_list;
+    std::vector<double> inv_nu(nf);
+    for (std::size_t i = 0; i < nf; ++i) {
       const std::uint32_t v = free_nodes[i];
+      fu_self[i] = local[v];
       double s = 0;
-      for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += inv_deg(adj.neighbor[k]);
-      inv_nu[i] = 1.0 / (1.0 + s * inv_deg(v));
+      for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) {
+        fu_list.push_back(local[adj.neighbor[k]]);
+        s += u_inv_deg[local[adj.neighbor[k]]];
+      }
+      fu_offset[i + 1] = static_cast<std::uint32_t>(fu_list.size());
+      inv_nu[i] = 1.0 / (1.0 + s * u_inv_deg[local[v]]);
     }
     // Moves are along the body normal n at the closest point x, so to first
     // order the signed distance is (p - x).n + d_x: sub-steps are tested on
     // that tangent plane (no body query per sub-step), and the end state is
     // verified exactly below.
-    std::vector<Vec3d> u(n, Vec3d::Zero()), next(free_nodes.size()), start(free_nodes.size());
-    std::vector<double> lin(free_nodes.size()), next_lin(free_nodes.size());
-    for (std::size_t i = 0; i < free_nodes.size(); ++i) {
-      start[i] = g[free_nodes[i]];
-      lin[i] = d[free_nodes[i]].distance;
+    std::vector<Vec3d> u(nu), disp(nf), next(nf), start(nf);
+    std::vector<double> lin(nf), next_lin(nf);
+    for (std::size_t i = 0; i < nf; ++i) {
+      const std::uint32_t v = free_nodes[i];
+      start[i] = g[v];
+      disp[i] = g[v] - entry[v];
+      lin[i] = d[v].distance;
     }
-    std::vector<std::uint32_t> refused(free_nodes.size(), 0);
-    // A fairing sweep costs tens of nanoseconds per vertex: regions of a few
-    // thousand vertices are worth splitting, in blocks that amortise the
-    // task overhead.
+    std::vector<std::uint32_t> refused(nf, 0);
+    // A fairing sweep costs nanoseconds per vertex on these local arrays:
+    // only regions of thousands of vertices are worth splitting, in blocks
+    // that amortise the task overhead.
     const double inv_substeps = 1.0 / prm.substeps;
     ExecContext fctx = ctx;
-    fctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 1024);
-    if (ctx.grain == 0) fctx.grain = 512;
+    fctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 4096);
+    if (ctx.grain == 0) fctx.grain = 1024;
     for (int it = 0; it < prm.fair_iterations; ++it) {
       if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "resolve_collisions cancelled");
-      par::for_each_n(fctx, u_nodes.size(), [&](std::size_t i) {
-        const std::uint32_t v = u_nodes[i];
+      par::for_each_n(fctx, nu, [&](std::size_t i) {
         Vec3d s = Vec3d::Zero();
-        for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) {
-          const std::uint32_t w = adj.neighbor[k];
-          s += g[w] - entry[w];
-        }
-        u[v] = s * inv_deg(v) - (g[v] - entry[v]);
+        for (std::uint32_t k = uf_offset[i]; k < uf_offset[i + 1]; ++k) s += disp[uf_list[k]];
+        u[i] = s * u_inv_deg[i] - (u_self[i] != kNone ? disp[u_self[i]] : Vec3d::Zero());
       });
-      par::for_each_n(fctx, free_nodes.size(), [&](std::size_t i) {
+      par::for_each_n(fctx, nf, [&](std::size_t i) {
         const std::uint32_t v = free_nodes[i];
         Vec3d s = Vec3d::Zero();
-        for (std::uint32_t k = adj.offset[v]; k < adj.offset[v + 1]; ++k) s += u[adj.neighbor[k]];
+        for (std::uint32_t k = fu_offset[i]; k < fu_offset[i + 1]; ++k) s += u[fu_list[k]];
         // Half a Jacobi step: U2 is not diagonally dominant, and on the open
         // boundary of a garment (degree 2-3) full Jacobi steps diverge.
         // Only the component along the body normal is kept: the pass smooths
@@ -668,7 +694,7 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
         // tangential moves would slide open hems along the body (a free
         // boundary shrinks under U2 fairing) and add strain.
         const Vec3d& nrm = d[v].normal;
-        const double along = nrm.dot(-0.5 * inv_nu[i] * (s * inv_deg(v) - u[v]));
+        const double along = nrm.dot(-0.5 * inv_nu[i] * (s * u_inv_deg[fu_self[i]] - u[fu_self[i]]));
         // The last admissible sub-step: one that does not enter, or go
         // deeper into, the forbidden zone (below the target).
         const double step = along * inv_substeps;
@@ -683,14 +709,13 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
           reached = dk;
           taken = k;
         }
-        next[i] = g[v] + nrm * (step * taken);
+        next[i] = disp[i] + nrm * (step * taken);
         next_lin[i] = reached;
       });
-      par::for_each_n(fctx, free_nodes.size(), [&](std::size_t i) {
-        g[free_nodes[i]] = next[i];
-        lin[i] = next_lin[i];
-      });
+      std::swap(disp, next);
+      std::swap(lin, next_lin);
     }
+    for (std::size_t i = 0; i < nf; ++i) g[free_nodes[i]] = entry[free_nodes[i]] + disp[i];
     // Exact check of the faired vertices: one that ended deeper than both
     // its target and its pre-fairing distance (curvature beyond the tangent
     // plane) goes back to where the push left it.
