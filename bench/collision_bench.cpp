@@ -199,6 +199,25 @@ void BM_CollisionQuery(benchmark::State& st) {
 }
 BENCHMARK(BM_CollisionQuery)->Args({1, 0})->Args({1, 1})->Args({0, 0})->Unit(benchmark::kMillisecond);
 
+// The same points through CollisionBody::query_many (clusters of neighbours
+// ordered by hint, one traversal per cluster), on 1 thread: same answers.
+void BM_CollisionQueryMany(benchmark::State& st) {
+  const CollisionScene& s = scene();
+  CollisionBody cb;
+  if (Status e = cb.build(s.topo, s.skins[0]); !e) st.SkipWithError(e.to_string().c_str());
+  const auto& g = s.decoded[0];
+  std::vector<BodyDistance> out(g.size());
+  ExecContext one;
+  one.threads = 1;
+  for (auto _ : st) {
+    cb.query_many(g, s.clear.triangle, out, one);
+    benchmark::DoNotOptimize(out.data());
+  }
+  st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * g.size()));
+  st.SetLabel("hinted, clustered");
+}
+BENCHMARK(BM_CollisionQueryMany)->Unit(benchmark::kMillisecond);
+
 // The edge transfer on one body (systems/edge_transfer.h): edge targets,
 // right-hand side and the solve with the factor made at encoding.
 void BM_EdgeTransfer(benchmark::State& st) {

@@ -17,17 +17,18 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Squared distances from a point (pc: its coordinates broadcast, in float)
-// to four boxes (lo, hi: per axis, four lanes each), made conservative:
-// every gap shrunk by `slack` (a bound on the rounding of the point to
-// float and of one subtraction; the boxes are already rounded outward).
-// Returns the mask of lanes whose distance is at most `bound`.
-inline unsigned box_within_x4(const __m128 pc[3], const float* const lo[3], const float* const hi[3], __m128 slack,
-                              float bound, float out[4]) noexcept {
+// Squared distances from a query box (qlo, qhi: its corners broadcast, in
+// float; a point is a box with qlo == qhi) to four boxes (lo, hi: per axis,
+// four lanes each), made conservative: every gap shrunk by `slack` (a bound
+// on the rounding of the query to float and of one subtraction; the boxes
+// are already rounded outward). Returns the mask of lanes whose distance is
+// at most `bound`.
+inline unsigned box_within_x4(const __m128 qlo[3], const __m128 qhi[3], const float* const lo[3],
+                              const float* const hi[3], __m128 slack, float bound, float out[4]) noexcept {
   const __m128 zero = _mm_setzero_ps();
   __m128 s = zero;
   for (int a = 0; a < 3; ++a) {
-    const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(lo[a]), pc[a]), _mm_sub_ps(pc[a], _mm_loadu_ps(hi[a])));
+    const __m128 gap = _mm_max_ps(_mm_sub_ps(_mm_loadu_ps(lo[a]), qhi[a]), _mm_sub_ps(qlo[a], _mm_loadu_ps(hi[a])));
     const __m128 g = _mm_max_ps(_mm_sub_ps(gap, slack), zero);
     s = _mm_add_ps(s, _mm_mul_ps(g, g));
   }
@@ -143,6 +144,20 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
     open_tasks.push_back({child + 1, mid, k.hi});
     open_tasks.push_back({child, k.lo, mid});
   }
+  // Leaves padded to four slots each (slot 4 i + k), so that a leaf's
+  // triangle boxes are one contiguous 96-byte block (two cache lines
+  // instead of one in each of six columns). Padding slots hold kNoTriangle.
+  {
+    std::vector<std::uint32_t> padded;
+    padded.reserve(nt + nt / 2);
+    for (TreeNode& nd : tree) {
+      if (nd.count == 0) continue;
+      const auto first = static_cast<std::uint32_t>(padded.size());
+      for (std::uint32_t k = 0; k < 4; ++k) padded.push_back(k < nd.count ? leaf_tri_[nd.first + k] : kNoTriangle);
+      nd.first = first;
+    }
+    leaf_tri_ = std::move(padded);
+  }
   // Wide nodes: the lanes of binary node b are its grandchildren (a child
   // that is a leaf stays a lane itself). Depth-first, so a wide node's
   // subtree is contiguous like the binary one's.
@@ -176,6 +191,9 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
     return w;
   };
   make_wide(make_wide, 0);
+  leaf_slot_.assign(nt, 0);
+  for (std::size_t i = 0; i < leaf_tri_.size(); ++i)
+    if (leaf_tri_[i] != kNoTriangle) leaf_slot_[leaf_tri_[i]] = static_cast<std::uint32_t>(i);
 }
 
 // ------------------------------------------------------------ body
@@ -207,12 +225,8 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
     const float f = static_cast<float>(x);
     return f + (std::abs(f) * 0x1p-23f + std::numeric_limits<float>::min());
   };
-  // Columns are sized, not cleared: every slot below nt is written by the
-  // loop below; the four padding slots a leaf's four-lane load may reach
-  // are zeroed (and masked out by the leaf's count).
-  tri_box_stride_ = nt + 4;
-  tri_box_.resize(6 * tri_box_stride_);
-  for (int a = 0; a < 6; ++a) std::fill_n(&tri_box_[a * tri_box_stride_ + nt], 4, 0.0f);
+  // Sized, not cleared: the loop below writes every slot of every leaf.
+  tri_box_.resize(6 * tp.leaf_tri_.size());
   const auto& wide = tp.wide_;
   wide_box_.resize(wide.size());
   constexpr float kFInf = std::numeric_limits<float>::infinity();
@@ -226,7 +240,6 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   ExecContext lctx = ctx;
   lctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
   if (ctx.grain == 0) lctx.grain = 128;
-  const std::size_t st = tri_box_stride_;
   par::for_each_n(lctx, wide.size(), [&](std::size_t w) {
     WideBox& wb = wide_box_[w];
     for (int l = 0; l < 4; ++l) {
@@ -234,19 +247,27 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
       const std::uint32_t count = wide[w].count[l];
       if (child != CollisionTopology::kEmptyLane && count == 0) continue;
       float lo[3] = {kFInf, kFInf, kFInf}, hi[3] = {-kFInf, -kFInf, -kFInf};
-      if (child != CollisionTopology::kEmptyLane)
-        for (std::uint32_t i = child; i < child + count; ++i) {
-          const Triangle& t = tp.triangles_[tp.leaf_tri_[i]];
-          const std::array<Vec3d, 3> c = {pos_[t[0]], pos_[t[1]], pos_[t[2]]};
-          const Vec3d tl = c[0].cwiseMin(c[1]).cwiseMin(c[2]), th = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
+      if (child != CollisionTopology::kEmptyLane) {
+        float* tb = &tri_box_[(child / 4) * 24];  // [lo x, y, z, hi x, y, z][slot]
+        for (std::uint32_t k = 0; k < 4; ++k) {
+          if (k >= count) {  // padding: an inverted infinite box
+            for (int a = 0; a < 3; ++a) tb[4 * a + k] = kFInf, tb[4 * (3 + a) + k] = -kFInf;
+            continue;
+          }
+          const Triangle& t = tp.triangles_[tp.leaf_tri_[child + k]];
+          const Vec3d& c0 = pos_[t[0]];
+          const Vec3d& c1 = pos_[t[1]];
+          const Vec3d& c2 = pos_[t[2]];
+          const Vec3d tl = c0.cwiseMin(c1).cwiseMin(c2), th = c0.cwiseMax(c1).cwiseMax(c2);
           for (int a = 0; a < 3; ++a) {
             const float fl = down(tl[a]), fh = up(th[a]);
-            tri_box_[a * st + i] = fl;
-            tri_box_[(3 + a) * st + i] = fh;
+            tb[4 * a + k] = fl;
+            tb[4 * (3 + a) + k] = fh;
             lo[a] = std::min(lo[a], fl);
             hi[a] = std::max(hi[a], fh);
           }
         }
+      }
       for (int a = 0; a < 3; ++a) {
         wb.lo[a][l] = lo[a];
         wb.hi[a][l] = hi[a];
@@ -333,42 +354,96 @@ BodyDistance CollisionBody::signed_distance(const Vec3d& p, std::uint32_t t, con
   return out;
 }
 
-BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noexcept {
-  const auto& tris = topo_->triangles_;
-  double best2 = kInf;
-  std::uint32_t best_t = kNoTriangle;
-  TrianglePoint best_r;
-  if (hint < tris.size()) {
+namespace {
+
+// A squared bound in float for the lane tests, rounded up with a relative
+// margin (2e-6, far above float rounding): a lane is opened when its
+// conservative box distance is at most the bound, so every box the exact
+// test would open is opened (ties included).
+inline float float_bound(double b2) noexcept {
+  return static_cast<float>(std::min(b2 * (1.0 + 2e-6), static_cast<double>(std::numeric_limits<float>::max())));
+}
+
+}  // namespace
+
+// A point broadcast in float for the four-lane box tests, with the slack
+// that makes them conservative: a bound on the rounding of the point to
+// float and of one subtraction, relative to the largest coordinate in play
+// (boxes are already rounded outward).
+struct CollisionBody::FloatPoint {
+  __m128 lo[3], hi[3];
+  __m128 slack;
+  FloatPoint(const Vec3d& p, double extent) noexcept : FloatPoint(p, p, extent) {}
+  FloatPoint(const Vec3d& a, const Vec3d& b, double extent) noexcept {  // the box [a, b]
+    const double scale =
+        extent + std::max({std::abs(a[0]), std::abs(a[1]), std::abs(a[2]), std::abs(b[0]), std::abs(b[1]), std::abs(b[2])});
+    slack = _mm_set1_ps(static_cast<float>(std::ldexp(scale, -21)));
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = _mm_set1_ps(static_cast<float>(a[k]));
+      hi[k] = _mm_set1_ps(static_cast<float>(b[k]));
+    }
+  }
+};
+
+struct CollisionBody::Best {
+  double d2 = kInf;
+  float d2f = std::numeric_limits<float>::max();
+  std::uint32_t t = kNoTriangle;
+  TrianglePoint r;
+  void take(double d, std::uint32_t tri, const TrianglePoint& at) noexcept {
+    if (d < d2 || (d == d2 && tri < t)) {
+      d2 = d;
+      d2f = float_bound(d);
+      t = tri;
+      r = at;
+    }
+  }
+};
+
+CollisionBody::Best CollisionBody::start_from_hint(const Vec3d& p, std::uint32_t hint) const noexcept {
+  Best b;
+  if (hint < topo_->triangles_.size()) {
     // On a body of the same topology the hint's distance bounds the answer.
     // (A greedy walk from the hint to nearer neighbours tightened the bound
     // but cost more than it pruned: 12% slower queries on MakeHuman bodies.)
-    const Triangle& tr = tris[hint];
-    best_r = closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]);
-    best2 = (p - best_r.point).squaredNorm();
-    best_t = hint;
+    const Triangle& tr = topo_->triangles_[hint];
+    b.r = closest_point_on_triangle(p, pos_[tr[0]], pos_[tr[1]], pos_[tr[2]]);
+    b.d2 = (p - b.r.point).squaredNorm();
+    b.d2f = float_bound(b.d2);
+    b.t = hint;
   }
+  return b;
+}
+
+// A leaf's triangles: their own boxes first, four at once, then the exact
+// distance of those within the bound.
+void CollisionBody::scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, std::uint32_t count,
+                              Best& best) const noexcept {
+  const float* tb = &tri_box_[(first / 4) * 24];
+  const float* const lo[3] = {tb, tb + 4, tb + 8};
+  const float* const hi[3] = {tb + 12, tb + 16, tb + 20};
+  alignas(16) float d2[4];
+  // Padding slots are inverted infinite boxes: never within.
+  unsigned m = box_within_x4(fp.lo, fp.hi, lo, hi, fp.slack, best.d2f, d2);
+  for (; m != 0; m &= m - 1) {
+    const std::uint32_t t = topo_->leaf_tri_[first + static_cast<std::uint32_t>(std::countr_zero(m))];
+    if (t == best.t) continue;
+    const Triangle& c = topo_->triangles_[t];
+    const TrianglePoint r = closest_point_on_triangle(p, pos_[c[0]], pos_[c[1]], pos_[c[2]]);
+    best.take((p - r.point).squaredNorm(), t, r);
+  }
+}
+
+BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noexcept {
+  Best best = start_from_hint(p, hint);
   // Branch and bound over the wide hierarchy, nearer lanes first. Boxes
   // at exactly the best distance are still opened: ties go to the smaller
   // triangle index, so the answer does not depend on the hint. Box
-  // distances are computed in float, four lanes at once, made conservative:
-  // each gap is shrunk by a bound on its rounding (the point rounded to
-  // float, one subtraction; boxes are already rounded outward) and the sum
-  // by a relative margin, so a box is never skipped that the exact distance
-  // would open.
+  // distances are computed in float, four lanes at once, made conservative
+  // (FloatPoint, float_bound), so a box is never skipped that the exact
+  // distance would open.
   const auto& wide = topo_->wide_;
-  const auto& leaf_tri = topo_->leaf_tri_;
-  const double scale = extent_ + std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])});
-  const __m128 slack = _mm_set1_ps(static_cast<float>(std::ldexp(scale, -21)));
-  const __m128 pc[3] = {_mm_set1_ps(static_cast<float>(p[0])), _mm_set1_ps(static_cast<float>(p[1])),
-                        _mm_set1_ps(static_cast<float>(p[2]))};
-  // The bound in float for the lane tests, rounded up with a relative
-  // margin (2e-6, far above float rounding): a lane is opened when its
-  // conservative box distance is at most the bound, so every box the exact
-  // test would open is opened (ties included).
-  auto bound_f = [](double b2) {
-    return static_cast<float>(std::min(b2 * (1.0 + 2e-6), static_cast<double>(std::numeric_limits<float>::max())));
-  };
-  float best2f = bound_f(best2);
+  const FloatPoint fp(p, extent_);
   struct Item {
     std::uint32_t ref;    // wide node, or first leaf slot
     std::uint32_t count;  // 0: wide node
@@ -380,28 +455,9 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
   alignas(16) float d2[4];
   while (top > 0) {
     const Item it = stack[--top];
-    if (it.d2 > best2f) continue;
+    if (it.d2 > best.d2f) continue;
     if (it.count > 0) {
-      // The leaf's triangles' own boxes first, four at once, the same way.
-      const float* tb = &tri_box_[it.ref];
-      const std::size_t stride = tri_box_stride_;
-      const float* const lo[3] = {tb, tb + stride, tb + 2 * stride};
-      const float* const hi[3] = {tb + 3 * stride, tb + 4 * stride, tb + 5 * stride};
-      unsigned m = box_within_x4(pc, lo, hi, slack, best2f, d2) & ((1u << it.count) - 1u);
-      for (; m != 0; m &= m - 1) {
-        const std::uint32_t i = it.ref + static_cast<std::uint32_t>(std::countr_zero(m));
-        const std::uint32_t t = leaf_tri[i];
-        if (t == best_t) continue;
-        const Triangle& c = topo_->triangles_[t];
-        const TrianglePoint r = closest_point_on_triangle(p, pos_[c[0]], pos_[c[1]], pos_[c[2]]);
-        const double dd = (p - r.point).squaredNorm();
-        if (dd < best2 || (dd == best2 && t < best_t)) {
-          best2 = dd;
-          best2f = bound_f(dd);
-          best_t = t;
-          best_r = r;
-        }
-      }
+      scan_leaf(p, fp, it.ref, it.count, best);
       continue;
     }
     const CollisionTopology::WideNode& nd = wide[it.ref];
@@ -411,7 +467,7 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     // Lanes within the bound (empty lanes are inverted infinite boxes,
     // never within), pushed far to near so the nearest is popped first.
     const int base = top;
-    for (unsigned m = box_within_x4(pc, lo, hi, slack, best2f, d2); m != 0; m &= m - 1) {
+    for (unsigned m = box_within_x4(fp.lo, fp.hi, lo, hi, fp.slack, best.d2f, d2); m != 0; m &= m - 1) {
       const int l = std::countr_zero(m);
       const float dl = d2[l];
       int k = top++;
@@ -420,7 +476,122 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     }
   }
   // The closest point as the leaf test found it.
-  return signed_distance(p, best_t, best_r);
+  return signed_distance(p, best.t, best.r);
+}
+
+void CollisionBody::query_cluster(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
+                                  std::span<BodyDistance> out) const noexcept {
+  const std::size_t n = p.size();
+  auto one_by_one = [&] {
+    for (std::size_t i = 0; i < n; ++i) out[i] = query(p[i], hint[i]);
+  };
+  if (n == 0) return;
+  if (n > kClusterMax) return one_by_one();
+  // Every point's hint bounds its answer: a triangle nearer to p_i than
+  // r_i lies within r = max r_i of the cluster's bounding box, so one
+  // traversal with that box and bound collects every leaf any point needs.
+  Best best[kClusterMax];
+  Vec3d lo = p[0], hi = p[0];
+  double r2 = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (hint[i] >= topo_->triangles_.size()) return one_by_one();
+    best[i] = start_from_hint(p[i], hint[i]);
+    lo = lo.cwiseMin(p[i]);
+    hi = hi.cwiseMax(p[i]);
+    r2 = std::max(r2, best[i].d2);
+  }
+  const float bound = float_bound(r2);
+  const FloatPoint fc(lo, hi, extent_);
+  // The leaves within the bound, with their boxes in four-lane columns.
+  constexpr std::size_t kMaxLeaves = 96;
+  alignas(16) float leaf_box[6][kMaxLeaves + 4];
+  std::uint32_t leaf_first[kMaxLeaves];
+  std::uint8_t leaf_count[kMaxLeaves];
+  std::size_t leaves = 0;
+  const auto& wide = topo_->wide_;
+  std::uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  alignas(16) float d2[4];
+  while (top > 0) {
+    const std::uint32_t w = stack[--top];
+    const WideBox& bx = wide_box_[w];
+    const float* const blo[3] = {bx.lo[0], bx.lo[1], bx.lo[2]};
+    const float* const bhi[3] = {bx.hi[0], bx.hi[1], bx.hi[2]};
+    for (unsigned m = box_within_x4(fc.lo, fc.hi, blo, bhi, fc.slack, bound, d2); m != 0; m &= m - 1) {
+      const int l = std::countr_zero(m);
+      if (wide[w].count[l] == 0) {
+        stack[top++] = wide[w].child[l];
+        continue;
+      }
+      // A large bound (a point far from the body, a spread-out cluster):
+      // single queries prune better.
+      if (leaves == kMaxLeaves) return one_by_one();
+      for (int a = 0; a < 3; ++a) {
+        leaf_box[a][leaves] = bx.lo[a][l];
+        leaf_box[3 + a][leaves] = bx.hi[a][l];
+      }
+      leaf_first[leaves] = wide[w].child[l];
+      leaf_count[leaves] = wide[w].count[l];
+      ++leaves;
+    }
+  }
+  // Pad the last group of four with inverted infinite boxes.
+  for (std::size_t j = leaves; j % 4 != 0; ++j)
+    for (int a = 0; a < 3; ++a) {
+      leaf_box[a][j] = std::numeric_limits<float>::infinity();
+      leaf_box[3 + a][j] = -std::numeric_limits<float>::infinity();
+    }
+  // Per point: the collected leaves' boxes four at once, then the triangles
+  // of those within its own bound, exactly as query() would.
+  for (std::size_t i = 0; i < n; ++i) {
+    const FloatPoint fp(p[i], extent_);
+    for (std::size_t j = 0; j < leaves; j += 4) {
+      const float* const llo[3] = {&leaf_box[0][j], &leaf_box[1][j], &leaf_box[2][j]};
+      const float* const lhi[3] = {&leaf_box[3][j], &leaf_box[4][j], &leaf_box[5][j]};
+      for (unsigned m = box_within_x4(fp.lo, fp.hi, llo, lhi, fp.slack, best[i].d2f, d2); m != 0; m &= m - 1) {
+        const std::size_t k = j + static_cast<std::size_t>(std::countr_zero(m));
+        scan_leaf(p[i], fp, leaf_first[k], leaf_count[k], best[i]);
+      }
+    }
+    out[i] = signed_distance(p[i], best[i].t, best[i].r);
+  }
+}
+
+void CollisionBody::query_many(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
+                               std::span<BodyDistance> out, const ExecContext& ctx) const {
+  const std::size_t n = p.size();
+  ExecContext qctx = ctx;
+  qctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
+  if (ctx.grain == 0) qctx.grain = 64;
+  if (hint.empty()) {
+    par::for_each_n(qctx, n, [&](std::size_t v) { out[v] = query(p[v]); });
+    return;
+  }
+  // Counting sort by the hint's leaf slot (points without a usable hint
+  // last): neighbours in the hierarchy's leaf order are neighbours on the
+  // body, so consecutive points form compact clusters.
+  const std::size_t nt = topo_->triangles_.size(), slots = topo_->leaf_tri_.size();
+  auto key = [&](std::size_t v) {
+    return hint[v] < nt ? topo_->leaf_slot_[hint[v]] : static_cast<std::uint32_t>(slots);
+  };
+  std::vector<std::uint32_t> start(slots + 2, 0), order(n);
+  for (std::size_t v = 0; v < n; ++v) ++start[key(v) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  for (std::size_t v = 0; v < n; ++v) order[start[key(v)]++] = static_cast<std::uint32_t>(v);
+  constexpr std::size_t kCluster = 8;
+  ExecContext cctx = ctx;
+  cctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 16);
+  if (ctx.grain == 0) cctx.grain = 4;
+  par::for_each_n(cctx, (n + kCluster - 1) / kCluster, [&](std::size_t k) {
+    const std::size_t i0 = k * kCluster, m = std::min(kCluster, n - i0);
+    Vec3d cp[kCluster];
+    std::uint32_t ch[kCluster];
+    BodyDistance cd[kCluster];
+    for (std::size_t i = 0; i < m; ++i) cp[i] = p[order[i0 + i]], ch[i] = hint[order[i0 + i]];
+    query_cluster(std::span<const Vec3d>(cp, m), std::span<const std::uint32_t>(ch, m), std::span<BodyDistance>(cd, m));
+    for (std::size_t i = 0; i < m; ++i) out[order[i0 + i]] = cd[i];
+  });
 }
 
 // ------------------------------------------------------------ encoding
@@ -547,8 +718,10 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
   // lower bound at or above the target (see the check after fairing) and
   // the rest of d[v] is that of the vertex's previous position.
   std::vector<std::uint8_t> exact(n, 1);
+  // Every vertex's exact distance, by clusters of neighbours (one traversal
+  // per cluster, each vertex bounded by its hint).
+  body.query_many(g, enc.triangle, d, qctx);
   par::for_each_n(qctx, n, [&](std::size_t v) {
-    d[v] = body.query(g[v], enc.triangle.empty() ? kNoTriangle : enc.triangle[v]);
     queries[v] = 1;
     target[v] = std::clamp(static_cast<double>(enc.clearance[v]), prm.min_clearance, prm.max_clearance);
     if (!floor.empty()) target[v] = std::max(target[v], floor_at(floor, body, d[v]) + prm.layer_gap);

@@ -86,7 +86,8 @@ class CollisionTopology {
   // Hierarchy layout, made by the first CollisionBody::build (call_once):
   // the results of queries never depend on it, only their cost.
   mutable std::once_flag tree_once_;
-  mutable std::vector<std::uint32_t> leaf_tri_;  // triangles in leaf order
+  mutable std::vector<std::uint32_t> leaf_tri_;   // triangles in leaf order, four slots per leaf (kNoTriangle pads)
+  mutable std::vector<std::uint32_t> leaf_slot_;  // triangle -> its slot in leaf order
   // The same hierarchy with every other level removed: each wide node holds
   // up to four lanes (binary grandchildren), whose boxes a query tests at
   // once. Half the depth, a quarter of the dependent loads. Children always
@@ -117,8 +118,8 @@ struct CollisionBodyParams {
 };
 
 /// Per-body query structure: the topology's hierarchy refit to these
-/// positions (float boxes rounded outward) and the triangle corners copied
-/// in leaf order. Keeps a view of the positions: they must stay alive and
+/// positions (float boxes rounded outward, per wide-node lane and per
+/// triangle). Keeps a view of the positions: they must stay alive and
 /// unchanged while it is used.
 class CollisionBody {
  public:
@@ -136,11 +137,31 @@ class CollisionBody {
   /// closest one on the source body, or kNoTriangle); it only speeds the
   /// search up, the result is exact either way. Thread-safe.
   [[nodiscard]] BodyDistance query(const Vec3d& p, std::uint32_t hint = kNoTriangle) const noexcept;
+  /// The same answers for a cluster of nearby points (say, 16 neighbouring
+  /// garment vertices), each with its hint, in one traversal: the hints
+  /// bound a ball around the cluster, its leaves are collected once and
+  /// each point tests only those. Points without a hint, more than
+  /// kClusterMax points, or a ball holding too many leaves fall back to
+  /// query() per point. Thread-safe.
+  static constexpr std::size_t kClusterMax = 32;
+  void query_cluster(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
+                     std::span<BodyDistance> out) const noexcept;
+  /// The same answers for many points with hints (empty: none), in
+  /// parallel: the points are ordered by their hint's place in the
+  /// hierarchy (a counting sort) and queried in clusters of 16 neighbours.
+  /// Sizes must match.
+  void query_many(std::span<const Vec3d> p, std::span<const std::uint32_t> hint, std::span<BodyDistance> out,
+                  const ExecContext& ctx = {}) const;
   /// Pseudo-normal signed distance to one given triangle (the triangle must
   /// hold the closest point for the sign to be meaningful).
   [[nodiscard]] BodyDistance query_triangle(const Vec3d& p, std::uint32_t t) const noexcept;
 
  private:
+  struct Best;        // the best triangle so far of one query
+  struct FloatPoint;  // a query point in float lanes, with its rounding slack
+  [[nodiscard]] Best start_from_hint(const Vec3d& p, std::uint32_t hint) const noexcept;
+  void scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, std::uint32_t count,
+                 Best& best) const noexcept;
   [[nodiscard]] Vec3d face_normal(std::uint32_t t) const noexcept;  // area-weighted (unnormalised)
   /// Sign and outward direction of p's closest point r on triangle t.
   [[nodiscard]] BodyDistance signed_distance(const Vec3d& p, std::uint32_t t, const TrianglePoint& r) const noexcept;
@@ -151,10 +172,9 @@ class CollisionBody {
     float lo[3][4], hi[3][4];  // [axis][lane]; empty lanes are inverted infinite boxes
   };
   std::vector<WideBox> wide_box_;  // per wide node
-  // Per leaf slot, the triangle's box (float, rounded outward), six columns
-  // lo x, y, z, hi x, y, z of stride tri_box_stride_ (padded by four).
+  // Per leaf (four slots), its triangles' boxes (float, rounded outward)
+  // as one block [lo x, y, z, hi x, y, z][slot].
   std::vector<float> tri_box_;
-  std::size_t tri_box_stride_ = 0;
   double extent_ = 0;                          // largest absolute coordinate (bounds float rounding)
 };
 

@@ -81,6 +81,66 @@ TEST(CollisionBody, QueriesMatchBvhSignedDistanceWithAndWithoutHintsAndRoi) {
   EXPECT_EQ(part->cb.hierarchy_nodes(), full->cb.hierarchy_nodes());
 }
 
+// Clustered queries (one traversal per cluster of neighbours, each point
+// bounded by its hint) must give exactly what single queries give: the same
+// triangle, closest point and distance bits, whatever the hints (good, bad,
+// missing) and however spread the points (far ones make the cluster fall
+// back to single queries); checked against the BVH's brute answer too.
+TEST(CollisionBody, ClusteredQueriesEqualSingleQueries) {
+  const auto scene = make_scene(capsule(0.1, 0.2, 48, 10, 20));
+  const auto nt = static_cast<std::uint32_t>(scene->body.t.size());
+  SplitMix64 rng(17);
+  std::vector<Vec3d> p;
+  std::vector<std::uint32_t> hint;
+  for (int i = 0; i < 4000; ++i) {
+    // Mostly a garment-like shell 0-20 mm off the surface, with good hints;
+    // some points inside, far away, or with a wrong or no hint.
+    const double a = rng.uniform(0, 2 * M_PI), z = rng.uniform(-0.3, 0.3);
+    const double off = i % 10 == 0 ? rng.uniform(-0.05, 0.3) : rng.uniform(0.0, 0.02);
+    Vec3d q(std::cos(a), std::sin(a), 0);
+    if (std::abs(z) > 0.2) {
+      const Vec3d c(0, 0, z > 0 ? 0.2 : -0.2);
+      const Vec3d dir = (Vec3d(std::cos(a), std::sin(a), (z - c.z()) / 0.1)).normalized();
+      q = c + (0.1 + off) * dir;
+    } else {
+      q = (0.1 + off) * q + Vec3d(0, 0, z);
+    }
+    p.push_back(q);
+    const std::uint32_t good = scene->bvh.signed_distance(q).closest.triangle;
+    hint.push_back(i % 7 == 3 ? kNoTriangle : (i % 7 == 5 ? static_cast<std::uint32_t>(rng.uniform(0, nt - 1e-9)) : good));
+  }
+  // Neighbours in index order are not neighbours in space: query_many
+  // orders them itself.
+  for (std::size_t i = p.size(); i-- > 1;) {
+    const auto j = static_cast<std::size_t>(rng.uniform(0, static_cast<double>(i) + 1 - 1e-9));
+    std::swap(p[i], p[j]);
+    std::swap(hint[i], hint[j]);
+  }
+  for (int threads : {1, 2}) {
+    ExecContext ctx;
+    ctx.threads = threads;
+    std::vector<BodyDistance> many(p.size());
+    scene->cb.query_many(p, hint, many, ctx);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const BodyDistance one = scene->cb.query(p[i], hint[i]);
+      ASSERT_EQ(many[i].triangle, one.triangle) << i;
+      ASSERT_EQ(many[i].distance, one.distance) << i;
+      ASSERT_EQ(many[i].closest, one.closest) << i;
+      ASSERT_EQ(many[i].normal, one.normal) << i;
+      ASSERT_NEAR(one.distance, scene->bvh.signed_distance(p[i]).distance, 1e-12) << i;
+    }
+    // A cluster given directly, hints all good, bigger than the traversal's
+    // own clusters.
+    std::vector<Vec3d> cp;
+    std::vector<std::uint32_t> ch;
+    for (std::size_t i = 0; i < p.size() && cp.size() < CollisionBody::kClusterMax; ++i)
+      if (hint[i] != kNoTriangle && (p[i] - p[0]).norm() < 0.05) cp.push_back(p[i]), ch.push_back(hint[i]);
+    std::vector<BodyDistance> cd(cp.size());
+    scene->cb.query_cluster(cp, ch, cd);
+    for (std::size_t i = 0; i < cp.size(); ++i) ASSERT_EQ(cd[i].distance, scene->cb.query(cp[i], ch[i]).distance);
+  }
+}
+
 // The hierarchy's layout comes from the first body built on a topology and
 // is only refit on the next ones: answers on a strongly deformed body of the
 // same topology (stretched, bent, bulged) must still be exact.
