@@ -481,9 +481,16 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
 
 void CollisionBody::query_cluster(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
                                   std::span<BodyDistance> out) const noexcept {
-  const std::size_t n = p.size();
+  query_cluster_at(nullptr, p.size(), p, hint, out);
+}
+
+// Point i of the cluster is p[at(i)] (idx null: i itself), so query_many
+// needs no gathered copies.
+void CollisionBody::query_cluster_at(const std::uint32_t* idx, std::size_t n, std::span<const Vec3d> p,
+                                     std::span<const std::uint32_t> hint, std::span<BodyDistance> out) const noexcept {
+  auto at = [idx](std::size_t i) { return idx ? idx[i] : i; };
   auto one_by_one = [&] {
-    for (std::size_t i = 0; i < n; ++i) out[i] = query(p[i], hint[i]);
+    for (std::size_t i = 0; i < n; ++i) out[at(i)] = query(p[at(i)], hint[at(i)]);
   };
   if (n == 0) return;
   if (n > kClusterMax) return one_by_one();
@@ -491,13 +498,13 @@ void CollisionBody::query_cluster(std::span<const Vec3d> p, std::span<const std:
   // r_i lies within r = max r_i of the cluster's bounding box, so one
   // traversal with that box and bound collects every leaf any point needs.
   Best best[kClusterMax];
-  Vec3d lo = p[0], hi = p[0];
+  Vec3d lo = p[at(0)], hi = p[at(0)];
   double r2 = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    if (hint[i] >= topo_->triangles_.size()) return one_by_one();
-    best[i] = start_from_hint(p[i], hint[i]);
-    lo = lo.cwiseMin(p[i]);
-    hi = hi.cwiseMax(p[i]);
+    if (hint[at(i)] >= topo_->triangles_.size()) return one_by_one();
+    best[i] = start_from_hint(p[at(i)], hint[at(i)]);
+    lo = lo.cwiseMin(p[at(i)]);
+    hi = hi.cwiseMax(p[at(i)]);
     r2 = std::max(r2, best[i].d2);
   }
   const float bound = float_bound(r2);
@@ -545,16 +552,16 @@ void CollisionBody::query_cluster(std::span<const Vec3d> p, std::span<const std:
   // Per point: the collected leaves' boxes four at once, then the triangles
   // of those within its own bound, exactly as query() would.
   for (std::size_t i = 0; i < n; ++i) {
-    const FloatPoint fp(p[i], extent_);
+    const FloatPoint fp(p[at(i)], extent_);
     for (std::size_t j = 0; j < leaves; j += 4) {
       const float* const llo[3] = {&leaf_box[0][j], &leaf_box[1][j], &leaf_box[2][j]};
       const float* const lhi[3] = {&leaf_box[3][j], &leaf_box[4][j], &leaf_box[5][j]};
       for (unsigned m = box_within_x4(fp.lo, fp.hi, llo, lhi, fp.slack, best[i].d2f, d2); m != 0; m &= m - 1) {
         const std::size_t k = j + static_cast<std::size_t>(std::countr_zero(m));
-        scan_leaf(p[i], fp, leaf_first[k], leaf_count[k], best[i]);
+        scan_leaf(p[at(i)], fp, leaf_first[k], leaf_count[k], best[i]);
       }
     }
-    out[i] = signed_distance(p[i], best[i].t, best[i].r);
+    out[at(i)] = signed_distance(p[at(i)], best[i].t, best[i].r);
   }
 }
 
@@ -584,13 +591,8 @@ void CollisionBody::query_many(std::span<const Vec3d> p, std::span<const std::ui
   cctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 16);
   if (ctx.grain == 0) cctx.grain = 4;
   par::for_each_n(cctx, (n + kCluster - 1) / kCluster, [&](std::size_t k) {
-    const std::size_t i0 = k * kCluster, m = std::min(kCluster, n - i0);
-    Vec3d cp[kCluster];
-    std::uint32_t ch[kCluster];
-    BodyDistance cd[kCluster];
-    for (std::size_t i = 0; i < m; ++i) cp[i] = p[order[i0 + i]], ch[i] = hint[order[i0 + i]];
-    query_cluster(std::span<const Vec3d>(cp, m), std::span<const std::uint32_t>(ch, m), std::span<BodyDistance>(cd, m));
-    for (std::size_t i = 0; i < m; ++i) out[order[i0 + i]] = cd[i];
+    const std::size_t i0 = k * kCluster;
+    query_cluster_at(order.data() + i0, std::min(kCluster, n - i0), p, hint, out);
   });
 }
 

@@ -162,6 +162,8 @@ class CollisionBody {
   [[nodiscard]] Best start_from_hint(const Vec3d& p, std::uint32_t hint) const noexcept;
   void scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, std::uint32_t count,
                  Best& best) const noexcept;
+  void query_cluster_at(const std::uint32_t* idx, std::size_t n, std::span<const Vec3d> p,
+                        std::span<const std::uint32_t> hint, std::span<BodyDistance> out) const noexcept;
   [[nodiscard]] Vec3d face_normal(std::uint32_t t) const noexcept;  // area-weighted (unnormalised)
   /// Sign and outward direction of p's closest point r on triangle t.
   [[nodiscard]] BodyDistance signed_distance(const Vec3d& p, std::uint32_t t, const TrianglePoint& r) const noexcept;
