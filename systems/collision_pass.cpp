@@ -479,9 +479,15 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
   return signed_distance(p, best.t, best.r);
 }
 
-void CollisionBody::query_cluster(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
-                                  std::span<BodyDistance> out) const noexcept {
+Status CollisionBody::query_cluster(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
+                                    std::span<BodyDistance> out) const {
+  if (empty()) return Status(ErrorCode::kInvalidArgument, "query_cluster: collision body not built");
+  if (hint.size() != p.size() || out.size() != p.size())
+    return Status(ErrorCode::kMismatch, "query_cluster: " + std::to_string(p.size()) + " points, " +
+                                            std::to_string(hint.size()) + " hints and " +
+                                            std::to_string(out.size()) + " outputs");
   query_cluster_at(nullptr, p.size(), p, hint, out);
+  return Status::ok();
 }
 
 // Point i of the cluster is p[at(i)] (idx null: i itself), so query_many
@@ -565,15 +571,20 @@ void CollisionBody::query_cluster_at(const std::uint32_t* idx, std::size_t n, st
   }
 }
 
-void CollisionBody::query_many(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
-                               std::span<BodyDistance> out, const ExecContext& ctx) const {
+Status CollisionBody::query_many(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
+                                 std::span<BodyDistance> out, const ExecContext& ctx) const {
   const std::size_t n = p.size();
+  if (empty()) return Status(ErrorCode::kInvalidArgument, "query_many: collision body not built");
+  if (out.size() != n || (!hint.empty() && hint.size() != n))
+    return Status(ErrorCode::kMismatch, "query_many: " + std::to_string(n) + " points, " +
+                                            std::to_string(hint.size()) + " hints and " +
+                                            std::to_string(out.size()) + " outputs");
   ExecContext qctx = ctx;
   qctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
   if (ctx.grain == 0) qctx.grain = 64;
   if (hint.empty()) {
     par::for_each_n(qctx, n, [&](std::size_t v) { out[v] = query(p[v]); });
-    return;
+    return Status::ok();
   }
   // Counting sort by the hint's leaf slot (points without a usable hint
   // last): neighbours in the hierarchy's leaf order are neighbours on the
@@ -594,6 +605,7 @@ void CollisionBody::query_many(std::span<const Vec3d> p, std::span<const std::ui
     const std::size_t i0 = k * kCluster;
     query_cluster_at(order.data() + i0, std::min(kCluster, n - i0), p, hint, out);
   });
+  return Status::ok();
 }
 
 // ------------------------------------------------------------ encoding
@@ -722,7 +734,7 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
   std::vector<std::uint8_t> exact(n, 1);
   // Every vertex's exact distance, by clusters of neighbours (one traversal
   // per cluster, each vertex bounded by its hint).
-  body.query_many(g, enc.triangle, d, qctx);
+  if (Status s = body.query_many(g, enc.triangle, d, qctx); !s) return s;
   par::for_each_n(qctx, n, [&](std::size_t v) {
     queries[v] = 1;
     target[v] = std::clamp(static_cast<double>(enc.clearance[v]), prm.min_clearance, prm.max_clearance);

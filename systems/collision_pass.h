@@ -137,21 +137,22 @@ class CollisionBody {
   /// closest one on the source body, or kNoTriangle); it only speeds the
   /// search up, the result is exact either way. Thread-safe.
   [[nodiscard]] BodyDistance query(const Vec3d& p, std::uint32_t hint = kNoTriangle) const noexcept;
-  /// The same answers for a cluster of nearby points (say, 16 neighbouring
+  /// The same answers for a cluster of nearby points (say, 8 neighbouring
   /// garment vertices), each with its hint, in one traversal: the hints
-  /// bound a ball around the cluster, its leaves are collected once and
-  /// each point tests only those. Points without a hint, more than
-  /// kClusterMax points, or a ball holding too many leaves fall back to
-  /// query() per point. Thread-safe.
+  /// bound the distance to the cluster's bounding box within which every
+  /// point's answer lies, those leaves are collected once and each point
+  /// tests only them. Points without a hint, more than kClusterMax points,
+  /// or a box holding too many leaves fall back to query() per point.
+  /// Errors: spans of different sizes, an empty body. Thread-safe.
   static constexpr std::size_t kClusterMax = 32;
-  void query_cluster(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
-                     std::span<BodyDistance> out) const noexcept;
+  [[nodiscard]] Status query_cluster(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
+                                     std::span<BodyDistance> out) const;
   /// The same answers for many points with hints (empty: none), in
   /// parallel: the points are ordered by their hint's place in the
-  /// hierarchy (a counting sort) and queried in clusters of 16 neighbours.
-  /// Sizes must match.
-  void query_many(std::span<const Vec3d> p, std::span<const std::uint32_t> hint, std::span<BodyDistance> out,
-                  const ExecContext& ctx = {}) const;
+  /// hierarchy (a counting sort) and queried in clusters of 8 neighbours.
+  /// Errors: sizes that differ, an empty body.
+  [[nodiscard]] Status query_many(std::span<const Vec3d> p, std::span<const std::uint32_t> hint,
+                                  std::span<BodyDistance> out, const ExecContext& ctx = {}) const;
   /// Pseudo-normal signed distance to one given triangle (the triangle must
   /// hold the closest point for the sign to be meaningful).
   [[nodiscard]] BodyDistance query_triangle(const Vec3d& p, std::uint32_t t) const noexcept;

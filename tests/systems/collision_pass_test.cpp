@@ -120,7 +120,7 @@ TEST(CollisionBody, ClusteredQueriesEqualSingleQueries) {
     ExecContext ctx;
     ctx.threads = threads;
     std::vector<BodyDistance> many(p.size());
-    scene->cb.query_many(p, hint, many, ctx);
+    ASSERT_TRUE(scene->cb.query_many(p, hint, many, ctx));
     for (std::size_t i = 0; i < p.size(); ++i) {
       const BodyDistance one = scene->cb.query(p[i], hint[i]);
       ASSERT_EQ(many[i].triangle, one.triangle) << i;
@@ -136,9 +136,16 @@ TEST(CollisionBody, ClusteredQueriesEqualSingleQueries) {
     for (std::size_t i = 0; i < p.size() && cp.size() < CollisionBody::kClusterMax; ++i)
       if (hint[i] != kNoTriangle && (p[i] - p[0]).norm() < 0.05) cp.push_back(p[i]), ch.push_back(hint[i]);
     std::vector<BodyDistance> cd(cp.size());
-    scene->cb.query_cluster(cp, ch, cd);
+    ASSERT_TRUE(scene->cb.query_cluster(cp, ch, cd));
     for (std::size_t i = 0; i < cp.size(); ++i) ASSERT_EQ(cd[i].distance, scene->cb.query(cp[i], ch[i]).distance);
   }
+  std::vector<BodyDistance> short_out(p.size() - 1);
+  EXPECT_EQ(scene->cb.query_many(p, hint, short_out).code(), ErrorCode::kMismatch);
+  EXPECT_EQ(CollisionBody().query_many(p, {}, short_out).code(), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(scene->cb.query_cluster(std::span<const Vec3d>(p.data(), 4), std::span<const std::uint32_t>(hint.data(), 3),
+                                    std::span<BodyDistance>(short_out.data(), 4))
+                .code(),
+            ErrorCode::kMismatch);
 }
 
 // The hierarchy's layout comes from the first body built on a topology and
