@@ -207,7 +207,8 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
                                             " positions for a topology of " + std::to_string(topology->point_count()) +
                                             " points");
   // A nanosecond per point: not worth a parallel loop's start-up.
-  if (!std::all_of(positions.begin(), positions.end(), [](const Vec3d& q) { return is_finite(q); })) return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
+  if (!std::all_of(positions.begin(), positions.end(), [](const Vec3d& q) { return is_finite(q); }))
+    return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
   const CollisionTopology& tp = *topology;
   std::call_once(tp.tree_once_, [&] { tp.build_tree(positions); });
   pos_ = positions;
@@ -375,8 +376,8 @@ struct CollisionBody::FloatPoint {
   __m128 slack;
   FloatPoint(const Vec3d& p, double extent) noexcept : FloatPoint(p, p, extent) {}
   FloatPoint(const Vec3d& a, const Vec3d& b, double extent) noexcept {  // the box [a, b]
-    const double scale =
-        extent + std::max({std::abs(a[0]), std::abs(a[1]), std::abs(a[2]), std::abs(b[0]), std::abs(b[1]), std::abs(b[2])});
+    const double scale = extent + std::max({std::abs(a[0]), std::abs(a[1]), std::abs(a[2]), std::abs(b[0]),
+                                            std::abs(b[1]), std::abs(b[2])});
     slack = _mm_set1_ps(static_cast<float>(std::ldexp(scale, -21)));
     for (int k = 0; k < 3; ++k) {
       lo[k] = _mm_set1_ps(static_cast<float>(a[k]));
@@ -484,8 +485,8 @@ Status CollisionBody::query_cluster(std::span<const Vec3d> p, std::span<const st
   if (empty()) return Status(ErrorCode::kInvalidArgument, "query_cluster: collision body not built");
   if (hint.size() != p.size() || out.size() != p.size())
     return Status(ErrorCode::kMismatch, "query_cluster: " + std::to_string(p.size()) + " points, " +
-                                            std::to_string(hint.size()) + " hints and " +
-                                            std::to_string(out.size()) + " outputs");
+                                            std::to_string(hint.size()) + " hints and " + std::to_string(out.size()) +
+                                            " outputs");
   query_cluster_at(nullptr, p.size(), p, hint, out);
   return Status::ok();
 }
@@ -576,9 +577,8 @@ Status CollisionBody::query_many(std::span<const Vec3d> p, std::span<const std::
   const std::size_t n = p.size();
   if (empty()) return Status(ErrorCode::kInvalidArgument, "query_many: collision body not built");
   if (out.size() != n || (!hint.empty() && hint.size() != n))
-    return Status(ErrorCode::kMismatch, "query_many: " + std::to_string(n) + " points, " +
-                                            std::to_string(hint.size()) + " hints and " +
-                                            std::to_string(out.size()) + " outputs");
+    return Status(ErrorCode::kMismatch, "query_many: " + std::to_string(n) + " points, " + std::to_string(hint.size()) +
+                                            " hints and " + std::to_string(out.size()) + " outputs");
   ExecContext qctx = ctx;
   qctx.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 256);
   if (ctx.grain == 0) qctx.grain = 64;

@@ -178,7 +178,7 @@ class CollisionBody {
   // Per leaf (four slots), its triangles' boxes (float, rounded outward)
   // as one block [lo x, y, z, hi x, y, z][slot].
   std::vector<float> tri_box_;
-  double extent_ = 0;                          // largest absolute coordinate (bounds float rounding)
+  double extent_ = 0;  // largest absolute coordinate (bounds float rounding)
 };
 
 /// Clearance encoding of a garment on its source body.

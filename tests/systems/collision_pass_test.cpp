@@ -107,7 +107,8 @@ TEST(CollisionBody, ClusteredQueriesEqualSingleQueries) {
     }
     p.push_back(q);
     const std::uint32_t good = scene->bvh.signed_distance(q).closest.triangle;
-    hint.push_back(i % 7 == 3 ? kNoTriangle : (i % 7 == 5 ? static_cast<std::uint32_t>(rng.uniform(0, nt - 1e-9)) : good));
+    hint.push_back(i % 7 == 3 ? kNoTriangle
+                              : (i % 7 == 5 ? static_cast<std::uint32_t>(rng.uniform(0, nt - 1e-9)) : good));
   }
   // Neighbours in index order are not neighbours in space: query_many
   // orders them itself.
@@ -142,8 +143,9 @@ TEST(CollisionBody, ClusteredQueriesEqualSingleQueries) {
   std::vector<BodyDistance> short_out(p.size() - 1);
   EXPECT_EQ(scene->cb.query_many(p, hint, short_out).code(), ErrorCode::kMismatch);
   EXPECT_EQ(CollisionBody().query_many(p, {}, short_out).code(), ErrorCode::kInvalidArgument);
-  EXPECT_EQ(scene->cb.query_cluster(std::span<const Vec3d>(p.data(), 4), std::span<const std::uint32_t>(hint.data(), 3),
-                                    std::span<BodyDistance>(short_out.data(), 4))
+  EXPECT_EQ(scene->cb
+                .query_cluster(std::span<const Vec3d>(p.data(), 4), std::span<const std::uint32_t>(hint.data(), 3),
+                               std::span<BodyDistance>(short_out.data(), 4))
                 .code(),
             ErrorCode::kMismatch);
 }
