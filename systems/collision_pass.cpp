@@ -213,7 +213,6 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   std::call_once(tp.tree_once_, [&] { tp.build_tree(positions); });
   pos_ = positions;
   topo_ = std::move(topology);
-  const std::size_t nt = tp.triangles_.size();
   // Refit, in float rounded outward so that a box never excludes its
   // triangle. At least one float ulp outward whichever way the conversion
   // rounded (|f| 2^-23 >= ulp(f); the float minimum covers zero), without a
@@ -418,8 +417,7 @@ CollisionBody::Best CollisionBody::start_from_hint(const Vec3d& p, std::uint32_t
 
 // A leaf's triangles: their own boxes first, four at once, then the exact
 // distance of those within the bound.
-void CollisionBody::scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, std::uint32_t count,
-                              Best& best) const noexcept {
+void CollisionBody::scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, Best& best) const noexcept {
   const float* tb = &tri_box_[(first / 4) * 24];
   const float* const lo[3] = {tb, tb + 4, tb + 8};
   const float* const hi[3] = {tb + 12, tb + 16, tb + 20};
@@ -458,7 +456,7 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     const Item it = stack[--top];
     if (it.d2 > best.d2f) continue;
     if (it.count > 0) {
-      scan_leaf(p, fp, it.ref, it.count, best);
+      scan_leaf(p, fp, it.ref, best);
       continue;
     }
     const CollisionTopology::WideNode& nd = wide[it.ref];
@@ -520,7 +518,6 @@ void CollisionBody::query_cluster_at(const std::uint32_t* idx, std::size_t n, st
   constexpr std::size_t kMaxLeaves = 96;
   alignas(16) float leaf_box[6][kMaxLeaves + 4];
   std::uint32_t leaf_first[kMaxLeaves];
-  std::uint8_t leaf_count[kMaxLeaves];
   std::size_t leaves = 0;
   const auto& wide = topo_->wide_;
   std::uint32_t stack[64];
@@ -546,7 +543,6 @@ void CollisionBody::query_cluster_at(const std::uint32_t* idx, std::size_t n, st
         leaf_box[3 + a][leaves] = bx.hi[a][l];
       }
       leaf_first[leaves] = wide[w].child[l];
-      leaf_count[leaves] = wide[w].count[l];
       ++leaves;
     }
   }
@@ -565,7 +561,7 @@ void CollisionBody::query_cluster_at(const std::uint32_t* idx, std::size_t n, st
       const float* const lhi[3] = {&leaf_box[3][j], &leaf_box[4][j], &leaf_box[5][j]};
       for (unsigned m = box_within_x4(fp.lo, fp.hi, llo, lhi, fp.slack, best[i].d2f, d2); m != 0; m &= m - 1) {
         const std::size_t k = j + static_cast<std::size_t>(std::countr_zero(m));
-        scan_leaf(p[at(i)], fp, leaf_first[k], leaf_count[k], best[i]);
+        scan_leaf(p[at(i)], fp, leaf_first[k], best[i]);
       }
     }
     out[at(i)] = signed_distance(p[at(i)], best[i].t, best[i].r);

@@ -161,8 +161,7 @@ class CollisionBody {
   struct Best;        // the best triangle so far of one query
   struct FloatPoint;  // a query point in float lanes, with its rounding slack
   [[nodiscard]] Best start_from_hint(const Vec3d& p, std::uint32_t hint) const noexcept;
-  void scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, std::uint32_t count,
-                 Best& best) const noexcept;
+  void scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, Best& best) const noexcept;
   void query_cluster_at(const std::uint32_t* idx, std::size_t n, std::span<const Vec3d> p,
                         std::span<const std::uint32_t> hint, std::span<BodyDistance> out) const noexcept;
   [[nodiscard]] Vec3d face_normal(std::uint32_t t) const noexcept;  // area-weighted (unnormalised)
