@@ -50,7 +50,7 @@ tsan:
 	@bash scripts/install-deps.sh --test
 	cmake -S . -B build-tsan -G "$(GEN)" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DATELIER_SANITIZE=thread -DATELIER_BUILD_BENCH=OFF
 	cmake --build build-tsan -j $(JOBS)
-	ATELIER_SKIP_LONG_TESTS=1 ctest --test-dir build-tsan --output-on-failure -j $(JOBS)
+	ATELIER_SKIP_LONG_TESTS=1 TSAN_OPTIONS="suppressions=$(CURDIR)/scripts/tsan.supp halt_on_error=1" ctest --test-dir build-tsan --output-on-failure -j $(JOBS)
 
 format:
 	find engine storage systems io apps tests bench examples -name '*.h' -o -name '*.cpp' | xargs clang-format -i

@@ -17,7 +17,8 @@ Status fail(ErrorCode c, const std::string& surface, const std::string& what) {
 
 Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonArrays& a, const ExecContext& ctx) {
   const std::size_t nv = a.positions.size();
-  if (a.face_offsets.empty()) return fail(ErrorCode::kInvalidArgument, name, "face_offsets is empty (needs F+1 entries)");
+  if (a.face_offsets.empty())
+    return fail(ErrorCode::kInvalidArgument, name, "face_offsets is empty (needs F+1 entries)");
   const std::size_t nf = a.face_offsets.size() - 1;
   if (a.face_offsets.front() != 0 || a.face_offsets.back() != a.face_nodes.size())
     return fail(ErrorCode::kInvalidArgument, name, "face_offsets must start at 0 and end at face_nodes.size()");
@@ -54,7 +55,8 @@ Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonA
   const std::size_t nc = a.face_nodes.size();
   std::vector<std::uint32_t> corner_face(nc);
   for (std::size_t f = 0; f < nf; ++f)
-    for (std::uint32_t k = a.face_offsets[f]; k < a.face_offsets[f + 1]; ++k) corner_face[k] = static_cast<std::uint32_t>(f);
+    for (std::uint32_t k = a.face_offsets[f]; k < a.face_offsets[f + 1]; ++k)
+      corner_face[k] = static_cast<std::uint32_t>(f);
   auto corner_next = [&](std::size_t k) -> std::uint32_t {
     const std::uint32_t f = corner_face[k];
     return k + 1 < a.face_offsets[f + 1] ? a.face_nodes[k + 1] : a.face_nodes[a.face_offsets[f]];
@@ -71,6 +73,9 @@ Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonA
   // Within a bucket, order corners by their larger end (then corner index),
   // so edge numbering is a pure function of the input.
   std::vector<std::uint32_t> corner_half(nc);  // corner -> local halfedge id 2*edge+side
+  // The first corner of each edge writes both of its halfedges' tails (the
+  // other corner, if any, would write the same values: a data race).
+  std::vector<std::uint8_t> writes_tails(nc, 0);
   std::uint32_t n_edges = 0;
   for (std::size_t v = 0; v < nv; ++v) {
     auto* first = bucket.data() + bucket_start[v];
@@ -94,11 +99,12 @@ Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonA
       const bool fwd0 = a.face_nodes[*it] == v;
       if (count == 2 && fwd0 == (a.face_nodes[it[1]] == v)) {
         std::ostringstream s;
-        s << "faces " << corner_face[it[0]] << " and " << corner_face[it[1]] << " traverse edge (" << v << ","
-          << hi << ") in the same direction (inconsistent orientation)";
+        s << "faces " << corner_face[it[0]] << " and " << corner_face[it[1]] << " traverse edge (" << v << "," << hi
+          << ") in the same direction (inconsistent orientation)";
         return fail(ErrorCode::kNonManifold, name, s.str());
       }
       for (auto* q = it; q != run; ++q) corner_half[*q] = 2 * n_edges + (a.face_nodes[*q] == v ? 0u : 1u);
+      writes_tails[*it] = 1;
       ++n_edges;
       it = run;
     }
@@ -124,9 +130,11 @@ Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonA
     const std::uint32_t lh = corner_half[k];
     const std::uint32_t va = a.face_nodes[k], vb = corner_next(k);
     const std::uint32_t lo = std::min(va, vb), hi = std::max(va, vb);
-    const std::uint32_t he = lh & ~1u;
-    m.halfedges.tail[h0 + he] = NodeIdx{v0 + lo};
-    m.halfedges.tail[h0 + he + 1] = NodeIdx{v0 + hi};
+    if (writes_tails[k]) {
+      const std::uint32_t he = lh & ~1u;
+      m.halfedges.tail[h0 + he] = NodeIdx{v0 + lo};
+      m.halfedges.tail[h0 + he + 1] = NodeIdx{v0 + hi};
+    }
     const std::uint32_t f = corner_face[k];
     m.halfedges.face[h0 + lh] = FaceIdx{f0 + f};
     const std::uint32_t b = a.face_offsets[f], e = a.face_offsets[f + 1];
@@ -149,7 +157,8 @@ Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonA
     std::vector<std::uint32_t> order(nh);
     {
       std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-      for (std::size_t h = 0; h < nh; ++h) order[fill[m.halfedges.tail[h0 + h].value - v0]++] = h0 + static_cast<std::uint32_t>(h);
+      for (std::size_t h = 0; h < nh; ++h)
+        order[fill[m.halfedges.tail[h0 + h].value - v0]++] = h0 + static_cast<std::uint32_t>(h);
     }
     par::for_each_n(ctx, nv, [&](std::size_t v) {
       const std::uint32_t b = start[v], e = start[v + 1];
