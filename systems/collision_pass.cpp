@@ -385,6 +385,13 @@ struct CollisionBody::FloatPoint {
   }
 };
 
+// The lanes of a wide node within `bound` of the query (box_within_x4).
+unsigned CollisionBody::lanes_within(const FloatPoint& q, const WideBox& b, float bound, float d2[4]) noexcept {
+  const float* const lo[3] = {b.lo[0], b.lo[1], b.lo[2]};
+  const float* const hi[3] = {b.hi[0], b.hi[1], b.hi[2]};
+  return box_within_x4(q.lo, q.hi, lo, hi, q.slack, bound, d2);
+}
+
 struct CollisionBody::Best {
   double d2 = kInf;
   float d2f = std::numeric_limits<float>::max();
@@ -461,12 +468,10 @@ BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noex
     }
     const CollisionTopology::WideNode& nd = wide[it.ref];
     const WideBox& bx = wide_box_[it.ref];
-    const float* const lo[3] = {bx.lo[0], bx.lo[1], bx.lo[2]};
-    const float* const hi[3] = {bx.hi[0], bx.hi[1], bx.hi[2]};
     // Lanes within the bound (empty lanes are inverted infinite boxes,
     // never within), pushed far to near so the nearest is popped first.
     const int base = top;
-    for (unsigned m = box_within_x4(fp.lo, fp.hi, lo, hi, fp.slack, best.d2f, d2); m != 0; m &= m - 1) {
+    for (unsigned m = lanes_within(fp, bx, best.d2f, d2); m != 0; m &= m - 1) {
       const int l = std::countr_zero(m);
       const float dl = d2[l];
       int k = top++;
@@ -527,9 +532,7 @@ void CollisionBody::query_cluster_at(const std::uint32_t* idx, std::size_t n, st
   while (top > 0) {
     const std::uint32_t w = stack[--top];
     const WideBox& bx = wide_box_[w];
-    const float* const blo[3] = {bx.lo[0], bx.lo[1], bx.lo[2]};
-    const float* const bhi[3] = {bx.hi[0], bx.hi[1], bx.hi[2]};
-    for (unsigned m = box_within_x4(fc.lo, fc.hi, blo, bhi, fc.slack, bound, d2); m != 0; m &= m - 1) {
+    for (unsigned m = lanes_within(fc, bx, bound, d2); m != 0; m &= m - 1) {
       const int l = std::countr_zero(m);
       if (wide[w].count[l] == 0) {
         stack[top++] = wide[w].child[l];

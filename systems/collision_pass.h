@@ -160,6 +160,8 @@ class CollisionBody {
  private:
   struct Best;        // the best triangle so far of one query
   struct FloatPoint;  // a query point in float lanes, with its rounding slack
+  struct WideBox;
+  [[nodiscard]] static unsigned lanes_within(const FloatPoint& q, const WideBox& b, float bound, float d2[4]) noexcept;
   [[nodiscard]] Best start_from_hint(const Vec3d& p, std::uint32_t hint) const noexcept;
   void scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_t first, Best& best) const noexcept;
   void query_cluster_at(const std::uint32_t* idx, std::size_t n, std::span<const Vec3d> p,
