@@ -22,7 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path mh_dir() { return fs::path(ATELIER_BENCH_SHARED_DATA) / "makehuman"; }
+fs::path mh_dir() {
+  return fs::path(ATELIER_BENCH_SHARED_DATA) / "makehuman";
+}
 
 struct Scene {
   std::shared_ptr<const makehuman::HumanLibrary> lib;  // null without the data
@@ -92,7 +94,8 @@ void BM_PPolygonSearch_Grid(benchmark::State& st) {
     grid.nearest_many(s.garment, kNq, out, ctx);
     benchmark::DoNotOptimize(out.data());
   }
-  st.counters["queries/s"] = benchmark::Counter(static_cast<double>(s.garment.size()), benchmark::Counter::kIsIterationInvariantRate);
+  st.counters["queries/s"] =
+      benchmark::Counter(static_cast<double>(s.garment.size()), benchmark::Counter::kIsIterationInvariantRate);
   st.SetLabel(s.body_name + ", k=134");
 }
 BENCHMARK(BM_PPolygonSearch_Grid)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -131,7 +134,8 @@ void BM_PPolygonSearch_Nanoflann(benchmark::State& st) {
       }
     });
   }
-  st.counters["queries/s"] = benchmark::Counter(static_cast<double>(s.garment.size()), benchmark::Counter::kIsIterationInvariantRate);
+  st.counters["queries/s"] =
+      benchmark::Counter(static_cast<double>(s.garment.size()), benchmark::Counter::kIsIterationInvariantRate);
   st.SetLabel("nanoflann KD-tree, k=134");
 }
 BENCHMARK(BM_PPolygonSearch_Nanoflann)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -199,8 +203,10 @@ void BM_Decode_OneBody(benchmark::State& st) {
     decode_detail(e, fr, out, ctx);
     benchmark::DoNotOptimize(out.data());
   }
-  st.counters["entries/s"] = benchmark::Counter(static_cast<double>(e.entries()), benchmark::Counter::kIsIterationInvariantRate);
-  st.counters["bytes/s"] = benchmark::Counter(static_cast<double>(e.bytes()), benchmark::Counter::kIsIterationInvariantRate);
+  st.counters["entries/s"] =
+      benchmark::Counter(static_cast<double>(e.entries()), benchmark::Counter::kIsIterationInvariantRate);
+  st.counters["bytes/s"] =
+      benchmark::Counter(static_cast<double>(e.bytes()), benchmark::Counter::kIsIterationInvariantRate);
   st.SetLabel("30k x 200, frames precomputed");
 }
 BENCHMARK(BM_Decode_OneBody)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -246,13 +252,63 @@ void BM_Decode_Batched(benchmark::State& st) {
     (void)decode_detail_batch(dec, s.poly, set, 0, bodies, out, ws, ctx);
     benchmark::DoNotOptimize(out.data());
   }
-  st.counters["bodies/s"] = benchmark::Counter(static_cast<double>(bodies), benchmark::Counter::kIsIterationInvariantRate);
-  st.counters["ms/body"] = benchmark::Counter(static_cast<double>(bodies) / 1000.0,
-                                              benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  st.counters["bodies/s"] =
+      benchmark::Counter(static_cast<double>(bodies), benchmark::Counter::kIsIterationInvariantRate);
+  st.counters["ms/body"] =
+      benchmark::Counter(static_cast<double>(bodies) / 1000.0,
+                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   st.counters["entries/run"] = static_cast<double>(dec.entries()) / static_cast<double>(dec.runs());
   st.SetLabel("30k x 200, frames included");
 }
 BENCHMARK(BM_Decode_Batched)->Args({2, 16})->Args({2, 64})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// A garment over part of the body, as real ones are: 10k points near the
+// polygons of a band of the body's height (a top, on the human body), the
+// default N_q. A pass computes the frames of the polygons it uses only.
+void BM_Decode_Batched_Band(benchmark::State& st) {
+  const Scene& s = scene();
+  static const DetailEncoding e = [&] {
+    PolygonFrames fr;
+    compute_frames(s.poly, s.pos, fr);
+    double lo = 1e300, hi = -1e300;
+    for (const Vec3f& c : fr.centroid) lo = std::min(lo, double{c.y()}), hi = std::max(hi, double{c.y()});
+    std::vector<std::size_t> band;
+    for (std::size_t f = 0; f < s.poly.size(); ++f) {
+      const double h = (fr.centroid[f].y() - lo) / (hi - lo);
+      if (!fr.degenerate[f] && h > 0.55 && h < 0.8) band.push_back(f);
+    }
+    SplitMix64 r(2);
+    std::vector<Vec3d> g;
+    for (std::size_t i = 0; g.size() < 10'000; ++i) {
+      const std::size_t f = band[(i / 3) % band.size()];
+      g.push_back(fr.centroid[f].cast<double>() + r.uniform(0.005, 0.03) * fr.x[f].cast<double>() +
+                  0.004 * Vec3d(r.normal(), r.normal(), r.normal()));
+    }
+    return encode_detail(s.poly, s.pos, g, DetailParams{}).value();
+  }();
+  BodySet set(s.ref);
+  SplitMix64 r(5);
+  std::vector<Vec3d> p(s.pos.size());
+  for (std::size_t b = 0; b < 16; ++b) {
+    const double k = r.uniform(0.9, 1.1);
+    for (std::size_t v = 0; v < p.size(); ++v) p[v] = s.pos[v] * k;
+    (void)set.add("b", std::span<const Vec3d>(p));
+  }
+  std::vector<Vec3f> out(16 * e.vertex_count());
+  const ExecContext ctx = threads(static_cast<int>(st.range(0)));
+  const DetailDecoder dec(e, ctx);
+  DecodeWorkspace ws;
+  for (auto _ : st) {
+    (void)decode_detail_batch(dec, s.poly, set, 0, 16, out, ws, ctx);
+    benchmark::DoNotOptimize(out.data());
+  }
+  st.counters["ms/body"] =
+      benchmark::Counter(16.0 / 1000.0, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  st.counters["polygons used"] = static_cast<double>(dec.used_polygons().size());
+  st.counters["entries/vertex"] = static_cast<double>(dec.entries()) / static_cast<double>(e.vertex_count());
+  st.SetLabel("10k-vertex band garment, default N_q, batches of 16, frames included");
+}
+BENCHMARK(BM_Decode_Batched_Band)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_MakeHuman_EndToEnd_1000(benchmark::State& st) {
   const Scene& s = scene();

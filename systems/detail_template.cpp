@@ -1029,6 +1029,12 @@ DetailDecoder::DetailDecoder(const DetailEncoding& enc, const ExecContext& ctx)
     std::copy(polys[t].begin(), polys[t].end(), run_polygon_.begin() + tile_run_[t]);
     std::copy(ends[t].begin(), ends[t].end(), run_entry_.begin() + tile_run_[t] + 1);
   }
+  // A garment rarely covers the whole body (a skirt uses a fifth of the
+  // skin's polygons): frames are computed for these polygons only.
+  std::vector<std::uint8_t> used(np, 0);
+  for (const std::uint32_t p : run_polygon_) used[p] = 1;
+  for (std::size_t p = 0; p < np; ++p)
+    if (used[p]) used_polygons_.push_back(static_cast<std::uint32_t>(p));
 }
 
 Status DetailDecoder::check_topology(const BodyPolygons& body) const {
@@ -1063,7 +1069,8 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   // (a tile's entries stay in L2 while each group's frames stream through).
   constexpr std::size_t kGroups = 2;
   const std::size_t pass_groups = std::min(kGroups, (count + kLanes - 1) / kLanes);
-  // Every lane of every frame is written below before it is read.
+  // Every lane of every frame the decoder reads (its used polygons') is
+  // written below before it is read.
   if (ws.frames.size() < pass_groups * np * kFrameFloats + 16) ws.frames.resize(pass_groups * np * kFrameFloats + 16);
   const auto addr = reinterpret_cast<std::uintptr_t>(ws.frames.data());
   float* frames = ws.frames.data() + ((64 - addr % 64) % 64) / sizeof(float);
@@ -1071,6 +1078,15 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   if (fast && ws.positions.size() < std::size_t{body.node_count} * 3 * pass_groups * kLanes)
     ws.positions.resize(std::size_t{body.node_count} * 3 * pass_groups * kLanes);
   float* tpos = ws.positions.data();
+  if (fast) {  // the nodes whose positions the frames read
+    ws.node_used.assign(body.node_count, 0);
+    for (const std::uint32_t p : dec.used_polygons_)
+      for (std::uint32_t k = body.face_offsets[p]; k < body.face_offsets[p + 1]; ++k)
+        ws.node_used[body.face_nodes[k]] = 1;
+    ws.nodes.clear();
+    for (std::uint32_t n = 0; n < body.node_count; ++n)
+      if (ws.node_used[n]) ws.nodes.push_back(n);
+  }
   const std::size_t tiles = (nv + DetailDecoder::kTile - 1) / DetailDecoder::kTile;
   for (std::size_t g0 = 0; g0 < count; g0 += pass_groups * kLanes) {
     const std::size_t nb = std::min(pass_groups * kLanes, count - g0);
@@ -1086,17 +1102,26 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
       // columns read at once would defeat the hardware prefetchers).
       ExecContext tc = ctx;
       tc.grain = 2048;
-      par::for_each_block(tc, stride, [&](std::size_t n0, std::size_t n1) {
-        for (std::size_t i = 0; i < lanes; ++i)
-          for (std::size_t d = 0; d < 3; ++d) {
-            const float* src = col[i] + d * stride;
-            for (std::size_t n = n0; n < n1; ++n) tpos[(n * 3 + d) * lanes + i] = src[n];
-          }
+      // Only the corners of used polygons (not a body's helper geometry or
+      // the skin a garment does not reach), in sub-blocks of 128 nodes
+      // whose 24 KB of transposed rows stay in L1 while the columns are
+      // read into them.
+      const std::uint32_t* nodes = ws.nodes.data();
+      par::for_each_block(tc, ws.nodes.size(), [&](std::size_t b0, std::size_t b1) {
+        for (std::size_t j0 = b0; j0 < b1; j0 += 128) {
+          const std::size_t j1 = std::min(b1, j0 + 128);
+          for (std::size_t i = 0; i < lanes; ++i)
+            for (std::size_t d = 0; d < 3; ++d) {
+              const float* src = col[i] + d * stride;
+              for (std::size_t j = j0; j < j1; ++j) tpos[(nodes[j] * std::size_t{3} + d) * lanes + i] = src[nodes[j]];
+            }
+        }
       });
     }
     ExecContext fc = ctx;
     fc.grain = 256;  // 13k polygons: enough blocks to balance 2 threads
-    par::for_each_n(fc, np, [&](std::size_t p) {
+    par::for_each_n(fc, dec.used_polygons_.size(), [&](std::size_t u) {
+      const std::size_t p = dec.used_polygons_[u];
       const bool small = body.face_offsets[p + 1] - body.face_offsets[p] <= kMaxCorners;
       for (std::size_t i = 0; i < groups * kLanes; i += kLanes) {
         float* f = frames + ((i / kLanes) * np + p) * kFrameFloats;

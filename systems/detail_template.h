@@ -198,6 +198,8 @@ class DetailDecoder {
   [[nodiscard]] std::size_t vertex_count() const noexcept { return vertex_count_; }
   [[nodiscard]] std::size_t entries() const noexcept { return vertex_.size(); }
   [[nodiscard]] std::size_t runs() const noexcept { return run_polygon_.size(); }
+  /// Polygons some entry uses, increasing: the only frames a pass computes.
+  [[nodiscard]] std::span<const std::uint32_t> used_polygons() const noexcept { return used_polygons_; }
   /// Bytes one pass over the matrix streams.
   [[nodiscard]] std::size_t bytes() const noexcept {
     return entries() * 17 + runs() * 8 + tile_run_.size() * 4 + reference_corners_.size() * 8;
@@ -214,11 +216,12 @@ class DetailDecoder {
   std::uint64_t topology_hash_ = 0;
   std::uint32_t vertex_count_ = 0;
   std::vector<Eigen::Vector2f> reference_corners_;
-  std::vector<std::uint32_t> tile_run_{0};  // tile -> first run (size tiles + 1)
-  std::vector<std::uint32_t> run_polygon_;  // per run
-  std::vector<std::uint32_t> run_entry_{0};  // run -> first entry (size runs + 1)
-  std::vector<std::uint8_t> vertex_;        // per entry: its vertex within the tile
-  std::vector<float> coef_;                 // per entry: a, b, c, d (see top)
+  std::vector<std::uint32_t> tile_run_{0};    // tile -> first run (size tiles + 1)
+  std::vector<std::uint32_t> run_polygon_;    // per run
+  std::vector<std::uint32_t> used_polygons_;  // distinct run_polygon_, increasing
+  std::vector<std::uint32_t> run_entry_{0};   // run -> first entry (size runs + 1)
+  std::vector<std::uint8_t> vertex_;          // per entry: its vertex within the tile
+  std::vector<float> coef_;                   // per entry: a, b, c, d (see top)
 };
 
 /// Buffers of batched decoding (a pass's frames, the bodies' positions
@@ -227,6 +230,8 @@ class DetailDecoder {
 /// One workspace per concurrent caller.
 struct DecodeWorkspace {
   std::vector<float> frames, positions;
+  std::vector<std::uint32_t> nodes;  // corners of the decoder's used polygons, increasing
+  std::vector<std::uint8_t> node_used;
 };
 
 /// Decodes bodies [first, first+count) of a body set, 16 bodies per pass

@@ -1,3 +1,5 @@
+#include "systems/detail_template.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -8,7 +10,6 @@
 #include "engine/random.h"
 #include "support/shapes.h"
 #include "systems/body_set.h"
-#include "systems/detail_template.h"
 #include "systems/makehuman_body.h"
 
 using namespace atelier;
@@ -259,7 +260,8 @@ TEST(DetailTemplate, BatchedDecodingMatchesSingleAndIsDeterministic) {
   for (int k = 0; k < 21; ++k) {  // not a multiple of the batch width
     std::vector<Vec3d> p(b.pos.size());
     const Vec3d s(r.uniform(0.8, 1.2), r.uniform(0.8, 1.2), r.uniform(0.8, 1.2));
-    for (std::size_t v = 0; v < p.size(); ++v) p[v] = b.pos[v].cwiseProduct(s) + Vec3d(0, 0, 0.1 * std::sin(3 * b.pos[v].x()));
+    for (std::size_t v = 0; v < p.size(); ++v)
+      p[v] = b.pos[v].cwiseProduct(s) + Vec3d(0, 0, 0.1 * std::sin(3 * b.pos[v].x()));
     ASSERT_TRUE(set.add("b" + std::to_string(k), std::span<const Vec3d>(p)));
     bodies.push_back(set.positions(set.size() - 1));  // what the set stores (float)
   }
@@ -355,10 +357,59 @@ TEST(DetailTemplate, DecoderForBatchesIsThreadIndependentAndMatchesSingleBodies)
   EXPECT_EQ(std::memcmp(w1.data(), a.data(), w1.size() * sizeof(Vec3f)), 0);
   // Errors: another topology, wrong output size, range out of bounds.
   const Body other = sphere_body(31, 20);
-  EXPECT_EQ(decode_detail_batch(d1, other.poly, set, 0, 1, std::span<Vec3f>(a.data(), nv)).code(), ErrorCode::kMismatch);
+  EXPECT_EQ(decode_detail_batch(d1, other.poly, set, 0, 1, std::span<Vec3f>(a.data(), nv)).code(),
+            ErrorCode::kMismatch);
   EXPECT_EQ(decode_detail_batch(d1, b.poly, set, 0, 2, std::span<Vec3f>(a.data(), nv)).code(), ErrorCode::kMismatch);
   EXPECT_EQ(decode_detail_batch(d1, b.poly, set, 18, 2, std::span<Vec3f>(a.data(), 2 * nv)).code(),
             ErrorCode::kInvalidArgument);
+}
+
+TEST(DetailTemplate, BatchedDecodingOfAPartialGarmentComputesOnlyItsPolygonsFrames) {
+  // A cap over the upper sphere uses a fraction of the polygons. The
+  // decoder's used polygons are exactly the distinct polygons of the
+  // encoding, and a pass that computes only their frames decodes as the
+  // single-body path does, also in a workspace whose other frames hold a
+  // full-coverage garment's values of other bodies.
+  const Body b = sphere_body(40, 24);
+  std::vector<Vec3d> cap;
+  for (const Vec3d& q : shell_points(6000, 31))
+    if (q.z() > 0.6) cap.push_back(q);
+  ASSERT_GT(cap.size(), 600u);
+  DetailParams prm;
+  prm.polygons_per_vertex = 12;
+  auto enc = encode_detail(b.poly, b.pos, cap, prm);
+  auto full = encode_detail(b.poly, b.pos, shell_points(800, 32), prm);
+  ASSERT_TRUE(enc && full);
+  ExecContext two;
+  two.threads = 2;
+  two.sequential_threshold = 1;
+  const DetailDecoder dec(*enc, two), dec_full(*full, two);
+  std::vector<std::uint32_t> want(enc->polygon.begin(), enc->polygon.end());
+  std::sort(want.begin(), want.end());
+  want.erase(std::unique(want.begin(), want.end()), want.end());
+  EXPECT_TRUE(std::equal(want.begin(), want.end(), dec.used_polygons().begin(), dec.used_polygons().end()));
+  EXPECT_LT(dec.used_polygons().size() * 2, b.poly.size());  // a cap of a fifth of the area
+  EXPECT_GT(dec_full.used_polygons().size() * 10, b.poly.size() * 9);
+  BodySet set(b.ref);
+  SplitMix64 r(33);
+  for (int k = 0; k < 20; ++k) {
+    std::vector<Vec3d> p(b.pos.size());
+    const Vec3d sc(r.uniform(0.8, 1.2), r.uniform(0.8, 1.2), r.uniform(0.8, 1.2));
+    for (std::size_t v = 0; v < p.size(); ++v) p[v] = b.pos[v].cwiseProduct(sc);
+    ASSERT_TRUE(set.add("b" + std::to_string(k), std::span<const Vec3d>(p)));
+  }
+  DecodeWorkspace ws;
+  std::vector<Vec3f> other(16 * full->vertex_count()), out(16 * cap.size());
+  ASSERT_TRUE(decode_detail_batch(dec_full, b.poly, set, 4, 16, other, ws, two));
+  ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 16, out, ws, two));
+  std::vector<Vec3d> single(cap.size());
+  double worst = 0;
+  for (std::size_t k = 0; k < 16; ++k) {
+    ASSERT_TRUE(decode_detail(*enc, b.poly, set.positions(k), single));
+    for (std::size_t v = 0; v < cap.size(); ++v)
+      worst = std::max(worst, (out[k * cap.size() + v].cast<double>() - single[v]).norm());
+  }
+  EXPECT_LT(worst, 1e-5);
 }
 
 TEST(DetailTemplate, BatchedFramesHandleLargeAndCollapsedPolygons) {
@@ -513,7 +564,9 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
 }
 
 namespace {
-fs::path mh_dir() { return fs::path(ATELIER_SHARED_DATA) / "makehuman"; }
+fs::path mh_dir() {
+  return fs::path(ATELIER_SHARED_DATA) / "makehuman";
+}
 }  // namespace
 
 TEST(DetailTemplate, RealSkinPPolygonsEqualBruteForceAndHelpersRegenerate) {
