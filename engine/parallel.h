@@ -21,37 +21,32 @@
 #if defined(__SANITIZE_THREAD__)
 extern "C" void __tsan_acquire(void* addr);
 extern "C" void __tsan_release(void* addr);
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
 #endif
 
 namespace atelier::par {
 
-/// ThreadSanitizer's view of a parallel loop's fork and join. TBB as
-/// packaged is not instrumented, so TSan cannot see that the caller's
-/// writes happen before the workers run, nor that the workers' writes
-/// happen before the loop returns, and reports every hand-over as a race.
-/// These edges say it; outside TSan builds the type is empty and free.
-struct ForkJoin {
+/// Happens-before edges for ThreadSanitizer around our callbacks that
+/// Embree and OpenVDB call on their own (uninstrumented) TBB threads: the
+/// callback releases, the caller acquires once the library returns. No-ops
+/// outside TSan builds.
+inline void tsan_release(const void* addr) noexcept {
 #if defined(__SANITIZE_THREAD__)
-  char fork_ = 0, join_ = 0;
-  ForkJoin() noexcept {
-    __tsan_release(&fork_);
-  }
-  ~ForkJoin() {
-    __tsan_acquire(&join_);
-  }
-  ForkJoin(const ForkJoin&) = delete;
-  ForkJoin& operator=(const ForkJoin&) = delete;
-  void enter() noexcept {
-    __tsan_acquire(&fork_);
-  }  // at the start of a worker's block
-  void leave() noexcept {
-    __tsan_release(&join_);
-  }  // at its end
+  __tsan_release(const_cast<void*>(addr));
 #else
-  void enter() const noexcept {}
-  void leave() const noexcept {}
+  (void)addr;
 #endif
-};
+}
+inline void tsan_acquire(const void* addr) noexcept {
+#if defined(__SANITIZE_THREAD__)
+  __tsan_acquire(const_cast<void*>(addr));
+#else
+  (void)addr;
+#endif
+}
 
 [[nodiscard]] inline bool run_sequential(const ExecContext& ctx, std::size_t n) noexcept {
   return ctx.threads == 1 || n < ctx.sequential_threshold;
@@ -71,6 +66,48 @@ void in_arena(const ExecContext& ctx, F&& f) {
   }
 }
 
+#if defined(__SANITIZE_THREAD__)
+namespace detail {
+inline thread_local bool in_parallel_block = false;
+
+/// The loops' parallel path under ThreadSanitizer: blocks of [0, n) taken
+/// from an atomic counter by std::threads that TSan sees created and
+/// joined. TBB as packaged is not instrumented, so TSan cannot see it hand
+/// a loop body's copy from the thread that split the range to the thread
+/// that runs it, and reports every such hand-over as a race in our code.
+/// Blocks of `grain` elements (TBB cuts them between grain / 2 and grain;
+/// no result depends on it); loops nested in a block run sequentially.
+template <class Body>
+void run_blocks(const ExecContext& ctx, std::size_t n, std::size_t grain, Body&& body) {
+  const std::size_t blocks = (n + grain - 1) / grain;
+  std::size_t want = ctx.threads > 0 ? static_cast<std::size_t>(ctx.threads)
+                                     : std::max<std::size_t>(1, std::thread::hardware_concurrency());
+  if (in_parallel_block) want = 1;
+  const std::size_t workers = std::min(want, blocks);
+  std::atomic<std::size_t> next{0};
+  std::mutex error_mutex;
+  std::exception_ptr error;
+  auto work = [&] {
+    const bool outer = in_parallel_block;
+    in_parallel_block = true;
+    try {
+      for (std::size_t b; (b = next.fetch_add(1)) < blocks;) body(b * grain, std::min(n, (b + 1) * grain));
+    } catch (...) {
+      const std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = blocks;
+    }
+    in_parallel_block = outer;
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t k = 1; k < workers; ++k) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+}  // namespace detail
+#endif
+
 /// Calls f(i) for i in [0, n). f must only write to locations owned by i.
 template <class F>
 void for_each_n(const ExecContext& ctx, std::size_t n, F&& f) {
@@ -79,14 +116,17 @@ void for_each_n(const ExecContext& ctx, std::size_t n, F&& f) {
     return;
   }
   const std::size_t grain = ctx.grain ? ctx.grain : 1024;
-  ForkJoin fj;
+#if defined(__SANITIZE_THREAD__)
+  detail::run_blocks(ctx, n, grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) f(i);
+  });
+#else
   in_arena(ctx, [&] {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain), [&](const tbb::blocked_range<std::size_t>& r) {
-      fj.enter();
       for (std::size_t i = r.begin(); i < r.end(); ++i) f(i);
-      fj.leave();
     });
   });
+#endif
 }
 
 /// Calls f(begin, end) over blocks of [0, n).
@@ -97,14 +137,14 @@ void for_each_block(const ExecContext& ctx, std::size_t n, F&& f) {
     return;
   }
   const std::size_t grain = ctx.grain ? ctx.grain : 1024;
-  ForkJoin fj;
+#if defined(__SANITIZE_THREAD__)
+  detail::run_blocks(ctx, n, grain, f);
+#else
   in_arena(ctx, [&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain), [&](const tbb::blocked_range<std::size_t>& r) {
-      fj.enter();
-      f(r.begin(), r.end());
-      fj.leave();
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                      [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
   });
+#endif
 }
 
 /// Deterministic reduction: [0,n) is cut into fixed blocks whose size does
@@ -178,8 +218,8 @@ void sort(const ExecContext& ctx, It first, It last, Less less) {
     return;
   }
 #if defined(__SANITIZE_THREAD__)
-  // TBB's sort moves elements in tasks TSan cannot see forked (see
-  // ForkJoin); the order is total, so the sequential sort gives the same
+  // TBB's sort moves elements in tasks TSan cannot see handed over (see
+  // detail::run_blocks); the order is total, so the sequential sort gives the same
   // result and keeps TSan's reports to our own code.
   std::sort(first, last, less);
 #else

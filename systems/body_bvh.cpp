@@ -103,7 +103,7 @@ struct BodyBvh::Impl {
   std::vector<Triangle> tris;  // size n + 1: Embree may read past the last index triple
   std::size_t num_tris = 0;
   std::vector<Vec3d> pos;
-  std::vector<float> fpos;     // padded float copy when the view cannot be shared
+  std::vector<float> fpos;  // padded float copy when the view cannot be shared
   const void* embree_vertices = nullptr;
   std::size_t embree_stride = 0;
   const void* bound_vertices = nullptr;  // what the Embree geometry currently points at
@@ -112,10 +112,10 @@ struct BodyBvh::Impl {
   std::vector<std::uint8_t> used;
 
   // Pseudo-normals (Baerentzen & Aanaes 2005, section 3).
-  std::vector<Vec3d> face_n;                        // unit face normals
-  std::vector<std::array<std::uint32_t, 3>> adj;    // triangle across edge k (k -> k+1)
-  std::vector<std::array<Vec3d, 3>> edge_n;         // sum of the two unit face normals
-  std::vector<Vec3d> vert_n;                        // angle-weighted vertex normals
+  std::vector<Vec3d> face_n;                      // unit face normals
+  std::vector<std::array<std::uint32_t, 3>> adj;  // triangle across edge k (k -> k+1)
+  std::vector<std::array<Vec3d, 3>> edge_n;       // sum of the two unit face normals
+  std::vector<Vec3d> vert_n;                      // angle-weighted vertex normals
   bool closed = false;
   std::string open_message;
 
@@ -150,7 +150,9 @@ void embree_error(void* user, RTCError code, const char* str) {
 
 bool embree_progress(void* user, double) {
   const auto* im = static_cast<const BodyBvh::Impl*>(user);
-  return !(im->cancel && im->cancel->cancelled());
+  const bool go_on = !(im->cancel && im->cancel->cancelled());
+  par::tsan_release(im);  // called on Embree's threads: see commit_impl
+  return go_on;
 }
 
 Status check_device(BodyBvh::Impl& im, const char* what) {
@@ -307,6 +309,7 @@ Status commit_impl(BodyBvh::Impl& im, const ExecContext& ctx) {
   rtcCommitGeometry(im.geom);
   im.cancel = &ctx.cancel;
   par::in_arena(ctx, [&] { rtcCommitScene(im.scene); });
+  par::tsan_acquire(&im);  // the progress callbacks Embree ran on its threads happened before
   im.cancel = nullptr;
   if (Status s = check_device(im, "BodyBvh commit"); !s) {
     im.committed = false;
@@ -372,8 +375,8 @@ Status BodyBvh::build(const StridedPoints& points, std::span<const Triangle> tri
   }
   const std::size_t scalar_size = points.scalar == StridedPoints::Scalar::kFloat ? sizeof(float) : sizeof(double);
   if (!points.data || points.stride < 3 * scalar_size || points.stride % scalar_size != 0) {
-    return {ErrorCode::kInvalidArgument, "BodyBvh: bad point view (null data or stride " +
-                                             std::to_string(points.stride) + " bytes)"};
+    return {ErrorCode::kInvalidArgument,
+            "BodyBvh: bad point view (null data or stride " + std::to_string(points.stride) + " bytes)"};
   }
   for (std::size_t t = 0; t < triangles.size(); ++t) {
     for (int k = 0; k < 3; ++k) {
@@ -407,8 +410,8 @@ Status BodyBvh::build(const StridedPoints& points, std::span<const Triangle> tri
   rtcSetSceneProgressMonitorFunction(im.scene, embree_progress, &im);
   im.geom = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
   if (params.refit_on_commit) rtcSetGeometryBuildQuality(im.geom, RTC_BUILD_QUALITY_REFIT);
-  rtcSetSharedGeometryBuffer(im.geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, im.tris.data(), 0,
-                             sizeof(Triangle), im.num_tris);
+  rtcSetSharedGeometryBuffer(im.geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, im.tris.data(), 0, sizeof(Triangle),
+                             im.num_tris);
   // The scene holds the geometry; our pointer stays valid while the scene lives.
   rtcAttachGeometryByID(im.scene, im.geom, 0);
   rtcReleaseGeometry(im.geom);
@@ -421,7 +424,9 @@ Status BodyBvh::build(const StridedPoints& points, std::span<const Triangle> tri
   return s;
 }
 
-Status BodyBvh::commit(const ExecContext& ctx) { return commit_impl(*impl_, ctx); }
+Status BodyBvh::commit(const ExecContext& ctx) {
+  return commit_impl(*impl_, ctx);
+}
 
 Status BodyBvh::commit(const StridedPoints& points, const ExecContext& ctx) {
   Impl& im = *impl_;
@@ -437,16 +442,30 @@ Status BodyBvh::commit(const StridedPoints& points, const ExecContext& ctx) {
   return commit_impl(im, ctx);
 }
 
-bool BodyBvh::empty() const noexcept { return !impl_ || !impl_->committed; }
-std::size_t BodyBvh::num_triangles() const noexcept { return impl_ ? impl_->num_tris : 0; }
-std::size_t BodyBvh::num_points() const noexcept { return impl_ ? impl_->pos.size() : 0; }
-std::span<const Vec3d> BodyBvh::positions() const noexcept { return impl_->pos; }
+bool BodyBvh::empty() const noexcept {
+  return !impl_ || !impl_->committed;
+}
+std::size_t BodyBvh::num_triangles() const noexcept {
+  return impl_ ? impl_->num_tris : 0;
+}
+std::size_t BodyBvh::num_points() const noexcept {
+  return impl_ ? impl_->pos.size() : 0;
+}
+std::span<const Vec3d> BodyBvh::positions() const noexcept {
+  return impl_->pos;
+}
 std::span<const Triangle> BodyBvh::triangles() const noexcept {
   return {impl_->tris.data(), impl_->num_tris};
 }
-bool BodyBvh::zero_copy() const noexcept { return impl_->shared; }
-Box3d BodyBvh::bounds() const noexcept { return impl_->box; }
-bool BodyBvh::closed() const noexcept { return impl_ && impl_->committed && impl_->closed; }
+bool BodyBvh::zero_copy() const noexcept {
+  return impl_->shared;
+}
+Box3d BodyBvh::bounds() const noexcept {
+  return impl_->box;
+}
+bool BodyBvh::closed() const noexcept {
+  return impl_ && impl_->committed && impl_->closed;
+}
 Status BodyBvh::require_closed() const {
   if (empty()) return {ErrorCode::kInvalidArgument, "BodyBvh: not built"};
   if (!impl_->closed) return {ErrorCode::kTopology, "BodyBvh: mesh is not closed and oriented: " + impl_->open_message};
@@ -529,7 +548,7 @@ RayHit BodyBvh::ray_first_hit(const Vec3d& origin, const Vec3d& dir, double tmax
   rh.ray.dir_z = static_cast<float>(dir.z());
   rh.ray.tnear = 0.0f;
   rh.ray.tfar = tmax >= static_cast<double>(std::numeric_limits<float>::max()) ? std::numeric_limits<float>::infinity()
-                                                                                : static_cast<float>(tmax);
+                                                                               : static_cast<float>(tmax);
   rh.ray.time = 0.0f;
   rh.ray.mask = 0xFFFFFFFFu;
   rh.ray.id = 0;
@@ -587,13 +606,26 @@ SignedHit BodyBvh::signed_distance_to(const Vec3d& p, std::uint32_t t) const noe
   out.closest = {r.point, r.barycentric, d, t, r.feature};
   Vec3d n = im.face_n[t];
   switch (r.feature) {
-    case TriFeature::kVertex0: n = im.vert_n[im.tris[t][0]]; break;
-    case TriFeature::kVertex1: n = im.vert_n[im.tris[t][1]]; break;
-    case TriFeature::kVertex2: n = im.vert_n[im.tris[t][2]]; break;
-    case TriFeature::kEdge01: n = im.edge_n[t][0]; break;
-    case TriFeature::kEdge12: n = im.edge_n[t][1]; break;
-    case TriFeature::kEdge20: n = im.edge_n[t][2]; break;
-    case TriFeature::kFace: break;
+    case TriFeature::kVertex0:
+      n = im.vert_n[im.tris[t][0]];
+      break;
+    case TriFeature::kVertex1:
+      n = im.vert_n[im.tris[t][1]];
+      break;
+    case TriFeature::kVertex2:
+      n = im.vert_n[im.tris[t][2]];
+      break;
+    case TriFeature::kEdge01:
+      n = im.edge_n[t][0];
+      break;
+    case TriFeature::kEdge12:
+      n = im.edge_n[t][1];
+      break;
+    case TriFeature::kEdge20:
+      n = im.edge_n[t][2];
+      break;
+    case TriFeature::kFace:
+      break;
   }
   // Baerentzen & Aanaes, theorem 1: sign of (p - c) . n_pseudo at the closest
   // feature is the inside/outside sign for a closed oriented mesh.

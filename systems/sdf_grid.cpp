@@ -29,7 +29,11 @@ namespace {
 struct CancelInterrupter final : vdb::util::NullInterrupter {
   explicit CancelInterrupter(const ExecContext* c) : ctx(c) {}
   const ExecContext* ctx = nullptr;
-  bool wasInterrupted(int = -1) override { return ctx->cancelled(); }
+  bool wasInterrupted(int = -1) override {
+    const bool stop = ctx->cancelled();
+    par::tsan_release(this);  // called on OpenVDB's threads; acquired after meshToVolume
+    return stop;
+  }
 };
 
 Box3d grow(const Box3d& b, double r) {
@@ -539,6 +543,7 @@ Status SdfGrid::build(const BodyBvh& body, const SdfParams& params, const ExecCo
           index_grid.get());
     }
   });
+  par::tsan_acquire(&cancel);
   if (ctx.cancelled()) return {ErrorCode::kCancelled, "SdfGrid: cancelled"};
   if (!im->grid) return {ErrorCode::kInternal, "SdfGrid: OpenVDB returned no grid"};
 
