@@ -1078,14 +1078,14 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   if (fast && ws.positions.size() < std::size_t{body.node_count} * 3 * pass_groups * kLanes)
     ws.positions.resize(std::size_t{body.node_count} * 3 * pass_groups * kLanes);
   float* tpos = ws.positions.data();
-  if (fast) {  // the nodes whose positions the frames read
-    ws.node_used.assign(body.node_count, 0);
+  // The nodes whose positions the frames read: the used polygons' corners.
+  std::vector<std::uint32_t> nodes;
+  if (fast) {
+    std::vector<std::uint8_t> used(body.node_count, 0);
     for (const std::uint32_t p : dec.used_polygons_)
-      for (std::uint32_t k = body.face_offsets[p]; k < body.face_offsets[p + 1]; ++k)
-        ws.node_used[body.face_nodes[k]] = 1;
-    ws.nodes.clear();
+      for (std::uint32_t k = body.face_offsets[p]; k < body.face_offsets[p + 1]; ++k) used[body.face_nodes[k]] = 1;
     for (std::uint32_t n = 0; n < body.node_count; ++n)
-      if (ws.node_used[n]) ws.nodes.push_back(n);
+      if (used[n]) nodes.push_back(n);
   }
   const std::size_t tiles = (nv + DetailDecoder::kTile - 1) / DetailDecoder::kTile;
   for (std::size_t g0 = 0; g0 < count; g0 += pass_groups * kLanes) {
@@ -1099,15 +1099,13 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
     if (fast) {
       // The bodies' columns transposed node-major, so a polygon corner's
       // coordinate for 8 bodies is one load (a body set is body-major: 48
-      // columns read at once would defeat the hardware prefetchers).
+      // columns read at once would defeat the hardware prefetchers). Only
+      // the used nodes (not a body's helper geometry or the skin a garment
+      // does not reach), in sub-blocks of 128 whose 24 KB of transposed
+      // rows stay in L1 while the columns are read into them.
       ExecContext tc = ctx;
       tc.grain = 2048;
-      // Only the corners of used polygons (not a body's helper geometry or
-      // the skin a garment does not reach), in sub-blocks of 128 nodes
-      // whose 24 KB of transposed rows stay in L1 while the columns are
-      // read into them.
-      const std::uint32_t* nodes = ws.nodes.data();
-      par::for_each_block(tc, ws.nodes.size(), [&](std::size_t b0, std::size_t b1) {
+      par::for_each_block(tc, nodes.size(), [&](std::size_t b0, std::size_t b1) {
         for (std::size_t j0 = b0; j0 < b1; j0 += 128) {
           const std::size_t j1 = std::min(b1, j0 + 128);
           for (std::size_t i = 0; i < lanes; ++i)

@@ -230,8 +230,6 @@ class DetailDecoder {
 /// One workspace per concurrent caller.
 struct DecodeWorkspace {
   std::vector<float> frames, positions;
-  std::vector<std::uint32_t> nodes;  // corners of the decoder's used polygons, increasing
-  std::vector<std::uint8_t> node_used;
 };
 
 /// Decodes bodies [first, first+count) of a body set, 16 bodies per pass
