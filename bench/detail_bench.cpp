@@ -246,7 +246,7 @@ BodySet scaled_bodies(const Scene& s, std::size_t n) {
   return set;
 }
 
-void BM_Decode_Batched(benchmark::State& st) {
+void decode_batched(benchmark::State& st, DecodeKernel kernel) {
   const Scene& s = scene();
   const DetailEncoding& e = encoding200();
   const std::size_t bodies = static_cast<std::size_t>(st.range(1));
@@ -255,6 +255,7 @@ void BM_Decode_Batched(benchmark::State& st) {
   const ExecContext ctx = threads(static_cast<int>(st.range(0)));
   const DetailDecoder dec(e, ctx);  // once per encoding, outside the timing (as FairPlan)
   DecodeWorkspace ws;               // buffers kept from batch to batch, as a caller decoding many batches does
+  ws.allow = kernel;
   for (auto _ : st) {
     (void)decode_detail_batch(dec, s.poly, set, 0, bodies, out, ws, ctx);
     benchmark::DoNotOptimize(out.data());
@@ -265,9 +266,19 @@ void BM_Decode_Batched(benchmark::State& st) {
       benchmark::Counter(static_cast<double>(bodies) / 1000.0,
                          benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   st.counters["entries/run"] = static_cast<double>(dec.entries()) / static_cast<double>(dec.runs());
-  st.SetLabel("30k x 200, frames included");
+  const char* names[] = {"auto", "AVX-512", "AVX2", "portable"};
+  st.SetLabel(std::string("30k x 200, frames included, ") + names[static_cast<int>(ws.ran)] + " kernel");
+}
+// The widest kernel the CPU has (AVX-512 where present).
+void BM_Decode_Batched(benchmark::State& st) {
+  decode_batched(st, DecodeKernel::kAuto);
 }
 BENCHMARK(BM_Decode_Batched)->Args({2, 16})->Args({2, 64})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
+// The AVX2 kernel on the same data, for the ratio in one run.
+void BM_Decode_Batched_AVX2(benchmark::State& st) {
+  decode_batched(st, DecodeKernel::kAvx2);
+}
+BENCHMARK(BM_Decode_Batched_AVX2)->Args({2, 16})->Args({1, 16})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // A garment over part of the body, as real ones are: 10k points near the
 // polygons of a band of the body's height (a top, on the human body), the

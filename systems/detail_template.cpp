@@ -815,6 +815,51 @@ void decode_tile_scalar(const std::uint32_t* run_polygon, const std::uint32_t* r
   }
 }
 
+// The AVX-512 layout: per polygon 12 rows of kWideLanes = 16 bodies (768
+// bytes), one zmm register a row.
+constexpr std::size_t kWideLanes = 16;
+constexpr std::size_t kWideFrameFloats = 12 * kWideLanes;
+
+bool have_avx512f() noexcept {
+  static const bool yes = __builtin_cpu_supports("avx512f");
+  return yes;
+}
+
+// decode_tile2_avx2 with one 16-lane register per frame row: a run's whole
+// frame (12 rows for 16 bodies) stays in registers (AVX-512 has 32), so an
+// entry costs 4 broadcasts, 3 accumulator loads and 3 stores next to its 12
+// FMA-unit operations, where the AVX2 kernel, with 16 registers, also reads
+// 15 of its 24 frame vectors from L1 (31 memory operations per entry). The
+// arithmetic per lane is the AVX2 kernel's, in the same order, so both give
+// the same bits. acc: [tile vertex][x, y, z][16 lanes].
+__attribute__((target("avx512f"))) void decode_tile_avx512(const std::uint32_t* run_polygon,
+                                                           const std::uint32_t* run_entry, std::size_t run_begin,
+                                                           std::size_t run_end, const std::uint8_t* vertex,
+                                                           const float* coef, const float* frames, float* acc) {
+  for (std::size_t r = run_begin; r < run_end; ++r) {
+    const float* F = frames + static_cast<std::size_t>(run_polygon[r]) * kWideFrameFloats;
+    if (r + 1 < run_end) {
+      const char* next =
+          reinterpret_cast<const char*>(frames + static_cast<std::size_t>(run_polygon[r + 1]) * kWideFrameFloats);
+      for (int l = 0; l < 12; ++l) _mm_prefetch(next + 64 * l, _MM_HINT_T0);
+    }
+    __m512 f[12];
+    for (int j = 0; j < 12; ++j) f[j] = _mm512_load_ps(F + 16 * j);
+    const std::uint32_t e_end = run_entry[r + 1];
+    for (std::uint32_t e = run_entry[r]; e < e_end; ++e) {
+      float* o = acc + static_cast<std::size_t>(vertex[e]) * 3 * kWideLanes;
+      const float* c = coef + 4 * static_cast<std::size_t>(e);
+      const __m512 a = _mm512_set1_ps(c[0]), b = _mm512_set1_ps(c[1]), cc = _mm512_set1_ps(c[2]),
+                   d = _mm512_set1_ps(c[3]);
+      for (int k = 0; k < 3; ++k) {
+        const __m512 s = _mm512_fmadd_ps(b, f[3 + k], _mm512_mul_ps(a, f[k]));
+        const __m512 t = _mm512_fmadd_ps(d, f[9 + k], _mm512_mul_ps(cc, f[6 + k]));
+        _mm512_store_ps(o + 16 * k, _mm512_add_ps(_mm512_load_ps(o + 16 * k), _mm512_add_ps(s, t)));
+      }
+    }
+  }
+}
+
 // Frames of one polygon on 8 bodies at once (AVX2 floats, one body per
 // lane): polygon_frame's steps with the branches as lane masks. Batched
 // decoding computes polygons x bodies frames per pass; in doubles they cost
@@ -827,7 +872,8 @@ void decode_tile_scalar(const std::uint32_t* run_polygon, const std::uint32_t* r
 //
 // pos: node positions of the pass's bodies, node-major ([node][x, y, z]
 // [lanes] floats), read at lanes lane .. lane + 7. out: rows (p_c, X, Y,
-// Z; x, y, z) of kLanes floats. Polygons of at most kMaxCorners.
+// Z; x, y, z) of 8 floats, row_stride floats apart (kLanes in the AVX2
+// layout, kWideLanes in the AVX-512 one). Polygons of at most kMaxCorners.
 constexpr std::size_t kMaxCorners = 16;
 __attribute__((target("avx2,fma"), always_inline)) inline __m256 dot_x8(__m256 a0, __m256 a1, __m256 a2, __m256 b0,
                                                                         __m256 b1, __m256 b2) {
@@ -844,7 +890,8 @@ __attribute__((target("avx2"), always_inline)) inline void cross_x8(__m256 a0, _
 
 __attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b, const float* pos, std::size_t lanes,
                                                           std::size_t lane, std::size_t f,
-                                                          std::span<const Eigen::Vector2f> ref, float* out) {
+                                                          std::span<const Eigen::Vector2f> ref, float* out,
+                                                          std::size_t row_stride) {
   const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
   const std::size_t n = e - s;
   __m256 O[3];
@@ -931,7 +978,7 @@ __attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b,
                            _mm256_and_ps(x0, ok1),   _mm256_and_ps(x1, ok1),   _mm256_and_ps(x2, ok1),
                            _mm256_and_ps(y0, ok2),   _mm256_and_ps(y1, ok2),   _mm256_and_ps(y2, ok2),
                            _mm256_and_ps(z[0], ok2), _mm256_and_ps(z[1], ok2), _mm256_and_ps(z[2], ok2)};
-  for (std::size_t j = 0; j < 12; ++j) _mm256_store_ps(out + j * kLanes, rows[j]);
+  for (std::size_t j = 0; j < 12; ++j) _mm256_store_ps(out + j * row_stride, rows[j]);
 }
 
 // A body's node positions read in place from a body set's float columns
@@ -1065,16 +1112,30 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   if (out.size() != count * nv) return {ErrorCode::kMismatch, "decode_detail_batch: output has the wrong size"};
   if (count == 0 || nv == 0) return {};
   const std::size_t np = body.size();
+  // The widest kernel both the CPU and the caller allow.
+  DecodeKernel kernel = have_avx512f()    ? DecodeKernel::kAvx512
+                        : have_avx2_fma() ? DecodeKernel::kAvx2
+                                          : DecodeKernel::kPortable;
+  if (ws.allow != DecodeKernel::kAuto && ws.allow > kernel) kernel = ws.allow;
+  ws.ran = kernel;
+  const bool fast = kernel != DecodeKernel::kPortable, wide = kernel == DecodeKernel::kAvx512;
   // Groups of kLanes bodies; kGroups groups share one pass over the matrix
   // (a tile's entries stay in L2 while each group's frames stream through).
+  // The AVX-512 kernel takes both groups in one register (its frames are
+  // laid out 16 lanes a row), so its passes always hold 16 lanes.
   constexpr std::size_t kGroups = 2;
-  const std::size_t pass_groups = std::min(kGroups, (count + kLanes - 1) / kLanes);
+  static_assert(kGroups * kLanes == kWideLanes);
+  const std::size_t pass_groups = wide ? kGroups : std::min(kGroups, (count + kLanes - 1) / kLanes);
+  // Frame of polygon p for group g: rows of `row` floats.
+  const std::size_t row = wide ? kWideLanes : kLanes;
+  auto frame_of = [&](float* base, std::size_t g, std::size_t p) {
+    return wide ? base + p * kWideFrameFloats + g * kLanes : base + (g * np + p) * kFrameFloats;
+  };
   // Every lane of every frame the decoder reads (its used polygons') is
   // written below before it is read.
   if (ws.frames.size() < pass_groups * np * kFrameFloats + 16) ws.frames.resize(pass_groups * np * kFrameFloats + 16);
   const auto addr = reinterpret_cast<std::uintptr_t>(ws.frames.data());
   float* frames = ws.frames.data() + ((64 - addr % 64) % 64) / sizeof(float);
-  const bool fast = have_avx2_fma();
   if (fast && ws.positions.size() < std::size_t{body.node_count} * 3 * pass_groups * kLanes)
     ws.positions.resize(std::size_t{body.node_count} * 3 * pass_groups * kLanes);
   float* tpos = ws.positions.data();
@@ -1090,7 +1151,7 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
   const std::size_t tiles = (nv + DetailDecoder::kTile - 1) / DetailDecoder::kTile;
   for (std::size_t g0 = 0; g0 < count; g0 += pass_groups * kLanes) {
     const std::size_t nb = std::min(pass_groups * kLanes, count - g0);
-    const std::size_t groups = (nb + kLanes - 1) / kLanes;
+    const std::size_t groups = wide ? kGroups : (nb + kLanes - 1) / kLanes;
     // Frames of every body of the pass, written straight into the lanes,
     // 8 bodies per vector. Lanes past the last body repeat it (never output).
     const float* col[kGroups * kLanes];
@@ -1121,19 +1182,20 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
     par::for_each_n(fc, dec.used_polygons_.size(), [&](std::size_t u) {
       const std::size_t p = dec.used_polygons_[u];
       const bool small = body.face_offsets[p + 1] - body.face_offsets[p] <= kMaxCorners;
-      for (std::size_t i = 0; i < groups * kLanes; i += kLanes) {
-        float* f = frames + ((i / kLanes) * np + p) * kFrameFloats;
+      for (std::size_t g = 0; g < groups; ++g) {
+        float* f = frame_of(frames, g, p);
         if (fast && small) {
-          polygon_frame_x8(body, tpos, lanes, i, p, dec.reference_corners_, f);
+          polygon_frame_x8(body, tpos, lanes, g * kLanes, p, dec.reference_corners_, f, row);
           continue;
         }
-        for (std::size_t l = i; l < i + kLanes; ++l) {
-          const SetPos pos{col[l], col[l] + stride, col[l] + 2 * stride};
+        for (std::size_t l = 0; l < kLanes; ++l) {
+          const float* cl = col[g * kLanes + l];
+          const SetPos pos{cl, cl + stride, cl + 2 * stride};
           const FrameD fr = polygon_frame(body, pos, p, dec.reference_corners_);
           const Vec3d* v[4] = {&fr.c, &fr.x, &fr.y, &fr.z};
           for (std::size_t j = 0; j < 4; ++j)
             for (std::size_t k = 0; k < 3; ++k)
-              f[(3 * j + k) * kLanes + l % kLanes] = static_cast<float>((*v[j])[static_cast<int>(k)]);
+              f[(3 * j + k) * row + l] = static_cast<float>((*v[j])[static_cast<int>(k)]);
         }
       }
     });
@@ -1144,16 +1206,23 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
       alignas(64) float acc[DetailDecoder::kTile * 3 * kGroups * kLanes];
       for (std::size_t t = t0; t < t1; ++t) {
         const std::size_t v0 = t * DetailDecoder::kTile, v1 = std::min(nv, v0 + DetailDecoder::kTile);
-        if (fast && groups == 2) {
+        if (wide || (fast && groups == 2)) {
+          // Both groups in one pass: acc is [vertex][x, y, z][16 lanes]
+          // (AVX-512) or [vertex][group][x, y, z][8 lanes] (AVX2).
           std::fill(acc, acc + (v1 - v0) * 6 * kLanes, 0.0f);
-          decode_tile2_avx2(dec.run_polygon_.data(), dec.run_entry_.data(), dec.tile_run_[t], dec.tile_run_[t + 1],
-                            dec.vertex_.data(), dec.coef_.data(), frames, frames + np * kFrameFloats, acc);
-          for (std::size_t g = 0; g < 2; ++g) {
+          if (wide)
+            decode_tile_avx512(dec.run_polygon_.data(), dec.run_entry_.data(), dec.tile_run_[t], dec.tile_run_[t + 1],
+                               dec.vertex_.data(), dec.coef_.data(), frames, acc);
+          else
+            decode_tile2_avx2(dec.run_polygon_.data(), dec.run_entry_.data(), dec.tile_run_[t], dec.tile_run_[t + 1],
+                              dec.vertex_.data(), dec.coef_.data(), frames, frames + np * kFrameFloats, acc);
+          for (std::size_t g = 0; g * kLanes < nb; ++g) {
             const std::size_t lanes = std::min(kLanes, nb - g * kLanes);
             for (std::size_t v = v0; v < v1; ++v) {
-              const float* r = acc + ((v - v0) * 2 + g) * 3 * kLanes;
+              const float* r =
+                  wide ? acc + (v - v0) * 3 * kWideLanes + g * kLanes : acc + ((v - v0) * 2 + g) * 3 * kLanes;
               for (std::size_t w = 0; w < lanes; ++w)
-                out[(g0 + g * kLanes + w) * nv + v] = Vec3f(r[w], r[kLanes + w], r[2 * kLanes + w]);
+                out[(g0 + g * kLanes + w) * nv + v] = Vec3f(r[w], r[row + w], r[2 * row + w]);
             }
           }
           continue;

@@ -32,6 +32,9 @@ namespace atelier {
 class BodySet;
 struct DecodeWorkspace;
 
+/// Kernels of batched decoding, widest first.
+enum class DecodeKernel : std::uint8_t { kAuto, kAvx512, kAvx2, kPortable };
+
 /// The polygons of a body surface (all live faces of the model, in index
 /// order) over node indices; what encoding and decoding need of a body.
 struct BodyPolygons {
@@ -230,12 +233,21 @@ class DetailDecoder {
 /// One workspace per concurrent caller.
 struct DecodeWorkspace {
   std::vector<float> frames, positions;
+  /// The widest kernel the caller allows (kAuto: the widest this CPU runs).
+  /// AVX-512 and AVX2 give the same bits; the portable kernel computes the
+  /// frames in double and differs from them by float rounding.
+  DecodeKernel allow = DecodeKernel::kAuto;
+  /// The kernel the last call ran.
+  DecodeKernel ran = DecodeKernel::kAuto;
 };
 
 /// Decodes bodies [first, first+count) of a body set, 16 bodies per pass
 /// over the matrix. out is body-major: out[(b - first) * V + v].
 /// Deterministic: every output is summed in entry order, whatever the thread
-/// count; equal to decode_detail on each body to float rounding.
+/// count; equal to decode_detail on each body to float rounding. Where the
+/// CPU has AVX-512, a run's frames for the pass's 16 bodies stay in 12
+/// registers (docs/performance.md: 0.84x the AVX2 kernel's time), with the
+/// AVX2 kernel's bits.
 [[nodiscard]] Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, const BodySet& bodies,
                                          std::size_t first, std::size_t count, std::span<Vec3f> out,
                                          const ExecContext& ctx = {});

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 
 #include "engine/random.h"
@@ -364,6 +365,62 @@ TEST(DetailTemplate, DecoderForBatchesIsThreadIndependentAndMatchesSingleBodies)
             ErrorCode::kInvalidArgument);
 }
 
+TEST(DetailTemplate, BatchedKernelsAgree) {
+  // The AVX-512 kernel (16 bodies a register, frames 16 lanes a row) and
+  // the AVX2 one (two groups of 8) do the same arithmetic per lane: same
+  // bits. The portable kernel (frames in double) agrees to float rounding.
+  // 21 bodies: a full pass and a pass of 5 (lanes 5-15 repeat the last
+  // body in the AVX-512 layout). A garment of 3 tiles and a bit.
+  const Body b = sphere_body(36, 22);
+  const auto g = shell_points(DetailDecoder::kTile * 3 + 41, 17);
+  DetailParams prm;
+  prm.polygons_per_vertex = 19;
+  auto enc = encode_detail(b.poly, b.pos, g, prm);
+  ASSERT_TRUE(enc);
+  BodySet set(b.ref);
+  SplitMix64 r(71);
+  for (int k = 0; k < 21; ++k) {
+    std::vector<Vec3d> p(b.pos.size());
+    const Mat3d R = Eigen::AngleAxisd(r.uniform(0, 3), Vec3d(0, 1, 1).normalized()).toRotationMatrix();
+    const Vec3d sc(r.uniform(0.8, 1.2), r.uniform(0.8, 1.2), r.uniform(0.8, 1.2));
+    for (std::size_t v = 0; v < p.size(); ++v) p[v] = R * b.pos[v].cwiseProduct(sc) + Vec3d(0.1 * k, 0, 0);
+    ASSERT_TRUE(set.add("b" + std::to_string(k), std::span<const Vec3d>(p)));
+  }
+  ExecContext two;
+  two.threads = 2;
+  two.sequential_threshold = 1;
+  const DetailDecoder dec(*enc, two);
+  const std::size_t nv = g.size();
+  std::map<DecodeKernel, std::vector<Vec3f>> out;
+  for (const DecodeKernel k : {DecodeKernel::kAvx512, DecodeKernel::kAvx2, DecodeKernel::kPortable}) {
+    DecodeWorkspace ws;
+    ws.allow = k;
+    std::vector<Vec3f> o(21 * nv);
+    ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 21, o, ws, two));
+    if (out.count(ws.ran) == 0) out[ws.ran] = o;  // narrower than asked where the CPU lacks it
+    // A pass of 3 bodies alone gives the same bits as those bodies in the
+    // full batch (lanes past the last body never leak).
+    std::vector<Vec3f> three(3 * nv);
+    ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 17, 3, three, ws, two));
+    EXPECT_EQ(std::memcmp(three.data(), o.data() + 17 * nv, three.size() * sizeof(Vec3f)), 0);
+  }
+  ASSERT_TRUE(out.count(DecodeKernel::kPortable));
+  if (__builtin_cpu_supports("avx512f")) EXPECT_TRUE(out.count(DecodeKernel::kAvx512));
+  if (out.count(DecodeKernel::kAvx512) && out.count(DecodeKernel::kAvx2)) {
+    const auto& w = out[DecodeKernel::kAvx512];
+    EXPECT_EQ(std::memcmp(w.data(), out[DecodeKernel::kAvx2].data(), w.size() * sizeof(Vec3f)), 0);
+  }
+  std::vector<Vec3d> single(nv);
+  for (const auto& [kernel, o] : out) {
+    double worst = 0;
+    for (std::size_t k = 0; k < 21; ++k) {
+      ASSERT_TRUE(decode_detail(*enc, b.poly, set.positions(k), single));
+      for (std::size_t v = 0; v < nv; ++v) worst = std::max(worst, (o[k * nv + v].cast<double>() - single[v]).norm());
+    }
+    EXPECT_LT(worst, 1e-5) << "kernel " << static_cast<int>(kernel);
+  }
+}
+
 TEST(DetailTemplate, BatchedDecodingOfAPartialGarmentComputesOnlyItsPolygonsFrames) {
   // A cap over the upper sphere uses a fraction of the polygons. The
   // decoder's used polygons are exactly the distinct polygons of the
@@ -474,15 +531,22 @@ TEST(DetailTemplate, BatchedFramesHandleLargeAndCollapsedPolygons) {
   two.threads = 2;
   two.sequential_threshold = 1;
   const DetailDecoder dec(*enc, one);
-  ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 11, one_out, one));
-  ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 11, two_out, two));
-  EXPECT_EQ(std::memcmp(one_out.data(), two_out.data(), one_out.size() * sizeof(Vec3f)), 0);
-  std::vector<Vec3d> single(nv);
-  for (std::size_t k = 0; k < 11; ++k) {
-    ASSERT_TRUE(decode_detail(*enc, b.poly, set.positions(k), single));
-    for (std::size_t v = 0; v < nv; ++v) {
-      ASSERT_TRUE(single[v].allFinite()) << k << " " << v;
-      ASSERT_LT((one_out[k * nv + v].cast<double>() - single[v]).norm(), 1e-5) << "body " << k << " vertex " << v;
+  // Every kernel: the large caps' frames are written by the double path
+  // into each kernel's frame layout.
+  for (const DecodeKernel kernel : {DecodeKernel::kAvx512, DecodeKernel::kAvx2, DecodeKernel::kPortable}) {
+    DecodeWorkspace w1, w2;
+    w1.allow = w2.allow = kernel;
+    ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 11, one_out, w1, one));
+    ASSERT_TRUE(decode_detail_batch(dec, b.poly, set, 0, 11, two_out, w2, two));
+    EXPECT_EQ(std::memcmp(one_out.data(), two_out.data(), one_out.size() * sizeof(Vec3f)), 0);
+    std::vector<Vec3d> single(nv);
+    for (std::size_t k = 0; k < 11; ++k) {
+      ASSERT_TRUE(decode_detail(*enc, b.poly, set.positions(k), single));
+      for (std::size_t v = 0; v < nv; ++v) {
+        ASSERT_TRUE(single[v].allFinite()) << k << " " << v;
+        ASSERT_LT((one_out[k * nv + v].cast<double>() - single[v]).norm(), 1e-5)
+            << "kernel " << static_cast<int>(w1.ran) << " body " << k << " vertex " << v;
+      }
     }
   }
 }
