@@ -150,7 +150,11 @@ struct DetailEncoding {
   std::uint64_t topology_hash = 0;
   std::vector<std::uint32_t> row;      // size V+1
   std::vector<std::uint32_t> polygon;  // per entry
-  std::vector<float> a, b, c, d;       // per entry, precombined (see top)
+  /// Per entry, precombined (see top). Four columns, not one interleaved
+  /// (a, b, c, d) array: decoding reads them as four sequential streams,
+  /// which this machine's prefetchers keep up with where one stream of 16
+  /// bytes per entry stalls (docs/performance.md, 2026-11-24).
+  std::vector<float> a, b, c, d;
   /// Corners of every body polygon in its reference frame (fitted frames);
   /// empty in eq. (8) mode.
   std::vector<Eigen::Vector2f> reference_corners;
@@ -176,8 +180,10 @@ struct DetailEncoding {
                                    std::span<const Vec3d> body_positions, std::span<Vec3d> out,
                                    const ExecContext& ctx = {});
 /// Decodes with frames already computed (e.g. shared by several garments).
-void decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::span<Vec3d> out,
-                   const ExecContext& ctx = {});
+/// `allow`: the widest kernel to use (kAuto: the widest this CPU runs; the
+/// AVX-512 and AVX2 kernels give the same bits). Returns the kernel that ran.
+DecodeKernel decode_detail(const DetailEncoding& enc, const PolygonFrames& frames, std::span<Vec3d> out,
+                           const ExecContext& ctx = {}, DecodeKernel allow = DecodeKernel::kAuto);
 
 /// An encoding rearranged for batched decoding, built once per encoding (as
 /// FairPlan is per mesh). Garment vertices are cut into tiles of kTile; in

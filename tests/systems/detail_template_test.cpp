@@ -295,19 +295,31 @@ TEST(DetailTemplate, DecodingEqualsEquations11And12InDouble) {
     bent[v] = Vec3d(b.pos[v].x() * 1.3, b.pos[v].y() + 0.2 * b.pos[v].z() * b.pos[v].z(), b.pos[v].z());
   PolygonFrames fr;
   compute_frames(b.poly, bent, fr, {}, enc->reference_corners);
-  std::vector<Vec3d> got(g.size());
-  decode_detail(*enc, fr, got);
-  double worst = 0;
-  for (std::size_t v = 0; v < g.size(); ++v) {
-    Vec3d want = Vec3d::Zero();
-    for (std::uint32_t e = enc->row[v]; e < enc->row[v + 1]; ++e) {
-      const std::uint32_t p = enc->polygon[e];
-      want += double{enc->a[e]} * fr.centroid[p].cast<double>() + double{enc->b[e]} * fr.x[p].cast<double>() +
-              double{enc->c[e]} * fr.y[p].cast<double>() + double{enc->d[e]} * fr.z[p].cast<double>();
-    }
-    worst = std::max(worst, (got[v] - want).norm());
+  // Every kernel (rows of 23 entries end on 3 past the last full round of
+  // 4 accumulators). AVX-512 and AVX2 sum the same lanes in the same order.
+  std::map<DecodeKernel, std::vector<Vec3d>> got;
+  for (const DecodeKernel k : {DecodeKernel::kAvx512, DecodeKernel::kAvx2, DecodeKernel::kPortable}) {
+    std::vector<Vec3d> o(g.size());
+    const DecodeKernel ran = decode_detail(*enc, fr, o, {}, k);
+    got.emplace(ran, std::move(o));
   }
-  EXPECT_LT(worst, 2e-6);  // float sums of 23 terms at unit scale
+  ASSERT_TRUE(got.count(DecodeKernel::kPortable));
+  if (__builtin_cpu_supports("avx512f")) EXPECT_TRUE(got.count(DecodeKernel::kAvx512));
+  if (got.count(DecodeKernel::kAvx512) && got.count(DecodeKernel::kAvx2))
+    EXPECT_EQ(got[DecodeKernel::kAvx512], got[DecodeKernel::kAvx2]);
+  for (const auto& [kernel, o] : got) {
+    double worst = 0;
+    for (std::size_t v = 0; v < g.size(); ++v) {
+      Vec3d want = Vec3d::Zero();
+      for (std::uint32_t e = enc->row[v]; e < enc->row[v + 1]; ++e) {
+        const std::uint32_t p = enc->polygon[e];
+        want += double{enc->a[e]} * fr.centroid[p].cast<double>() + double{enc->b[e]} * fr.x[p].cast<double>() +
+                double{enc->c[e]} * fr.y[p].cast<double>() + double{enc->d[e]} * fr.z[p].cast<double>();
+      }
+      worst = std::max(worst, (o[v] - want).norm());
+    }
+    EXPECT_LT(worst, 2e-6) << "kernel " << static_cast<int>(kernel);  // float sums of 23 terms at unit scale
+  }
 }
 
 TEST(DetailTemplate, DecoderForBatchesIsThreadIndependentAndMatchesSingleBodies) {
@@ -598,6 +610,8 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
   const DetailEncoding back = read_detail(p);
   EXPECT_EQ(back.polygon, enc->polygon);
   EXPECT_EQ(back.a, enc->a);
+  EXPECT_EQ(back.b, enc->b);
+  EXPECT_EQ(back.c, enc->c);
   EXPECT_EQ(back.d, enc->d);
   EXPECT_EQ(back.topology_hash, enc->topology_hash);
   EXPECT_EQ(back.reference_corners, enc->reference_corners);
@@ -606,6 +620,18 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
   {
     std::ifstream in(p, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  // On disk the coefficients are four blocks (all a, then b, c, d) after
+  // the 52-byte header, the row offsets and the polygons.
+  {
+    const std::size_t ne = enc->entries(), at = 52 + 4 * (enc->vertex_count() + 1) + 4 * ne;
+    for (const std::size_t e : {std::size_t{0}, ne / 2, ne - 1})
+      for (std::size_t j = 0; j < 4; ++j) {
+        float x;
+        std::memcpy(&x, bytes.data() + at + 4 * (j * ne + e), 4);
+        const std::vector<float>* col[4] = {&enc->a, &enc->b, &enc->c, &enc->d};
+        EXPECT_EQ(x, (*col[j])[e]) << "entry " << e << " coefficient " << j;
+      }
   }
   auto expect_error = [&](const std::string& content, const std::string& fragment) {
     const fs::path bad = tmp_dir() / "bad.atd";
