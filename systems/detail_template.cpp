@@ -716,6 +716,9 @@ __attribute__((target("avx2,fma"), always_inline)) inline void coefficients4(con
   _MM_TRANSPOSE4_PS(k[0], k[1], k[2], k[3]);
 }
 
+// (The masked broadcasts and extracts with an all-ones mask are the plain
+// instructions; their unmasked intrinsics pass GCC 12 an undefined source
+// that -Wmaybe-uninitialized reports.)
 // Eqs. (11)-(12), one body, AVX-512: per entry one 64-byte frame line times
 // its (a, b, c, d) in every quarter, one FMA.
 __attribute__((target("avx512f,avx2,fma"))) void decode_rows_avx512(const DetailEncoding& enc, const float* frames,
@@ -729,13 +732,14 @@ __attribute__((target("avx512f,avx2,fma"))) void decode_rows_avx512(const Detail
       __m128 k[4];
       coefficients4(enc, e, e1, k);
       for (std::uint32_t j = 0; j < kRowChains && e + j < e1; ++j)
-        s[j] =
-            _mm512_fmadd_ps(_mm512_broadcast_f32x4(k[j]), _mm512_load_ps(frames + std::size_t{poly[e + j]} * 16), s[j]);
+        s[j] = _mm512_fmadd_ps(_mm512_mask_broadcast_f32x4(_mm512_setzero_ps(), 0xFFFF, k[j]),
+                               _mm512_load_ps(frames + std::size_t{poly[e + j]} * 16), s[j]);
     }
     const __m512 t = _mm512_add_ps(_mm512_add_ps(s[0], s[1]), _mm512_add_ps(s[2], s[3]));
     alignas(16) float r[4];
-    _mm_store_ps(
-        r, quarter_sums(_mm512_extractf32x4_ps(t, 0), _mm512_extractf32x4_ps(t, 1), _mm512_extractf32x4_ps(t, 2)));
+    _mm_store_ps(r, quarter_sums(_mm512_mask_extractf32x4_ps(_mm_setzero_ps(), 0xF, t, 0),
+                                 _mm512_mask_extractf32x4_ps(_mm_setzero_ps(), 0xF, t, 1),
+                                 _mm512_mask_extractf32x4_ps(_mm_setzero_ps(), 0xF, t, 2)));
     out[v] = Vec3d(r[0], r[1], r[2]);
   }
 }
