@@ -32,7 +32,7 @@ namespace atelier {
 class BodySet;
 struct DecodeWorkspace;
 
-/// Kernels of batched decoding, widest first.
+/// Decoding kernels (single-body and batched), widest first.
 enum class DecodeKernel : std::uint8_t { kAuto, kAvx512, kAvx2, kPortable };
 
 /// The polygons of a body surface (all live faces of the model, in index
