@@ -304,9 +304,12 @@ TEST(DetailTemplate, DecodingEqualsEquations11And12InDouble) {
     got.emplace(ran, std::move(o));
   }
   ASSERT_TRUE(got.count(DecodeKernel::kPortable));
-  if (__builtin_cpu_supports("avx512f")) EXPECT_TRUE(got.count(DecodeKernel::kAvx512));
-  if (got.count(DecodeKernel::kAvx512) && got.count(DecodeKernel::kAvx2))
+  if (__builtin_cpu_supports("avx512f")) {
+    EXPECT_TRUE(got.count(DecodeKernel::kAvx512));
+  }
+  if (got.count(DecodeKernel::kAvx512) && got.count(DecodeKernel::kAvx2)) {
     EXPECT_EQ(got[DecodeKernel::kAvx512], got[DecodeKernel::kAvx2]);
+  }
   for (const auto& [kernel, o] : got) {
     double worst = 0;
     for (std::size_t v = 0; v < g.size(); ++v) {
@@ -417,7 +420,9 @@ TEST(DetailTemplate, BatchedKernelsAgree) {
     EXPECT_EQ(std::memcmp(three.data(), o.data() + 17 * nv, three.size() * sizeof(Vec3f)), 0);
   }
   ASSERT_TRUE(out.count(DecodeKernel::kPortable));
-  if (__builtin_cpu_supports("avx512f")) EXPECT_TRUE(out.count(DecodeKernel::kAvx512));
+  if (__builtin_cpu_supports("avx512f")) {
+    EXPECT_TRUE(out.count(DecodeKernel::kAvx512));
+  }
   if (out.count(DecodeKernel::kAvx512) && out.count(DecodeKernel::kAvx2)) {
     const auto& w = out[DecodeKernel::kAvx512];
     EXPECT_EQ(std::memcmp(w.data(), out[DecodeKernel::kAvx2].data(), w.size() * sizeof(Vec3f)), 0);

@@ -77,7 +77,9 @@ TEST(Fairing, ReproducesQuadraticsFromNoise) {
     for (int j = 0; j <= g.n; ++j) {
       const Vec3d& p = g.m.nodes.position[g.id(i, j)];
       worst = std::max(worst, std::abs(p.z() - f(p.x(), p.y())));
-      if (g.fixed[g.id(i, j)]) EXPECT_EQ(std::memcmp(p.data(), before.nodes.position[g.id(i, j)].data(), 24), 0);
+      if (g.fixed[g.id(i, j)]) {
+        EXPECT_EQ(std::memcmp(p.data(), before.nodes.position[g.id(i, j)].data(), 24), 0);
+      }
     }
   EXPECT_LT(worst, 1e-6) << "after " << rep->iterations << " iterations";  // from noise of amplitude 1
   const NodeAdjacency adj = build_adjacency(g.m);
@@ -154,7 +156,9 @@ TEST(Fairing, MatchesAReferenceJacobiOnAnIrregularMesh) {
   for (std::size_t v = 0; v < n; ++v) {
     worst = std::max(worst, (m.nodes.position[v] - ref[v]).norm());
     moved = std::max(moved, (m.nodes.position[v] - before.nodes.position[v]).norm());
-    if (fixed[v] || v == lonely.value) EXPECT_EQ(m.nodes.position[v], before.nodes.position[v]) << v;
+    if (fixed[v] || v == lonely.value) {
+      EXPECT_EQ(m.nodes.position[v], before.nodes.position[v]) << v;
+    }
   }
   EXPECT_LT(worst, 1e-12);
   EXPECT_GT(moved, 1e-3);  // the comparison is not between two unmoved meshes

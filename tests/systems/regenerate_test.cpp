@@ -1,6 +1,8 @@
 // Profile templates: authoring, encoding on a reference body, regeneration
 // by the modified variational subdivision with collision avoidance, and the
 // quality measures of every result (seed 000 section 4, seed 001 section 4).
+#include "systems/regenerate.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,11 +12,10 @@
 #include "engine/parallel.h"
 #include "storage/validate.h"
 #include "support/fixtures.h"
+#include "support/project_templates.h"
 #include "systems/makehuman_body.h"
 #include "systems/mannequin.h"
-#include "support/project_templates.h"
 #include "systems/project_templates.h"
-#include "systems/regenerate.h"
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -22,7 +23,9 @@ namespace fs = std::filesystem;
 namespace {
 
 using Fixture = atelier::testing::TemplateFixture;
-const Fixture& fixture() { return atelier::testing::template_fixture(); }
+const Fixture& fixture() {
+  return atelier::testing::template_fixture();
+}
 
 Box3d bounds(const Model& m) {
   Box3d b;
@@ -45,9 +48,9 @@ void print(const ProfileTemplate& t, const RegenQuality& q) {
   std::printf(
       "  %-9s nodes %6zu faces %6zu | inside %zu (max %.1e) min d %.4f | node clearance err %.1e | profile err "
       "%.1e | U2 %.1e | crack %.1e | %.1f ms (split %.1f push %.1f fair %.1f [%llu queries] quality %.1f)\n",
-      t.name.c_str(), q.nodes, q.faces, q.inside, q.max_depth, q.min_distance, q.node_clearance_error,
-      q.profile_error, q.umbrella, q.crack, q.ms, q.split_ms, q.push_ms, q.fair_ms,
-      static_cast<unsigned long long>(q.fair_queries), q.quality_ms);
+      t.name.c_str(), q.nodes, q.faces, q.inside, q.max_depth, q.min_distance, q.node_clearance_error, q.profile_error,
+      q.umbrella, q.crack, q.ms, q.split_ms, q.push_ms, q.fair_ms, static_cast<unsigned long long>(q.fair_queries),
+      q.quality_ms);
 }
 
 // A template over a hand-built model: every node encoded as an offset from
@@ -125,8 +128,9 @@ TEST(Regenerate, OnTheReferenceBodyIsCleanAndKeepsNodes) {
     EXPECT_EQ(q.faces, t.model.num_faces() * 64) << t.name;  // 3 levels of 1-to-4 (quads stay quads)
     // Nodes encoded outside the body decode where they were.
     for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v)
-      if (t.encoded_clearance[v] > 0)
+      if (t.encoded_clearance[v] > 0) {
         EXPECT_LT((r->model.position(NodeIdx{v}) - t.model.position(NodeIdx{v})).norm(), 1e-9) << t.name << " " << v;
+      }
   }
 }
 
@@ -264,7 +268,8 @@ TEST(Regenerate, TwoHundredMannequins) {
 TEST(Regenerate, FiftyMakeHumanBodies) {
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "ATELIER_SKIP_LONG_TESTS is set";
   const fs::path dir = fs::path(ATELIER_SHARED_DATA) / "makehuman";
-  if (!fs::exists(dir / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " << dir << " (../shared/data absent)";
+  if (!fs::exists(dir / "base.obj"))
+    GTEST_SKIP() << "MakeHuman data not found at " << dir << " (../shared/data absent)";
   auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(dir));
   auto ref = std::make_shared<const ReferenceBody>(makehuman::make_reference_body(*lib));
   // MakeHuman units are decimetres: the reference body is in metres.
