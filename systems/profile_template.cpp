@@ -15,7 +15,15 @@ namespace atelier {
 
 namespace {
 
-Status invalid(const std::string& what) { return {ErrorCode::kInvalidArgument, what}; }
+Status invalid(const std::string& what) {
+  return {ErrorCode::kInvalidArgument, what};
+}
+
+}  // namespace
+
+// Named, not anonymous: TemplateBuilder::Impl (declared in the header, so of
+// external linkage) holds these as members.
+namespace template_builder_detail {
 
 // How a feature node is placed; turned into NodeEncodings once the model's
 // node indices are known (build()).
@@ -31,7 +39,10 @@ struct SurfaceInfo {
   std::map<std::string, NodeIdx, std::less<>> nodes;  // feature node -> this surface's copy
 };
 
-}  // namespace
+}  // namespace template_builder_detail
+
+using template_builder_detail::FeatureNode;
+using template_builder_detail::SurfaceInfo;
 
 // ------------------------------------------------------------------ template
 
@@ -77,7 +88,7 @@ Status validate_template(const ProfileTemplate& t) {
     for (std::size_t k = 0; k < i; ++k)
       if (edge_of(t.profiles[k].halfedge) == edge_of(p.halfedge))
         return invalid(where + ": edge " + std::to_string(edge_of(p.halfedge).value) + " already has profile " +
-                   std::to_string(k));
+                       std::to_string(k));
   }
   return {};
 }
@@ -196,7 +207,8 @@ struct TemplateBuilder::Impl {
     if (!b) return b.status();
     const HalfedgeIdx h = model.find_halfedge(*a, *b);
     if (!h.valid())
-      return invalid("surface '" + std::string(surface) + "' has no edge " + std::string(from) + " - " + std::string(to));
+      return invalid("surface '" + std::string(surface) + "' has no edge " + std::string(from) + " - " +
+                     std::string(to));
     return h;
   }
 
@@ -213,8 +225,12 @@ TemplateBuilder::TemplateBuilder(const ReferenceBody& body, std::string name)
     : impl_(std::make_unique<Impl>(body, std::move(name))) {}
 TemplateBuilder::~TemplateBuilder() = default;
 
-void TemplateBuilder::set_clearance(double c) noexcept { impl_->clearance = c; }
-void TemplateBuilder::set_levels(int levels) noexcept { impl_->levels = levels; }
+void TemplateBuilder::set_clearance(double c) noexcept {
+  impl_->clearance = c;
+}
+void TemplateBuilder::set_levels(int levels) noexcept {
+  impl_->levels = levels;
+}
 
 Status TemplateBuilder::node_on_feature_point(const std::string& name, std::string_view point, const Vec3d& abg) {
   const FeaturePoint* fp = impl_->body.find_point(point);
@@ -252,7 +268,9 @@ Expected<Vec3d> TemplateBuilder::position(std::string_view name) const {
   return it->second.position;
 }
 
-bool TemplateBuilder::has_node(std::string_view name) const { return impl_->features.count(name) > 0; }
+bool TemplateBuilder::has_node(std::string_view name) const {
+  return impl_->features.count(name) > 0;
+}
 
 Status TemplateBuilder::surface(const std::string& name, std::span<const std::vector<std::string>> faces) {
   Impl& I = *impl_;
@@ -316,9 +334,10 @@ Status TemplateBuilder::joint(std::span<const JointChain> members) {
     const JointChain& mc = members[k];
     if (mc.nodes != ref)
       return invalid("joint member " + std::to_string(k) + " (surface '" + mc.surface +
-                 "') does not name the same node chain as member 0");
+                     "') does not name the same node chain as member 0");
     auto si = I.surfaces.find(mc.surface);
-    if (si == I.surfaces.end()) return invalid("joint member " + std::to_string(k) + ": no surface '" + mc.surface + "'");
+    if (si == I.surfaces.end())
+      return invalid("joint member " + std::to_string(k) + ": no surface '" + mc.surface + "'");
     std::vector<HalfedgeIdx> chain;
     bool any_face_side_forward = true;
     for (std::size_t i = 0; i + 1 < mc.nodes.size(); ++i) {
@@ -339,7 +358,7 @@ Status TemplateBuilder::joint(std::span<const JointChain> members) {
     for (HalfedgeIdx h : chain)
       if (I.model.edges.mesh_edge[edge_of(h).value].valid())
         return invalid("joint member " + std::to_string(k) + ": edge " + std::to_string(edge_of(h).value) +
-                   " already belongs to a mesh edge");
+                       " already belongs to a mesh edge");
     const MeshEdgeIdx me = I.model.new_mesh_edge(si->second.index, chain);
     // Angle of the member's sheet about the joint direction, from the first
     // edge's midpoint towards the centroid of a face on it.
@@ -372,7 +391,8 @@ Status TemplateBuilder::bezier_profile(std::string_view surface, std::string_vie
   c.kind = ProfileCurve::Kind::kBezier;
   c.points.push_back(I.model.position(I.model.tail(*h)));
   for (const Vec3d& p : interior) {
-    if (!p.allFinite()) return invalid("Bezier profile " + std::string(from) + " - " + std::string(to) + ": non-finite control point");
+    if (!p.allFinite())
+      return invalid("Bezier profile " + std::string(from) + " - " + std::string(to) + ": non-finite control point");
     c.points.push_back(p);
   }
   c.points.push_back(I.model.position(I.model.head(*h)));
@@ -390,7 +410,8 @@ Status TemplateBuilder::point_list_profile(std::string_view surface, std::string
   Impl& I = *impl_;
   auto h = I.halfedge_of(surface, from, to);
   if (!h) return h.status();
-  if (u.size() != points.size() || u.empty()) return invalid("point list profile: u and points must have the same, non-zero size");
+  if (u.size() != points.size() || u.empty())
+    return invalid("point list profile: u and points must have the same, non-zero size");
   for (std::size_t i = 0; i < u.size(); ++i) {
     if (!(u[i] > 0 && u[i] < 1) || (i && !(u[i] > u[i - 1])))
       return invalid("point list profile: parameters must increase inside (0, 1)");
@@ -489,7 +510,8 @@ Expected<ProfileTemplate> TemplateBuilder::build() {
   if (!I.bvh->closed()) return Status(ErrorCode::kTopology, "reference body skin is not closed");
   t.encoded_clearance.assign(n, 0.0);
   for (std::uint32_t v = 0; v < n; ++v)
-    if (I.model.alive(NodeIdx{v})) t.encoded_clearance[v] = I.bvh->signed_distance(I.model.position(NodeIdx{v})).distance;
+    if (I.model.alive(NodeIdx{v}))
+      t.encoded_clearance[v] = I.bvh->signed_distance(I.model.position(NodeIdx{v})).distance;
   t.model = std::move(I.model);
   t.node_names = std::move(I.node_names);
   t.profiles = std::move(I.profiles);

@@ -74,7 +74,9 @@ void expect_same_tree(const fs::path& a, const fs::path& b) {
     EXPECT_EQ(slurp(e.path()), slurp(b / rel)) << rel;
   }
   for (const auto& e : fs::recursive_directory_iterator(b))
-    if (e.is_regular_file()) EXPECT_TRUE(seen.count(fs::relative(e.path(), b))) << fs::relative(e.path(), b);
+    if (e.is_regular_file()) {
+      EXPECT_TRUE(seen.count(fs::relative(e.path(), b))) << fs::relative(e.path(), b);
+    }
 }
 
 }  // namespace
@@ -143,8 +145,7 @@ TEST(MpiRegen, AFailureOnOneRankSetsTheExitCodeOfTheJob) {
     std::ofstream(objs[1], std::ios::binary) << text;
   }
   const std::string args = "--threads 1 regen --template " + top_template().string() + " --source " +
-                           (d / "set").string() + " --reference " + objs[0].string() +
-                           " --chunk 1 --levels 1 --out ";
+                           (d / "set").string() + " --reference " + objs[0].string() + " --chunk 1 --levels 1 --out ";
   const CommandResult single = run_cli(args + (d / "one").string());
   const CommandResult mpi = mpirun_cli(2, args + (d / "two").string());
   // Exit code 1 (some bodies failed) from the job, as from one process.
@@ -164,9 +165,8 @@ TEST(MpiRegen, BadInputOnEveryRankExitsWithTheInputCodeAndNoReport) {
   const fs::path d = scratch_dir("mpi_regen_bad");
   // The ranks must not wait for each other forever: each reports the error
   // and the job exits 3 (bad input), writing no report.
-  const CommandResult r =
-      mpirun_cli(2, "regen --template " + (d / "missing.template.json").string() + " --count 2 --out " +
-                        (d / "run").string());
+  const CommandResult r = mpirun_cli(
+      2, "regen --template " + (d / "missing.template.json").string() + " --count 2 --out " + (d / "run").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("missing.template.json"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(d / "run" / "report.json"));

@@ -24,8 +24,12 @@ namespace {
 
 using CliRun = atelier::testing::CommandResult;
 using atelier::testing::scratch_dir;
-CliRun run(const std::string& args) { return atelier::testing::run_cli(args); }
-fs::path dir(const std::string& name) { return scratch_dir(name); }
+CliRun run(const std::string& args) {
+  return atelier::testing::run_cli(args);
+}
+fs::path dir(const std::string& name) {
+  return scratch_dir(name);
+}
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -46,7 +50,8 @@ const fs::path& templates() {
 
 std::string template_args() {
   std::string a;
-  for (const char* n : {"top", "skirt", "trousers"}) a += " --template " + (templates() / (std::string(n) + ".template.json")).string();
+  for (const char* n : {"top", "skirt", "trousers"})
+    a += " --template " + (templates() / (std::string(n) + ".template.json")).string();
   return a;
 }
 
@@ -87,8 +92,8 @@ TEST(RegenCli, ByteIdenticalForOneAndTwoThreads) {
 
 TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
   const fs::path out = dir("regen_kill");
-  const std::string cmd = std::string(ATELIER_CLI) + " --threads 2 regen" + template_args() +
-                          " --count 60 --chunk 4 --out " + out.string();
+  const std::string cmd =
+      std::string(ATELIER_CLI) + " --threads 2 regen" + template_args() + " --count 60 --chunk 4 --out " + out.string();
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
@@ -113,7 +118,9 @@ TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
   // Every record left behind is complete JSON (atomic writes), and no
   // temporary file is mistaken for one.
   for (const auto& e : fs::directory_iterator(out / "bodies"))
-    if (e.path().extension() == ".json") EXPECT_FALSE(nlohmann::json::parse(slurp(e.path()), nullptr, false).is_discarded()) << e.path();
+    if (e.path().extension() == ".json") {
+      EXPECT_FALSE(nlohmann::json::parse(slurp(e.path()), nullptr, false).is_discarded()) << e.path();
+    }
   const CliRun again = run("--threads 2 regen" + template_args() + " --count 60 --chunk 4 --out " + out.string());
   ASSERT_EQ(again.code, 0) << again.out;
   const auto timing = nlohmann::json::parse(slurp(out / "timing.json"));
