@@ -12,7 +12,7 @@ function(atelier_precompile target)
   target_precompile_headers(${target} PRIVATE
     <algorithm> <array> <cmath> <cstdint> <functional> <map> <memory> <span> <string> <vector>
     <Eigen/Core> <Eigen/Geometry> <nlohmann/json.hpp>
-    "${PROJECT_SOURCE_DIR}/engine/parallel.h"
-    "${PROJECT_SOURCE_DIR}/storage/model.h"
+    <atelier/engine/parallel.h>
+    <atelier/storage/model.h>
     ${ARGN})
 endfunction()

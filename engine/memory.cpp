@@ -1,4 +1,4 @@
-#include "engine/memory.h"
+#include <atelier/engine/memory.h>
 
 #include <climits>
 

@@ -16,7 +16,7 @@
 #include <numeric>
 #include <vector>
 
-#include "engine/exec_context.h"
+#include <atelier/engine/exec_context.h>
 
 #if defined(__SANITIZE_THREAD__)
 extern "C" void __tsan_acquire(void* addr);

@@ -1,4 +1,4 @@
-#include "engine/status.h"
+#include <atelier/engine/status.h>
 
 namespace atelier {
 

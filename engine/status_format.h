@@ -3,7 +3,7 @@
 
 #include <sstream>
 
-#include "engine/status.h"
+#include <atelier/engine/status.h>
 
 namespace atelier {
 

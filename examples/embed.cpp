@@ -12,13 +12,13 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/exec_context.h"
-#include "systems/body_bvh.h"
-#include "systems/detail_template.h"
-#include "systems/mannequin.h"
-#include "systems/mannequin_source.h"
-#include "systems/reference_body.h"
-#include "systems/render.h"
+#include <atelier/engine/exec_context.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/garment/detail_template.h>
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/body/mannequin_source.h>
+#include <atelier/systems/body/reference_body.h>
+#include <atelier/systems/view/render.h>
 
 using namespace atelier;
 

@@ -1,4 +1,4 @@
-#include "io/atomic_file.h"
+#include <atelier/io/atomic_file.h>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -8,7 +8,7 @@
 #include <cstring>
 #include <system_error>
 
-#include "engine/status.h"
+#include <atelier/engine/status.h>
 
 namespace atelier {
 

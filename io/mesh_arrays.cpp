@@ -1,4 +1,4 @@
-#include "io/mesh_arrays.h"
+#include <atelier/io/mesh_arrays.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -7,7 +7,7 @@
 #include <regex>
 #include <sstream>
 
-#include "storage/builder.h"
+#include <atelier/storage/builder.h>
 
 namespace atelier::io_detail {
 

@@ -12,9 +12,9 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/math.h"
-#include "engine/status.h"
-#include "storage/model.h"
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
 
 namespace atelier {
 

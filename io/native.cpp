@@ -1,4 +1,4 @@
-#include "io/native.h"
+#include <atelier/io/native.h>
 
 #include <algorithm>
 #include <array>
@@ -8,10 +8,10 @@
 #include <tuple>
 #include <type_traits>
 
-#include "io/atomic_file.h"
-#include "io/crc32.h"
-#include "io/mesh_arrays.h"
-#include "storage/validate.h"
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/crc32.h>
+#include <atelier/io/mesh_arrays.h>
+#include <atelier/storage/validate.h>
 
 namespace atelier {
 

@@ -21,7 +21,7 @@
 #include <string>
 #include <string_view>
 
-#include "storage/model.h"
+#include <atelier/storage/model.h>
 
 namespace atelier {
 

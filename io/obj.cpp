@@ -1,4 +1,4 @@
-#include "io/obj.h"
+#include <atelier/io/obj.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,8 +6,8 @@
 #include <limits>
 #include <unordered_map>
 
-#include "io/atomic_file.h"
-#include "io/mesh_arrays.h"
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/mesh_arrays.h>
 
 namespace atelier {
 

@@ -1,10 +1,10 @@
-#include "io/off.h"
+#include <atelier/io/off.h>
 
 #include <cmath>
 #include <limits>
 
-#include "io/atomic_file.h"
-#include "io/mesh_arrays.h"
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/mesh_arrays.h>
 
 namespace atelier {
 

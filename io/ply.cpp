@@ -1,4 +1,4 @@
-#include "io/ply.h"
+#include <atelier/io/ply.h>
 
 #include <algorithm>
 #include <bit>
@@ -6,8 +6,8 @@
 #include <cstring>
 #include <limits>
 
-#include "io/atomic_file.h"
-#include "io/mesh_arrays.h"
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/mesh_arrays.h>
 
 namespace atelier {
 

@@ -17,7 +17,7 @@
 #include <filesystem>
 #include <string_view>
 
-#include "storage/model.h"
+#include <atelier/storage/model.h>
 
 namespace atelier {
 

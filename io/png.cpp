@@ -1,4 +1,4 @@
-#include "io/png.h"
+#include <atelier/io/png.h>
 
 #include <zlib.h>
 
@@ -8,10 +8,10 @@
 #include <cstring>
 #include <limits>
 
-#include "engine/status.h"
-#include "io/atomic_file.h"
-#include "io/crc32.h"
-#include "io/mesh_arrays.h"
+#include <atelier/engine/status.h>
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/crc32.h>
+#include <atelier/io/mesh_arrays.h>
 
 namespace atelier {
 

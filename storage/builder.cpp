@@ -1,11 +1,11 @@
-#include "storage/builder.h"
+#include <atelier/storage/builder.h>
 
 #include <algorithm>
 #include <sstream>
 #include <vector>
 
-#include "engine/parallel.h"
-#include "storage/topology.h"
+#include <atelier/engine/parallel.h>
+#include <atelier/storage/topology.h>
 
 namespace atelier {
 

@@ -6,9 +6,9 @@
 #include <span>
 #include <string>
 
-#include "engine/exec_context.h"
-#include "engine/status.h"
-#include "storage/model.h"
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
 
 namespace atelier {
 

@@ -1,4 +1,4 @@
-#include "storage/model.h"
+#include <atelier/storage/model.h>
 
 #include <algorithm>
 #include <sstream>

@@ -17,12 +17,12 @@
 #include <string>
 #include <vector>
 
-#include "engine/handle.h"
-#include "engine/math.h"
-#include "engine/status.h"
-#include "storage/property.h"
-#include "storage/ragged.h"
-#include "storage/slot_table.h"
+#include <atelier/engine/handle.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/property.h>
+#include <atelier/storage/ragged.h>
+#include <atelier/storage/slot_table.h>
 
 namespace atelier {
 

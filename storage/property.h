@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "engine/handle.h"
-#include "storage/slot_table.h"
+#include <atelier/engine/handle.h>
+#include <atelier/storage/slot_table.h>
 
 namespace atelier {
 

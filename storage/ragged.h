@@ -9,7 +9,7 @@
 #include <span>
 #include <vector>
 
-#include "engine/handle.h"
+#include <atelier/engine/handle.h>
 
 namespace atelier {
 

@@ -8,7 +8,7 @@
 #include <span>
 #include <vector>
 
-#include "engine/handle.h"
+#include <atelier/engine/handle.h>
 
 namespace atelier {
 

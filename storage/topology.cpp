@@ -1,4 +1,4 @@
-#include "storage/topology.h"
+#include <atelier/storage/topology.h>
 
 #include <numeric>
 #include <vector>

@@ -6,7 +6,7 @@
 
 #include <cstdint>
 
-#include "storage/model.h"
+#include <atelier/storage/model.h>
 
 namespace atelier {
 

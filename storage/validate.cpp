@@ -1,9 +1,9 @@
-#include "storage/validate.h"
+#include <atelier/storage/validate.h>
 
 #include <sstream>
 #include <vector>
 
-#include "storage/topology.h"
+#include <atelier/storage/topology.h>
 
 namespace atelier {
 

@@ -5,8 +5,8 @@
 // tables' own invariants and every layer above, I/O included, uses it.)
 #pragma once
 
-#include "engine/status.h"
-#include "storage/model.h"
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
 
 namespace atelier {
 

@@ -3,20 +3,20 @@
 #include <memory>
 #include <sstream>
 
-#include "apps/atelier/commands.h"
-#include "io/atomic_file.h"
-#include "io/native.h"
-#include "io/obj.h"
-#include "io/off.h"
-#include "io/ply.h"
-#include "storage/topology.h"
-#include "storage/validate.h"
-#include "systems/body_set.h"
-#include "systems/detail_template.h"
-#include "systems/makehuman_body.h"
-#include "systems/mannequin.h"
-#include "systems/mannequin_source.h"
-#include "systems/measure.h"
+#include "commands.h"
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/native.h>
+#include <atelier/io/obj.h>
+#include <atelier/io/off.h>
+#include <atelier/io/ply.h>
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/body/body_set.h>
+#include <atelier/systems/garment/detail_template.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/body/mannequin_source.h>
+#include <atelier/systems/body/measure.h>
 
 namespace atelier::cli {
 

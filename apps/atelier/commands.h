@@ -8,9 +8,9 @@
 #include <memory>
 #include <string>
 
-#include "apps/atelier/log.h"
-#include "engine/exec_context.h"
-#include "systems/body_set.h"
+#include "log.h"
+#include <atelier/engine/exec_context.h>
+#include <atelier/systems/body/body_set.h>
 
 namespace atelier::cli {
 

@@ -12,23 +12,23 @@
 #include <numeric>
 #include <sstream>
 
-#include "apps/atelier/commands.h"
-#include "engine/parallel.h"
-#include "io/atomic_file.h"
-#include "io/html_report.h"
-#include "io/obj.h"
-#include "io/png.h"
-#include "systems/body_bvh.h"
-#include "systems/body_set.h"
-#include "systems/collision_pass.h"
-#include "systems/detail_template.h"
-#include "systems/edge_transfer.h"
-#include "systems/mannequin.h"
-#include "systems/mannequin_source.h"
-#include "systems/measure.h"
-#include "systems/project_templates.h"
-#include "systems/regenerate.h"
-#include "systems/render.h"
+#include "commands.h"
+#include <atelier/engine/parallel.h>
+#include <atelier/io/atomic_file.h>
+#include "html_report.h"
+#include <atelier/io/obj.h>
+#include <atelier/io/png.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/body/body_set.h>
+#include <atelier/systems/garment/collision_pass.h>
+#include <atelier/systems/garment/detail_template.h>
+#include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/body/mannequin_source.h>
+#include <atelier/systems/body/measure.h>
+#include <atelier/systems/profile/project_templates.h>
+#include <atelier/systems/profile/regenerate.h>
+#include <atelier/systems/view/render.h>
 
 namespace atelier::cli {
 

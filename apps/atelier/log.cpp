@@ -1,4 +1,4 @@
-#include "apps/atelier/log.h"
+#include "log.h"
 
 #include <unistd.h>
 

@@ -3,12 +3,12 @@
 #include <cstdio>
 #include <exception>
 
-#include "apps/atelier/commands.h"
-#include "apps/atelier/measure_cmd.h"
-#include "apps/atelier/regen_cmd.h"
-#include "apps/atelier/render_cmd.h"
-#include "engine/memory.h"
-#include "engine/status.h"
+#include "commands.h"
+#include "measure_cmd.h"
+#include "regen_cmd.h"
+#include "render_cmd.h"
+#include <atelier/engine/memory.h>
+#include <atelier/engine/status.h>
 
 #ifndef ATELIER_VERSION
 #define ATELIER_VERSION "0.1.0"

@@ -1,11 +1,11 @@
-#include "apps/atelier/measure_cmd.h"
+#include "measure_cmd.h"
 
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "io/atomic_file.h"
-#include "systems/body_bvh.h"
-#include "systems/fit_measure.h"
+#include <atelier/io/atomic_file.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/garment/fit_measure.h>
 
 namespace atelier::cli {
 

@@ -8,7 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 
-#include "apps/atelier/commands.h"
+#include "commands.h"
 
 namespace atelier::cli {
 

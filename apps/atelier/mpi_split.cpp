@@ -1,10 +1,10 @@
-#include "apps/atelier/mpi_split.h"
+#include "mpi_split.h"
 
 #include <cstdlib>
 #include <string>
 #include <utility>
 
-#include "engine/status.h"
+#include <atelier/engine/status.h>
 
 #ifdef ATELIER_WITH_MPI
 #include <mpi.h>

@@ -1,4 +1,4 @@
-#include "apps/atelier/regen_cmd.h"
+#include "regen_cmd.h"
 
 #include <algorithm>
 #include <array>
@@ -10,20 +10,20 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "apps/atelier/mpi_split.h"
-#include "engine/parallel.h"
-#include "io/atomic_file.h"
-#include "io/makehuman.h"
-#include "io/mhclo.h"
-#include "io/obj.h"
-#include "systems/collision_pass.h"
-#include "systems/detail_template.h"
-#include "systems/edge_transfer.h"
-#include "systems/makehuman_body.h"
-#include "systems/mannequin.h"
-#include "systems/project_templates.h"
-#include "systems/regenerate.h"
-#include "systems/template_json.h"
+#include "mpi_split.h"
+#include <atelier/engine/parallel.h>
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/makehuman/makehuman.h>
+#include <atelier/io/makehuman/mhclo.h>
+#include <atelier/io/obj.h>
+#include <atelier/systems/garment/collision_pass.h>
+#include <atelier/systems/garment/detail_template.h>
+#include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/profile/project_templates.h>
+#include <atelier/systems/profile/regenerate.h>
+#include <atelier/systems/profile/template_json.h>
 
 namespace atelier::cli {
 

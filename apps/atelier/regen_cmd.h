@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "apps/atelier/commands.h"
+#include "commands.h"
 
 namespace atelier::cli {
 

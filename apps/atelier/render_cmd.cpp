@@ -1,16 +1,16 @@
-#include "apps/atelier/render_cmd.h"
+#include "render_cmd.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <deque>
 
-#include "io/obj.h"
-#include "io/off.h"
-#include "io/ply.h"
-#include "io/png.h"
-#include "systems/body_bvh.h"
-#include "systems/render.h"
+#include <atelier/io/obj.h>
+#include <atelier/io/off.h>
+#include <atelier/io/ply.h>
+#include <atelier/io/png.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/view/render.h>
 
 namespace atelier::cli {
 

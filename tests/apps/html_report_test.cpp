@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "io/html_report.h"
-#include "io/png.h"
-#include "systems/render.h"
+#include "apps/atelier/html_report.h"
+#include <atelier/io/png.h>
+#include <atelier/systems/view/render.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;

@@ -39,8 +39,8 @@ TEST(Install, DownstreamProjectBuildsAndRunsTheEmbeddingExample) {
   const Outcome install = run("cmake --install " + q(build) + " --prefix " + q(prefix));
   ASSERT_EQ(install.code, 0) << install.out;
   EXPECT_TRUE(fs::exists(prefix / "bin" / "atelier"));
-  EXPECT_TRUE(fs::exists(prefix / "include" / "systems" / "detail_template.h"));
-  EXPECT_TRUE(fs::exists(prefix / "include" / "engine" / "exec_context.h"));
+  EXPECT_TRUE(fs::exists(prefix / "include" / "atelier" / "systems" / "garment" / "detail_template.h"));
+  EXPECT_TRUE(fs::exists(prefix / "include" / "atelier" / "engine" / "exec_context.h"));
   bool config = false;
   for (const auto& e : fs::recursive_directory_iterator(prefix))
     config = config || e.path().filename() == "atelierConfig.cmake";

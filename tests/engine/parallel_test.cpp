@@ -4,9 +4,9 @@
 #include <random>
 #include <type_traits>
 
-#include "engine/handle.h"
-#include "engine/parallel.h"
-#include "engine/status.h"
+#include <atelier/engine/handle.h>
+#include <atelier/engine/parallel.h>
+#include <atelier/engine/status.h>
 
 using namespace atelier;
 

@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "engine/status.h"
-#include "storage/builder.h"
-#include "storage/model.h"
-#include "systems/validate.h"
+#include <atelier/engine/status.h>
+#include <atelier/storage/builder.h>
+#include <atelier/storage/model.h>
+#include <atelier/storage/validate.h>
 
 namespace atelier::test {
 

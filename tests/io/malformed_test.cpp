@@ -6,10 +6,10 @@
 
 #include <set>
 
-#include "io/native.h"
-#include "io/obj.h"
-#include "io/off.h"
-#include "io/ply.h"
+#include <atelier/io/native.h>
+#include <atelier/io/obj.h>
+#include <atelier/io/off.h>
+#include <atelier/io/ply.h>
 #include "io_test_support.h"
 
 using namespace atelier;

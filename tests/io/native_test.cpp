@@ -2,10 +2,10 @@
 
 #include <cstring>
 
-#include "io/native.h"
-#include "io/obj.h"
+#include <atelier/io/native.h>
+#include <atelier/io/obj.h>
 #include "io_test_support.h"
-#include "storage/topology.h"
+#include <atelier/storage/topology.h>
 
 using namespace atelier;
 using namespace atelier::test;

@@ -4,9 +4,9 @@
 #include <map>
 #include <set>
 
-#include "io/obj.h"
+#include <atelier/io/obj.h>
 #include "io_test_support.h"
-#include "storage/topology.h"
+#include <atelier/storage/topology.h>
 
 using namespace atelier;
 using namespace atelier::test;

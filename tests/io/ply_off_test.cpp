@@ -3,10 +3,10 @@
 #include <bit>
 #include <cstring>
 
-#include "io/off.h"
-#include "io/ply.h"
+#include <atelier/io/off.h>
+#include <atelier/io/ply.h>
 #include "io_test_support.h"
-#include "storage/topology.h"
+#include <atelier/storage/topology.h>
 
 using namespace atelier;
 using namespace atelier::test;

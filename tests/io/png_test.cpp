@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "io/io_test_support.h"
-#include "io/png.h"
+#include <atelier/io/png.h>
 
 namespace atelier {
 namespace {

@@ -2,9 +2,9 @@
 
 #include <random>
 
-#include "storage/property.h"
-#include "storage/ragged.h"
-#include "storage/slot_table.h"
+#include <atelier/storage/property.h>
+#include <atelier/storage/ragged.h>
+#include <atelier/storage/slot_table.h>
 
 using namespace atelier;
 

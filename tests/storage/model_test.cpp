@@ -3,9 +3,9 @@
 #include <cmath>
 #include <random>
 
-#include "storage/builder.h"
-#include "storage/topology.h"
-#include "systems/validate.h"
+#include <atelier/storage/builder.h>
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
 
 using namespace atelier;
 

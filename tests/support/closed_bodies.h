@@ -7,11 +7,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/math.h"
-#include "engine/status.h"
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
 #include "support/shapes.h"
-#include "systems/body_bvh.h"
-#include "systems/collision_pass.h"
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/garment/collision_pass.h>
 
 namespace atelier::test_bodies {
 

@@ -4,8 +4,8 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "storage/builder.h"
-#include "systems/euler.h"
+#include <atelier/storage/builder.h>
+#include <atelier/systems/mesh/euler.h>
 
 namespace atelier::fixtures {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "storage/model.h"
+#include <atelier/storage/model.h>
 
 namespace atelier::fixtures {
 

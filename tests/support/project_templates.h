@@ -5,8 +5,8 @@
 
 #include <vector>
 
-#include "systems/mannequin.h"
-#include "systems/project_templates.h"
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/profile/project_templates.h>
 
 namespace atelier::testing {
 

@@ -7,9 +7,9 @@
 #include <memory>
 #include <vector>
 
-#include "engine/math.h"
-#include "storage/builder.h"
-#include "systems/reference_body.h"
+#include <atelier/engine/math.h>
+#include <atelier/storage/builder.h>
+#include <atelier/systems/body/reference_body.h>
 
 namespace atelier::shapes {
 

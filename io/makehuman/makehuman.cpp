@@ -1,0 +1,169 @@
+#include <atelier/io/makehuman/makehuman.h>
+
+#include <charconv>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include <atelier/engine/status.h>
+
+namespace atelier::makehuman {
+
+namespace {
+
+[[noreturn]] void parse_error(const std::filesystem::path& f, std::size_t line, const std::string& what) {
+  std::ostringstream s;
+  s << f.string();
+  if (line) s << ":" << line;
+  s << ": " << what;
+  throw Error(Status(ErrorCode::kParse, s.str()));
+}
+
+std::string slurp(const std::filesystem::path& f) {
+  std::ifstream in(f, std::ios::binary);
+  if (!in) throw Error(Status(ErrorCode::kIo, f.string() + ": cannot open"));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return std::move(ss).str();
+}
+
+// Minimal tokeniser over a line.
+struct Cursor {
+  const char* p;
+  const char* end;
+  void skip_ws() {
+    while (p < end && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
+  }
+  bool done() {
+    skip_ws();
+    return p >= end;
+  }
+  template <class T>
+  bool read(T& v) {
+    skip_ws();
+    auto [q, ec] = std::from_chars(p, end, v);
+    if (ec != std::errc{} || (q < end && *q != ' ' && *q != '\t' && *q != '\r' && *q != '/')) return false;
+    p = q;
+    return true;
+  }
+};
+
+template <class F>
+void for_each_line(const std::string& text, F&& f) {
+  std::size_t line = 0, pos = 0;
+  while (pos < text.size()) {
+    std::size_t nl = text.find('\n', pos);
+    if (nl == std::string::npos) nl = text.size();
+    ++line;
+    f(line, text.data() + pos, text.data() + nl);
+    pos = nl + 1;
+  }
+}
+
+}  // namespace
+
+Target read_target(const std::filesystem::path& file, std::uint32_t vertex_count) {
+  const std::string text = slurp(file);
+  Target t;
+  t.name = file.stem().string();
+  for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
+    Cursor c{b, e};
+    if (c.done() || *c.p == '#') return;
+    std::uint32_t idx = 0;
+    float d[3];
+    if (!c.read(idx)) parse_error(file, line, "expected 'INDEX DX DY DZ', got a non-integer index");
+    for (float& x : d)
+      if (!c.read(x)) parse_error(file, line, "expected 'INDEX DX DY DZ', a displacement is missing or not a number");
+    if (!c.done()) parse_error(file, line, "extra tokens after 'INDEX DX DY DZ'");
+    if (idx >= vertex_count) {
+      std::ostringstream s;
+      s << "vertex index " << idx << " out of range (the base mesh has " << vertex_count << " vertices)";
+      parse_error(file, line, s.str());
+    }
+    if (!std::isfinite(d[0]) || !std::isfinite(d[1]) || !std::isfinite(d[2]))
+      parse_error(file, line, "non-finite displacement");
+    t.index.push_back(idx);
+    t.delta.emplace_back(d[0], d[1], d[2]);
+  });
+  return t;
+}
+
+const BaseMesh::Group* BaseMesh::group(std::string_view name) const noexcept {
+  for (const auto& g : groups)
+    if (g.name == name) return &g;
+  return nullptr;
+}
+
+BaseMesh read_base_mesh(const std::filesystem::path& file) {
+  const std::string text = slurp(file);
+  BaseMesh m;
+  BaseMesh::Group* cur = nullptr;
+  std::vector<std::uint32_t> face;
+  for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
+    Cursor c{b, e};
+    if (c.done() || *c.p == '#') return;
+    const char* kw = c.p;
+    while (c.p < e && *c.p != ' ' && *c.p != '\t' && *c.p != '\r') ++c.p;
+    const std::string_view key(kw, static_cast<std::size_t>(c.p - kw));
+    if (key == "v") {
+      float x, y, z;
+      if (!c.read(x) || !c.read(y) || !c.read(z)) parse_error(file, line, "vertex needs three numbers");
+      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) parse_error(file, line, "non-finite vertex");
+      m.positions.emplace_back(x, y, z);
+    } else if (key == "g" || key == "o") {
+      c.skip_ws();
+      std::string name(c.p, static_cast<std::size_t>(e - c.p));
+      while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+      m.groups.push_back({name, {0}, {}});
+      cur = &m.groups.back();
+    } else if (key == "f") {
+      if (!cur) {
+        m.groups.push_back({"default", {0}, {}});
+        cur = &m.groups.back();
+      }
+      face.clear();
+      while (!c.done()) {
+        long long v = 0;
+        if (!c.read(v)) parse_error(file, line, "face index is not an integer");
+        while (c.p < e && *c.p != ' ' && *c.p != '\t' && *c.p != '\r') ++c.p;  // skip /vt/vn
+        const long long n = static_cast<long long>(m.positions.size());
+        const long long i = v > 0 ? v - 1 : n + v;
+        if (v == 0 || i < 0 || i >= n) {
+          std::ostringstream s;
+          s << "face index " << v << " out of range (" << n << " vertices so far)";
+          parse_error(file, line, s.str());
+        }
+        face.push_back(static_cast<std::uint32_t>(i));
+      }
+      if (face.size() < 3) parse_error(file, line, "face with fewer than 3 vertices");
+      cur->face_nodes.insert(cur->face_nodes.end(), face.begin(), face.end());
+      cur->face_offsets.push_back(static_cast<std::uint32_t>(cur->face_nodes.size()));
+    }
+  });
+  return m;
+}
+
+std::map<std::string, std::vector<std::uint32_t>> read_measures(const std::filesystem::path& file,
+                                                                std::uint32_t vertex_count) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(slurp(file));
+  } catch (const nlohmann::json::parse_error& e) {
+    parse_error(file, 0, e.what());
+  }
+  std::map<std::string, std::vector<std::uint32_t>> out;
+  if (!j.contains("measures") || !j["measures"].is_object()) parse_error(file, 0, "no \"measures\" object");
+  for (auto& [name, list] : j["measures"].items()) {
+    if (!list.is_array()) parse_error(file, 0, "measure '" + name + "' is not an array");
+    std::vector<std::uint32_t> v;
+    for (auto& x : list) {
+      if (!x.is_number_unsigned() || x.get<std::uint64_t>() >= vertex_count)
+        parse_error(file, 0, "measure '" + name + "' has an invalid vertex index " + x.dump());
+      v.push_back(x.get<std::uint32_t>());
+    }
+    out[name] = std::move(v);
+  }
+  return out;
+}
+
+}  // namespace atelier::makehuman

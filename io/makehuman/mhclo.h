@@ -1,0 +1,41 @@
+// MakeHuman garment bindings (.mhclo), MakeHuman's own way of fitting a
+// garment on any body (../shared/data/makehuman/clothes/README.md):
+//   fitted = w0 H[i0] + w1 H[i1] + w2 H[i2] + (sx dx, sy dy, sz dz),
+//   s_axis = |H[a].axis - H[b].axis| / d   from the x_scale/y_scale/z_scale lines.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <atelier/engine/math.h>
+
+namespace atelier::makehuman {
+
+struct GarmentBinding {
+  std::string name;
+  std::string obj_file;
+  int z_depth = 0;                                // layer order (inner first)
+  std::array<std::uint32_t, 3> scale_a{}, scale_b{};  // per axis: reference vertex pair
+  std::array<double, 3> scale_d{1, 1, 1};         // per axis: reference distance
+  std::array<bool, 3> has_scale{};
+  struct Ref {
+    std::array<std::uint32_t, 3> v{};
+    std::array<double, 3> w{};
+    Vec3d offset = Vec3d::Zero();
+  };
+  std::vector<Ref> refs;                 // one per garment vertex, in obj order
+  std::vector<std::uint32_t> delete_verts;  // body vertices hidden under the garment
+};
+
+/// Reads a .mhclo file. Throws atelier::Error (kParse) naming file and line on
+/// a malformed line or a vertex index >= body_vertex_count.
+[[nodiscard]] GarmentBinding read_mhclo(const std::filesystem::path& file, std::uint32_t body_vertex_count);
+
+/// The binding's fit on a body with vertex array H (base.obj units).
+[[nodiscard]] std::vector<Vec3d> fit_binding(const GarmentBinding& b, std::span<const Vec3f> H);
+
+}  // namespace atelier::makehuman

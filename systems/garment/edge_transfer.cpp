@@ -1,0 +1,225 @@
+#include <atelier/systems/garment/edge_transfer.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <cmath>
+#include <string>
+
+#include <atelier/engine/parallel.h>
+#include <atelier/systems/mesh/normals.h>
+
+namespace atelier {
+
+// P A P^T = L D L^T (sparse LDL^T with a fill-reducing ordering, Eigen's
+// SimplicialLDLT), kept as plain arrays so that a solve runs the three
+// coordinates together: one pass over L per direction instead of one per
+// coordinate (Eigen's solve with a three-column right-hand side makes six).
+class EdgeTransferSolver {
+ public:
+  std::vector<int> col_start, row;  // strictly lower L, compressed columns
+  std::vector<double> value;
+  std::vector<double> inv_d;
+  std::vector<int> perm;  // y = P b: y[perm[i]] = b[i]
+
+  void solve(std::span<const Vec3d> b, std::span<Vec3d> x, std::vector<Vec3d>& y) const {
+    const std::size_t n = inv_d.size();
+    y.resize(n);
+    for (std::size_t i = 0; i < n; ++i) y[perm[i]] = b[i];
+    for (std::size_t j = 0; j < n; ++j) {  // L y' = y, by columns
+      const Vec3d yj = y[j];
+      for (int k = col_start[j]; k < col_start[j + 1]; ++k) y[row[k]] -= value[k] * yj;
+    }
+    for (std::size_t j = 0; j < n; ++j) y[j] *= inv_d[j];
+    for (std::size_t j = n; j-- > 0;) {  // L^T x' = y', column j of L is row j of L^T
+      Vec3d s = y[j];
+      for (int k = col_start[j]; k < col_start[j + 1]; ++k) s -= value[k] * y[row[k]];
+      y[j] = s;
+    }
+    for (std::size_t i = 0; i < n; ++i) x[i] = y[perm[i]];
+  }
+};
+
+Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
+                                            std::span<const std::array<std::uint32_t, 2>> edges,
+                                            const CollisionBody& body, const EdgeTransferParams& params,
+                                            const ExecContext& ctx) {
+  const std::size_t n = source.size();
+  if (n == 0) return Status(ErrorCode::kInvalidArgument, "edge transfer: empty garment");
+  if (body.empty()) return Status(ErrorCode::kInvalidArgument, "edge transfer: source body not built");
+  if (!(params.anchor > 0) || !std::isfinite(params.anchor))
+    return Status(ErrorCode::kInvalidArgument, "edge transfer: anchor must be positive");
+  if (params.length_iterations < 0 || params.length_sweeps < 0)
+    return Status(ErrorCode::kInvalidArgument, "edge transfer: length iterations and sweeps must not be negative");
+  for (std::size_t v = 0; v < n; ++v)
+    if (!is_finite(source[v]))
+      return Status(ErrorCode::kDegenerate, "edge transfer: garment vertex " + std::to_string(v) + " is not finite");
+  for (std::size_t e = 0; e < edges.size(); ++e)
+    if (edges[e][0] >= n || edges[e][1] >= n || edges[e][0] == edges[e][1])
+      return Status(ErrorCode::kInvalidArgument, "edge transfer: edge " + std::to_string(e) + " (" +
+                                                     std::to_string(edges[e][0]) + ", " + std::to_string(edges[e][1]) +
+                                                     ") is not an edge of " + std::to_string(n) + " vertices");
+  EdgeTransfer t;
+  t.vertices = n;
+  t.length_iterations = params.length_iterations;
+  t.length_sweeps = params.length_sweeps;
+  t.edges.assign(edges.begin(), edges.end());
+  const std::size_t ne = edges.size();
+  t.triangle.assign(ne, kNoTriangle);
+  t.coefficient.assign(ne, Vec3d::Zero());
+  t.weight.assign(ne, 0.0);
+  const auto tris = body.topology().triangles();
+  const auto pos = body.positions();
+  par::for_each_n(ctx, ne, [&](std::size_t e) {
+    const Vec3d& a = source[edges[e][0]];
+    const Vec3d& b = source[edges[e][1]];
+    const double l2 = (b - a).squaredNorm();
+    if (!(l2 > 0)) return;
+    const std::uint32_t tri = body.query(0.5 * (a + b)).triangle;
+    if (tri == kNoTriangle) return;
+    const Mat3d m = triangle_basis(pos, tris[tri]);
+    const Eigen::FullPivLU<Mat3d> lu(m);  // a zero-area triangle (zero normal) is not invertible
+    if (!lu.isInvertible()) return;
+    t.triangle[e] = tri;
+    t.coefficient[e] = lu.solve(b - a);
+    t.weight[e] = 1.0 / l2;
+  });
+  // a_v = anchor * mean weight of v's edges (1 for a vertex without any:
+  // it keeps its decoded position).
+  std::vector<double> wsum(n, 0.0);
+  std::vector<std::uint32_t> deg(n, 0);
+  for (std::size_t e = 0; e < ne; ++e)
+    for (std::uint32_t v : edges[e]) {
+      wsum[v] += t.weight[e];
+      deg[v] += t.weight[e] > 0;
+    }
+  t.anchor.resize(n);
+  for (std::size_t v = 0; v < n; ++v) t.anchor[v] = deg[v] > 0 ? params.anchor * wsum[v] / deg[v] : 1.0;
+  t.inv_diagonal.resize(n);
+  for (std::size_t v = 0; v < n; ++v) t.inv_diagonal[v] = 1.0 / (t.anchor[v] + wsum[v]);
+  t.vertex_edge_offset.assign(n + 1, 0);
+  for (std::size_t e = 0; e < ne; ++e)
+    if (t.weight[e] > 0)
+      for (std::uint32_t v : edges[e]) ++t.vertex_edge_offset[v + 1];
+  for (std::size_t v = 0; v < n; ++v) t.vertex_edge_offset[v + 1] += t.vertex_edge_offset[v];
+  t.vertex_edge.resize(t.vertex_edge_offset[n]);
+  {
+    std::vector<std::uint32_t> fill(t.vertex_edge_offset.begin(), t.vertex_edge_offset.end() - 1);
+    for (std::size_t e = 0; e < ne; ++e)
+      if (t.weight[e] > 0)
+        for (std::uint32_t v : edges[e]) t.vertex_edge[fill[v]++] = static_cast<std::uint32_t>(e);
+  }
+  // Normal matrix D^T W D + A.
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(4 * ne + n);
+  for (std::size_t e = 0; e < ne; ++e) {
+    const double w = t.weight[e];
+    if (w == 0) continue;
+    const auto [i, j] = edges[e];
+    trip.emplace_back(i, i, w);
+    trip.emplace_back(j, j, w);
+    trip.emplace_back(i, j, -w);
+    trip.emplace_back(j, i, -w);
+  }
+  for (std::size_t v = 0; v < n; ++v) trip.emplace_back(v, v, t.anchor[v]);
+  Eigen::SparseMatrix<double> a(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  a.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(a);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0).all())
+    return Status(ErrorCode::kDegenerate, "edge transfer: the normal matrix does not factor");
+  auto solver = std::make_shared<EdgeTransferSolver>();
+  const Eigen::SparseMatrix<double>& l = ldlt.matrixL().nestedExpression();
+  solver->col_start.assign(l.outerIndexPtr(), l.outerIndexPtr() + n + 1);
+  const auto nnz = static_cast<std::size_t>(solver->col_start[n]);
+  solver->row.assign(l.innerIndexPtr(), l.innerIndexPtr() + nnz);
+  solver->value.assign(l.valuePtr(), l.valuePtr() + nnz);
+  solver->inv_d.resize(n);
+  for (std::size_t i = 0; i < n; ++i) solver->inv_d[i] = 1.0 / ldlt.vectorD()[static_cast<Eigen::Index>(i)];
+  solver->perm.assign(ldlt.permutationP().indices().data(), ldlt.permutationP().indices().data() + n);
+  t.solver = std::move(solver);
+  return t;
+}
+
+Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_points,
+                           std::span<const Triangle> body_triangles, std::span<Vec3d> garment, const ExecContext& ctx) {
+  const std::size_t n = t.vertices;
+  if (!t.solver) return Status(ErrorCode::kInvalidArgument, "edge transfer: not encoded");
+  if (garment.size() != n)
+    return Status(ErrorCode::kMismatch, "edge transfer: " + std::to_string(garment.size()) +
+                                            " garment vertices for an encoding of " + std::to_string(n));
+  for (std::size_t e = 0; e < t.edges.size(); ++e) {
+    if (t.triangle[e] == kNoTriangle) continue;
+    if (t.triangle[e] >= body_triangles.size())
+      return Status(ErrorCode::kMismatch, "edge transfer: the body has " + std::to_string(body_triangles.size()) +
+                                              " triangles; the encoding uses triangle " +
+                                              std::to_string(t.triangle[e]));
+    for (std::uint32_t c : body_triangles[t.triangle[e]])
+      if (c >= body_points.size())
+        return Status(ErrorCode::kMismatch, "edge transfer: triangle " + std::to_string(t.triangle[e]) +
+                                                " uses point " + std::to_string(c) + " of " +
+                                                std::to_string(body_points.size()));
+  }
+  for (std::size_t v = 0; v < n; ++v)
+    if (!is_finite(garment[v]))
+      return Status(ErrorCode::kDegenerate, "edge transfer: garment vertex " + std::to_string(v) + " is not finite");
+  // Edge targets T_e = B_new c_e, then the right-hand side D^T W T + A d,
+  // gathered per vertex in a fixed order (deterministic).
+  std::vector<Vec3d> target(t.edges.size(), Vec3d::Zero());
+  par::for_each_n(ctx, t.edges.size(), [&](std::size_t e) {
+    if (t.weight[e] == 0) return;
+    const Mat3d m = triangle_basis(body_points, body_triangles[t.triangle[e]]);
+    // A triangle collapsed on this body (zero normal) gives no stretch: the
+    // edge keeps its decoded vector.
+    target[e] = m.col(2).squaredNorm() > 0 ? Vec3d(m * t.coefficient[e])
+                                           : Vec3d(garment[t.edges[e][1]] - garment[t.edges[e][0]]);
+  });
+  std::vector<Vec3d> rhs(n), x(n), scratch;
+  auto solve = [&] {
+    for (std::size_t v = 0; v < n; ++v) rhs[v] = t.anchor[v] * garment[v];
+    for (std::size_t e = 0; e < t.edges.size(); ++e) {
+      if (t.weight[e] == 0) continue;
+      const Vec3d f = t.weight[e] * target[e];
+      rhs[t.edges[e][1]] += f;
+      rhs[t.edges[e][0]] -= f;
+    }
+    t.solver->solve(rhs, x, scratch);
+  };
+  solve();
+  // Length iterations (local-global, as in as-rigid-as-possible solvers):
+  // only an edge's length is prescribed, its direction is free, so each
+  // target is turned to the edge's current direction and the same energy is
+  // relaxed again. Vector targets over-constrain the garment (three
+  // equations per edge, about two edges per vertex); lengths do not. The
+  // targets' lengths never change.
+  std::vector<double> length(t.edges.size());
+  for (std::size_t e = 0; e < t.edges.size(); ++e) length[e] = target[e].norm();
+  for (int it = 0; it < t.length_iterations; ++it) {
+    // Sequential: between two sequential sweeps, waking the workers for a
+    // loop this short costs more than it saves.
+    for (std::size_t e = 0; e < t.edges.size(); ++e) {
+      if (t.weight[e] == 0) continue;
+      const Vec3d cur = x[t.edges[e][1]] - x[t.edges[e][0]];
+      const double l2 = cur.squaredNorm();
+      if (l2 > 0) target[e] = (length[e] / std::sqrt(l2)) * cur;
+    }
+    if (t.length_sweeps == 0) {
+      solve();
+      continue;
+    }
+    for (int sw = 0; sw < t.length_sweeps; ++sw)
+      for (std::size_t v = 0; v < n; ++v) {
+        Vec3d s = t.anchor[v] * garment[v];
+        for (std::uint32_t k = t.vertex_edge_offset[v]; k < t.vertex_edge_offset[v + 1]; ++k) {
+          const std::uint32_t e = t.vertex_edge[k];
+          const auto [i, j] = t.edges[e];
+          // v = j: x_j = x_i + T_e; v = i: x_i = x_j - T_e.
+          const double w = t.weight[e];
+          s += v == j ? Vec3d(w * x[i] + w * target[e]) : Vec3d(w * x[j] - w * target[e]);
+        }
+        x[v] = s * t.inv_diagonal[v];
+      }
+  }
+  std::copy(x.begin(), x.end(), garment.begin());
+  return Status::ok();
+}
+
+}  // namespace atelier

@@ -1,0 +1,77 @@
+// The fit of a garment on a body, as `atelier measure` reports it and as the
+// batch report's quality columns define it (issues 6 and 7): penetration,
+// clearance, and, given the same garment on a source body, the clearance
+// change and the excess edge strain.
+//
+// Definitions (every figure is independent of the pass that produced the
+// garment: distances come from the exact BVH signed distance):
+//  * penetration: vertices with signed distance < 0, and < -tolerance;
+//    the largest depth;
+//  * clearance: the signed distance of each vertex (min, mean, p50, p95);
+//  * clearance change: RMS over vertices of (signed distance on the body -
+//    signed distance of the source garment on the source body);
+//  * edge strain: |l / l_source - 1| per garment edge;
+//  * excess edge strain: |garment strain - body strain| per edge, where the
+//    body strain is that of the source edge vector carried by the affine
+//    map of the body triangle under the edge's midpoint (its two edges and
+//    unit normal on the source body to the same on the new body): the stretch
+//    of an edge that followed the skin exactly. Needs the source body with
+//    the same topology as the body.
+//
+// Reads: body positions and triangles, garment positions and edges (and the
+// source pair). Writes: nothing but the result.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/systems/spatial/body_bvh.h>
+
+namespace atelier {
+
+struct FitMeasureParams {
+  double inside_tolerance = 0.001;  // "more than 1 mm inside"
+};
+
+struct FitMeasure {
+  std::size_t vertices = 0;
+  std::size_t edges = 0;
+  std::size_t inside = 0;            // signed distance < 0
+  std::size_t inside_tolerance = 0;  // signed distance < -tolerance
+  double max_depth = 0;              // largest -distance (0 when none inside)
+  double clearance_min = 0, clearance_mean = 0, clearance_p50 = 0, clearance_p95 = 0;
+  bool has_source = false;       // a source garment was given: edge_strain_p95 is set
+  bool has_source_body = false;  // and its body: clearance_change_rms, excess_strain_p95 are set
+  double edge_strain_p95 = 0;
+  double clearance_change_rms = 0;
+  double excess_strain_p95 = 0;
+};
+
+/// A garment on a body. `source_*` are optional (empty spans): the garment
+/// as designed (same vertex count and edges) and the body it was designed
+/// on (same topology as `body_points`).
+struct FitInput {
+  std::span<const Vec3d> body_points;
+  std::span<const Triangle> body_triangles;
+  std::span<const Vec3d> garment;
+  std::span<const std::array<std::uint32_t, 2>> garment_edges;
+  std::span<const Vec3d> source_garment;
+  std::span<const Vec3d> source_body_points;
+};
+
+/// Errors: open or empty body (naming the first bad edge), empty garment,
+/// edge index out of range, non-finite vertex (naming it), source arrays of
+/// the wrong size.
+[[nodiscard]] Expected<FitMeasure> measure_fit(const FitInput& in, const FitMeasureParams& params = {},
+                                               const ExecContext& ctx = {});
+
+/// p-quantile by the nearest-rank rule used by every report (index
+/// floor(q n), clamped); 0 for an empty array. Sorts its argument.
+[[nodiscard]] double quantile_in_place(std::vector<double>& v, double q);
+
+}  // namespace atelier

@@ -1,0 +1,732 @@
+#include <atelier/systems/profile/profile_curve.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <string>
+
+namespace atelier {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+[[nodiscard]] Vec3d lerp(const Vec3d& a, const Vec3d& b, double t) noexcept {
+  return (1.0 - t) * a + t * b;
+}
+
+/// Scratch for de Casteljau: on the stack up to degree 7 (profiles are cubic),
+/// so evaluation in the distance search does not allocate.
+class Scratch {
+ public:
+  explicit Scratch(std::span<const Vec3d> p) {
+    if (p.size() > small_.size()) {
+      big_.assign(p.begin(), p.end());
+      data_ = big_.data();
+    } else {
+      std::copy(p.begin(), p.end(), small_.begin());
+      data_ = small_.data();
+    }
+  }
+  Vec3d& operator[](std::size_t i) noexcept { return data_[i]; }
+
+ private:
+  std::array<Vec3d, 8> small_;
+  std::vector<Vec3d> big_;
+  Vec3d* data_ = nullptr;
+};
+
+/// De Casteljau value and first/second derivatives of a Bezier at t.
+struct BezierJet {
+  Vec3d c, d1, d2;
+};
+[[nodiscard]] BezierJet bezier_jet(std::span<const Vec3d> P, double t) {
+  const std::size_t n = P.size() - 1;
+  Scratch b(P);
+  BezierJet j{Vec3d::Zero(), Vec3d::Zero(), Vec3d::Zero()};
+  // After n-2 levels three points remain: C'' = n(n-1)(q2 - 2 q1 + q0); after
+  // n-1 levels two: C' = n(q1 - q0).
+  for (std::size_t r = 1; r <= n; ++r) {
+    const std::size_t left = n + 2 - r;  // points before this level
+    if (left == 3) j.d2 = double(n) * double(n - 1) * (b[2] - 2.0 * b[1] + b[0]);
+    if (left == 2) j.d1 = double(n) * (b[1] - b[0]);
+    for (std::size_t i = 0; i + 1 < left; ++i) b[i] = lerp(b[i], b[i + 1], t);
+  }
+  j.c = b[0];
+  return j;
+}
+
+[[nodiscard]] double point_segment_distance2(const Vec3d& p, const Vec3d& a, const Vec3d& b) noexcept {
+  const Vec3d ab = b - a;
+  const double l2 = ab.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).squaredNorm();
+}
+
+/// Closest point of polyline pts to p as a real index s (segment floor(s), fraction s - floor(s)).
+[[nodiscard]] double closest_polyline_param(std::span<const Vec3d> pts, const Vec3d& p) noexcept {
+  if (pts.size() == 1) return 0;
+  double best = std::numeric_limits<double>::infinity(), best_s = 0;
+  for (std::size_t k = 0; k + 1 < pts.size(); ++k) {
+    const Vec3d ab = pts[k + 1] - pts[k];
+    const double l2 = ab.squaredNorm();
+    const double t = l2 > 0 ? std::clamp((p - pts[k]).dot(ab) / l2, 0.0, 1.0) : 0.0;
+    const double d = (pts[k] + t * ab - p).squaredNorm();
+    if (d < best) {
+      best = d;
+      best_s = double(k) + t;
+    }
+  }
+  return best_s;
+}
+
+[[nodiscard]] double point_segment_distance2_2d(const Vec2d& p, const Vec2d& a, const Vec2d& b) noexcept {
+  const Vec2d ab = b - a;
+  const double l2 = ab.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).squaredNorm();
+}
+
+[[nodiscard]] double stroke_distance2(std::span<const Vec2d> stroke, const Vec2d& p) noexcept {
+  if (stroke.size() == 1) return (stroke[0] - p).squaredNorm();
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k + 1 < stroke.size(); ++k)
+    best = std::min(best, point_segment_distance2_2d(p, stroke[k], stroke[k + 1]));
+  return best;
+}
+
+/// Newell normal (area-weighted, unnormalised) of a face.
+[[nodiscard]] Vec3d face_normal(const Model& m, std::span<const Vec3d> pos, FaceIdx f) {
+  Vec3d n = Vec3d::Zero();
+  m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
+    const Vec3d& a = pos[m.tail(h).value];
+    const Vec3d& b = pos[m.head(h).value];
+    n += a.cross(b);
+  });
+  return n;
+}
+
+[[nodiscard]] bool is_profile_node(const Model& m, std::uint32_t i) noexcept {
+  const auto& an = m.attrib_nodes;
+  return m.alive(AttribNodeIdx{i}) && an.kind[i] == AttribNodeKind::kEdge && !an.owner[i].valid();
+}
+
+/// Chord-length parameters of a point sequence (uniform if it has no length).
+[[nodiscard]] std::vector<double> chord_params(std::span<const Vec3d> pts) {
+  std::vector<double> u(pts.size(), 0.0);
+  if (pts.size() < 2) return u;
+  for (std::size_t i = 1; i < pts.size(); ++i) u[i] = u[i - 1] + (pts[i] - pts[i - 1]).norm();
+  const double total = u.back();
+  for (std::size_t i = 0; i < pts.size(); ++i) u[i] = total > 0 ? u[i] / total : double(i) / double(pts.size() - 1);
+  u.front() = 0.0;
+  u.back() = 1.0;
+  return u;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ ProfileCurve
+
+Vec3d ProfileCurve::eval(double t) const {
+  t = std::clamp(t, 0.0, 1.0);
+  if (points.size() == 1) return points[0];
+  if (kind == Kind::kBezier) {
+    Scratch b(points);
+    for (std::size_t left = points.size(); left > 1; --left)
+      for (std::size_t i = 0; i + 1 < left; ++i) b[i] = lerp(b[i], b[i + 1], t);
+    return b[0];
+  }
+  // Segment k with u[k] <= t < u[k+1] (the last segment for t = 1).
+  const auto it = std::upper_bound(u.begin(), u.end(), t);
+  std::size_t k = it == u.begin() ? 0 : std::size_t(it - u.begin()) - 1;
+  k = std::min(k, points.size() - 2);
+  const double du = u[k + 1] - u[k];
+  if (!(du > 0)) return points[t >= u[k + 1] ? k + 1 : k];
+  const double f = (t - u[k]) / du;
+  if (f == 0.0) return points[k];
+  if (f == 1.0) return points[k + 1];
+  return lerp(points[k], points[k + 1], f);
+}
+
+std::pair<ProfileCurve, ProfileCurve> ProfileCurve::split_half() const {
+  ProfileCurve l, r;
+  l.kind = r.kind = kind;
+  const Vec3d mid = eval(0.5);
+  if (kind == Kind::kBezier) {
+    // seed 000 section 4.2 / Fig. 6b: the two halves of the de Casteljau pyramid at t = 1/2.
+    const std::size_t n1 = points.size();
+    std::vector<Vec3d> b = points;
+    l.points.resize(n1);
+    r.points.resize(n1);
+    for (std::size_t level = 0; level < n1; ++level) {
+      const std::size_t left = n1 - level;
+      l.points[level] = b[0];
+      r.points[n1 - 1 - level] = b[left - 1];
+      for (std::size_t i = 0; i + 1 < left; ++i) b[i] = lerp(b[i], b[i + 1], 0.5);
+    }
+    // The apex equals eval(0.5) up to contraction; make the shared end exact.
+    l.points.back() = mid;
+    r.points.front() = mid;
+    return {std::move(l), std::move(r)};
+  }
+  // Polyline: cut at u = 1/2. Points with u < 1/2 go left, u > 1/2 right;
+  // the cut point is shared (an existing point at exactly 1/2 is reused).
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (u[i] < 0.5) {
+      l.points.push_back(points[i]);
+      l.u.push_back(2.0 * u[i]);
+    }
+  }
+  l.points.push_back(mid);
+  l.u.push_back(1.0);
+  r.points.push_back(mid);
+  r.u.push_back(0.0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (u[i] > 0.5) {
+      r.points.push_back(points[i]);
+      r.u.push_back(2.0 * u[i] - 1.0);
+    }
+  }
+  l.u.front() = 0.0;
+  r.u.back() = 1.0;
+  return {std::move(l), std::move(r)};
+}
+
+ProfileCurve ProfileCurve::reversed() const {
+  ProfileCurve c;
+  c.kind = kind;
+  c.points.assign(points.rbegin(), points.rend());
+  if (kind == Kind::kPolyline) {
+    c.u.resize(u.size());
+    for (std::size_t i = 0; i < u.size(); ++i) c.u[i] = 1.0 - u[u.size() - 1 - i];
+  }
+  return c;
+}
+
+double ProfileCurve::distance(const Vec3d& p) const {
+  if (points.empty()) return std::numeric_limits<double>::infinity();
+  if (points.size() == 1) return (points[0] - p).norm();
+  if (kind == Kind::kPolyline) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k + 1 < points.size(); ++k)
+      best = std::min(best, point_segment_distance2(p, points[k], points[k + 1]));
+    return std::sqrt(best);
+  }
+  const std::size_t n = points.size() - 1;
+  const std::size_t samples = std::max<std::size_t>(32, 16 * n);
+  auto d2 = [&](double t) { return (eval(t) - p).squaredNorm(); };
+  std::vector<double> s(samples + 1);
+  for (std::size_t k = 0; k <= samples; ++k) s[k] = d2(double(k) / double(samples));
+  double best = std::min(s.front(), s.back());
+  const double h = 1.0 / double(samples);
+  constexpr double kInvPhi = 0.6180339887498949;
+  for (std::size_t k = 0; k <= samples; ++k) {
+    const bool local_min = (k == 0 || s[k] <= s[k - 1]) && (k == samples || s[k] <= s[k + 1]);
+    if (!local_min) continue;
+    // Golden section on the bracket around the sampled minimum...
+    double lo = std::max(0.0, double(k) * h - h), hi = std::min(1.0, double(k) * h + h);
+    double x1 = hi - kInvPhi * (hi - lo), x2 = lo + kInvPhi * (hi - lo);
+    double f1 = d2(x1), f2 = d2(x2);
+    while (hi - lo > 1e-10) {
+      if (f1 < f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = hi - kInvPhi * (hi - lo);
+        f1 = d2(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = lo + kInvPhi * (hi - lo);
+        f2 = d2(x2);
+      }
+    }
+    double t = 0.5 * (lo + hi), ft = d2(t);
+    // ...then Newton on g(t) = (C - p).C' = 0, kept when it improves.
+    for (int it = 0; it < 4; ++it) {
+      const BezierJet j = bezier_jet(points, t);
+      const double g = (j.c - p).dot(j.d1), dg = j.d1.squaredNorm() + (j.c - p).dot(j.d2);
+      if (!(dg > 0)) break;
+      const double tn = std::clamp(t - g / dg, 0.0, 1.0);
+      const double fn = d2(tn);
+      if (!(fn < ft)) break;
+      t = tn;
+      ft = fn;
+    }
+    best = std::min({best, ft, s[k]});
+  }
+  return std::sqrt(best);
+}
+
+Status ProfileCurve::check() const {
+  if (points.size() < 2) return {ErrorCode::kInvalidArgument, "profile curve needs at least 2 points"};
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!is_finite(points[i]))
+      return {ErrorCode::kDegenerate, "profile curve point " + std::to_string(i) + " is not finite"};
+  if (kind == Kind::kBezier) return {};
+  if (u.size() != points.size())
+    return {ErrorCode::kMismatch, "polyline profile has " + std::to_string(points.size()) + " points but " +
+                                      std::to_string(u.size()) + " parameters"};
+  if (u.front() != 0.0 || u.back() != 1.0)
+    return {ErrorCode::kInvalidArgument, "polyline profile parameters must run from 0 to 1"};
+  for (std::size_t i = 1; i < u.size(); ++i)
+    if (!(u[i] >= u[i - 1]))
+      return {ErrorCode::kInvalidArgument, "polyline profile parameter " + std::to_string(i) + " decreases"};
+  return {};
+}
+
+ProfileCurve ProfileCurve::polyline(std::span<const Vec3d> pts) {
+  ProfileCurve c;
+  c.kind = Kind::kPolyline;
+  c.points.assign(pts.begin(), pts.end());
+  c.u = chord_params(pts);
+  return c;
+}
+
+ProfileCurve ProfileCurve::bezier(std::span<const Vec3d> control_points) {
+  ProfileCurve c;
+  c.kind = Kind::kBezier;
+  c.points.assign(control_points.begin(), control_points.end());
+  return c;
+}
+
+// ------------------------------------------------------------- Bezier encoding
+
+Expected<BezierProfileEncoding> encode_bezier_profile(const ProfileCurve& c) {
+  if (c.points.empty()) return Status(ErrorCode::kInvalidArgument, "empty profile curve");
+  return encode_bezier_profile(c, c.start(), c.end());
+}
+
+Expected<BezierProfileEncoding> encode_bezier_profile(const ProfileCurve& c, const Vec3d& a, const Vec3d& b) {
+  if (c.kind != ProfileCurve::Kind::kBezier)
+    return Status(ErrorCode::kInvalidArgument, "eq. (6) encodes Bezier profiles only (got a polyline)");
+  if (Status s = c.check(); !s) return s;
+  if (!is_finite(a) || !is_finite(b)) return Status(ErrorCode::kDegenerate, "edge ends are not finite");
+  // eq. (6): the chord E(u) as a degree-n Bezier has control points E(i/n),
+  // so ep = C - E is the Bezier with control points P_i - E(i/n).
+  const std::size_t n = c.points.size() - 1;
+  BezierProfileEncoding e;
+  e.offsets.resize(n + 1);
+  for (std::size_t i = 0; i <= n; ++i) e.offsets[i] = c.points[i] - lerp(a, b, double(i) / double(n));
+  return e;
+}
+
+ProfileCurve decode_bezier_profile(const BezierProfileEncoding& e, const Vec3d& a, const Vec3d& b) {
+  // eq. (7): C*(u) = ep(u) + E*(u), control point by control point.
+  ProfileCurve c;
+  c.kind = ProfileCurve::Kind::kBezier;
+  const std::size_t n = e.offsets.empty() ? 0 : e.offsets.size() - 1;
+  c.points.resize(e.offsets.size());
+  for (std::size_t i = 0; i < e.offsets.size(); ++i)
+    c.points[i] = e.offsets[i] + (n ? lerp(a, b, double(i) / double(n)) : a);
+  return c;
+}
+
+// ------------------------------------------------------------ point lists
+
+ProfileCurve PointListProfile::curve() const {
+  ProfileCurve c;
+  c.kind = ProfileCurve::Kind::kPolyline;
+  c.points.reserve(points.size() + 2);
+  c.u.reserve(points.size() + 2);
+  c.points.push_back(a);
+  c.u.push_back(0.0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    c.points.push_back(points[i]);
+    c.u.push_back(u[i]);
+  }
+  c.points.push_back(b);
+  c.u.push_back(1.0);
+  return c;
+}
+
+ProfileCurve shift_point_list(const PointListProfile& p, const Vec3d& a_new, const Vec3d& b_new, ShiftMode mode) {
+  const Vec3d d = p.b - p.a, d_new = b_new - a_new;
+  const double len = d.norm(), len_new = d_new.norm();
+  const bool degenerate = !(len > 0);
+  // eq. (3): p*(Q) = |a*b*|/|ab| {Q - a - u(b - a)} + a* + u(b* - a*).
+  const double scale = degenerate ? 1.0 : len_new / len;
+  Mat3d rot = Mat3d::Identity();
+  if (mode == ShiftMode::kScaleRotate && !degenerate && len_new > 0)
+    rot = Eigen::Quaterniond::FromTwoVectors(d, d_new).toRotationMatrix();
+  const Mat3d lin = scale * rot;
+  ProfileCurve c;
+  c.kind = ProfileCurve::Kind::kPolyline;
+  c.points.reserve(p.points.size() + 2);
+  c.u.reserve(p.points.size() + 2);
+  c.points.push_back(a_new);
+  c.u.push_back(0.0);
+  for (std::size_t i = 0; i < p.points.size(); ++i) {
+    const double ui = p.u[i];
+    const Vec3d off = p.points[i] - p.a - ui * d;
+    c.points.push_back(lin * off + a_new + ui * d_new);
+    c.u.push_back(ui);
+  }
+  c.points.push_back(b_new);
+  c.u.push_back(1.0);
+  return c;
+}
+
+std::size_t clear_point_list(Model& m, EdgeIdx e) {
+  std::size_t removed = 0;
+  for (std::uint32_t i = 0; i < m.attrib_nodes.slots.capacity(); ++i) {
+    if (!is_profile_node(m, i) || edge_of(HalfedgeIdx{m.attrib_nodes.element[i]}) != e) continue;
+    m.delete_attrib_node(AttribNodeIdx{i});
+    ++removed;
+  }
+  return removed;
+}
+
+Status attach_point_list(Model& m, SurfaceIdx s, HalfedgeIdx h, std::span<const double> u, std::span<const Vec3d> pts) {
+  if (!h.valid() || h.value >= m.halfedges.tail.size() || !m.alive(h))
+    return {ErrorCode::kStaleHandle, "attach_point_list: halfedge " + std::to_string(h.value) + " is dead"};
+  if (m.surface_of(edge_of(h)) != s)
+    return {ErrorCode::kInvalidArgument,
+            "attach_point_list: halfedge " + std::to_string(h.value) + " is not in surface " + std::to_string(s.value)};
+  if (u.size() != pts.size())
+    return {ErrorCode::kMismatch, "attach_point_list: " + std::to_string(u.size()) + " parameters for " +
+                                      std::to_string(pts.size()) + " points"};
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    if (!(u[i] >= 0.0 && u[i] <= 1.0))
+      return {ErrorCode::kInvalidArgument,
+              "attach_point_list: parameter " + std::to_string(i) + " = " + std::to_string(u[i]) + " outside [0,1]"};
+    if (!is_finite(pts[i]))
+      return {ErrorCode::kDegenerate, "attach_point_list: point " + std::to_string(i) + " is not finite"};
+  }
+  (void)clear_point_list(m, edge_of(h));
+  for (std::size_t i = 0; i < u.size(); ++i)
+    (void)m.new_attrib_node(s, AttribNodeKind::kEdge, h.value, Vec3d(u[i], 0, 0), pts[i]);
+  return {};
+}
+
+namespace {
+
+/// Sorts (u, point) pairs by u, then by attribute index (stable, deterministic).
+void sort_profile(PointListProfile& p, std::vector<std::uint32_t>& order_key) {
+  std::vector<std::size_t> idx(p.u.size());
+  std::iota(idx.begin(), idx.end(), std::size_t{0});
+  std::sort(idx.begin(), idx.end(), [&](std::size_t x, std::size_t y) {
+    return p.u[x] != p.u[y] ? p.u[x] < p.u[y] : order_key[x] < order_key[y];
+  });
+  PointListProfile q;
+  q.a = p.a;
+  q.b = p.b;
+  for (std::size_t i : idx) {
+    q.u.push_back(p.u[i]);
+    q.points.push_back(p.points[i]);
+  }
+  p = std::move(q);
+}
+
+}  // namespace
+
+PointListProfile read_point_list(const Model& m, HalfedgeIdx h) {
+  PointListProfile p;
+  p.a = m.position(m.tail(h));
+  p.b = m.position(m.head(h));
+  std::vector<std::uint32_t> key;
+  const auto& an = m.attrib_nodes;
+  for (std::uint32_t i = 0; i < an.slots.capacity(); ++i) {
+    if (!is_profile_node(m, i)) continue;
+    const HalfedgeIdx g{an.element[i]};
+    if (edge_of(g) != edge_of(h)) continue;
+    const double ui = an.param[i].x();
+    p.u.push_back(g == h ? ui : 1.0 - ui);
+    p.points.push_back(an.position[i]);
+    key.push_back(i);
+  }
+  sort_profile(p, key);
+  return p;
+}
+
+std::vector<EdgePointList> read_all_point_lists(const Model& m) {
+  const auto& an = m.attrib_nodes;
+  std::vector<std::uint32_t> ids;
+  for (std::uint32_t i = 0; i < an.slots.capacity(); ++i)
+    if (is_profile_node(m, i)) ids.push_back(i);
+  std::stable_sort(ids.begin(), ids.end(), [&](std::uint32_t x, std::uint32_t y) {
+    return edge_of(HalfedgeIdx{an.element[x]}) < edge_of(HalfedgeIdx{an.element[y]});
+  });
+  std::vector<EdgePointList> out;
+  for (std::size_t k = 0; k < ids.size();) {
+    const EdgeIdx e = edge_of(HalfedgeIdx{an.element[ids[k]]});
+    const HalfedgeIdx h0 = halfedge_of(e, 0);
+    EdgePointList l{e, {}};
+    l.profile.a = m.position(m.tail(h0));
+    l.profile.b = m.position(m.head(h0));
+    std::vector<std::uint32_t> key;
+    for (; k < ids.size() && edge_of(HalfedgeIdx{an.element[ids[k]]}) == e; ++k) {
+      const std::uint32_t i = ids[k];
+      const double ui = an.param[i].x();
+      l.profile.u.push_back(HalfedgeIdx{an.element[i]} == h0 ? ui : 1.0 - ui);
+      l.profile.points.push_back(an.position[i]);
+      key.push_back(i);
+    }
+    sort_profile(l.profile, key);
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
+// ------------------------------------------------------------------ camera
+
+Vec3d Camera::project(const Vec3d& p) const {
+  const Vec4d c = projection * (view * Vec4d(p.x(), p.y(), p.z(), 1.0));
+  if (!(c.w() > 0)) return Vec3d(kNaN, kNaN, kNaN);
+  const Vec3d ndc = c.head<3>() / c.w();
+  return Vec3d((ndc.x() + 1.0) * 0.5 * width, (1.0 - ndc.y()) * 0.5 * height, ndc.z());
+}
+
+std::pair<Vec3d, Vec3d> Camera::ray(const Vec2d& px) const {
+  const Mat4d inv = (projection * view).inverse();
+  const double x = 2.0 * px.x() / width - 1.0, y = 1.0 - 2.0 * px.y() / height;
+  // The near plane and NDC depth 0 (not the far plane): with a large
+  // far/near ratio the far point is badly conditioned.
+  const Vec4d n = inv * Vec4d(x, y, -1.0, 1.0), f = inv * Vec4d(x, y, 0.0, 1.0);
+  const Vec3d pn = n.head<3>() / n.w(), pf = f.head<3>() / f.w();
+  return {pn, (pf - pn).normalized()};
+}
+
+namespace {
+
+[[nodiscard]] Mat4d look_at_matrix(const Vec3d& eye, const Vec3d& target, const Vec3d& up) {
+  const Vec3d f = (target - eye).normalized();
+  const Vec3d s = f.cross(up).normalized();
+  const Vec3d u = s.cross(f);
+  Mat4d v = Mat4d::Identity();
+  v.block<1, 3>(0, 0) = s.transpose();
+  v.block<1, 3>(1, 0) = u.transpose();
+  v.block<1, 3>(2, 0) = -f.transpose();
+  v(0, 3) = -s.dot(eye);
+  v(1, 3) = -u.dot(eye);
+  v(2, 3) = f.dot(eye);
+  return v;
+}
+
+}  // namespace
+
+Camera Camera::look_at(const Vec3d& eye, const Vec3d& target, const Vec3d& up, double fov_y_deg, int w, int h,
+                       double near_z, double far_z) {
+  const double dist = (target - eye).norm();
+  if (!(near_z > 0)) near_z = 1e-3 * dist;
+  if (!(far_z > near_z)) far_z = 1e3 * dist;
+  Camera c;
+  c.width = w;
+  c.height = h;
+  c.view = look_at_matrix(eye, target, up);
+  const double f = 1.0 / std::tan(0.5 * fov_y_deg * std::numbers::pi / 180.0), aspect = double(w) / double(h);
+  Mat4d p = Mat4d::Zero();
+  p(0, 0) = f / aspect;
+  p(1, 1) = f;
+  p(2, 2) = (far_z + near_z) / (near_z - far_z);
+  p(2, 3) = 2.0 * far_z * near_z / (near_z - far_z);
+  p(3, 2) = -1.0;
+  c.projection = p;
+  return c;
+}
+
+Camera Camera::orthographic(const Vec3d& eye, const Vec3d& target, const Vec3d& up, double half_height, int w, int h,
+                            double near_z, double far_z) {
+  const double dist = (target - eye).norm();
+  if (near_z == 0 && far_z == 0) {
+    near_z = -1e3 * dist;
+    far_z = 1e3 * dist;
+  }
+  Camera c;
+  c.width = w;
+  c.height = h;
+  c.view = look_at_matrix(eye, target, up);
+  const double half_width = half_height * double(w) / double(h);
+  Mat4d p = Mat4d::Identity();
+  p(0, 0) = 1.0 / half_width;
+  p(1, 1) = 1.0 / half_height;
+  p(2, 2) = -2.0 / (far_z - near_z);
+  p(2, 3) = -(far_z + near_z) / (far_z - near_z);
+  c.projection = p;
+  return c;
+}
+
+// ------------------------------------------------------------------ strokes
+
+std::vector<EdgeIdx> select_edges_by_stroke(const Model& m, std::span<const Vec3d> positions, const Camera& cam,
+                                            std::span<const Vec2d> stroke, double tol_px,
+                                            const std::function<bool(const Vec3d&)>& visible) {
+  std::vector<EdgeIdx> out;
+  if (stroke.empty()) return out;
+  if (!positions.empty() && positions.size() < m.nodes.slots.capacity()) return out;  // one position per node slot
+  const std::span<const Vec3d> pos = positions.empty() ? std::span<const Vec3d>(m.nodes.position) : positions;
+  const double tol2 = tol_px * tol_px;
+  // Screen-space box of the stroke grown by the tolerance: a cheap reject.
+  Vec2d lo = stroke[0], hi = stroke[0];
+  for (const Vec2d& s : stroke) {
+    lo = lo.cwiseMin(s);
+    hi = hi.cwiseMax(s);
+  }
+  lo.array() -= tol_px;
+  hi.array() += tol_px;
+  auto near_stroke = [&](const Vec3d& p) {
+    const Vec3d q = cam.project(p);
+    if (!q.allFinite()) return false;
+    const Vec2d px = q.head<2>();
+    if ((px.array() < lo.array()).any() || (px.array() > hi.array()).any()) return false;
+    return stroke_distance2(stroke, px) <= tol2;
+  };
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e})) continue;
+    const HalfedgeIdx h = halfedge_of(EdgeIdx{e}, 0);
+    const Vec3d& a = pos[m.tail(h).value];
+    const Vec3d& b = pos[m.head(h).value];
+    if (!near_stroke(a) || !near_stroke(b)) continue;
+    if (visible && !(visible(a) && visible(b) && visible(0.5 * (a + b)))) continue;
+    out.push_back(EdgeIdx{e});
+  }
+  return out;
+}
+
+namespace {
+
+/// The plane through a line (point c, unit direction d) whose normal is as
+/// close as possible to the viewing direction at c (seed 000 4.1.4: "the
+/// sketched profile faces towards the camera as much as possible").
+[[nodiscard]] Expected<Vec3d> camera_facing_normal(const Camera& cam, const Vec3d& c, const Vec3d& d) {
+  const Vec3d q = cam.project(c);
+  if (!q.allFinite()) return Status(ErrorCode::kDegenerate, "stroke plane: the edges are behind the camera");
+  const Vec3d v = cam.ray(q.head<2>()).second;
+  const Vec3d n = v - v.dot(d) * d;
+  if (!(n.norm() > 1e-9)) return Status(ErrorCode::kDegenerate, "stroke plane: the edge points at the camera");
+  return Vec3d(n.normalized());
+}
+
+}  // namespace
+
+Expected<StrokeProfiles> profiles_from_stroke(const Model& m, std::span<const Vec3d> positions, const Camera& cam,
+                                              std::span<const Vec2d> stroke, double tol_px,
+                                              const std::function<bool(const Vec3d&)>& visible) {
+  const std::span<const Vec3d> pos = positions.empty() ? std::span<const Vec3d>(m.nodes.position) : positions;
+  if (!positions.empty() && positions.size() < m.nodes.slots.capacity())
+    return Status(ErrorCode::kMismatch, "profiles_from_stroke: " + std::to_string(positions.size()) +
+                                            " positions for " + std::to_string(m.nodes.slots.capacity()) + " nodes");
+  if (stroke.size() < 2) return Status(ErrorCode::kInvalidArgument, "profiles_from_stroke: the stroke needs 2 points");
+  const std::vector<EdgeIdx> sel = select_edges_by_stroke(m, pos, cam, stroke, tol_px, visible);
+  if (sel.empty())
+    return Status(ErrorCode::kInvalidArgument, "profiles_from_stroke: no visible edge has both ends within " +
+                                                   std::to_string(tol_px) + " px of the stroke");
+
+  StrokeProfiles out;
+  // ---- the projection plane
+  std::vector<NodeIdx> ends;
+  for (EdgeIdx e : sel) {
+    ends.push_back(m.tail(halfedge_of(e, 0)));
+    ends.push_back(m.head(halfedge_of(e, 0)));
+  }
+  std::sort(ends.begin(), ends.end());
+  ends.erase(std::unique(ends.begin(), ends.end()), ends.end());
+  Vec3d centre = Vec3d::Zero();
+  for (NodeIdx v : ends) centre += pos[v.value];
+  centre /= double(ends.size());
+  Vec3d normal = Vec3d::Zero();
+  if (sel.size() == 1) {
+    const HalfedgeIdx h0 = halfedge_of(sel[0], 0), h1 = halfedge_of(sel[0], 1);
+    const Vec3d d = (pos[m.head(h0).value] - pos[m.tail(h0).value]).normalized();
+    if (m.face(h0).valid() && m.face(h1).valid()) {
+      // Bisector of the dihedral angle: the plane holding the edge and the
+      // mean of the two unit face normals (both perpendicular to the edge).
+      const Vec3d nm = face_normal(m, pos, m.face(h0)).normalized() + face_normal(m, pos, m.face(h1)).normalized();
+      const Vec3d w = nm - nm.dot(d) * d;
+      if (w.norm() > 1e-9) normal = d.cross(w).normalized();
+    }
+    if (normal == Vec3d::Zero()) {
+      auto n = camera_facing_normal(cam, centre, d);
+      if (!n) return n.status();
+      normal = *n;
+    }
+  } else {
+    // Least-squares plane of the end points: normal = eigenvector of the
+    // smallest eigenvalue of their covariance.
+    Mat3d cov = Mat3d::Zero();
+    for (NodeIdx v : ends) {
+      const Vec3d r = pos[v.value] - centre;
+      cov += r * r.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Mat3d> es(cov);
+    const Vec3d ev = es.eigenvalues();
+    if (ev(1) <= 1e-12 * std::max(ev(2), std::numeric_limits<double>::min())) {
+      // Collinear end points: any plane through the line fits; face the camera.
+      auto n = camera_facing_normal(cam, centre, es.eigenvectors().col(2).normalized());
+      if (!n) return n.status();
+      normal = *n;
+    } else {
+      normal = es.eigenvectors().col(0).normalized();
+    }
+  }
+  {
+    const Vec3d q = cam.project(centre);
+    if (q.allFinite() && normal.dot(cam.ray(q.head<2>()).second) > 0) normal = -normal;
+  }
+  out.plane_point = centre;
+  out.plane_normal = normal;
+
+  // ---- the stroke on the plane
+  for (const Vec2d& px : stroke) {
+    const auto [o, dir] = cam.ray(px);
+    const double den = normal.dot(dir);
+    if (!(std::abs(den) > 1e-12)) continue;  // ray parallel to the plane
+    const double t = normal.dot(centre - o) / den;
+    out.stroke_points.push_back(o + t * dir);
+  }
+  // Repeated pixels of a slow stroke would repeat points: cut a copy without them.
+  std::vector<Vec3d> Y = out.stroke_points;
+  Y.erase(std::unique(Y.begin(), Y.end(), [](const Vec3d& p, const Vec3d& q) { return p == q; }), Y.end());
+  if (Y.size() < 2)
+    return Status(ErrorCode::kDegenerate, "profiles_from_stroke: the stroke misses the projection plane");
+
+  // ---- cut per edge: the points strictly between the closest stroke points to its ends
+  for (EdgeIdx e : sel) {
+    HalfedgeIdx h = halfedge_of(e, 0);
+    double sa = closest_polyline_param(Y, pos[m.tail(h).value]);
+    double sb = closest_polyline_param(Y, pos[m.head(h).value]);
+    if (sb < sa) {
+      h = twin(h);
+      std::swap(sa, sb);
+    }
+    const Vec3d a = pos[m.tail(h).value], b = pos[m.head(h).value];
+    const double snap = 1e-9 * (b - a).norm();
+    std::vector<Vec3d> chain{a};
+    for (std::size_t k = 0; k < Y.size(); ++k) {
+      const double s = double(k);
+      if (!(s > sa && s < sb)) continue;
+      if ((Y[k] - a).norm() <= snap || (Y[k] - b).norm() <= snap) continue;
+      chain.push_back(Y[k]);
+    }
+    chain.push_back(b);
+    const std::vector<double> u = chord_params(chain);
+    PointListProfile p;
+    p.a = a;
+    p.b = b;
+    p.points.assign(chain.begin() + 1, chain.end() - 1);
+    p.u.assign(u.begin() + 1, u.end() - 1);
+    out.edges.push_back(h);
+    out.profiles.push_back(std::move(p));
+  }
+  return out;
+}
+
+Status attach_stroke_profiles(Model& m, const StrokeProfiles& sp) {
+  if (sp.edges.size() != sp.profiles.size())
+    return {ErrorCode::kMismatch, "attach_stroke_profiles: edges and profiles differ in number"};
+  for (std::size_t i = 0; i < sp.edges.size(); ++i) {
+    const HalfedgeIdx h = sp.edges[i];
+    if (!h.valid() || h.value >= m.halfedges.tail.size() || !m.alive(h))
+      return {ErrorCode::kStaleHandle, "attach_stroke_profiles: halfedge " + std::to_string(h.value) + " is dead"};
+    if (Status s = attach_point_list(m, m.surface_of(edge_of(h)), h, sp.profiles[i].u, sp.profiles[i].points); !s)
+      return s;
+  }
+  return {};
+}
+
+}  // namespace atelier

@@ -1,0 +1,132 @@
+// Ray-cast pictures of bodies and garments (issue #6: front and side views of
+// sample and worst bodies, no GPU or display needed).
+//
+// One primary ray per pixel sample through each mesh's BodyBvh (Embree stays
+// inside body_bvh.cpp); the nearest hit over all meshes wins (ties go to the
+// lower mesh index). Shading is two-sided Lambert with a little ambient light
+// and a headlight slightly above and left of the camera, then sRGB encoded.
+// Optional outlines darken pixels where the mesh index changes or the depth
+// jumps (silhouettes and occluding contours).
+//
+// Reads: the meshes' BVHs (positions as of their last commit). Writes: a new
+// image. Rows are rendered in parallel (engine/parallel.h); every pixel is a
+// pure function of its coordinates, so the output is identical for any
+// thread count.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/io/png.h>
+#include <atelier/systems/spatial/body_bvh.h>
+
+namespace atelier {
+
+/// One mesh of a scene: a committed BVH (not owned) and its colour (linear
+/// RGB in [0, 1]).
+struct RenderMesh {
+  const BodyBvh* bvh = nullptr;
+  Vec3d colour{0.8, 0.8, 0.8};
+};
+
+/// Standard views for the mannequin/MakeHuman axes (y up, z to the front,
+/// +x the body's left): kFront looks along -z, kSide along -x (the body's
+/// left side, its front to the left of the picture), kBack along +z.
+enum class View : std::uint8_t { kFront, kSide, kBack };
+enum class Projection : std::uint8_t { kOrthographic, kPerspective };
+
+/// A pinhole or orthographic camera. forward, up and right are orthonormal
+/// (right = forward x up). Orthographic rays start on the plane through
+/// `eye` orthogonal to forward; perspective rays start at `eye`.
+struct RenderCamera {
+  Projection projection = Projection::kOrthographic;
+  Vec3d eye = Vec3d::Zero();
+  Vec3d forward{0, 0, -1};
+  Vec3d up{0, 1, 0};
+  Vec3d right{1, 0, 0};
+  double half_height = 1.0;    // orthographic: half the picture height in world units
+  double tan_half_fov = 0.27;  // perspective: tan of half the vertical field of view
+
+  /// Ray through the image point (px, py) in pixels (0,0 = top-left corner of
+  /// the top-left pixel) of a width x height picture. dir is unit.
+  void ray(double px, double py, std::uint32_t width, std::uint32_t height, Vec3d& origin, Vec3d& dir) const noexcept;
+  /// Image point (pixels) of a world point; the inverse of ray() on the
+  /// image plane (used by the tests to project analytic shapes).
+  [[nodiscard]] Vec2d project(const Vec3d& p, std::uint32_t width, std::uint32_t height) const noexcept;
+};
+
+/// A camera looking at `box` from `view`, framing it with `margin` (fraction
+/// of the box's size) on every side of a width/height `aspect` picture.
+/// Perspective cameras use the vertical field of view `fov_degrees` and stand
+/// far enough for the box's bounding sphere to fit. kInvalidArgument for an
+/// empty or non-finite box or a bad aspect/fov.
+[[nodiscard]] Expected<RenderCamera> frame_box(const Box3d& box, View view, Projection projection, double aspect,
+                                         double margin = 0.05, double fov_degrees = 30.0);
+
+struct RenderParams {
+  std::uint32_t width = 480;
+  std::uint32_t height = 640;
+  View view = View::kFront;
+  Projection projection = Projection::kOrthographic;
+  double fov_degrees = 30.0;
+  double margin = 0.05;
+  /// Frame this box; when empty, the union of the meshes' bounds.
+  Box3d frame;
+  /// Samples per pixel along each axis (k x k jittered-free grid, box filter).
+  int supersample = 1;
+  Vec3d background{1.0, 1.0, 1.0};
+  double ambient = 0.15;
+  /// Outline pixels where the mesh changes or the depth jumps by more than
+  /// outline_depth_jump times the framed box's diagonal.
+  bool outlines = false;
+  double outline_depth_jump = 0.02;
+  Vec3d outline_colour{0.1, 0.1, 0.1};
+};
+
+/// The picture and, per pixel (row-major, top row first), the index of the
+/// mesh hit by the ray through the pixel centre (-1 for background) and its
+/// distance along the ray (infinity for background).
+struct RenderResult {
+  RgbImage image;
+  RenderCamera camera;
+  std::vector<std::int32_t> mesh;
+  std::vector<double> depth;
+  std::size_t covered_pixels = 0;  // pixels whose centre ray hits a mesh
+};
+
+/// Renders the scene. kInvalidArgument for no meshes, a null or empty BVH,
+/// a zero size or a bad supersample; kCancelled when ctx is cancelled (polled
+/// per row). Progress: stage "render", rows done.
+[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderParams& params,
+                                                  const ExecContext& ctx = {});
+/// The same with an explicit camera (params.view/projection/frame ignored).
+[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderCamera& camera,
+                                                  const RenderParams& params, const ExecContext& ctx = {});
+
+/// A mesh given as arrays (e.g. a body of a BodySet and a decoded garment):
+/// render_scene builds a BVH over it for the call.
+struct RenderTriangles {
+  std::span<const Vec3d> positions;
+  std::span<const Triangle> triangles;
+  Vec3d colour{0.8, 0.8, 0.8};
+};
+/// Builds one BVH per mesh (errors name the mesh), then renders as above.
+[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderTriangles> meshes, const RenderParams& params,
+                                                  const ExecContext& ctx = {});
+
+/// Pictures placed left to right, top aligned, `gap` pixels apart, on the
+/// background colour (e.g. front and side views in one report picture).
+/// kInvalidArgument when empty or an image is malformed.
+[[nodiscard]] Expected<RgbImage> side_by_side(std::span<const RgbImage> images, std::uint32_t gap = 8,
+                                              const Vec3d& background = Vec3d::Ones());
+
+/// Default colours: skin for bodies, then a palette for garments.
+[[nodiscard]] Vec3d body_colour() noexcept;
+[[nodiscard]] Vec3d garment_colour(std::size_t i) noexcept;
+
+}  // namespace atelier

@@ -1,0 +1,1 @@
+// Carries the test executables' shared precompiled header.

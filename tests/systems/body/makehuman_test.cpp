@@ -1,0 +1,210 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include <atelier/engine/status.h>
+#include <atelier/io/makehuman/makehuman.h>
+#include <atelier/systems/body/makehuman_body.h>
+
+using namespace atelier;
+using namespace atelier::makehuman;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path mh_dir() { return fs::path(ATELIER_SHARED_DATA) / "makehuman"; }
+
+const HumanLibrary& library() {
+  static const HumanLibrary lib = HumanLibrary::load(mh_dir());
+  return lib;
+}
+
+#define REQUIRE_MAKEHUMAN()                                                              \
+  if (!fs::exists(mh_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " \
+                                                        << mh_dir() << " (../shared/data absent)"
+
+fs::path temp_file(const std::string& name, const std::string& text) {
+  const char* env = std::getenv("ATELIER_TMP");
+  fs::path dir = env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests";
+  fs::create_directories(dir);
+  fs::path p = dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+}  // namespace
+
+TEST(MakeHumanMixing, FactorsFollowTheReadmeRules) {
+  MacroParams p;
+  p.age = 0.3;  // a < 0.5: young = (a - 0.1875) * 3.2 = 0.36; child = min(1, 5.333a) - young = 0.64
+  EXPECT_NEAR(macro_factor("young", p), 0.36, 1e-12);
+  EXPECT_NEAR(macro_factor("child", p), 0.64, 1e-12);
+  EXPECT_EQ(macro_factor("old", p), 0.0);
+  p.age = 0.8;  // old = 2a - 1 = 0.6, young = 0.4
+  EXPECT_NEAR(macro_factor("old", p), 0.6, 1e-12);
+  EXPECT_NEAR(macro_factor("young", p), 0.4, 1e-12);
+  p.muscle = 0.8;  // max = 0.6, min = 0, average = 0.4
+  EXPECT_NEAR(macro_factor("maxmuscle", p), 0.6, 1e-12);
+  EXPECT_NEAR(macro_factor("averagemuscle", p), 0.4, 1e-12);
+  EXPECT_EQ(macro_factor("minmuscle", p), 0.0);
+  p.weight = 0.2;  // min = 0.6, average = 0.4
+  EXPECT_NEAR(macro_factor("minweight", p), 0.6, 1e-12);
+  p.height = 0.3;  // minheight = 0.4, maxheight = 0
+  EXPECT_NEAR(macro_factor("minheight", p), 0.4, 1e-12);
+  EXPECT_EQ(macro_factor("maxheight", p), 0.0);
+  p.gender = 0.7;
+  EXPECT_NEAR(macro_factor("male", p), 0.7, 1e-12);
+  EXPECT_NEAR(macro_factor("female", p), 0.3, 1e-12);
+  p.african = 2;
+  p.asian = 1;
+  p.caucasian = 1;  // normalised: 0.5, 0.25, 0.25
+  EXPECT_NEAR(macro_factor("african", p), 0.5, 1e-12);
+  // Hand-computed: height/male-old-maxmuscle-minweight-minheight = 0.7*0.6*0.6*0.6*0.4
+  EXPECT_NEAR(macro_target_weight("height/male-old-maxmuscle-minweight-minheight.target", p),
+              0.7 * 0.6 * 0.6 * 0.6 * 0.4, 1e-12);
+  EXPECT_NEAR(macro_target_weight("african-female-young", p), 0.5 * 0.3 * 0.4, 1e-12);
+  EXPECT_THROW((void)macro_factor("purple", p), std::invalid_argument);
+}
+
+TEST(MakeHumanMixing, UniversalWeightsPartitionUnityForAdults) {
+  // For a >= 0.1875, the gender x age x muscle x weight factors of the
+  // universal targets sum to 1 (each factor family is a partition of unity).
+  for (const auto& p : sample_adults(200, 99)) {
+    double sum = 0;
+    for (const char* g : {"male", "female"})
+      for (const char* a : {"child", "young", "old"})
+        for (const char* m : {"minmuscle", "averagemuscle", "maxmuscle"})
+          for (const char* w : {"minweight", "averageweight", "maxweight"})
+            sum += macro_target_weight(std::string("universal-") + g + "-" + a + "-" + m + "-" + w, p);
+    EXPECT_NEAR(sum, 1.0, 1e-12);
+    EXPECT_GE(p.age, 0.45);
+    EXPECT_LE(p.age, 0.95);
+    EXPECT_GE(p.weight, 0.1);
+    EXPECT_LE(p.weight, 0.9);
+    EXPECT_NEAR(p.african + p.asian + p.caucasian, 1.0, 1e-12);
+  }
+}
+
+TEST(MakeHumanMixing, SamplingIsDeterministic) {
+  auto a = sample_adults(50, 7), b = sample_adults(50, 7), c = sample_adults(50, 8);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].gender, b[i].gender);
+    EXPECT_EQ(a[i].height, b[i].height);
+  }
+  EXPECT_NE(a[0].height, c[0].height);
+  int males = 0;
+  for (const auto& p : a) males += p.gender > 0.5;
+  EXPECT_GT(males, 10);
+  EXPECT_LT(males, 40);
+}
+
+TEST(MakeHumanTargets, BadLinesNameFileAndLine) {
+  auto expect_parse = [](const std::string& text, const std::string& fragment) {
+    const fs::path p = temp_file("bad.target", text);
+    try {
+      (void)read_target(p, 100);
+      FAIL() << "no error for: " << text;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status().code(), ErrorCode::kParse);
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.target"), std::string::npos) << e.what();
+    }
+  };
+  expect_parse("# c\n1 0 0 0\n2 0.1 x 0\n", "bad.target:3:");
+  expect_parse("1 0 0 0\n100 0 0 0\n", "out of range");
+  expect_parse("1 0 0\n", "missing");
+  expect_parse("-4 0 0 0\n", "non-integer index");
+  expect_parse("1 0 0 0 7\n", "extra tokens");
+  expect_parse("1 nan 0 0\n", "non-finite");
+  const fs::path good = temp_file("good.target", "# header\n\n3 0.5 -1 2e-3\n7 0 0 1\n");
+  const Target t = read_target(good, 100);
+  ASSERT_EQ(t.index.size(), 2u);
+  EXPECT_EQ(t.index[1], 7u);
+  EXPECT_FLOAT_EQ(t.delta[0].z(), 2e-3f);
+}
+
+TEST(MakeHumanBody, BaseMeshHasTheDocumentedGroups) {
+  REQUIRE_MAKEHUMAN();
+  const auto& base = library().base();
+  EXPECT_EQ(base.positions.size(), 19158u);
+  const auto* body = base.group("body");
+  ASSERT_NE(body, nullptr);
+  EXPECT_EQ(body->face_offsets.size() - 1, 13378u);
+  for (auto v : body->face_nodes) EXPECT_LT(v, 13380u);
+  EXPECT_NE(base.group("helper-tights"), nullptr);
+  EXPECT_NE(base.group("helper-skirt"), nullptr);
+  EXPECT_GT(library().macro_targets().size(), 250u);
+  EXPECT_GT(library().measure_targets().size(), 30u);
+  // Every slider of modifiers/measurement_modifiers.json is two-sided and loaded.
+  const auto& mods = library().measure_modifiers();
+  EXPECT_GE(mods.size(), 20u);
+  EXPECT_NE(std::find(mods.begin(), mods.end(), "measure-waist-circ"), mods.end());
+  for (const auto& m : mods) {
+    EXPECT_NE(library().find_target(m + "-decr"), nullptr) << m;
+    EXPECT_NE(library().find_target(m + "-incr"), nullptr) << m;
+  }
+  MacroParams p;
+  p.measures = {{"measure-wasit-circ", 0.5}};  // misspelt
+  std::vector<Vec3f> out(library().vertex_count());
+  EXPECT_THROW(library().build(p, out), std::invalid_argument);
+}
+
+TEST(MakeHumanBody, ASingleMeasureTargetReproducesItsFileDisplacements) {
+  REQUIRE_MAKEHUMAN();
+  const auto& lib = library();
+  const std::uint32_t nv = lib.vertex_count();
+  MacroParams p;
+  std::vector<Vec3f> a(nv), b(nv);
+  lib.build(p, a);
+  p.measures = {{"measure-waist-circ", 0.75}};
+  lib.build(p, b);
+  // Independent parse of the target file.
+  std::map<std::uint32_t, Vec3f> expect;
+  std::ifstream in(mh_dir() / "targets" / "measure" / "measure-waist-circ-incr.target");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream s(line);
+    std::uint32_t i;
+    float x, y, z;
+    s >> i >> x >> y >> z;
+    expect[i] = Vec3f(x, y, z);
+  }
+  ASSERT_GT(expect.size(), 100u);
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    const Vec3f d = b[v] - a[v];
+    auto it = expect.find(v);
+    const Vec3f want = it == expect.end() ? Vec3f::Zero() : Vec3f(0.75f * it->second);
+    ASSERT_LT((d - want).norm(), 2e-5f) << "vertex " << v;
+  }
+}
+
+TEST(MakeHumanBody, DefaultBodyIsBasePlusTheDefaultMacroBlend) {
+  REQUIRE_MAKEHUMAN();
+  const auto& lib = library();
+  MacroParams p;  // all 0.5, ethnic 1/3
+  const auto active = lib.active_targets(p);
+  // Default: gender 0.5 -> male and female; age 0.5 -> young only; muscle,
+  // weight 0.5 -> average only; height/proportions 0.5 -> none.
+  // So 2 x 3 ethnic + 2 universal targets, each ethnic at 1/6, universal at 1/2.
+  ASSERT_EQ(active.size(), 8u);
+  for (const auto& [t, w] : active) {
+    if (t->name.rfind("universal", 0) == 0)
+      EXPECT_NEAR(w, 0.5, 1e-12) << t->name;
+    else
+      EXPECT_NEAR(w, 1.0 / 6.0, 1e-12) << t->name;
+  }
+}
+
+TEST(MakeHumanBody, MeasuresAreValidLoopsOnTheSkin) {
+  REQUIRE_MAKEHUMAN();
+  const auto m = read_measures(mh_dir() / "measures.json", library().vertex_count());
+  for (const char* name : {"neck-circ", "bust-circ", "underbust-circ", "waist-circ", "hips-circ", "thigh-circ",
+                           "knee-circ", "ankle-circ"}) {
+    ASSERT_TRUE(m.count(name)) << name;
+    EXPECT_GT(m.at(name).size(), 8u);
+    for (auto v : m.at(name)) EXPECT_LT(v, 13380u) << name;
+  }
+}
