@@ -108,8 +108,7 @@ std::vector<std::uint64_t> faces_named_in(const std::string& msg) {
 
 void add_soup_surface(Model& m, SurfaceSoup& soup, std::string_view file, std::string_view where_label) {
   const std::uint32_t first = static_cast<std::uint32_t>(m.nodes.slots.capacity());
-  PolygonArrays arrays{soup.positions, soup.face_offsets, soup.face_nodes};
-  auto made = add_polygon_surface(m, soup.name, arrays, ExecContext::sequential());
+  auto made = add_polygon_surface(m, soup.name, soup, ExecContext::sequential());
   if (!made) {
     std::string msg = made.status().message();
     const auto named = faces_named_in(msg);

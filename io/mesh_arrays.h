@@ -15,6 +15,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+#include <atelier/storage/polygon_soup.h>
 
 namespace atelier {
 
@@ -43,13 +44,10 @@ void split_blanks(std::string_view line, std::vector<std::string_view>& out);
 
 /// One surface's polygon soup, as read from a file, with the location of
 /// every face (a line number or a byte offset) for error messages.
-struct SurfaceSoup {
+struct SurfaceSoup : PolygonSoup {
   std::string name;
-  std::vector<Vec3d> positions;
   std::vector<Vec2d> uv;                   // empty or one per position
   std::vector<std::int32_t> source;        // empty or one per position: index in the file's vertex list
-  std::vector<std::uint32_t> face_offsets{0};
-  std::vector<std::uint32_t> face_nodes;
   std::vector<std::uint64_t> face_where;   // one per face
 };
 
@@ -62,12 +60,10 @@ void add_soup_surface(Model& m, SurfaceSoup& soup, std::string_view file, std::s
 /// The live part of a model as one flat polygon list: live nodes numbered
 /// densely in index order, live faces in index order (surface by surface is
 /// not needed: PLY and OFF have a single mesh).
-struct FlatMesh {
+struct FlatMesh : PolygonSoup {  // positions unused; face nodes are dense indices
   std::vector<NodeIdx> nodes;               // dense -> model node
   std::vector<std::uint32_t> dense;         // model node -> dense (kInvalid for dead)
   std::vector<FaceIdx> faces;
-  std::vector<std::uint32_t> face_offsets{0};
-  std::vector<std::uint32_t> face_nodes;    // dense indices
 };
 [[nodiscard]] FlatMesh flatten(const Model& m);
 

@@ -15,7 +15,7 @@ Status fail(ErrorCode c, const std::string& surface, const std::string& what) {
 }
 }  // namespace
 
-Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonArrays& a, const ExecContext& ctx) {
+Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonSoupView& a, const ExecContext& ctx) {
   const std::size_t nv = a.positions.size();
   if (a.face_offsets.empty())
     return fail(ErrorCode::kInvalidArgument, name, "face_offsets is empty (needs F+1 entries)");

@@ -9,16 +9,9 @@
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+#include <atelier/storage/polygon_soup.h>
 
 namespace atelier {
-
-/// Polygon soup in CSR form: face f has nodes face_nodes[face_offsets[f] ..
-/// face_offsets[f+1]), counter-clockwise seen from outside.
-struct PolygonArrays {
-  std::span<const Vec3d> positions;
-  std::span<const std::uint32_t> face_offsets;  // size F+1, starts at 0
-  std::span<const std::uint32_t> face_nodes;
-};
 
 /// Adds one surface holding the given polygons. Errors (naming the face or
 /// node): out-of-range index, face with fewer than 3 nodes or a repeated node,
@@ -27,7 +20,7 @@ struct PolygonArrays {
 /// faces traversing an edge in the same direction (inconsistent orientation).
 /// Nodes referenced by no face are kept as isolated nodes. The model's
 /// complex-hole count is updated so the Euler-Poincare formula holds.
-[[nodiscard]] Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonArrays& arrays,
+[[nodiscard]] Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonSoupView& arrays,
                                                     const ExecContext& ctx = {});
 
 }  // namespace atelier

@@ -51,19 +51,11 @@ nlohmann::json quality_json(const RegenQuality& q) {
           {"pushed", q.pushed}};
 }
 
-/// A garment as a polygon soup: vertices in file order (the rows of its
-/// detail encoding), polygons over them. MakeHuman garments and scanned
-/// clothes are often not manifold, so no Model is made of them.
-struct GarmentMesh {
-  std::vector<Vec3d> positions;  // metres
-  std::vector<std::uint32_t> face_offsets{0}, face_nodes;
-};
-
 /// The garment of an OBJ file (read_base_mesh: every `v`, every `f` of every
 /// group), positions times `scale`.
-GarmentMesh read_garment_obj(const fs::path& file, double scale) {
+PolygonSoup read_garment_obj(const fs::path& file, double scale) {
   const makehuman::BaseMesh m = makehuman::read_base_mesh(file);
-  GarmentMesh g;
+  PolygonSoup g;
   for (const Vec3f& p : m.positions) g.positions.push_back(scale * p.cast<double>());
   for (const auto& grp : m.groups)
     for (std::size_t f = 0; f + 1 < grp.face_offsets.size(); ++f) {
@@ -79,7 +71,7 @@ GarmentMesh read_garment_obj(const fs::path& file, double scale) {
 /// Writes the garment with `positions` (float precision: what
 /// read_garment_obj gives back, so encoding and regeneration see the same
 /// reference garment).
-void write_garment_obj(const GarmentMesh& g, std::span<const Vec3d> positions, const fs::path& file) {
+void write_garment_obj(const PolygonSoup& g, std::span<const Vec3d> positions, const fs::path& file) {
   write_atomically(file, [&](AtomicFile& f) {
     char line[128];
     for (const Vec3d& p : positions) {
@@ -99,21 +91,6 @@ void write_garment_obj(const GarmentMesh& g, std::span<const Vec3d> positions, c
   });
 }
 
-/// Undirected edges of the polygons, sorted and unique.
-std::vector<std::array<std::uint32_t, 2>> garment_edges(const GarmentMesh& g) {
-  std::vector<std::array<std::uint32_t, 2>> e;
-  for (std::size_t f = 0; f + 1 < g.face_offsets.size(); ++f) {
-    const std::uint32_t a = g.face_offsets[f], n = g.face_offsets[f + 1] - a;
-    for (std::uint32_t k = 0; k < n; ++k) {
-      const std::uint32_t u = g.face_nodes[a + k], v = g.face_nodes[a + (k + 1) % n];
-      if (u != v) e.push_back({std::min(u, v), std::max(u, v)});
-    }
-  }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  return e;
-}
-
 /// The collision body of a reference body's skin (shared topology, built once).
 std::shared_ptr<const CollisionTopology> collision_topology(const ReferenceBody& ref) {
   auto tris = fan_triangulate(ref.model);
@@ -128,7 +105,7 @@ std::shared_ptr<const CollisionTopology> collision_topology(const ReferenceBody&
 struct DetailJob {
   std::string name;
   DetailEncoding enc;
-  GarmentMesh mesh;  // positions: on the reference body
+  PolygonSoup mesh;  // positions: on the reference body
   std::vector<std::array<std::uint32_t, 2>> edges;
   std::vector<double> rest;  // edge lengths on the reference body
   NodeAdjacency adjacency;
@@ -162,7 +139,7 @@ void encode_garment(const Common& common, const EncodeOptions& opt, const Refere
   const ExecContext ctx = common.context();
   const fs::path& file = opt.garment;
   if (!fs::exists(file)) throw Error(Status(ErrorCode::kIo, file.string() + ": no such file"));
-  GarmentMesh g;
+  PolygonSoup g;
   const std::string ext = file.extension().string();
   if (ext == ".mhclo") {
     if (!lib)
@@ -329,7 +306,7 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
         throw Error(Status(ErrorCode::kMismatch, mesh_file.string() + " has " +
                                                      std::to_string(d.mesh.positions.size()) + " vertices, " +
                                                      f.string() + " encodes " + std::to_string(d.enc.vertex_count())));
-      d.edges = garment_edges(d.mesh);
+      d.edges = d.mesh.edges();
       for (const auto& e : d.edges) d.rest.push_back((d.mesh.positions[e[0]] - d.mesh.positions[e[1]]).norm());
       auto adj = adjacency_from_edges(d.mesh.positions.size(), d.edges);
       if (!adj) throw Error(Status(adj.status().code(), mesh_file.string() + ": " + adj.status().message()));

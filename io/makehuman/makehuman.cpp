@@ -114,11 +114,11 @@ BaseMesh read_base_mesh(const std::filesystem::path& file) {
       c.skip_ws();
       std::string name(c.p, static_cast<std::size_t>(e - c.p));
       while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
-      m.groups.push_back({name, {0}, {}});
+      m.groups.emplace_back().name = name;
       cur = &m.groups.back();
     } else if (key == "f") {
       if (!cur) {
-        m.groups.push_back({"default", {0}, {}});
+        m.groups.emplace_back().name = "default";
         cur = &m.groups.back();
       }
       face.clear();

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <atelier/engine/math.h>
+#include <atelier/storage/polygon_soup.h>
 
 namespace atelier::makehuman {
 
@@ -27,10 +28,8 @@ struct Target {
 /// and the faces of each group, as polygons over the global vertex indices.
 struct BaseMesh {
   std::vector<Vec3f> positions;
-  struct Group {
+  struct Group : PolygonSoup {  // faces over the global vertex indices; positions unused
     std::string name;
-    std::vector<std::uint32_t> face_offsets{0};
-    std::vector<std::uint32_t> face_nodes;  // global vertex indices
   };
   std::vector<Group> groups;
   [[nodiscard]] const Group* group(std::string_view name) const noexcept;

@@ -296,7 +296,7 @@ Expected<MannequinTopology> make_mannequin_topology(const MannequinResolution& r
 
   // Faces, counter-clockwise seen from outside (checked by the tests through
   // the signed volume).
-  t.face_offsets.push_back(0);
+  t.face_offsets.assign(1, 0);
   auto face = [&](std::initializer_list<std::uint32_t> f) {
     t.face_nodes.insert(t.face_nodes.end(), f);
     t.face_offsets.push_back(static_cast<std::uint32_t>(t.face_nodes.size()));
@@ -644,7 +644,7 @@ Expected<ReferenceBody> make_mannequin(const MannequinParams& p, const Mannequin
   auto pos = mannequin_positions(p, t);
   if (!pos) return pos.status();
   ReferenceBody body;
-  PolygonArrays arrays{*pos, t.face_offsets, t.face_nodes};
+  PolygonSoupView arrays{*pos, t.face_offsets, t.face_nodes};
   auto s = add_polygon_surface(body.model, "skin", arrays, ExecContext::sequential());
   if (!s) return s.status();
   body.skin = s->idx;

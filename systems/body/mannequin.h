@@ -34,6 +34,7 @@
 
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
+#include <atelier/storage/polygon_soup.h>
 #include <atelier/systems/body/reference_body.h>
 
 namespace atelier {
@@ -103,11 +104,9 @@ enum MannequinCurve : std::int32_t {
 
 /// The parameter-independent part: face arrays, and feature curves/points
 /// as node index lists. Build once per resolution, reuse for many bodies.
-struct MannequinTopology {
+struct MannequinTopology : PolygonSoup {  // the faces; positions unused (mannequin_positions)
   MannequinResolution res;
   std::uint32_t num_nodes = 0;
-  std::vector<std::uint32_t> face_offsets;
-  std::vector<std::uint32_t> face_nodes;
   struct Curve {
     std::int32_t id;
     std::string name;

@@ -26,6 +26,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+#include <atelier/storage/polygon_soup.h>
 
 namespace atelier {
 
@@ -37,13 +38,11 @@ enum class DecodeKernel : std::uint8_t { kAuto, kAvx512, kAvx2, kPortable };
 
 /// The polygons of a body surface (all live faces of the model, in index
 /// order) over node indices; what encoding and decoding need of a body.
-struct BodyPolygons {
-  std::vector<std::uint32_t> face_offsets{0};
-  std::vector<std::uint32_t> face_nodes;  // node indices
-  std::uint32_t node_count = 0;           // node capacity of the body model
-  std::uint64_t topology_hash = 0;        // of node_count and the face arrays
+struct BodyPolygons : PolygonSoup {  // positions unused: they come per body
+  std::uint32_t node_count = 0;     // node capacity of the body model
+  std::uint64_t topology_hash = 0;  // of node_count and the face arrays
 
-  [[nodiscard]] std::size_t size() const noexcept { return face_offsets.size() - 1; }
+  [[nodiscard]] std::size_t size() const noexcept { return face_count(); }
   [[nodiscard]] static BodyPolygons from_model(const Model& body);
   [[nodiscard]] static BodyPolygons from_model(const Model& body, SurfaceIdx surface);
 };

@@ -297,7 +297,7 @@ Status TemplateBuilder::surface(const std::string& name, std::span<const std::ve
   // Nodes are appended at the end of a dense table, in array order.
   const auto base = static_cast<std::uint32_t>(I.model.nodes.slots.capacity());
   if (I.model.nodes.slots.size() != base) return Status(ErrorCode::kInternal, "template model has node tombstones");
-  auto s = add_polygon_surface(I.model, name, PolygonArrays{pos, offsets, ids});
+  auto s = add_polygon_surface(I.model, name, PolygonSoupView{pos, offsets, ids});
   if (!s) return Status(s.status().code(), "surface '" + name + "': " + s.status().message());
   SurfaceInfo info;
   info.index = s->idx;

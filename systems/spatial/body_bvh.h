@@ -26,12 +26,9 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+#include <atelier/storage/polygon_soup.h>
 
 namespace atelier {
-
-/// Triangle as three indices into a point array, counter-clockwise seen from
-/// outside (the inside test relies on that orientation).
-using Triangle = std::array<std::uint32_t, 3>;
 
 inline constexpr std::uint32_t kNoTriangle = std::numeric_limits<std::uint32_t>::max();
 

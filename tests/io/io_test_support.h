@@ -70,7 +70,7 @@ inline void spit(const std::filesystem::path& p, const std::string& bytes) {
   out << bytes;
 }
 
-/// Polygon soup with owning storage (PolygonArrays only views).
+/// Polygon soup with owning storage (PolygonSoupView only views).
 struct Soup {
   std::vector<Vec3d> positions;
   std::vector<std::uint32_t> offsets{0};
@@ -79,7 +79,7 @@ struct Soup {
     nodes.insert(nodes.end(), f.begin(), f.end());
     offsets.push_back(static_cast<std::uint32_t>(nodes.size()));
   }
-  [[nodiscard]] PolygonArrays arrays() const { return {positions, offsets, nodes}; }
+  [[nodiscard]] PolygonSoupView arrays() const { return {positions, offsets, nodes}; }
 };
 
 /// A grid of nx*ny quads with jittered positions of full double precision

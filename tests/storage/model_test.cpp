@@ -18,7 +18,7 @@ struct Soup {
     idx.insert(idx.end(), f);
     off.push_back(static_cast<std::uint32_t>(idx.size()));
   }
-  [[nodiscard]] PolygonArrays arrays() const { return {p, off, idx}; }
+  [[nodiscard]] PolygonSoupView arrays() const { return {p, off, idx}; }
 };
 
 Soup torus(int nu, int nv) {  // quad torus: chi = 0, one hole pair (genus 1)

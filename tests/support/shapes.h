@@ -20,7 +20,7 @@ struct Soup {
     idx.insert(idx.end(), f);
     off.push_back(static_cast<std::uint32_t>(idx.size()));
   }
-  [[nodiscard]] PolygonArrays arrays() const { return {p, off, idx}; }
+  [[nodiscard]] PolygonSoupView arrays() const { return {p, off, idx}; }
 };
 
 /// Closed UV sphere of radius r: quads with triangle fans at the poles,

@@ -662,7 +662,7 @@ TEST(Spatial, FanTriangulatedModelSurface) {
     offsets.push_back(static_cast<std::uint32_t>(nodes.size()));
   }
   Model m;
-  const auto s = add_polygon_surface(m, "sphere", PolygonArrays{sphere.positions, offsets, nodes});
+  const auto s = add_polygon_surface(m, "sphere", PolygonSoupView{sphere.positions, offsets, nodes});
   ASSERT_TRUE(s.has_value()) << s.status().to_string();
   ASSERT_TRUE(validate(m).is_ok());
   const auto tris = fan_triangulate(m);
