@@ -30,6 +30,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+#include <atelier/systems/view/camera.h>
 
 namespace atelier {
 
@@ -131,27 +132,6 @@ struct EdgePointList {
 [[nodiscard]] std::vector<EdgePointList> read_all_point_lists(const Model& m);
 
 // ------------------------------------------------------------ strokes (seed 000 Fig. 13)
-
-/// Camera: pixel = viewport(projection * view * [p;1]) with (0,0) at the top-left,
-/// x to the right, y down; OpenGL conventions (camera looks down -z, NDC in [-1,1]^3).
-struct Camera {
-  Eigen::Matrix4d view = Eigen::Matrix4d::Identity(), projection = Eigen::Matrix4d::Identity();
-  int width = 1024, height = 1024;
-
-  /// (x_px, y_px, ndc depth); NaN for points on or behind the eye plane (w <= 0).
-  [[nodiscard]] Vec3d project(const Vec3d& p) const;
-  /// World origin (on the near plane) + unit direction through a pixel.
-  [[nodiscard]] std::pair<Vec3d, Vec3d> ray(const Vec2d& px) const;
-  /// Perspective camera (gluLookAt + gluPerspective). near/far <= 0 pick
-  /// 1e-3 and 1e3 times the eye-target distance.
-  [[nodiscard]] static Camera look_at(const Vec3d& eye, const Vec3d& target, const Vec3d& up, double fov_y_deg, int w,
-                                      int h, double near_z = 0, double far_z = 0);
-  /// Orthographic camera looking from eye at target; half_height is the world
-  /// half-extent of the image vertically (horizontally scaled by w / h).
-  /// near/far <= 0 pick -1e3 and 1e3 times the eye-target distance.
-  [[nodiscard]] static Camera orthographic(const Vec3d& eye, const Vec3d& target, const Vec3d& up, double half_height,
-                                           int w, int h, double near_z = 0, double far_z = 0);
-};
 
 /// seed 000 4.1.4: edges whose both projected ends lie within tol_px of the
 /// stroke polyline and that are visible: the optional predicate must hold at

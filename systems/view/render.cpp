@@ -54,74 +54,6 @@ Status check_meshes(std::span<const RenderMesh> meshes) {
 
 }  // namespace
 
-void RenderCamera::ray(double px, double py, std::uint32_t width, std::uint32_t height, Vec3d& origin,
-                 Vec3d& dir) const noexcept {
-  // Image plane coordinates in [-aspect, aspect] x [-1, 1], y up.
-  const double aspect = static_cast<double>(width) / static_cast<double>(height);
-  const double u = (2.0 * px / width - 1.0) * aspect;
-  const double v = 1.0 - 2.0 * py / height;
-  if (projection == Projection::kOrthographic) {
-    origin = eye + (u * half_height) * right + (v * half_height) * up;
-    dir = forward;
-  } else {
-    origin = eye;
-    dir = (forward + (u * tan_half_fov) * right + (v * tan_half_fov) * up).normalized();
-  }
-}
-
-Vec2d RenderCamera::project(const Vec3d& p, std::uint32_t width, std::uint32_t height) const noexcept {
-  const double aspect = static_cast<double>(width) / static_cast<double>(height);
-  const Vec3d d = p - eye;
-  double u = d.dot(right), v = d.dot(up);
-  if (projection == Projection::kOrthographic) {
-    u /= half_height;
-    v /= half_height;
-  } else {
-    const double z = d.dot(forward);
-    u /= z * tan_half_fov;
-    v /= z * tan_half_fov;
-  }
-  return {(u / aspect + 1.0) * 0.5 * width, (1.0 - v) * 0.5 * height};
-}
-
-Expected<RenderCamera> frame_box(const Box3d& box, View view, Projection projection, double aspect, double margin,
-                           double fov_degrees) {
-  if (box.empty() || !box.lo.allFinite() || !box.hi.allFinite())
-    return Status(ErrorCode::kInvalidArgument, "frame_box: empty or non-finite box");
-  if (!(aspect > 0.0) || !std::isfinite(aspect)) return Status(ErrorCode::kInvalidArgument, "frame_box: bad aspect");
-  if (!(margin >= 0.0) || !std::isfinite(margin)) return Status(ErrorCode::kInvalidArgument, "frame_box: bad margin");
-  if (projection == Projection::kPerspective && !(fov_degrees > 0.0 && fov_degrees < 170.0))
-    return Status(ErrorCode::kInvalidArgument, "frame_box: field of view outside (0, 170) degrees");
-  RenderCamera c;
-  c.projection = projection;
-  c.up = Vec3d::UnitY();
-  switch (view) {
-    case View::kFront: c.forward = -Vec3d::UnitZ(); break;
-    case View::kSide: c.forward = -Vec3d::UnitX(); break;
-    case View::kBack: c.forward = Vec3d::UnitZ(); break;
-  }
-  c.right = c.forward.cross(c.up);
-  const Vec3d centre = 0.5 * (box.lo + box.hi);
-  const Vec3d ext = box.hi - box.lo;
-  const double diag = std::max(ext.norm(), 1e-12);
-  // Extents of the box on the picture's axes (absolute values: axis aligned).
-  const double w = std::abs(c.right.dot(ext)), h = std::abs(c.up.dot(ext));
-  const double pad = margin * std::max(w, h);
-  const double half_h = std::max({0.5 * h + pad, (0.5 * w + pad) / aspect, 1e-12});
-  if (projection == Projection::kOrthographic) {
-    c.half_height = half_h;
-    c.eye = centre - c.forward * diag;  // rays start in front of the whole box
-  } else {
-    c.tan_half_fov = std::tan(0.5 * fov_degrees * M_PI / 180.0);
-    // Bounding sphere of radius diag/2 fits the smaller half-angle.
-    const double tan_min = c.tan_half_fov * std::min(1.0, aspect);
-    const double r = 0.5 * diag * (1.0 + margin);
-    const double dist = r * std::sqrt(1.0 + 1.0 / (tan_min * tan_min));
-    c.eye = centre - c.forward * dist;
-  }
-  return c;
-}
-
 Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderParams& params,
                                     const ExecContext& ctx) {
   if (Status s = check_meshes(meshes); !s) return s;
@@ -134,18 +66,24 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Re
       box.extend(b.hi);
     }
   }
-  auto cam = frame_box(box, params.view, params.projection,
-                       static_cast<double>(params.width) / static_cast<double>(params.height), params.margin,
+  if (params.width > (1u << 15) || params.height > (1u << 15))
+    return Status(ErrorCode::kInvalidArgument, "render: image too large");
+  auto cam = frame_box(box, params.view, params.projection, params.width, params.height, params.margin,
                        params.fov_degrees);
   if (!cam) return cam.status();
   return render_scene(meshes, *cam, params, ctx);
 }
 
-Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderCamera& camera,
+Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Camera& camera,
                                     const RenderParams& params, const ExecContext& ctx) {
   if (Status s = check_meshes(meshes); !s) return s;
-  const std::uint32_t W = params.width, H = params.height;
-  if (W == 0 || H == 0) return Status(ErrorCode::kInvalidArgument, "render: zero image size");
+  if (camera.width <= 0 || camera.height <= 0) return Status(ErrorCode::kInvalidArgument, "render: zero image size");
+  const auto W = static_cast<std::uint32_t>(camera.width), H = static_cast<std::uint32_t>(camera.height);
+  auto framed = camera.frame();
+  if (!framed) return Status(ErrorCode::kInvalidArgument, "render: " + framed.status().message());
+  // Rays from the camera's frame: a few operations per pixel, where the
+  // matrix path (Camera::ray) inverts a 4x4 matrix.
+  const CameraFrame& frame = *framed;
   if (W > (1u << 15) || H > (1u << 15)) return Status(ErrorCode::kInvalidArgument, "render: image too large");
   if (params.supersample < 1 || params.supersample > 8)
     return Status(ErrorCode::kInvalidArgument, "render: supersample must be in [1, 8]");
@@ -160,11 +98,11 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Re
   }
   const double scene_diag = (scene.hi - scene.lo).norm();
   // Headlight above and to the left of the viewer (direction towards the light).
-  const Vec3d light = (-camera.forward + 0.45 * camera.up - 0.3 * camera.right).normalized();
+  const Vec3d light = (-frame.forward + 0.45 * frame.up - 0.3 * frame.right).normalized();
 
   auto trace = [&](double px, double py) {
     Vec3d o, d;
-    camera.ray(px, py, W, H, o, d);
+    frame.ray(px, py, W, H, o, d);
     Hit best;
     for (std::size_t m = 0; m < meshes.size(); ++m) {
       const RayHit h = meshes[m].bvh->ray_first_hit(o, d, best.t);

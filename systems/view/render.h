@@ -23,6 +23,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/io/png.h>
+#include <atelier/systems/view/camera.h>
 #include <atelier/systems/spatial/body_bvh.h>
 
 namespace atelier {
@@ -33,40 +34,6 @@ struct RenderMesh {
   const BodyBvh* bvh = nullptr;
   Vec3d colour{0.8, 0.8, 0.8};
 };
-
-/// Standard views for the mannequin/MakeHuman axes (y up, z to the front,
-/// +x the body's left): kFront looks along -z, kSide along -x (the body's
-/// left side, its front to the left of the picture), kBack along +z.
-enum class View : std::uint8_t { kFront, kSide, kBack };
-enum class Projection : std::uint8_t { kOrthographic, kPerspective };
-
-/// A pinhole or orthographic camera. forward, up and right are orthonormal
-/// (right = forward x up). Orthographic rays start on the plane through
-/// `eye` orthogonal to forward; perspective rays start at `eye`.
-struct RenderCamera {
-  Projection projection = Projection::kOrthographic;
-  Vec3d eye = Vec3d::Zero();
-  Vec3d forward{0, 0, -1};
-  Vec3d up{0, 1, 0};
-  Vec3d right{1, 0, 0};
-  double half_height = 1.0;    // orthographic: half the picture height in world units
-  double tan_half_fov = 0.27;  // perspective: tan of half the vertical field of view
-
-  /// Ray through the image point (px, py) in pixels (0,0 = top-left corner of
-  /// the top-left pixel) of a width x height picture. dir is unit.
-  void ray(double px, double py, std::uint32_t width, std::uint32_t height, Vec3d& origin, Vec3d& dir) const noexcept;
-  /// Image point (pixels) of a world point; the inverse of ray() on the
-  /// image plane (used by the tests to project analytic shapes).
-  [[nodiscard]] Vec2d project(const Vec3d& p, std::uint32_t width, std::uint32_t height) const noexcept;
-};
-
-/// A camera looking at `box` from `view`, framing it with `margin` (fraction
-/// of the box's size) on every side of a width/height `aspect` picture.
-/// Perspective cameras use the vertical field of view `fov_degrees` and stand
-/// far enough for the box's bounding sphere to fit. kInvalidArgument for an
-/// empty or non-finite box or a bad aspect/fov.
-[[nodiscard]] Expected<RenderCamera> frame_box(const Box3d& box, View view, Projection projection, double aspect,
-                                         double margin = 0.05, double fov_degrees = 30.0);
 
 struct RenderParams {
   std::uint32_t width = 480;
@@ -93,7 +60,7 @@ struct RenderParams {
 /// distance along the ray (infinity for background).
 struct RenderResult {
   RgbImage image;
-  RenderCamera camera;
+  Camera camera;
   std::vector<std::int32_t> mesh;
   std::vector<double> depth;
   std::size_t covered_pixels = 0;  // pixels whose centre ray hits a mesh
@@ -104,8 +71,10 @@ struct RenderResult {
 /// per row). Progress: stage "render", rows done.
 [[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderParams& params,
                                                   const ExecContext& ctx = {});
-/// The same with an explicit camera (params.view/projection/frame ignored).
-[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderCamera& camera,
+/// The same with an explicit camera (a centred pinhole or orthographic one:
+/// Camera::frame()); the picture has the camera's viewport size and
+/// params.width/height/view/projection/frame are ignored.
+[[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Camera& camera,
                                                   const RenderParams& params, const ExecContext& ctx = {});
 
 /// A mesh given as arrays (e.g. a body of a BodySet and a decoded garment):

@@ -101,8 +101,8 @@ TEST(Render, OrthographicSphereCoversItsProjectedDisc) {
   ASSERT_TRUE(res.has_value()) << res.status().to_string();
   // The picture frames the sphere's box with a margin, so the disc's radius
   // in pixels is r / half_height * H / 2; the camera keeps it centred.
-  const RenderCamera& cam = res->camera;
-  const Vec2d c = cam.project(centre, p.width, p.height);
+  const CameraFrame cam = res->camera.frame().value();
+  const Vec2d c = res->camera.project(centre).head<2>();
   EXPECT_NEAR(c.x(), p.width / 2.0, 1e-6);
   EXPECT_NEAR(c.y(), p.height / 2.0, 1e-6);
   const double rad = r / cam.half_height * p.height / 2.0;
@@ -134,7 +134,7 @@ TEST(Render, PerspectiveSphereMatchesItsAngularRadius) {
   p.fov_degrees = 40.0;
   auto res = render_scene(std::span(&mesh, 1), p);
   ASSERT_TRUE(res.has_value()) << res.status().to_string();
-  const RenderCamera& cam = res->camera;
+  const CameraFrame cam = res->camera.frame().value();
   // A sphere at distance D subtends asin(r / D); on the image plane that is
   // tan(asin(r / D)) / tan(fov / 2) half-heights.
   const double dist = (cam.eye - centre).norm();
@@ -153,7 +153,7 @@ TEST(Render, LambertShadingAtTheSphereCentre) {
   p.ambient = 0.2;
   auto res = render_scene(std::span(&mesh, 1), p);
   ASSERT_TRUE(res.has_value());
-  const RenderCamera& cam = res->camera;
+  const CameraFrame cam = res->camera.frame().value();
   const Vec3d n = -cam.forward;
   const Vec3d light = (-cam.forward + 0.45 * cam.up - 0.3 * cam.right).normalized();
   const double k = p.ambient + (1.0 - p.ambient) * n.dot(light);
@@ -217,8 +217,8 @@ TEST(Render, NearestMeshWinsAndOutlinesFollowTheSilhouette) {
   auto res = render_scene(meshes, p);
   ASSERT_TRUE(res.has_value());
   EXPECT_EQ(res->mesh[60 * 120 + 60], 1);
-  const Vec2d c = res->camera.project(Vec3d(0, 0, 1.2), p.width, p.height);
-  const double rad_small = 0.3 / res->camera.half_height * p.height / 2.0;
+  const Vec2d c = res->camera.project(Vec3d(0, 0, 1.2)).head<2>();
+  const double rad_small = 0.3 / res->camera.frame()->half_height * p.height / 2.0;
   std::size_t ones = 0, outline = 0;
   for (std::size_t i = 0; i < res->mesh.size(); ++i) {
     ones += res->mesh[i] == 1;
@@ -232,7 +232,7 @@ TEST(Render, NearestMeshWinsAndOutlinesFollowTheSilhouette) {
   const double expected = static_cast<double>(disc_pixels(c, rad_small, p.width, p.height));
   EXPECT_NEAR(static_cast<double>(ones), expected, 0.03 * expected);
   // Outline pixels: about the two circles' perimeters (one pixel wide each).
-  const double rad_big = 1.0 / res->camera.half_height * p.height / 2.0;
+  const double rad_big = 1.0 / res->camera.frame()->half_height * p.height / 2.0;
   const double perimeters = 2 * M_PI * (rad_big + rad_small);
   EXPECT_GT(static_cast<double>(outline), 0.7 * perimeters);
   EXPECT_LT(static_cast<double>(outline), 2.0 * perimeters);
