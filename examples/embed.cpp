@@ -19,6 +19,7 @@
 #include <atelier/systems/body/mannequin_source.h>
 #include <atelier/systems/body/reference_body.h>
 #include <atelier/systems/view/render.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 using namespace atelier;
 

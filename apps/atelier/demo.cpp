@@ -29,6 +29,7 @@
 #include <atelier/systems/profile/project_templates.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/view/render.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier::cli {
 

@@ -24,6 +24,7 @@
 #include <atelier/systems/profile/project_templates.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/profile/template_json.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier::cli {
 

@@ -32,6 +32,7 @@
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/edge_transfer.h>
 #include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 using namespace atelier;
 using namespace atelier::makehuman;
