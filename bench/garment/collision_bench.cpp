@@ -16,7 +16,7 @@
 #include <numeric>
 
 #include <atelier/io/makehuman/makehuman.h>
-#include <atelier/io/makehuman/mhclo.h>
+#include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/systems/garment/collision_pass.h>
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/edge_transfer.h>

@@ -361,6 +361,7 @@ Expected<std::vector<CollisionReport>> resolve_layers(std::span<GarmentLayer> la
     auto r = resolve_impl(L.positions, *L.adjacency, *L.encoding, body, params, floor, &fin, ctx);
     if (!r) return Status(r.status().code(), "layer " + std::to_string(i) + ": " + r.status().message());
     reps[i] = *r;
+    if (L.final_distance) *L.final_distance = fin;
     // Splat this layer's clearances on the corners of the triangles under
     // it, then widen by one ring of body points so that outer vertices
     // between the inner layer's vertices are covered.

@@ -119,6 +119,9 @@ struct GarmentLayer {
   const NodeAdjacency* adjacency = nullptr;
   const ClearanceEncoding* encoding = nullptr;
   int z_depth = 0;  // MakeHuman's layer order: smaller is nearer the skin
+  /// When set, each vertex's exact distance to the body at its final
+  /// position (as resolve_collisions' final_distance).
+  std::vector<BodyDistance>* final_distance = nullptr;
 };
 
 /// Resolves the layers inner first (stable by z_depth); each outer layer's
