@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <atelier/engine/exec_context.h>
+#include <atelier/storage/builder.h>
 #include <atelier/systems/body/body_set.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
@@ -79,19 +80,7 @@ int main() {
   //    the fit figures (systems/garment/regenerate_garment.h).
   auto family = GarmentFamily::of(*reference);
   if (!family) return fail("family", family.status());
-  PolygonSoup soup;
-  soup.positions = garment_vertices;
-  {
-    std::vector<NodeIdx> fn;
-    std::vector<std::uint32_t> ids;
-    for (std::uint32_t f = 0; f < garment->faces.slots.capacity(); ++f) {
-      if (!garment->alive(FaceIdx{f})) continue;
-      garment->face_nodes(FaceIdx{f}, fn);
-      ids.clear();
-      for (NodeIdx v : fn) ids.push_back(v.value);
-      soup.add_face(ids);
-    }
-  }
+  PolygonSoup soup = polygon_soup(*garment);
   auto shorts = encode_garment(*family, "shorts", soup, {}, ctx);
   if (!shorts) return fail("encode", shorts.status());
   const auto shared_family = std::make_shared<const GarmentFamily>(std::move(*family));

@@ -14,6 +14,7 @@
 
 #include "commands.h"
 #include <atelier/engine/parallel.h>
+#include <atelier/storage/builder.h>
 #include <atelier/io/atomic_file.h>
 #include "html_report.h"
 #include <atelier/io/obj.h>
@@ -87,20 +88,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   for (std::uint32_t e = 0; e < garment->edges.slots.capacity(); ++e)
     g_edges.push_back(
         {garment->tail(halfedge_of(EdgeIdx{e}, 0)).value, garment->tail(halfedge_of(EdgeIdx{e}, 1)).value});
-  PolygonSoup shorts_soup;
-  shorts_soup.positions.assign(garment->nodes.position.begin(),
-                               garment->nodes.position.begin() + garment->nodes.slots.capacity());
-  {
-    std::vector<NodeIdx> fn;
-    std::vector<std::uint32_t> ids;
-    for (std::uint32_t f = 0; f < garment->faces.slots.capacity(); ++f) {
-      if (!garment->alive(FaceIdx{f})) continue;
-      garment->face_nodes(FaceIdx{f}, fn);
-      ids.clear();
-      for (NodeIdx v : fn) ids.push_back(v.value);
-      shorts_soup.add_face(ids);
-    }
-  }
+  PolygonSoup shorts_soup = polygon_soup(*garment);
   auto family_made = GarmentFamily::of(*ref);
   if (!family_made) throw Error(family_made.status());
   const auto family = std::make_shared<const GarmentFamily>(std::move(*family_made));

@@ -97,22 +97,6 @@ double maxv(const std::vector<double>& v) {
   return v.empty() ? 0 : *std::max_element(v.begin(), v.end());
 }
 
-// Unique undirected edges of a polygon soup (real garments may have
-// inconsistently oriented faces, which a Model refuses; strain only needs edges).
-std::vector<std::array<std::uint32_t, 2>> edges_of(const BaseMesh& mesh) {
-  std::vector<std::array<std::uint32_t, 2>> e;
-  for (const auto& g : mesh.groups)
-    for (std::size_t f = 0; f + 1 < g.face_offsets.size(); ++f)
-      for (std::uint32_t k = g.face_offsets[f]; k < g.face_offsets[f + 1]; ++k) {
-        const std::uint32_t a = g.face_nodes[k];
-        const std::uint32_t b = g.face_nodes[k + 1 < g.face_offsets[f + 1] ? k + 1 : g.face_offsets[f]];
-        e.push_back({std::min(a, b), std::max(a, b)});
-      }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  return e;
-}
-
 }  // namespace
 
 TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
@@ -140,20 +124,16 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
       Garment g;
       g.name = e.path().stem().string();
       g.binding = read_mhclo(e.path(), nv_base);
-      const BaseMesh mesh = read_base_mesh(e.path().parent_path() / g.binding.obj_file);
-      ASSERT_EQ(mesh.positions.size(), g.binding.refs.size()) << g.name;
-      g.edges = edges_of(mesh);
+      auto soup = read_garment_mesh(e.path().parent_path() / g.binding.obj_file);
+      ASSERT_TRUE(soup) << soup.status().to_string();
+      ASSERT_EQ(soup->positions.size(), g.binding.refs.size()) << g.name;
+      g.edges = soup->edges();
       for (auto& ed : g.edges) ASSERT_LT(std::max(ed[0], ed[1]), g.binding.refs.size()) << g.name;
       g.source = to_metres(fit_binding(g.binding, H0));
       g.source_sd.resize(g.source.size());
       ASSERT_TRUE(bvh0.signed_distances(g.source, g.source_sd));
-      PolygonSoup soup;
-      soup.positions = g.source;
-      for (const auto& grp : mesh.groups)
-        for (std::size_t f = 0; f < grp.face_count(); ++f) soup.add_face(grp.face(f));
-      GarmentEncodeOptions geo;
-      geo.edges = g.edges;
-      auto made = encode_garment(*family, g.name, std::move(soup), geo);
+      soup->positions = g.source;
+      auto made = encode_garment(*family, g.name, std::move(*soup));
       ASSERT_TRUE(made) << made.status().to_string();
       g.tmpl = std::move(*made);
       for (const float c : g.tmpl.clearance.clearance) {

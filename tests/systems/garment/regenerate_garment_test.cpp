@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include <atelier/storage/builder.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
 #include <atelier/systems/spatial/body_bvh.h>
@@ -26,21 +27,6 @@ struct Scene {
   std::shared_ptr<const GarmentTemplate> shorts, shell;
 };
 
-PolygonSoup soup_of(const Model& m) {
-  PolygonSoup s;
-  s.positions.assign(m.nodes.position.begin(), m.nodes.position.begin() + m.nodes.slots.capacity());
-  std::vector<NodeIdx> fn;
-  std::vector<std::uint32_t> ids;
-  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
-    if (!m.alive(FaceIdx{f})) continue;
-    m.face_nodes(FaceIdx{f}, fn);
-    ids.clear();
-    for (NodeIdx v : fn) ids.push_back(v.value);
-    s.add_face(ids);
-  }
-  return s;
-}
-
 const Scene& scene() {
   static const Scene s = [] {
     Scene r;
@@ -49,8 +35,8 @@ const Scene& scene() {
     r.family = std::make_shared<const GarmentFamily>(GarmentFamily::of(*r.ref).value());
     const Model inner = skin_band_garment(*r.ref, 0.70, 1.10, 0.004, 0.40, "inner").value();
     const Model outer = skin_band_garment(*r.ref, 0.75, 1.05, 0.006, 0.40, "outer").value();
-    r.shorts = std::make_shared<const GarmentTemplate>(encode_garment(*r.family, "inner", soup_of(inner)).value());
-    GarmentTemplate shell = encode_garment(*r.family, "outer", soup_of(outer)).value();
+    r.shorts = std::make_shared<const GarmentTemplate>(encode_garment(*r.family, "inner", polygon_soup(inner)).value());
+    GarmentTemplate shell = encode_garment(*r.family, "outer", polygon_soup(outer)).value();
     shell.z_depth = 1;
     r.shell = std::make_shared<const GarmentTemplate>(std::move(shell));
     return r;
