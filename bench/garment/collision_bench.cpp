@@ -143,7 +143,12 @@ const CollisionScene& scene(bool large = false) {
   return s;
 }
 
-// Args: threads, and 1 for the 10,925-vertex set.
+// The collision body's backend of a benchmark argument (docs/collision.md):
+// 0 the hand-written hierarchy, 1 Embree.
+CollisionBackend backend_arg(std::int64_t a) { return a ? CollisionBackend::kEmbree : CollisionBackend::kHierarchy; }
+const char* backend_name(std::int64_t a) { return a ? "embree" : "hierarchy"; }
+
+// Args: threads, 1 for the 10,925-vertex set, backend.
 void BM_CollisionPassPerBody(benchmark::State& st) {
   const CollisionScene& s = scene(st.range(1) != 0);
   ExecContext ctx;
@@ -155,6 +160,7 @@ void BM_CollisionPassPerBody(benchmark::State& st) {
     g = s.decoded[b];
     CollisionBodyParams cbp;
     for (const Vec3d& q : g) cbp.roi.extend(q);
+    cbp.backend = backend_arg(st.range(2));
     CollisionBody cb;
     if (Status e = cb.build(s.topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
     auto rep = resolve_collisions(g, s.adj, s.clear, cb, CollisionParams{}, ctx);
@@ -169,12 +175,14 @@ void BM_CollisionPassPerBody(benchmark::State& st) {
   st.counters["faired/body"] = static_cast<double>(faired) / std::max<std::size_t>(1, bodies);
   st.counters["queries/body"] = static_cast<double>(queries) / std::max<std::size_t>(1, bodies);
   st.counters["vertices"] = static_cast<double>(s.vertices);
-  st.SetLabel(s.label);
+  st.SetLabel(std::string(backend_name(st.range(2))) + ", " + s.label);
 }
 BENCHMARK(BM_CollisionPassPerBody)
-    ->Args({1, 0})
-    ->Args({2, 0})
-    ->Args({2, 1})
+    ->Args({1, 0, 0})
+    ->Args({2, 0, 0})
+    ->Args({2, 0, 1})
+    ->Args({2, 1, 0})
+    ->Args({2, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
@@ -182,8 +190,10 @@ BENCHMARK(BM_CollisionPassPerBody)
 // encoded hint, on 1 thread (the pass's unit of work).
 void BM_CollisionQuery(benchmark::State& st) {
   const CollisionScene& s = scene();
+  CollisionBodyParams cbp;
+  cbp.backend = backend_arg(st.range(2));
   CollisionBody cb;
-  if (Status e = cb.build(s.topo, s.skins[0]); !e) st.SkipWithError(e.to_string().c_str());
+  if (Status e = cb.build(s.topo, s.skins[0], cbp); !e) st.SkipWithError(e.to_string().c_str());
   const auto& g = s.decoded[0];
   const bool hinted = st.range(0) != 0;
   std::vector<std::uint32_t> order(g.size());
@@ -196,16 +206,22 @@ void BM_CollisionQuery(benchmark::State& st) {
     for (std::uint32_t v : order) sum += cb.query(g[v], hinted ? s.clear.triangle[v] : kNoTriangle).distance;
   benchmark::DoNotOptimize(sum);
   st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * g.size()));
-  st.SetLabel(hinted ? "hinted" : "no hint");
+  st.SetLabel(std::string(backend_name(st.range(2))) + (hinted ? ", hinted" : ", no hint"));
 }
-BENCHMARK(BM_CollisionQuery)->Args({1, 0})->Args({1, 1})->Args({0, 0})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CollisionQuery)
+    ->ArgsProduct({{1}, {0, 1}, {0, 1}})
+    ->Args({0, 0, 0})
+    ->Args({0, 0, 1})
+    ->Unit(benchmark::kMillisecond);
 
 // The same points through CollisionBody::query_many (clusters of neighbours
 // ordered by hint, one traversal per cluster), on 1 thread: same answers.
 void BM_CollisionQueryMany(benchmark::State& st) {
   const CollisionScene& s = scene();
+  CollisionBodyParams cbp;
+  cbp.backend = backend_arg(st.range(0));
   CollisionBody cb;
-  if (Status e = cb.build(s.topo, s.skins[0]); !e) st.SkipWithError(e.to_string().c_str());
+  if (Status e = cb.build(s.topo, s.skins[0], cbp); !e) st.SkipWithError(e.to_string().c_str());
   const auto& g = s.decoded[0];
   std::vector<BodyDistance> out(g.size());
   ExecContext one;
@@ -215,9 +231,9 @@ void BM_CollisionQueryMany(benchmark::State& st) {
     benchmark::DoNotOptimize(out.data());
   }
   st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * g.size()));
-  st.SetLabel("hinted, clustered");
+  st.SetLabel(std::string(backend_name(st.range(0))) + ", hinted, clustered");
 }
-BENCHMARK(BM_CollisionQueryMany)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CollisionQueryMany)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The edge transfer on one body (systems/edge_transfer.h): edge targets,
 // right-hand side and the solve with the factor made at encoding.
@@ -237,22 +253,41 @@ void BM_EdgeTransfer(benchmark::State& st) {
 }
 BENCHMARK(BM_EdgeTransfer)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// The set-up alone (grid over the garment's box).
+// The set-up alone. Args: threads, backend, and 1 for a first body (a new
+// topology each time, its own construction not timed: the hierarchy's
+// layout, Embree's device and SAH build) instead of a refit.
 void BM_CollisionBodySetup(benchmark::State& st) {
   const CollisionScene& s = scene();
   ExecContext ctx;
   ctx.threads = static_cast<int>(st.range(0));
+  const bool first = st.range(2) != 0;
   std::size_t body = 0;
   for (auto _ : st) {
     const std::size_t b = body++ % s.skins.size();
+    std::shared_ptr<const CollisionTopology> topo = s.topo;
+    if (first) {
+      st.PauseTiming();
+      topo = CollisionTopology::build(s.triangles, static_cast<std::uint32_t>(s.skins[b].size())).value();
+      st.ResumeTiming();
+    }
     CollisionBodyParams cbp;
     for (const Vec3d& q : s.decoded[b]) cbp.roi.extend(q);
+    cbp.backend = backend_arg(st.range(1));
     CollisionBody cb;
-    if (Status e = cb.build(s.topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
+    if (Status e = cb.build(topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
     benchmark::DoNotOptimize(cb.hierarchy_nodes());
+    if (first) {
+      st.PauseTiming();
+      cb = CollisionBody();
+      topo.reset();
+      st.ResumeTiming();
+    }
   }
-  st.SetLabel(s.label);
+  st.SetLabel(std::string(backend_name(st.range(1))) + (first ? ", first body" : ", refit") + ", " + s.label);
 }
-BENCHMARK(BM_CollisionBodySetup)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CollisionBodySetup)
+    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace

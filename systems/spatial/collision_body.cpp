@@ -10,12 +10,14 @@
 #include <sstream>
 
 #include <atelier/engine/parallel.h>
+#include "collision_body_detail.h"
 
 namespace atelier {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using collision_detail::float_bound;
+using collision_detail::kInf;
 
 // Squared distances from a query box (qlo, qhi: its corners broadcast, in
 // float; a point is a box with qlo == qhi) to four boxes (lo, hi: per axis,
@@ -155,8 +157,11 @@ void CollisionTopology::build_tree(std::span<const Vec3d> pos) const {
 // ------------------------------------------------------------ body
 
 Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, std::span<const Vec3d> positions,
-                            const CollisionBodyParams& /*params: see its comment*/, const ExecContext& ctx) {
+                            const CollisionBodyParams& params, const ExecContext& ctx) {
+  // params.roi: see its comment. A scene lent before goes back to the pool
+  // first, so that rebuilding a body reuses it.
   topo_.reset();
+  embree_.reset();
   if (!topology) return Status(ErrorCode::kInvalidArgument, "collision body: no topology");
   if (positions.size() != topology->point_count())
     return Status(ErrorCode::kMismatch, "collision body: " + std::to_string(positions.size()) +
@@ -165,6 +170,19 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
   // A nanosecond per point: not worth a parallel loop's start-up.
   if (!std::all_of(positions.begin(), positions.end(), [](const Vec3d& q) { return is_finite(q); }))
     return Status(ErrorCode::kDegenerate, "collision body: non-finite position");
+  if (params.backend == CollisionBackend::kEmbree) {
+    pos_ = positions;
+    topo_ = std::move(topology);
+    wide_box_.clear();
+    tri_box_.clear();
+    if (Status s = build_embree(ctx); !s) {
+      topo_.reset();
+      return s;
+    }
+    return Status::ok();
+  }
+  if (params.backend != CollisionBackend::kHierarchy)
+    return Status(ErrorCode::kInvalidArgument, "collision body: unknown backend");
   const CollisionTopology& tp = *topology;
   std::call_once(tp.tree_once_, [&] { tp.build_tree(positions); });
   pos_ = positions;
@@ -274,18 +292,6 @@ BodyDistance CollisionBody::signed_distance(const Vec3d& p, std::uint32_t t, con
   return out;
 }
 
-namespace {
-
-// A squared bound in float for the lane tests, rounded up with a relative
-// margin (2e-6, far above float rounding): a lane is opened when its
-// conservative box distance is at most the bound, so every box the exact
-// test would open is opened (ties included).
-inline float float_bound(double b2) noexcept {
-  return static_cast<float>(std::min(b2 * (1.0 + 2e-6), static_cast<double>(std::numeric_limits<float>::max())));
-}
-
-}  // namespace
-
 // A point broadcast in float for the four-lane box tests, with the slack
 // that makes them conservative: a bound on the rounding of the point to
 // float and of one subtraction, relative to the largest coordinate in play
@@ -311,21 +317,6 @@ unsigned CollisionBody::lanes_within(const FloatPoint& q, const WideBox& b, floa
   const float* const hi[3] = {b.hi[0], b.hi[1], b.hi[2]};
   return box_within_x4(q.lo, q.hi, lo, hi, q.slack, bound, d2);
 }
-
-struct CollisionBody::Best {
-  double d2 = kInf;
-  float d2f = std::numeric_limits<float>::max();
-  std::uint32_t t = kNoTriangle;
-  TrianglePoint r;
-  void take(double d, std::uint32_t tri, const TrianglePoint& at) noexcept {
-    if (d < d2 || (d == d2 && tri < t)) {
-      d2 = d;
-      d2f = float_bound(d);
-      t = tri;
-      r = at;
-    }
-  }
-};
 
 CollisionBody::Best CollisionBody::start_from_hint(const Vec3d& p, std::uint32_t hint) const noexcept {
   Best b;
@@ -361,6 +352,7 @@ void CollisionBody::scan_leaf(const Vec3d& p, const FloatPoint& fp, std::uint32_
 }
 
 BodyDistance CollisionBody::query(const Vec3d& p, std::uint32_t hint) const noexcept {
+  if (embree_) return query_embree(p, hint);
   Best best = start_from_hint(p, hint);
   // Branch and bound over the wide hierarchy, nearer lanes first. Boxes
   // at exactly the best distance are still opened: ties go to the smaller
@@ -424,6 +416,7 @@ void CollisionBody::query_cluster_at(const std::uint32_t* idx, std::size_t n, st
   };
   if (n == 0) return;
   if (n > kClusterMax) return one_by_one();
+  if (embree_) return query_cluster_embree(idx, n, p, hint, out);
   // Every point's hint bounds its answer: a triangle nearer to p_i than
   // r_i lies within r = max r_i of the cluster's bounding box, so one
   // traversal with that box and bound collects every leaf any point needs.
@@ -508,9 +501,13 @@ Status CollisionBody::query_many(std::span<const Vec3d> p, std::span<const std::
   // Counting sort by the hint's leaf slot (points without a usable hint
   // last): neighbours in the hierarchy's leaf order are neighbours on the
   // body, so consecutive points form compact clusters.
-  const std::size_t nt = topo_->triangles().size(), slots = topo_->leaf_tri_.size();
-  auto key = [&](std::size_t v) {
-    return hint[v] < nt ? topo_->leaf_slot_[hint[v]] : static_cast<std::uint32_t>(slots);
+  // (Embree's layout is not ours to read: its bodies order points by the
+  // hint's index, neighbours too on bodies whose triangles are numbered in
+  // rows, as MakeHuman's and the mannequin's are.)
+  const std::size_t nt = topo_->triangles().size(), slots = embree_ ? nt : topo_->leaf_tri_.size();
+  auto key = [&](std::size_t v) -> std::uint32_t {
+    if (hint[v] >= nt) return static_cast<std::uint32_t>(slots);
+    return embree_ ? hint[v] : topo_->leaf_slot_[hint[v]];
   };
   std::vector<std::uint32_t> start(slots + 2, 0), order(n);
   for (std::size_t v = 0; v < n; ++v) ++start[key(v) + 1];

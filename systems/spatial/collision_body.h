@@ -5,7 +5,10 @@
 // a time. Queries are exact: the closest point by point-triangle distances
 // within a bound (a hint triangle's distance), the sign by the pseudo-normal
 // rule of systems/spatial/triangle_query.h, so answers equal BodyBvh's.
-// Measured against Embree (refit scene and rtcPointQuery) in docs/collision.md.
+// A second backend finds the closest triangle with Embree instead (a refit
+// scene per body and rtcPointQuery bounded by the hint's distance; see
+// CollisionBackend): same answers bit for bit, costs side by side in
+// docs/collision.md.
 //
 // Reads: the body's triangles (once) and positions (per body, kept as a
 // view). Writes: nothing outside itself.
@@ -48,6 +51,13 @@ class CollisionTopology {
 
  private:
   friend class CollisionBody;
+  // The Embree backend's device and its idle refit scenes
+  // (collision_body_embree.cpp): a scene is built once, on the first body
+  // that needs one, and then lent to one body at a time and refit to it.
+  struct EmbreePool;
+  struct EmbreeScene;
+  mutable std::once_flag embree_once_;
+  mutable std::shared_ptr<EmbreePool> embree_pool_;
   void build_tree(std::span<const Vec3d> positions) const;  // once, from the first body
 
   TriangleTopology topo_;
@@ -77,12 +87,26 @@ struct BodyDistance {
   Vec3d barycentric = Vec3d::Zero();
 };
 
+/// Which structure finds the closest triangle. Both cull only: the exact
+/// distances (closest_point_on_triangle), the tie rule (smaller distance,
+/// then smaller triangle index) and the sign (pseudo_normal_sign) are the
+/// same code, so the answers are the same bit for bit; only the cost
+/// differs (docs/collision.md).
+///  * kHierarchy: the topology's hand-written 4-wide hierarchy, refit per
+///    body in float boxes rounded outward;
+///  * kEmbree: an Embree scene per body (RTC_BUILD_QUALITY_REFIT geometry:
+///    built on the first body, refit on the others) searched by
+///    rtcPointQuery, the sphere starting at the hint's distance and shrunk
+///    as nearer triangles are found.
+enum class CollisionBackend : std::uint8_t { kHierarchy, kEmbree };
+
 struct CollisionBodyParams {
   /// Where the garment lies. The hierarchy covers the whole body whatever
   /// it is (its refit, ~0.3 ms for the MakeHuman skin, costs less than
   /// cutting the tree to a region), so answers and cost ignore it; callers
   /// that built the old region grid still pass it (apps/atelier/demo.cpp).
   Box3d roi;
+  CollisionBackend backend = CollisionBackend::kHierarchy;
 };
 
 /// Per-body query structure: the topology's hierarchy refit to these
@@ -92,7 +116,8 @@ struct CollisionBodyParams {
 class CollisionBody {
  public:
   /// Errors: positions count differs from the topology, non-finite
-  /// position, bad parameters.
+  /// position, bad parameters; kEmbree: a coordinate beyond float range
+  /// (Embree holds vertices in float), an Embree error.
   [[nodiscard]] Status build(std::shared_ptr<const CollisionTopology> topology, std::span<const Vec3d> positions,
                              const CollisionBodyParams& params = {}, const ExecContext& ctx = {});
   [[nodiscard]] bool empty() const noexcept { return topo_ == nullptr; }
@@ -100,6 +125,9 @@ class CollisionBody {
   [[nodiscard]] std::span<const Vec3d> positions() const noexcept { return pos_; }
   /// Nodes of the refit hierarchy (set-up size).
   [[nodiscard]] std::size_t hierarchy_nodes() const noexcept { return wide_box_.size(); }
+  [[nodiscard]] CollisionBackend backend() const noexcept {
+    return embree_ ? CollisionBackend::kEmbree : CollisionBackend::kHierarchy;
+  }
 
   /// Exact signed distance. `hint`: a triangle believed near (e.g. the
   /// closest one on the source body, or kNoTriangle); it only speeds the
@@ -136,6 +164,11 @@ class CollisionBody {
                         std::span<const std::uint32_t> hint, std::span<BodyDistance> out) const noexcept;
   /// Sign and outward direction of p's closest point r on triangle t.
   [[nodiscard]] BodyDistance signed_distance(const Vec3d& p, std::uint32_t t, const TrianglePoint& r) const noexcept;
+  // The Embree backend (collision_body_embree.cpp).
+  [[nodiscard]] Status build_embree(const ExecContext& ctx);
+  [[nodiscard]] BodyDistance query_embree(const Vec3d& p, std::uint32_t hint) const noexcept;
+  void query_cluster_embree(const std::uint32_t* idx, std::size_t n, std::span<const Vec3d> p,
+                            std::span<const std::uint32_t> hint, std::span<BodyDistance> out) const noexcept;
 
   std::shared_ptr<const CollisionTopology> topo_;
   std::span<const Vec3d> pos_;
@@ -147,6 +180,9 @@ class CollisionBody {
   // as one block [lo x, y, z, hi x, y, z][slot].
   std::vector<float> tri_box_;
   double extent_ = 0;  // largest absolute coordinate (bounds float rounding)
+  // kEmbree: the scene lent by the topology's pool (back to it when the
+  // last holder lets go); null for kHierarchy.
+  std::shared_ptr<CollisionTopology::EmbreeScene> embree_;
 };
 
 }  // namespace atelier
