@@ -178,11 +178,8 @@ void BM_CollisionPassPerBody(benchmark::State& st) {
   st.SetLabel(std::string(backend_name(st.range(2))) + ", " + s.label);
 }
 BENCHMARK(BM_CollisionPassPerBody)
-    ->Args({1, 0, 0})
-    ->Args({2, 0, 0})
-    ->Args({2, 0, 1})
-    ->Args({2, 1, 0})
-    ->Args({2, 1, 1})
+    ->ArgsProduct({{1, 2}, {0}, {0, 1}})
+    ->ArgsProduct({{2}, {1}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
