@@ -143,12 +143,7 @@ const CollisionScene& scene(bool large = false) {
   return s;
 }
 
-// The collision body's backend of a benchmark argument (docs/collision.md):
-// 0 the hand-written hierarchy, 1 Embree.
-CollisionBackend backend_arg(std::int64_t a) { return a ? CollisionBackend::kEmbree : CollisionBackend::kHierarchy; }
-const char* backend_name(std::int64_t a) { return a ? "embree" : "hierarchy"; }
-
-// Args: threads, 1 for the 10,925-vertex set, backend.
+// Args: threads, and 1 for the 10,925-vertex set.
 void BM_CollisionPassPerBody(benchmark::State& st) {
   const CollisionScene& s = scene(st.range(1) != 0);
   ExecContext ctx;
@@ -160,7 +155,6 @@ void BM_CollisionPassPerBody(benchmark::State& st) {
     g = s.decoded[b];
     CollisionBodyParams cbp;
     for (const Vec3d& q : g) cbp.roi.extend(q);
-    cbp.backend = backend_arg(st.range(2));
     CollisionBody cb;
     if (Status e = cb.build(s.topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
     auto rep = resolve_collisions(g, s.adj, s.clear, cb, CollisionParams{}, ctx);
@@ -175,11 +169,12 @@ void BM_CollisionPassPerBody(benchmark::State& st) {
   st.counters["faired/body"] = static_cast<double>(faired) / std::max<std::size_t>(1, bodies);
   st.counters["queries/body"] = static_cast<double>(queries) / std::max<std::size_t>(1, bodies);
   st.counters["vertices"] = static_cast<double>(s.vertices);
-  st.SetLabel(std::string(backend_name(st.range(2))) + ", " + s.label);
+  st.SetLabel(s.label);
 }
 BENCHMARK(BM_CollisionPassPerBody)
-    ->ArgsProduct({{1, 2}, {0}, {0, 1}})
-    ->ArgsProduct({{2}, {1}, {0, 1}})
+    ->Args({1, 0})
+    ->Args({2, 0})
+    ->Args({2, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
@@ -187,10 +182,8 @@ BENCHMARK(BM_CollisionPassPerBody)
 // encoded hint, on 1 thread (the pass's unit of work).
 void BM_CollisionQuery(benchmark::State& st) {
   const CollisionScene& s = scene();
-  CollisionBodyParams cbp;
-  cbp.backend = backend_arg(st.range(2));
   CollisionBody cb;
-  if (Status e = cb.build(s.topo, s.skins[0], cbp); !e) st.SkipWithError(e.to_string().c_str());
+  if (Status e = cb.build(s.topo, s.skins[0]); !e) st.SkipWithError(e.to_string().c_str());
   const auto& g = s.decoded[0];
   const bool hinted = st.range(0) != 0;
   std::vector<std::uint32_t> order(g.size());
@@ -203,22 +196,15 @@ void BM_CollisionQuery(benchmark::State& st) {
     for (std::uint32_t v : order) sum += cb.query(g[v], hinted ? s.clear.triangle[v] : kNoTriangle).distance;
   benchmark::DoNotOptimize(sum);
   st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * g.size()));
-  st.SetLabel(std::string(backend_name(st.range(2))) + (hinted ? ", hinted" : ", no hint"));
+  st.SetLabel(hinted ? "hinted" : "no hint");
 }
-BENCHMARK(BM_CollisionQuery)
-    ->ArgsProduct({{1}, {0, 1}, {0, 1}})
-    ->Args({0, 0, 0})
-    ->Args({0, 0, 1})
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CollisionQuery)->Args({1, 0})->Args({1, 1})->Args({0, 0})->Unit(benchmark::kMillisecond);
 
-// The same points through CollisionBody::query_many (clusters of neighbours
-// ordered by hint, one traversal per cluster), on 1 thread: same answers.
+// The same points through CollisionBody::query_many, on 1 thread.
 void BM_CollisionQueryMany(benchmark::State& st) {
   const CollisionScene& s = scene();
-  CollisionBodyParams cbp;
-  cbp.backend = backend_arg(st.range(0));
   CollisionBody cb;
-  if (Status e = cb.build(s.topo, s.skins[0], cbp); !e) st.SkipWithError(e.to_string().c_str());
+  if (Status e = cb.build(s.topo, s.skins[0]); !e) st.SkipWithError(e.to_string().c_str());
   const auto& g = s.decoded[0];
   std::vector<BodyDistance> out(g.size());
   ExecContext one;
@@ -228,9 +214,9 @@ void BM_CollisionQueryMany(benchmark::State& st) {
     benchmark::DoNotOptimize(out.data());
   }
   st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * g.size()));
-  st.SetLabel(std::string(backend_name(st.range(0))) + ", hinted, clustered");
+  st.SetLabel("hinted");
 }
-BENCHMARK(BM_CollisionQueryMany)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CollisionQueryMany)->Unit(benchmark::kMillisecond);
 
 // The edge transfer on one body (systems/edge_transfer.h): edge targets,
 // right-hand side and the solve with the factor made at encoding.
@@ -250,14 +236,14 @@ void BM_EdgeTransfer(benchmark::State& st) {
 }
 BENCHMARK(BM_EdgeTransfer)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// The set-up alone. Args: threads, backend, and 1 for a first body (a new
-// topology each time, its own construction not timed: the hierarchy's
-// layout, Embree's device and SAH build) instead of a refit.
+// The set-up alone. Args: threads, and 1 for a first body (a new topology
+// each time, its own construction not timed: Embree's device and SAH build)
+// instead of a refit.
 void BM_CollisionBodySetup(benchmark::State& st) {
   const CollisionScene& s = scene();
   ExecContext ctx;
   ctx.threads = static_cast<int>(st.range(0));
-  const bool first = st.range(2) != 0;
+  const bool first = st.range(1) != 0;
   std::size_t body = 0;
   for (auto _ : st) {
     const std::size_t b = body++ % s.skins.size();
@@ -269,10 +255,9 @@ void BM_CollisionBodySetup(benchmark::State& st) {
     }
     CollisionBodyParams cbp;
     for (const Vec3d& q : s.decoded[b]) cbp.roi.extend(q);
-    cbp.backend = backend_arg(st.range(1));
     CollisionBody cb;
     if (Status e = cb.build(topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
-    benchmark::DoNotOptimize(cb.hierarchy_nodes());
+    benchmark::DoNotOptimize(cb.positions().data());
     if (first) {
       st.PauseTiming();
       cb = CollisionBody();
@@ -280,11 +265,8 @@ void BM_CollisionBodySetup(benchmark::State& st) {
       st.ResumeTiming();
     }
   }
-  st.SetLabel(std::string(backend_name(st.range(1))) + (first ? ", first body" : ", refit") + ", " + s.label);
+  st.SetLabel(std::string(first ? "first body" : "refit") + ", " + s.label);
 }
-BENCHMARK(BM_CollisionBodySetup)
-    ->ArgsProduct({{1, 2}, {0, 1}, {0, 1}})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+BENCHMARK(BM_CollisionBodySetup)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
