@@ -111,7 +111,7 @@ std::vector<Vec3d> probe_points(const TriBody& b, SplitMix64& rng, int n = 600) 
 
 // Every kind of query over one set of positions against brute force.
 void expect_exact(const TriBody& b, const std::shared_ptr<const CollisionTopology>& topo, const CollisionBody& cb,
-                  std::uint64_t seed, int n = 600) {
+                  std::uint64_t seed, int n = 300) {
   SplitMix64 rng(seed);
   const std::vector<Vec3d> pts = probe_points(b, rng, n);
   const auto nt = static_cast<std::uint32_t>(b.t.size());
@@ -173,10 +173,10 @@ TEST(CollisionBody, RefitScenesOnDeformedBodiesStayExact) {
   for (int round = 0; round < 2; ++round)
     for (std::size_t k = 0; k < shapes.size(); ++k) {
       ASSERT_TRUE(reused.build(topo, shapes[k].p));
-      expect_exact(shapes[k], topo, reused, 17 + k, 150);
+      expect_exact(shapes[k], topo, reused, 17 + k, 100);
       if (HasFatalFailure()) return;
     }
-  expect_exact(rest, topo, first, 3, 150);
+  expect_exact(rest, topo, first, 3, 100);
 }
 
 TEST(CollisionBody, RejectsCoordinatesBeyondFloatRangeAndWrongSizes) {
