@@ -43,9 +43,9 @@ struct Outfit {
   std::string label;
   std::shared_ptr<const CollisionTopology> topo;
   std::vector<Triangle> triangles;
-  std::vector<std::vector<Vec3d>> skins;                 // per body
-  std::vector<std::vector<std::vector<Vec3d>>> layers;   // per body, per layer
-  std::vector<std::vector<std::uint32_t>> hints;         // per layer (the reference body's closest triangles)
+  std::vector<std::vector<Vec3d>> skins;                // per body
+  std::vector<std::vector<std::vector<Vec3d>>> layers;  // per body, per layer
+  std::vector<std::vector<std::uint32_t>> hints;        // per layer (the reference body's closest triangles)
 };
 
 // The garment offset outward by `offset` along the body's outward

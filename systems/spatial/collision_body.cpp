@@ -115,8 +115,8 @@ struct CollisionTopology::EmbreePool {
     if (!s->geom) return nullptr;
     rtcSetGeometryBuildQuality(s->geom, RTC_BUILD_QUALITY_REFIT);
     const auto tris = topo.triangles();
-    auto* idx = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
-        s->geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), tris.size()));
+    auto* idx = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(s->geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                    3 * sizeof(std::uint32_t), tris.size()));
     s->vertices = static_cast<float*>(rtcSetNewGeometryBuffer(s->geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                               3 * sizeof(float), topo.point_count()));
     if (!idx || !s->vertices) {
@@ -175,8 +175,8 @@ Status CollisionBody::build(std::shared_ptr<const CollisionTopology> topology, s
     extent = std::max(extent, q.cwiseAbs().maxCoeff());
   }
   if (!(extent < 1e30))
-    return Status(ErrorCode::kInvalidArgument, "collision body: a coordinate of magnitude " + std::to_string(extent) +
-                                                    " is beyond float range");
+    return Status(ErrorCode::kInvalidArgument,
+                  "collision body: a coordinate of magnitude " + std::to_string(extent) + " is beyond float range");
   const CollisionTopology& tp = *topology;
   std::call_once(tp.embree_once_, [&] {
     auto pool = std::make_shared<CollisionTopology::EmbreePool>();

@@ -105,7 +105,8 @@ std::vector<Vec3d> probe_points(const TriBody& b, SplitMix64& rng, int n = 600) 
     const Vec3d d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
     out.push_back(c + 10 * (box.hi - box.lo).norm() * d.normalized());
   }
-  for (int i = 0; i <= 40; ++i) out.push_back(Vec3d(c.x(), c.y(), box.lo.z() - 0.1 + (box.hi.z() - box.lo.z() + 0.2) * i / 40));
+  for (int i = 0; i <= 40; ++i)
+    out.push_back(Vec3d(c.x(), c.y(), box.lo.z() - 0.1 + (box.hi.z() - box.lo.z() + 0.2) * i / 40));
   return out;
 }
 
@@ -142,8 +143,8 @@ void expect_exact(const TriBody& b, const std::shared_ptr<const CollisionTopolog
 }
 
 TEST(CollisionBody, AnswersEqualBruteForceBitForBitOnACapsuleAndASphere) {
-  for (const TriBody& b : {test_bodies::capsule(0.3, 0.5, 48, 12, 20),
-                           test_bodies::triangulate(shapes::uv_sphere(64, 32, 0.4))}) {
+  for (const TriBody& b :
+       {test_bodies::capsule(0.3, 0.5, 48, 12, 20), test_bodies::triangulate(shapes::uv_sphere(64, 32, 0.4))}) {
     const auto topo = topology_of(b);
     expect_exact(b, topo, body_of(topo, b.p), 5);
     if (HasFatalFailure()) return;
