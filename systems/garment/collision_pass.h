@@ -7,9 +7,9 @@
 //     distance to the source body (its clearance) and its closest source
 //     triangle (a hint: on a body of the same topology the distance to that
 //     triangle bounds the distance to the whole surface from above).
-//  2. Per body: a CollisionBody over the body triangles: the topology's
-//     bounding-volume hierarchy refit to the body (float boxes rounded
-//     outward), searched four boxes at a time. Queries are exact: closest
+//  2. Per body: a CollisionBody over the body triangles: an Embree scene
+//     built once per topology and worker, refit to the body, searched by
+//     rtcPointQuery within the hint's distance. Queries are exact: closest
 //     point by point-triangle distances within the hint's bound, sign by the
 //     angle-weighted pseudo-normal of the closest feature (Baerentzen &
 //     Aanaes 2005), computed on demand.
