@@ -16,7 +16,9 @@
 #include <numeric>
 
 #include <atelier/io/makehuman/makehuman.h>
+#include <atelier/storage/builder.h>
 #include <atelier/systems/garment/makehuman_binding.h>
+#include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/garment/collision_pass.h>
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/edge_transfer.h>
@@ -43,45 +45,26 @@ struct CollisionScene {
   std::size_t vertices = 0;
 };
 
-std::vector<std::array<std::uint32_t, 2>> soup_edges(const makehuman::BaseMesh& mesh) {
-  std::vector<std::array<std::uint32_t, 2>> e;
-  for (const auto& g : mesh.groups)
-    for (std::size_t f = 0; f + 1 < g.face_offsets.size(); ++f)
-      for (std::uint32_t k = g.face_offsets[f]; k < g.face_offsets[f + 1]; ++k) {
-        const std::uint32_t a = g.face_nodes[k];
-        const std::uint32_t b = g.face_nodes[k + 1 < g.face_offsets[f + 1] ? k + 1 : g.face_offsets[f]];
-        e.push_back({std::min(a, b), std::max(a, b)});
-      }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  return e;
-}
-
-// Encodes the garment (detail template + clearance) on the reference and
-// decodes it on every body.
-void finish(CollisionScene& s, const ReferenceBody& ref, std::span<const Vec3d> garment,
-            std::span<const std::array<std::uint32_t, 2>> edges) {
-  const BodyPolygons poly = BodyPolygons::from_model(ref.model);
-  const std::vector<Vec3d> skin0 = skin_positions(ref);
-  auto tris = fan_triangulate(ref.model).value();
-  s.topo = CollisionTopology::build(tris.triangles, static_cast<std::uint32_t>(skin0.size())).value();
-  CollisionBody cb0;
-  if (Status st = cb0.build(s.topo, skin0); !st) throw Error(st);
-  s.clear = encode_clearance(garment, cb0).value();
-  s.adj = adjacency_from_edges(garment.size(), edges).value();
-  const DetailEncoding enc = encode_detail(poly, skin0, garment).value();
-  s.transfer = encode_edge_transfer(garment, edges, cb0).value();
-  const EdgeTransfer& transfer = s.transfer;
-  s.triangles = tris.triangles;
-  PolygonFrames fr;
+// Encodes the garment through the garment pipeline on the reference
+// (systems/garment/regenerate_garment.h) and runs its first stages on
+// every body: decoded and given the skin's local stretch, what the pass
+// receives.
+void finish(CollisionScene& s, const ReferenceBody& ref, PolygonSoup garment) {
+  const GarmentFamily family = GarmentFamily::of(ref).value();
+  s.vertices = garment.positions.size();
+  const GarmentTemplate t = encode_garment(family, "garment", std::move(garment)).value();
+  s.topo = family.collision;
+  s.clear = t.clearance;
+  s.adj = t.adjacency;
+  s.transfer = t.transfer;
+  s.triangles.assign(family.collision->triangles().begin(), family.collision->triangles().end());
+  GarmentRegenOptions before_the_pass;
+  before_the_pass.collision_pass = false;
   for (const auto& skin : s.skins) {
-    std::vector<Vec3d> out(garment.size());
-    compute_frames(poly, skin, fr, {}, enc.reference_corners);
-    decode_detail(enc, fr, out);
-    if (Status st = apply_edge_transfer(transfer, skin, tris.triangles, out); !st) throw Error(st);
-    s.decoded.push_back(std::move(out));
+    auto r = regenerate_garment(family, t, skin, before_the_pass);
+    if (!r) throw Error(r.status());
+    s.decoded.push_back(std::move(r->positions));
   }
-  s.vertices = garment.size();
 }
 
 // `large`: with ../shared/data, two garments regenerated together as one
@@ -98,16 +81,19 @@ CollisionScene make_scene(bool large) {
     const ReferenceBody ref = makehuman::make_reference_body(lib);
     std::vector<Vec3f> H(lib.vertex_count());
     lib.build(makehuman::MacroParams{}, H);
-    std::vector<Vec3d> g;
-    std::vector<std::array<std::uint32_t, 2>> edges;
+    PolygonSoup g;  // one or two garments as one vertex set
     std::string names;
     for (const char* name : {"male_casualsuit01", "male_casualsuit03"}) {
       if (!large && !names.empty()) break;
-      const auto binding = makehuman::read_mhclo(mh / "clothes" / (std::string(name) + ".mhclo"), lib.vertex_count());
-      const makehuman::BaseMesh mesh = makehuman::read_base_mesh(mh / "clothes" / binding.obj_file);
-      const auto base = static_cast<std::uint32_t>(g.size());
-      for (const auto& e : soup_edges(mesh)) edges.push_back({base + e[0], base + e[1]});
-      for (const Vec3d& q : makehuman::fit_binding(binding, H)) g.push_back(makehuman::kMakeHumanToMetres * q);
+      const PolygonSoup one = makehuman::fitted_garment(lib, mh / "clothes" / (std::string(name) + ".mhclo")).value();
+      const auto base = static_cast<std::uint32_t>(g.positions.size());
+      g.positions.insert(g.positions.end(), one.positions.begin(), one.positions.end());
+      std::vector<std::uint32_t> face;
+      for (std::size_t f = 0; f < one.face_count(); ++f) {
+        face.clear();
+        for (const std::uint32_t v : one.face(f)) face.push_back(base + v);
+        g.add_face(face);
+      }
       names += (names.empty() ? "" : " + ") + std::string(name);
     }
     const std::size_t nskin = skin_positions(ref).size();
@@ -117,19 +103,16 @@ CollisionScene make_scene(bool large) {
       for (std::size_t v = 0; v < nskin; ++v) skin[v] = makehuman::kMakeHumanToMetres * H[v].cast<double>();
       s.skins.push_back(std::move(skin));
     }
-    finish(s, ref, g, edges);
-    s.label = "makehuman " + names + " (" + std::to_string(g.size()) + " v), 16 adults";
+    const std::size_t nv = g.positions.size();
+    finish(s, ref, std::move(g));
+    s.label = "makehuman " + names + " (" + std::to_string(nv) + " v), 16 adults";
   } else {
     auto topo = make_mannequin_topology().value();
     const ReferenceBody ref = make_mannequin(MannequinParams{}, topo).value();
     const Model garment = skin_band_garment(ref, 0.55, 1.45, 0.004, 0.40, "suit").value();
-    std::vector<Vec3d> g(garment.nodes.position.begin(), garment.nodes.position.end());
-    std::vector<std::array<std::uint32_t, 2>> edges;
-    for (std::uint32_t e = 0; e < garment.edges.slots.capacity(); ++e)
-      edges.push_back({garment.tail(halfedge_of(EdgeIdx{e}, 0)).value, garment.tail(halfedge_of(EdgeIdx{e}, 1)).value});
     for (const auto& prm : sample_mannequins(16, 99)) s.skins.push_back(mannequin_positions(prm, topo).value());
-    finish(s, ref, g, edges);
-    s.label = "mannequin skin band (" + std::to_string(g.size()) + " v), 16 bodies";
+    finish(s, ref, polygon_soup(garment));
+    s.label = "mannequin skin band (" + std::to_string(s.vertices) + " v), 16 bodies";
   }
   return s;
 }

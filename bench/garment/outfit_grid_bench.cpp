@@ -24,7 +24,7 @@
 #include <filesystem>
 #include <memory>
 
-#include <atelier/io/makehuman/mhclo.h>
+#include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
