@@ -1,0 +1,149 @@
+// Private machinery of the net Booleans (boolean.cpp, boolean_exact.cpp,
+// net_soup.cpp): the triangulated net, simplex keys of intersection points,
+// the box hierarchy for candidate pairs, and the exact kernel's entry points.
+// CGAL stays inside boolean_exact.cpp (docs/architecture.md, third-party).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/polygon_soup.h>
+
+namespace atelier::net_detail {
+
+inline constexpr std::uint32_t kNil = 0xffffffffu;
+
+/// A simplex of one net: dimension (0 vertex, 1 edge, 2 triangle, 3 none)
+/// and index, packed so keys sort and compare as integers.
+enum : std::uint8_t { kDimVertex = 0, kDimEdge = 1, kDimFace = 2, kDimNone = 3 };
+[[nodiscard]] constexpr std::uint64_t simplex(std::uint8_t dim, std::uint32_t idx) noexcept {
+  return (std::uint64_t{dim} << 32) | idx;
+}
+[[nodiscard]] constexpr std::uint8_t dim_of(std::uint64_t s) noexcept { return static_cast<std::uint8_t>(s >> 32); }
+[[nodiscard]] constexpr std::uint32_t idx_of(std::uint64_t s) noexcept { return static_cast<std::uint32_t>(s); }
+inline constexpr std::uint64_t kNoSimplex = simplex(kDimNone, 0);
+
+/// An intersection point named by the lowest-dimensional simplex of A and of
+/// B holding it (the relative interiors of a net's simplices partition it,
+/// so the pair is unique: the symbolic, exact identity of the point).
+struct PointKey {
+  std::uint64_t a = kNoSimplex;
+  std::uint64_t b = kNoSimplex;
+  friend bool operator==(const PointKey&, const PointKey&) = default;
+  friend auto operator<=>(const PointKey&, const PointKey&) = default;
+};
+
+/// A closed net split into triangles: n-gons around their centroid
+/// (seed 004 section 2), triangles as they are.
+struct TriMesh {
+  std::vector<Vec3d> p;                           // net vertices, then one centroid per split n-gon
+  std::size_t net_vertices = 0;                   // p[0, net_vertices) are the net's own
+  std::vector<std::array<std::uint32_t, 3>> tri;  // counter-clockwise from outside
+  std::vector<std::array<std::uint32_t, 3>> tri_edge;  // edge k runs tri[k] -> tri[k+1]
+  std::vector<std::array<std::uint32_t, 2>> edge;      // (smaller, larger) vertex
+  std::vector<std::array<std::uint32_t, 2>> edge_tri;  // the two triangles of an edge
+  std::vector<std::uint32_t> face_of;                  // net polygon of each triangle
+  std::vector<std::uint32_t> face_tri_begin;           // polygon f has triangles [begin[f], begin[f+1])
+  std::vector<std::array<double, 6>> box;              // per triangle: lo xyz, hi xyz (exact min/max)
+  Box3d bounds;
+  std::string name;                                    // "A" or "B" in messages
+};
+
+/// Builds the triangulated net and checks that it is a closed, consistently
+/// oriented 2-manifold without duplicate vertices or degenerate triangles
+/// (errors name the polygon). Self-intersection is checked separately.
+[[nodiscard]] Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out,
+                                    const ExecContext& ctx);
+
+/// Bounding-volume hierarchy over triangle boxes (median split, leaves of
+/// up to 4 triangles): node i has children or a triangle range.
+struct Bvh {
+  struct Node {
+    std::array<double, 6> box;
+    std::uint32_t left = kNil;   // inner: left child (right = left + 1); leaf: kNil
+    std::uint32_t first = 0;     // leaf: first index into order
+    std::uint32_t count = 0;     // leaf: triangle count
+  };
+  std::vector<Node> nodes;
+  std::vector<std::uint32_t> order;  // triangle indices, leaves' ranges
+};
+void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
+
+/// Candidate pairs (i in A, j in B) whose closed boxes overlap, sorted.
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_b,
+                                                                          const TriMesh& b, const ExecContext& ctx);
+/// Pairs i < j of one mesh whose boxes overlap (self-intersection candidates).
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> self_pairs(const TriMesh& m, const Bvh& bvh,
+                                                                   const ExecContext& ctx);
+
+// ----------------------------------------------------------- exact kernel
+// All decisions below are exact (CGAL's filtered predicates on the input
+// doubles, and the lazy exact kernel for constructed points).
+
+/// Sign of the orientation of d against the plane of (a, b, c): +1 on the
+/// side the normal (b - a) x (c - a) points to.
+[[nodiscard]] int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept;
+/// Exactly collinear (or coincident) points: a degenerate triangle.
+[[nodiscard]] bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) noexcept;
+
+/// The intersection points of triangle ta of A and tb of B (exactly
+/// classified, named by their simplex keys; sorted, unique) and whether the
+/// two triangles are coplanar. Empty when they are disjoint.
+struct PairHit {
+  std::vector<PointKey> points;
+  bool coplanar = false;
+};
+void intersect_pair(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb, PairHit& out);
+
+/// True when triangles t1 and t2 of one net intersect other than in the
+/// vertices and edge they share (exact).
+[[nodiscard]] bool triangles_cross(const TriMesh& m, std::uint32_t t1, std::uint32_t t2);
+
+/// Global ids of intersection points: sorted unique keys; a key naming a
+/// vertex of A is that vertex, one naming a vertex of B (and none of A) is
+/// nA + that vertex, any other gets nA + nB + its rank among such keys.
+struct PointIds {
+  std::vector<PointKey> keys;     // sorted unique
+  std::vector<std::uint32_t> id;  // per key
+  [[nodiscard]] std::uint32_t find(const PointKey& k) const;
+};
+
+/// Refines triangle t of one side (0: A, 1: B) by the given intersection
+/// points (keys whose simplex on this side lies in the triangle's closure)
+/// and constraint segments, by a constrained triangulation in exact
+/// arithmetic. Appends triangles of global ids, oriented like t.
+[[nodiscard]] Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
+                                     std::span<const PointKey> points,
+                                     std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
+                                     std::vector<std::array<std::uint32_t, 3>>& out);
+
+/// Coordinates of a new intersection point, rounded from its exact value.
+[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k);
+
+/// Winding number of the closed net m about a point: a double point not on
+/// m, or the centroid of three intersection points / vertices (exact), by an
+/// exact ray parity with deterministic directions (a direction that meets
+/// an edge or a vertex of m is replaced by the next).
+[[nodiscard]] int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q);
+[[nodiscard]] int winding_number_centroid(const TriMesh& m, const Bvh& bvh, const TriMesh& a, const TriMesh& b,
+                                          const std::array<PointKey, 3>& corners);
+
+/// Same orientation (+1) or opposite (-1) of two coplanar triangles.
+[[nodiscard]] int coplanar_orientation(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb);
+
+/// Paper mode (seed 004 section 3, Fig. 2): on an exact result, the points
+/// of A's and of B's intersection polygons (`from_a`, `from_b` per vertex;
+/// both for points on an edge of each) along each curve of `curve` edges are
+/// paired by the correspondence and each pair merged at its midpoint.
+[[nodiscard]] Status apply_paper_mode(PolygonSoup& result, std::span<const std::array<std::uint32_t, 2>> curve,
+                                      std::span<const std::uint8_t> from_a, std::span<const std::uint8_t> from_b,
+                                      int correspondence, std::size_t& merged, std::size_t& vertices,
+                                      std::size_t& irregular, std::size_t& vmin, std::size_t& vmax, double& vmean);
+
+}  // namespace atelier::net_detail
