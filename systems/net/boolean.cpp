@@ -95,6 +95,91 @@ struct Side {
   std::vector<std::uint8_t> keep;     // per piece
 };
 
+/// Solids that touch along an edge or at a vertex (a union of two boxes
+/// sharing an edge) leave edges in four faces and vertices with several
+/// fans. The result stays a 2-manifold: at such an edge each net's faces
+/// pair with their own net's (the two solids stay apart there), and a
+/// vertex with several fans gets one copy per fan (coincident vertices).
+Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
+  const std::size_t nf = out.face_count();
+  struct Half {
+    std::uint64_t key;
+    std::uint32_t face, corner;
+    bool forward;
+  };
+  std::vector<Half> half;
+  half.reserve(out.face_nodes.size());
+  for (std::uint32_t f = 0; f < nf; ++f) {
+    const auto c = out.face(f);
+    for (std::uint32_t k = 0; k < c.size(); ++k) {
+      const std::uint32_t u = c[k], v = c[(k + 1) % c.size()];
+      half.push_back({edge_key(u, v), f, k, u < v});
+    }
+  }
+  std::vector<std::uint32_t> id(half.size());
+  std::iota(id.begin(), id.end(), 0u);
+  std::sort(id.begin(), id.end(), [&](std::uint32_t x, std::uint32_t y) {
+    return half[x].key != half[y].key ? half[x].key < half[y].key : x < y;
+  });
+  std::vector<std::uint32_t> twin(half.size(), kNil);
+  bool pinched = false;
+  for (std::size_t i = 0; i < id.size();) {
+    std::size_t j = i;
+    while (j < id.size() && half[id[j]].key == half[id[i]].key) ++j;
+    pinched |= j - i != 2;
+    // Pair forward with backward halfedges, a net's with its own first.
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t x = i; x < j; ++x) {
+        const std::uint32_t hx = id[x];
+        if (twin[hx] != kNil || !half[hx].forward) continue;
+        for (std::size_t y = i; y < j; ++y) {
+          const std::uint32_t hy = id[y];
+          if (twin[hy] != kNil || half[hy].forward) continue;
+          if (pass == 0 && face_side[half[hx].face] != face_side[half[hy].face]) continue;
+          twin[hx] = hy;
+          twin[hy] = hx;
+          break;
+        }
+      }
+    for (std::size_t x = i; x < j; ++x)
+      if (twin[id[x]] == kNil) return {ErrorCode::kInternal, "net boolean: the result has an unmatched edge"};
+    i = j;
+  }
+  // Fans: rotate about a vertex through the previous halfedge's twin.
+  std::vector<std::uint32_t> half_begin(nf + 1, 0);
+  for (std::uint32_t f = 0; f < nf; ++f) half_begin[f + 1] = half_begin[f] + static_cast<std::uint32_t>(out.face(f).size());
+  auto prev_in_face = [&](std::uint32_t h) {
+    const std::uint32_t f = half[h].face, n = half_begin[f + 1] - half_begin[f];
+    return half_begin[f] + (half[h].corner + n - 1) % n;
+  };
+  const std::size_t nv = out.positions.size();
+  std::vector<std::uint32_t> fans(nv, 0);
+  std::vector<std::uint32_t> fan_of(half.size(), kNil);  // per outgoing halfedge (its tail's fan)
+  for (std::uint32_t h = 0; h < half.size(); ++h) {
+    if (fan_of[h] != kNil) continue;
+    const std::uint32_t v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
+    const std::uint32_t fan = fans[v]++;
+    std::uint32_t x = h;
+    do {
+      fan_of[x] = fan;
+      x = twin[prev_in_face(x)];
+    } while (x != h && fan_of[x] == kNil);
+  }
+  for (std::uint32_t v = 0; v < nv; ++v) pinched |= fans[v] > 1;
+  if (!pinched) return {};
+  std::vector<std::uint32_t> copy_base(nv, kNil);
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    if (fans[v] <= 1) continue;
+    copy_base[v] = static_cast<std::uint32_t>(out.positions.size());
+    for (std::uint32_t k = 1; k < fans[v]; ++k) out.positions.push_back(out.positions[v]);
+  }
+  for (std::uint32_t h = 0; h < half.size(); ++h) {
+    std::uint32_t& v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
+    if (copy_base[v] != kNil && fan_of[h] > 0) v = copy_base[v] + fan_of[h] - 1;
+  }
+  return {};
+}
+
 }  // namespace
 
 Expected<BooleanOp> parse_boolean_op(std::string_view s) {
@@ -548,6 +633,7 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   std::vector<std::uint32_t> out_index(n_ids, kNil);
   PolygonSoup& out = rep.result;
   std::vector<std::uint8_t> from_a, from_b;  // per output vertex
+  std::vector<std::uint8_t> face_side;       // per output face: 0 from A, 1 from B
   auto use = [&](std::uint32_t id) {
     if (out_index[id] == kNil) {
       out_index[id] = static_cast<std::uint32_t>(out.positions.size());
@@ -571,6 +657,7 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
           poly.push_back(use(canon[soup.face_nodes[i] + s.offset]));
         if (reverse) std::reverse(poly.begin(), poly.end());
         out.add_face(poly);
+        face_side.push_back(static_cast<std::uint8_t>(s.side));
         continue;
       }
       for (std::uint32_t t = t0; t < t1; ++t)
@@ -579,9 +666,11 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
           std::array<std::uint32_t, 3> tri{use(s.piece[p][0]), use(s.piece[p][1]), use(s.piece[p][2])};
           if (reverse) std::swap(tri[1], tri[2]);
           out.add_face(tri);
+          face_side.push_back(static_cast<std::uint8_t>(s.side));
         }
     }
   }
+  if (Status st = unpinch(out, face_side); !st) return st;
   rep.volume = soup_volume(out);
   rep.area = soup_area(out);
   if (opt.mode == BooleanMode::kPaper) {

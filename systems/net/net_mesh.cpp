@@ -55,6 +55,7 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
   const std::size_t nv = soup.positions.size();
   if (nv >= kNil / 2) return fail(ErrorCode::kInvalidArgument, "net ", nm, ": too many vertices");
   std::vector<std::uint8_t> used(nv, 0);
+  std::vector<std::uint32_t> face_using(nv, kNil);  // a face using each vertex, for messages
   std::size_t extra = 0, tris = 0;
   for (std::size_t f = 0; f < nf; ++f) {
     const std::uint32_t b = soup.face_offsets[f], e = soup.face_offsets[f + 1];
@@ -68,6 +69,7 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
         if (soup.face_nodes[j] == v)
           return fail(ErrorCode::kDegenerate, "net ", nm, ": face ", f, " repeats vertex ", v);
       used[v] = 1;
+      if (face_using[v] == kNil) face_using[v] = static_cast<std::uint32_t>(f);
     }
     if (e - b > 3) ++extra;
     tris += e - b > 3 ? e - b : 1;
@@ -93,6 +95,7 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
     const auto ci = static_cast<std::uint32_t>(out.p.size());
     out.p.push_back(c);
     used.push_back(1);
+    face_using.push_back(static_cast<std::uint32_t>(f));
     for (std::uint32_t i = b; i < e; ++i) {
       const std::uint32_t j = i + 1 < e ? i + 1 : b;
       out.tri.push_back({ci, soup.face_nodes[i], soup.face_nodes[j]});
@@ -119,7 +122,7 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
     if (out.p[order[i - 1]] == out.p[order[i]]) {
       const std::uint32_t x = order[i - 1], y = order[i];
       auto what = [&](std::uint32_t v) {
-        return v < nv ? "vertex " + std::to_string(v) : "the centroid of a split polygon (vertex " + std::to_string(v) + ")";
+        return (v < nv ? "vertex " + std::to_string(v) : "the centroid") + " of face " + std::to_string(face_using[v]);
       };
       return fail(ErrorCode::kDegenerate, "net ", nm, ": ", what(x), " and ", what(y), " coincide (duplicate vertices)");
     }
