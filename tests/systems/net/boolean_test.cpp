@@ -230,3 +230,57 @@ TEST(NetBoolean, SolidsTouchingAlongAnEdgeStayManifold) {
 
 }  // namespace
 }  // namespace atelier
+
+namespace atelier {
+namespace {
+
+/// Boxes on a coarse grid: faces coplanar, edges collinear, vertices on
+/// faces all the time. Volumes against the analytic box intersection.
+TEST(NetBoolean, DegenerateGridBoxesAgreeWithAnalyticVolumes) {
+  std::uint64_t seed = 12345;
+  auto next = [&] {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((seed >> 33) % 5);
+  };
+  for (int trial = 0; trial < 60; ++trial) {
+    Vec3d lo[2], hi[2];
+    for (int s = 0; s < 2; ++s)
+      for (int k = 0; k < 3; ++k) {
+        int x = next(), y = next();
+        if (x == y) y = x + 1;
+        lo[s][k] = 0.5 * std::min(x, y);
+        hi[s][k] = 0.5 * std::max(x, y);
+      }
+    const PolygonSoup a = trial % 2 ? box(lo[0], hi[0]) : box_triangles(lo[0], hi[0]);
+    const PolygonSoup b = trial % 3 ? box_triangles(lo[1], hi[1]) : box(lo[1], hi[1]);
+    double inter = 1;
+    for (int k = 0; k < 3; ++k) inter *= std::max(0.0, std::min(hi[0][k], hi[1][k]) - std::max(lo[0][k], lo[1][k]));
+    const double va = (hi[0] - lo[0]).prod(), vb = (hi[1] - lo[1]).prod();
+    const BooleanReport u = run(a, b, BooleanOp::kUnion), i = run(a, b, BooleanOp::kIntersection),
+                        d = run(a, b, BooleanOp::kAMinusB), e = run(a, b, BooleanOp::kBMinusA);
+    EXPECT_NEAR(u.volume, va + vb - inter, 1e-12) << trial;
+    EXPECT_NEAR(i.volume, inter, 1e-12) << trial;
+    EXPECT_NEAR(d.volume, va - inter, 1e-12) << trial;
+    EXPECT_NEAR(e.volume, vb - inter, 1e-12) << trial;
+    for (const BooleanReport* r : {&u, &i, &d, &e})
+      if (r->result.face_count()) {
+        EXPECT_TRUE(closed_model(r->result)) << trial;
+      }
+  }
+}
+
+/// Spheres sharing vertices (B is A moved by a vertex-to-vertex offset)
+/// and spheres touching A's vertices with theirs.
+TEST(NetBoolean, SpheresWithSharedVertices) {
+  const PolygonSoup a = net_test::icosphere(2, 1.0, {0, 0, 0});
+  const Vec3d shift = a.positions[5] - a.positions[0];
+  PolygonSoup b = a;
+  for (auto& p : b.positions) p += shift;  // vertex 0 of B is vertex 5 of A, and more
+  const BooleanReport u = run(a, b, BooleanOp::kUnion), i = run(a, b, BooleanOp::kIntersection);
+  EXPECT_TRUE(closed_model(u.result));
+  EXPECT_TRUE(closed_model(i.result));
+  EXPECT_NEAR(u.volume + i.volume, u.volume_a + u.volume_b, 1e-12 * (u.volume_a + u.volume_b));
+}
+
+}  // namespace
+}  // namespace atelier
