@@ -55,11 +55,13 @@ struct TriMesh {
   std::string name;                                    // "A" or "B" in messages
 };
 
-/// Builds the triangulated net and checks that it is a closed, consistently
-/// oriented 2-manifold without duplicate vertices or degenerate triangles
-/// (errors name the polygon). Self-intersection is checked separately.
+/// Builds the triangulated net and checks that it is a closed (unless
+/// `open` is allowed: trimming), consistently oriented 2-manifold without
+/// duplicate vertices or degenerate triangles (errors name the polygon).
+/// A boundary edge has edge_tri[e][1] == kNil. Self-intersection is
+/// checked separately.
 [[nodiscard]] Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out,
-                                    const ExecContext& ctx);
+                                    const ExecContext& ctx, bool open = false);
 
 /// Bounding-volume hierarchy over triangle boxes (median split, leaves of
 /// up to 4 triangles): node i has children or a triangle range.
@@ -136,6 +138,45 @@ struct PointIds {
 
 /// Same orientation (+1) or opposite (-1) of two coplanar triangles.
 [[nodiscard]] int coplanar_orientation(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb);
+
+/// One net's share of the cut: its cut triangles, their points and
+/// segments, their refinement, and its pieces.
+struct CutSide {
+  const TriMesh* m = nullptr;
+  int side = 0;
+  std::uint32_t offset = 0;  // global id of vertex 0
+  std::vector<std::uint32_t> slot;         // triangle -> index in cut, or kNil
+  std::vector<std::uint32_t> cut;          // cut triangles, increasing
+  std::vector<std::vector<PointKey>> points;                      // per cut triangle
+  std::vector<std::vector<std::array<PointKey, 2>>> segments;     // per cut triangle
+  std::vector<std::vector<std::uint32_t>> coplanar_with;          // per cut triangle: the other net's triangles
+  std::vector<std::vector<std::array<std::uint32_t, 3>>> refined;                        // per cut triangle, canonical ids
+  std::vector<std::uint64_t> edges;                               // sorted edges of the refined triangles
+  // Pieces: triangle t owns pieces [piece_begin[t], piece_begin[t+1]).
+  std::vector<std::uint32_t> piece_begin;
+  std::vector<std::array<std::uint32_t, 3>> piece;
+  std::vector<std::int8_t> coplanar;  // per piece: 0 no, +1 same orientation as the other net, -1 opposite
+  std::vector<std::uint32_t> component;
+  std::vector<std::uint8_t> keep;     // per piece
+};
+
+/// Both nets cut along their intersection.
+struct Cut {
+  CutSide sides[2];
+  PointIds ids;
+  std::uint32_t nA = 0, nB = 0;                 // ids: A's vertices, then B's, then new points
+  std::vector<std::uint32_t> canon;             // id -> canonical id (A's vertex where a B vertex coincides)
+  std::vector<std::uint64_t> on_a, on_b;        // canonical id -> simplex of A / B holding it, or none
+  std::vector<PointKey> new_keys;               // new points (id nA + nB + k)
+  std::vector<Vec3d> new_points;                // their rounded coordinates
+  std::size_t candidate_pairs = 0, intersecting_pairs = 0;
+  [[nodiscard]] Vec3d position(const TriMesh& a, const TriMesh& b, std::uint32_t id) const {
+    return id < nA ? a.p[id] : (id < nA + nB ? b.p[id - nA] : new_points[id - nA - nB]);
+  }
+};
+
+/// Cuts A and B along their intersection (either may be open: trimming).
+[[nodiscard]] Status cut_nets(const TriMesh& a, const TriMesh& b, const Bvh& bvh_b, const ExecContext& ctx, Cut& out);
 
 /// Paper mode (seed 004 section 3, Fig. 2): on an exact result, the points
 /// of A's and of B's intersection polygons (`from_a`, `from_b` per vertex;

@@ -44,7 +44,7 @@ void merge_box(std::array<double, 6>& into, const std::array<double, 6>& b) noex
 
 }  // namespace
 
-Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx) {
+Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx, bool open) {
   out = TriMesh{};
   out.name = std::move(name);
   const std::string& nm = out.name;
@@ -162,9 +162,17 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
     std::size_t j = i;
     while (j < half.size() && half[j].key == half[i].key) ++j;
     const auto u = static_cast<std::uint32_t>(half[i].key >> 32), v = static_cast<std::uint32_t>(half[i].key);
-    if (j - i == 1)
-      return fail(ErrorCode::kTopology, "net ", nm, " is open: edge (", u, ", ", v, ") of face ", out.face_of[half[i].tri],
-                  " has no neighbour");
+    if (j - i == 1) {
+      if (!open)
+        return fail(ErrorCode::kTopology, "net ", nm, " is open: edge (", u, ", ", v, ") of face ", out.face_of[half[i].tri],
+                    " has no neighbour");
+      const auto e = static_cast<std::uint32_t>(out.edge.size());
+      out.edge.push_back({u, v});
+      out.edge_tri.push_back({half[i].tri, kNil});
+      out.tri_edge[half[i].tri][half[i].k] = e;
+      i = j;
+      continue;
+    }
     if (j - i > 2)
       return fail(ErrorCode::kNonManifold, "net ", nm, " is non-manifold: edge (", u, ", ", v, ") is shared by faces ",
                   out.face_of[half[i].tri], ", ", out.face_of[half[i + 1].tri], " and ", out.face_of[half[i + 2].tri]);
@@ -197,6 +205,7 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
     const auto v = static_cast<std::uint32_t>(vi);
     if (first[v] == kNil) return;
     std::uint32_t t = first[v], count = 0;
+    if (open) return;  // fans around boundary vertices are open: checked by the builder of the result
     do {
       ++count;
       const std::uint32_t k = corner_of(t, v);
