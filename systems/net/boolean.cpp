@@ -384,41 +384,9 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   PolygonSoup& out = rep.result;
   std::vector<std::uint8_t> from_a, from_b;  // per output vertex
   std::vector<std::uint8_t> face_side;       // per output face: 0 from A, 1 from B
-  auto use = [&](std::uint32_t id) {
-    if (out_index[id] == kNil) {
-      out_index[id] = static_cast<std::uint32_t>(out.positions.size());
-      out.positions.push_back(id < nA ? A.p[id] : (id < nA + nB ? B.p[id - nA] : new_points[id - nA - nB]));
-    }
-    return out_index[id];
-  };
   for (CutSide& s : sides) {
-    const TriMesh& m = *s.m;
-    const PolygonSoupView& soup = s.side == 0 ? sa : sb;
     const bool reverse = s.side == 0 ? opt.op == BooleanOp::kBMinusA : reverse_b;
-    std::vector<std::uint32_t> poly;
-    for (std::size_t f = 0; f + 1 < m.face_tri_begin.size(); ++f) {
-      const std::uint32_t t0 = m.face_tri_begin[f], t1 = m.face_tri_begin[f + 1];
-      bool whole = t1 - t0 > 1;
-      for (std::uint32_t t = t0; t < t1 && whole; ++t) whole = s.slot[t] == kNil;
-      if (whole) {
-        if (!s.keep[s.piece_begin[t0]]) continue;
-        poly.clear();
-        for (std::uint32_t i = soup.face_offsets[f]; i < soup.face_offsets[f + 1]; ++i)
-          poly.push_back(use(canon[soup.face_nodes[i] + s.offset]));
-        if (reverse) std::reverse(poly.begin(), poly.end());
-        out.add_face(poly);
-        face_side.push_back(static_cast<std::uint8_t>(s.side));
-        continue;
-      }
-      for (std::uint32_t t = t0; t < t1; ++t)
-        for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p) {
-          if (!s.keep[p]) continue;
-          std::array<std::uint32_t, 3> tri{use(s.piece[p][0]), use(s.piece[p][1]), use(s.piece[p][2])};
-          if (reverse) std::swap(tri[1], tri[2]);
-          out.add_face(tri);
-          face_side.push_back(static_cast<std::uint8_t>(s.side));
-        }
-    }
+    emit_side(cut, A, B, s.side, s.side == 0 ? sa : sb, reverse, out, out_index, face_side);
   }
   if (Status st = unpinch(out, face_side); !st) return st;
   rep.volume = soup_volume(out);

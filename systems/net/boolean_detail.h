@@ -178,6 +178,13 @@ struct Cut {
 /// Cuts A and B along their intersection (either may be open: trimming).
 [[nodiscard]] Status cut_nets(const TriMesh& a, const TriMesh& b, const Bvh& bvh_b, const ExecContext& ctx, Cut& out);
 
+/// Appends the kept pieces of one side (`keep` of its CutSide) to `out`:
+/// untouched polygons whole (n-gons stay n-gons), cut ones as triangles;
+/// out_index maps ids to output vertices (kNil: not yet used), face_side
+/// records the side of each face.
+void emit_side(const Cut& cut, const TriMesh& a, const TriMesh& b, int side, const PolygonSoupView& soup, bool reverse,
+               PolygonSoup& out, std::vector<std::uint32_t>& out_index, std::vector<std::uint8_t>& face_side);
+
 /// Paper mode (seed 004 section 3, Fig. 2): on an exact result, the points
 /// of A's and of B's intersection polygons (`from_a`, `from_b` per vertex;
 /// both for points on an edge of each) along each curve of `curve` edges are

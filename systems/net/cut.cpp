@@ -310,4 +310,41 @@ Status cut_nets(const TriMesh& A, const TriMesh& B, const Bvh& bvh_b, const Exec
   return {};
 }
 
+void emit_side(const Cut& cut, const TriMesh& a, const TriMesh& b, int side, const PolygonSoupView& soup, bool reverse,
+               PolygonSoup& out, std::vector<std::uint32_t>& out_index, std::vector<std::uint8_t>& face_side) {
+  const CutSide& s = cut.sides[side];
+  const TriMesh& m = *s.m;
+  auto use = [&](std::uint32_t id) {
+    if (out_index[id] == kNil) {
+      out_index[id] = static_cast<std::uint32_t>(out.positions.size());
+      out.positions.push_back(cut.position(a, b, id));
+    }
+    return out_index[id];
+  };
+  std::vector<std::uint32_t> poly;
+  for (std::size_t f = 0; f + 1 < m.face_tri_begin.size(); ++f) {
+    const std::uint32_t t0 = m.face_tri_begin[f], t1 = m.face_tri_begin[f + 1];
+    bool whole = t1 - t0 > 1;
+    for (std::uint32_t t = t0; t < t1 && whole; ++t) whole = s.slot[t] == kNil;
+    if (whole) {
+      if (!s.keep[s.piece_begin[t0]]) continue;
+      poly.clear();
+      for (std::uint32_t i = soup.face_offsets[f]; i < soup.face_offsets[f + 1]; ++i)
+        poly.push_back(use(cut.canon[soup.face_nodes[i] + s.offset]));
+      if (reverse) std::reverse(poly.begin(), poly.end());
+      out.add_face(poly);
+      face_side.push_back(static_cast<std::uint8_t>(side));
+      continue;
+    }
+    for (std::uint32_t t = t0; t < t1; ++t)
+      for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p) {
+        if (!s.keep[p]) continue;
+        std::array<std::uint32_t, 3> tri{use(s.piece[p][0]), use(s.piece[p][1]), use(s.piece[p][2])};
+        if (reverse) std::swap(tri[1], tri[2]);
+        out.add_face(tri);
+        face_side.push_back(static_cast<std::uint8_t>(side));
+      }
+  }
+}
+
 }  // namespace atelier::net_detail
