@@ -389,6 +389,11 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     emit_side(cut, A, B, s.side, s.side == 0 ? sa : sb, reverse, out, out_index, face_side);
   }
   if (Status st = unpinch(out, face_side); !st) return st;
+  for (std::uint64_t e : common)
+    for (std::uint32_t id : {static_cast<std::uint32_t>(e >> 32), static_cast<std::uint32_t>(e)})
+      if (out_index[id] != kNil) rep.seam.push_back(out_index[id]);
+  std::sort(rep.seam.begin(), rep.seam.end());
+  rep.seam.erase(std::unique(rep.seam.begin(), rep.seam.end()), rep.seam.end());
   rep.volume = soup_volume(out);
   rep.area = soup_area(out);
   if (opt.mode == BooleanMode::kPaper) {

@@ -39,6 +39,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
+#include <vector>
 
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
@@ -92,6 +93,7 @@ struct BooleanReport {
   std::size_t intersection_points = 0;    // new points (not vertices of either net)
   std::size_t cut_triangles = 0;          // triangles re-triangulated, both nets
   std::size_t merged_pairs = 0;           // paper mode: matched pairs merged to midpoints
+  std::vector<std::uint32_t> seam;        // result vertices on the intersection polygons (sorted)
   ValenceStats valence;                   // paper mode
 };
 
