@@ -148,6 +148,124 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
   return {};
 }
 
+/// Section 4: the gaps left by the dropped cut polygons are closed by
+/// connecting meshes. Boundary loops of the kept parts (along their free
+/// sides) are paired by nearest centroids, A's with B's; a loop facing
+/// several is split (branching).
+Status connect_gaps(PolygonSoup& out, std::vector<std::uint8_t>& face_side, ConnectRule rule, BooleanReport& rep) {
+  const std::size_t nf = out.face_count();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> directed;  // (u << 32 | v, face)
+  for (std::uint32_t f = 0; f < nf; ++f) {
+    const auto c = out.face(f);
+    for (std::size_t k = 0; k < c.size(); ++k)
+      directed.emplace_back((std::uint64_t{c[k]} << 32) | c[(k + 1) % c.size()], f);
+  }
+  std::sort(directed.begin(), directed.end());
+  auto has = [&](std::uint32_t u, std::uint32_t v) {
+    const std::uint64_t k = (std::uint64_t{u} << 32) | v;
+    const auto it = std::lower_bound(directed.begin(), directed.end(), std::pair{k, 0u});
+    return it != directed.end() && it->first == k;
+  };
+  std::vector<std::uint32_t> valence(out.positions.size(), 0);
+  // Free halfedges v -> u (the twin of a used u -> v is missing), by tail.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> free;  // (tail, head)
+  for (const auto& [k, f] : directed) {
+    const auto u = static_cast<std::uint32_t>(k >> 32), v = static_cast<std::uint32_t>(k);
+    if (!has(v, u)) {
+      free.emplace_back(v, u);
+      ++valence[u];
+      ++valence[v];
+    } else if (u < v) {
+      ++valence[u];
+      ++valence[v];
+    }
+  }
+  std::sort(free.begin(), free.end());
+  std::vector<std::uint8_t> side_of_tail(out.positions.size(), 2);
+  for (const auto& [k, f] : directed) side_of_tail[static_cast<std::uint32_t>(k >> 32)] = face_side[f];
+  std::vector<std::uint8_t> used(free.size(), 0);
+  struct Loop {
+    BoundaryPolygon poly;
+    Vec3d centre = Vec3d::Zero();
+    int side = 0;
+  };
+  std::vector<Loop> loops;
+  for (std::size_t i = 0; i < free.size(); ++i) {
+    if (used[i]) continue;
+    Loop l;
+    std::size_t h = i;
+    while (!used[h]) {
+      used[h] = 1;
+      l.poly.vertices.push_back(free[h].first);
+      const std::uint32_t next = free[h].second;
+      const auto it = std::lower_bound(free.begin(), free.end(), std::pair{next, 0u});
+      std::size_t pick = free.size();
+      for (auto j = it; j != free.end() && j->first == next; ++j)
+        if (!used[static_cast<std::size_t>(j - free.begin())]) {
+          pick = static_cast<std::size_t>(j - free.begin());
+          break;
+        }
+      if (pick == free.size()) break;
+      h = pick;
+    }
+    for (std::uint32_t v : l.poly.vertices) {
+      l.centre += out.positions[v];
+      l.poly.valence.push_back(valence[v]);
+    }
+    l.centre /= static_cast<double>(l.poly.vertices.size());
+    l.side = side_of_tail[l.poly.vertices[0]];
+    loops.push_back(std::move(l));
+  }
+  if (loops.empty()) return {};
+  // Each loop's nearest loop of the other net.
+  auto nearest = [&](std::size_t i) {
+    std::size_t best = loops.size();
+    for (std::size_t j = 0; j < loops.size(); ++j)
+      if (loops[j].side != loops[i].side &&
+          (best == loops.size() || (loops[j].centre - loops[i].centre).squaredNorm() <
+                                       (loops[best].centre - loops[i].centre).squaredNorm()))
+        best = j;
+    return best;
+  };
+  std::vector<std::size_t> near(loops.size());
+  for (std::size_t i = 0; i < loops.size(); ++i) {
+    near[i] = nearest(i);
+    if (near[i] == loops.size())
+      return {ErrorCode::kUnsupported, "net boolean: a gap of the connecting meshes has a boundary polygon on one net only"};
+  }
+  ConnectOptions co;
+  co.rule = rule;
+  std::vector<std::uint8_t> done(loops.size(), 0);
+  for (std::size_t i = 0; i < loops.size(); ++i) {
+    if (done[i]) continue;
+    // Loops whose nearest is i: if i faces several, i branches.
+    std::vector<std::size_t> facing;
+    for (std::size_t j = 0; j < loops.size(); ++j)
+      if (!done[j] && near[j] == i) facing.push_back(j);
+    if (facing.empty()) continue;
+    std::vector<BoundaryPolygon> qs;
+    for (std::size_t j : facing) qs.push_back(loops[j].poly);
+    auto r = connect_branching(out.positions, loops[i].poly, qs, co);
+    if (!r) return r.status();
+    for (std::size_t f = 0; f < r->faces.face_count(); ++f) {
+      out.add_face(r->faces.face(f));
+      face_side.push_back(2);
+    }
+    rep.connecting.triangles += r->triangles;
+    rep.connecting.quads += r->quads;
+    rep.connecting.other += r->other;
+    rep.connecting.irregular_vertices += r->irregular_vertices;
+    rep.connecting.new_edge_length += r->new_edge_length;
+    ++rep.gaps;
+    done[i] = 1;
+    for (std::size_t j : facing) done[j] = 1;
+  }
+  for (std::size_t i = 0; i < loops.size(); ++i)
+    if (!done[i])
+      return {ErrorCode::kUnsupported, "net boolean: a boundary polygon of the connecting meshes could not be paired"};
+  return {};
+}
+
 }  // namespace
 
 Expected<BooleanOp> parse_boolean_op(std::string_view s) {
@@ -163,6 +281,12 @@ Expected<BooleanMode> parse_boolean_mode(std::string_view s) {
   if (s == "exact") return BooleanMode::kExact;
   if (s == "paper") return BooleanMode::kPaper;
   return Status(ErrorCode::kInvalidArgument, "unknown Boolean mode '" + std::string(s) + "' (exact, paper)");
+}
+
+Expected<BooleanJoin> parse_boolean_join(std::string_view s) {
+  if (s == "cut") return BooleanJoin::kCut;
+  if (s == "meshes") return BooleanJoin::kMeshes;
+  return Status(ErrorCode::kInvalidArgument, "unknown join '" + std::string(s) + "' (cut, meshes)");
 }
 
 Expected<Correspondence> parse_correspondence(std::string_view s) {
@@ -384,9 +508,25 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   PolygonSoup& out = rep.result;
   std::vector<std::uint8_t> from_a, from_b;  // per output vertex
   std::vector<std::uint8_t> face_side;       // per output face: 0 from A, 1 from B
+  if (opt.join == BooleanJoin::kMeshes) {
+    // Section 4: every polygon with a point of intersection is left out.
+    for (CutSide& s : sides) {
+      const TriMesh& m = *s.m;
+      for (std::size_t f = 0; f + 1 < m.face_tri_begin.size(); ++f) {
+        bool cut_polygon = false;
+        for (std::uint32_t t = m.face_tri_begin[f]; t < m.face_tri_begin[f + 1]; ++t) cut_polygon |= s.slot[t] != kNil;
+        if (!cut_polygon) continue;
+        for (std::uint32_t p = s.piece_begin[m.face_tri_begin[f]]; p < s.piece_begin[m.face_tri_begin[f + 1]]; ++p)
+          s.keep[p] = 0;
+      }
+    }
+  }
   for (CutSide& s : sides) {
     const bool reverse = s.side == 0 ? opt.op == BooleanOp::kBMinusA : reverse_b;
     emit_side(cut, A, B, s.side, s.side == 0 ? sa : sb, reverse, out, out_index, face_side);
+  }
+  if (opt.join == BooleanJoin::kMeshes) {
+    if (Status st = connect_gaps(out, face_side, opt.rule, rep); !st) return st;
   }
   if (Status st = unpinch(out, face_side); !st) return st;
   for (std::uint64_t e : common)

@@ -45,11 +45,16 @@
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/storage/polygon_soup.h>
+#include <atelier/systems/net/connect.h>
 
 namespace atelier {
 
 enum class BooleanOp : std::uint8_t { kUnion, kIntersection, kAMinusB, kBMinusA };
 enum class BooleanMode : std::uint8_t { kExact, kPaper };
+/// How the kept parts are joined: along the intersection polygons (section
+/// 3), or by connecting meshes across the gap left when every cut polygon
+/// is dropped (section 4, Figs. 3-7).
+enum class BooleanJoin : std::uint8_t { kCut, kMeshes };
 
 /// The correspondences of seed 004 Fig. 2 between the points of a pair of
 /// intersection polygons (paper mode).
@@ -63,11 +68,14 @@ enum class Correspondence : std::uint8_t {
 [[nodiscard]] Expected<BooleanOp> parse_boolean_op(std::string_view s);
 [[nodiscard]] Expected<BooleanMode> parse_boolean_mode(std::string_view s);
 [[nodiscard]] Expected<Correspondence> parse_correspondence(std::string_view s);
+[[nodiscard]] Expected<BooleanJoin> parse_boolean_join(std::string_view s);  // cut, meshes
 
 struct BooleanOptions {
   BooleanOp op = BooleanOp::kUnion;
   BooleanMode mode = BooleanMode::kExact;
   Correspondence correspondence = Correspondence::kVisual;  // paper mode only
+  BooleanJoin join = BooleanJoin::kCut;
+  ConnectRule rule = ConnectRule::kTriShortest;  // join by meshes only
   /// Refuse self-intersecting nets (exact test over box-overlapping pairs).
   /// Off saves about a third of the time when the caller knows.
   bool check_self_intersection = true;
@@ -95,6 +103,8 @@ struct BooleanReport {
   std::size_t merged_pairs = 0;           // paper mode: matched pairs merged to midpoints
   std::vector<std::uint32_t> seam;        // result vertices on the intersection polygons (sorted)
   ValenceStats valence;                   // paper mode
+  ConnectReport connecting;               // join by meshes: the connecting meshes (faces empty)
+  std::size_t gaps = 0;                   // join by meshes: gaps closed
 };
 
 /// The Boolean `opt.op` of the closed nets a and b (see above).

@@ -284,3 +284,40 @@ TEST(NetBoolean, SpheresWithSharedVertices) {
 
 }  // namespace
 }  // namespace atelier
+
+namespace atelier {
+namespace {
+
+/// Section 4: the cut polygons are dropped and the gap is closed by
+/// connecting meshes; the result is closed, and its volume stays near the
+/// cut result (the gap is one ring of meshes wide).
+TEST(NetBoolean, JoinByConnectingMeshes) {
+  const PolygonSoup a = net_test::icosphere(3, 1.0, {0, 0, 0});
+  const PolygonSoup b = net_test::icosphere(3, 0.8, {0.9, 0.05, 0.03});
+  const double cut_volume = run(a, b, BooleanOp::kUnion).volume;
+  for (ConnectRule rule : {ConnectRule::kTriShortest, ConnectRule::kTriTwoSided}) {
+    BooleanOptions o;
+    o.op = BooleanOp::kUnion;
+    o.join = BooleanJoin::kMeshes;
+    o.rule = rule;
+    auto r = net_boolean(a, b, o);
+    ASSERT_TRUE(r.has_value()) << r.status().to_string();
+    EXPECT_TRUE(closed_model(r->result));
+    EXPECT_EQ(r->gaps, 1u);
+    EXPECT_GT(r->connecting.triangles, 0u);
+    EXPECT_NEAR(r->volume, cut_volume, 0.05 * cut_volume);
+  }
+  // Quad nets joined by quads (UV spheres: quads with triangle fans at the poles).
+  const PolygonSoup qa = net_test::from_shapes(shapes::uv_sphere(24, 12, 1.0, {0, 0, 0}));
+  const PolygonSoup qb = net_test::from_shapes(shapes::uv_sphere(24, 12, 1.0, {0.05, 0.03, 1.3}));
+  BooleanOptions o;
+  o.join = BooleanJoin::kMeshes;
+  o.rule = ConnectRule::kQuadRegularMeshes;
+  auto q = net_boolean(qa, qb, o);
+  ASSERT_TRUE(q.has_value()) << q.status().to_string();
+  EXPECT_TRUE(closed_model(q->result));
+  EXPECT_LE(q->connecting.triangles + q->connecting.other, 1u);  // all quads but at most one
+}
+
+}  // namespace
+}  // namespace atelier
