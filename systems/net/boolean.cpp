@@ -553,7 +553,7 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     }
     if (Status s = apply_paper_mode(out, curve, from_a, from_b, static_cast<int>(opt.correspondence), rep.merged_pairs,
                                     rep.valence.vertices, rep.valence.irregular, rep.valence.min, rep.valence.max,
-                                    rep.valence.mean);
+                                    rep.valence.mean, rep.seam);
         !s)
       return s;
     rep.volume = soup_volume(out);

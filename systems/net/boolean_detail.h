@@ -192,6 +192,7 @@ void emit_side(const Cut& cut, const TriMesh& a, const TriMesh& b, int side, con
 [[nodiscard]] Status apply_paper_mode(PolygonSoup& result, std::span<const std::array<std::uint32_t, 2>> curve,
                                       std::span<const std::uint8_t> from_a, std::span<const std::uint8_t> from_b,
                                       int correspondence, std::size_t& merged, std::size_t& vertices,
-                                      std::size_t& irregular, std::size_t& vmin, std::size_t& vmax, double& vmean);
+                                      std::size_t& irregular, std::size_t& vmin, std::size_t& vmax, double& vmean,
+                                      std::vector<std::uint32_t>& seam);
 
 }  // namespace atelier::net_detail
