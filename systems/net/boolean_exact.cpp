@@ -319,6 +319,20 @@ bool triangles_cross(const TriMesh& m, std::uint32_t t1, std::uint32_t t2) {
         ia = i;
         ib = j;
       }
+  // Fast exact rejection: the other triangle's own corners strictly on one
+  // side of this one's plane (then they meet at most in shared corners).
+  auto one_side = [&](const std::array<std::uint32_t, 3>& X, const std::array<std::uint32_t, 3>& Y) {
+    int pos = 0, neg = 0;
+    for (std::uint32_t y : Y) {
+      if (std::find(X.begin(), X.end(), y) != X.end()) continue;
+      const int o = orient3d(m.p[X[0]], m.p[X[1]], m.p[X[2]], m.p[y]);
+      pos += o > 0;
+      neg += o < 0;
+      if (o == 0) return false;
+    }
+    return pos == 0 || neg == 0;
+  };
+  if (shared < 2 && (one_side(A, B) || one_side(B, A))) return false;
   const Ki::Triangle_3 ta(pi(m.p[A[0]]), pi(m.p[A[1]]), pi(m.p[A[2]]));
   const Ki::Triangle_3 tb(pi(m.p[B[0]]), pi(m.p[B[1]]), pi(m.p[B[2]]));
   if (shared == 0) return CGAL::do_intersect(ta, tb);
@@ -376,6 +390,14 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
     }
     std::vector<std::pair<PointKey, Ct::Vertex_handle>> handle;
     handle.reserve(points.size());
+    auto project = [&](const Ke::Point_3& p) {
+      return pr.axis == 0 ? Ke::Point_2(p.y(), p.z()) : (pr.axis == 1 ? Ke::Point_2(p.z(), p.x()) : Ke::Point_2(p.x(), p.y()));
+    };
+    // Points on the triangle's edges go in by their known place (the edge,
+    // sorted along it), so no predicate has to find out that they are
+    // collinear with its corners: an exact zero the filters cannot certify.
+    std::array<std::vector<std::pair<Ke::Point_3, PointKey>>, 3> on_edge;
+    std::vector<std::pair<Ke::Point_3, PointKey>> inside;
     for (const PointKey& k : points) {
       const std::uint64_t s = own(k);
       if (dim_of(s) == kDimVertex) {
@@ -383,19 +405,50 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
           if (tv[q] == idx_of(s)) handle.emplace_back(k, corner[q]);
         continue;
       }
-      const Ke::Point_3 p = exact_point(a, b, k);
-      const Ke::Point_2 p2 = pr.axis == 0 ? Ke::Point_2(p.y(), p.z())
-                                          : (pr.axis == 1 ? Ke::Point_2(p.z(), p.x()) : Ke::Point_2(p.x(), p.y()));
-      const std::size_t before = ct.number_of_vertices();
-      const Ct::Vertex_handle h = ct.insert(p2);
+      std::size_t slot = 3;
+      if (dim_of(s) == kDimEdge)
+        for (std::size_t q = 0; q < 3; ++q)
+          if (m.tri_edge[t][q] == idx_of(s)) slot = q;
+      (slot < 3 ? on_edge[slot] : inside).emplace_back(exact_point(a, b, k), k);
+    }
+    auto add = [&](Ct::Vertex_handle h, const PointKey& k) -> Status {
       const std::uint32_t id = ids.find(k);
-      if (ct.number_of_vertices() == before && h->info() != id) {
+      h->info() = id;
+      handle.emplace_back(k, h);
+      return {};
+    };
+    for (std::size_t q = 0; q < 3; ++q) {
+      auto& list = on_edge[q];
+      const Vec3d d = c[(q + 1) % 3] - c[q];
+      int ax = 0;
+      d.cwiseAbs().maxCoeff(&ax);
+      const bool up = d[ax] > 0;
+      std::sort(list.begin(), list.end(), [&](const auto& x, const auto& y) {
+        return up ? x.first[ax] < y.first[ax] : y.first[ax] < x.first[ax];
+      });
+      Ct::Vertex_handle prev = corner[q];
+      for (const auto& [p, k] : list) {
+        Ct::Face_handle f;
+        int i = 0;
+        if (!ct.is_edge(prev, corner[(q + 1) % 3], f, i)) {
+          std::ostringstream msg;
+          msg << "net boolean: points on an edge of triangle " << t << " of " << m.name << " are out of order";
+          return {ErrorCode::kInternal, msg.str()};
+        }
+        const Ct::Vertex_handle h = ct.insert(project(p), Ct::EDGE, f, i);
+        (void)add(h, k);
+        prev = h;
+      }
+    }
+    for (const auto& [p, k] : inside) {
+      const std::size_t before = ct.number_of_vertices();
+      const Ct::Vertex_handle h = ct.insert(project(p));
+      if (ct.number_of_vertices() == before) {
         std::ostringstream msg;
         msg << "net boolean: two intersection points coincide in triangle " << t << " of " << m.name;
         return {ErrorCode::kInternal, msg.str()};
       }
-      h->info() = id;
-      handle.emplace_back(k, h);
+      (void)add(h, k);
     }
     std::sort(handle.begin(), handle.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     auto find = [&](const PointKey& k) {
@@ -429,8 +482,16 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
 
 Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k) {
   const Ke::Point_3 p = exact_point(a, b, k);
-  return {CGAL::to_double(CGAL::exact(p.x())), CGAL::to_double(CGAL::exact(p.y())),
-          CGAL::to_double(CGAL::exact(p.z()))};
+  // The interval approximation when it pins the value within two ulps (the
+  // common case; the same bits on every run), else the exact value rounded.
+  auto coord = [](const Ke::FT& x) {
+    const std::pair<double, double> iv = CGAL::to_interval(x);
+    if (std::isfinite(iv.first) && std::isfinite(iv.second) &&
+        std::nextafter(std::nextafter(iv.first, iv.second), iv.second) >= iv.second)
+      return iv.first + 0.5 * (iv.second - iv.first);
+    return CGAL::to_double(CGAL::exact(x));
+  };
+  return {coord(p.x()), coord(p.y()), coord(p.z())};
 }
 
 int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q) { return winding_any<Ki>(m, bvh, pi(q), q); }
