@@ -336,23 +336,27 @@ PolygonSoup net_polygons(const Model& m) {
   PolygonSoup s;
   const auto source = m.nodes.props.find<std::int32_t>("source_vertex");
   std::vector<std::uint32_t> index(m.nodes.slots.capacity(), kNil);
-  std::vector<std::pair<std::int64_t, std::uint32_t>> by_source;  // (source vertex, soup index)
+  std::vector<std::uint32_t> by_source;  // source vertex -> the first soup vertex made from it
   std::vector<NodeIdx> corners;
+  std::vector<std::uint32_t> poly;
   for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
     if (!m.alive(FaceIdx{f})) continue;
     m.face_nodes(FaceIdx{f}, corners);
-    std::vector<std::uint32_t> poly;
+    poly.clear();
     for (NodeIdx v : corners) {
       if (index[v.value] == kNil) {
         std::uint32_t id = kNil;
-        if (source.valid() && source[v] >= 0) {
-          for (const auto& [src, i] : by_source)
-            if (src == source[v] && s.positions[i] == m.position(v)) id = i;
-        }
+        const std::int32_t src = source.valid() ? source[v] : -1;
+        if (src >= 0 && static_cast<std::size_t>(src) < by_source.size() && by_source[src] != kNil &&
+            s.positions[by_source[src]] == m.position(v))
+          id = by_source[src];
         if (id == kNil) {
           id = static_cast<std::uint32_t>(s.positions.size());
           s.positions.push_back(m.position(v));
-          if (source.valid() && source[v] >= 0) by_source.emplace_back(source[v], id);
+          if (src >= 0) {
+            if (static_cast<std::size_t>(src) >= by_source.size()) by_source.resize(static_cast<std::size_t>(src) + 1, kNil);
+            if (by_source[src] == kNil) by_source[src] = id;
+          }
         }
         index[v.value] = id;
       }
@@ -383,20 +387,15 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
 
   if (opt.check_self_intersection) {
     for (auto [m, bvh] : {std::pair{&A, &bvh_a}, std::pair{&B, &bvh_b}}) {
-      const auto pairs = self_pairs(*m, *bvh, ctx);
-      std::vector<std::uint8_t> cross(pairs.size(), 0);
-      par::for_each_n(ctx, pairs.size(), [&](std::size_t i) {
-        cross[i] = triangles_cross(*m, pairs[i][0], pairs[i][1]) ? 1 : 0;
-      });
-      for (std::size_t i = 0; i < pairs.size(); ++i)
-        if (cross[i])
-          return fail(ErrorCode::kTopology, "net ", m->name, " intersects itself: faces ", m->face_of[pairs[i][0]],
-                      " and ", m->face_of[pairs[i][1]], " cross");
+      const auto bad = first_self_crossing(*m, *bvh, ctx);
+      if (bad[0] != kNil)
+        return fail(ErrorCode::kTopology, "net ", m->name, " intersects itself: faces ", m->face_of[bad[0]], " and ",
+                    m->face_of[bad[1]], " cross");
     }
   }
 
   Cut cut;
-  if (Status st = cut_nets(A, B, bvh_b, ctx, cut); !st) return st;
+  if (Status st = cut_nets(A, bvh_a, B, bvh_b, ctx, cut); !st) return st;
   rep.candidate_pairs = cut.candidate_pairs;
   rep.intersecting_pairs = cut.intersecting_pairs;
   rep.intersection_points = cut.new_keys.size();

@@ -78,11 +78,12 @@ struct Bvh {
 void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
 
 /// Candidate pairs (i in A, j in B) whose closed boxes overlap, sorted.
-[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_b,
-                                                                          const TriMesh& b, const ExecContext& ctx);
-/// Pairs i < j of one mesh whose boxes overlap (self-intersection candidates).
-[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> self_pairs(const TriMesh& m, const Bvh& bvh,
-                                                                   const ExecContext& ctx);
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_a,
+                                                                          const TriMesh& b, const Bvh& bvh_b,
+                                                                          const ExecContext& ctx);
+/// The smallest pair i < j of triangles of one mesh that cross
+/// (triangles_cross), or {kNil, kNil} when the mesh does not intersect itself.
+[[nodiscard]] std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx);
 
 // ----------------------------------------------------------- exact kernel
 // All decisions below are exact (CGAL's filtered predicates on the input
@@ -176,7 +177,8 @@ struct Cut {
 };
 
 /// Cuts A and B along their intersection (either may be open: trimming).
-[[nodiscard]] Status cut_nets(const TriMesh& a, const TriMesh& b, const Bvh& bvh_b, const ExecContext& ctx, Cut& out);
+[[nodiscard]] Status cut_nets(const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
+                              const ExecContext& ctx, Cut& out);
 
 /// Appends the kept pieces of one side (`keep` of its CutSide) to `out`:
 /// untouched polygons whole (n-gons stay n-gons), cut ones as triangles;

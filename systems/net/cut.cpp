@@ -59,10 +59,11 @@ bool in_closure(const TriMesh& m, std::uint64_t s, std::uint32_t g) {
 
 }  // namespace
 
-Status cut_nets(const TriMesh& A, const TriMesh& B, const Bvh& bvh_b, const ExecContext& ctx, Cut& out) {
+Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh& bvh_b, const ExecContext& ctx,
+                Cut& out) {
   using Tri3 = std::array<std::uint32_t, 3>;
   // ---- pairs and their intersection points
-  const auto pairs = overlapping_pairs(A, bvh_b, B, ctx);
+  const auto pairs = overlapping_pairs(A, bvh_a, B, bvh_b, ctx);
   out.candidate_pairs = pairs.size();
   std::vector<PairHit> hits(pairs.size());
   par::for_each_n(ctx, pairs.size(), [&](std::size_t i) { intersect_pair(A, pairs[i][0], B, pairs[i][1], hits[i]); });

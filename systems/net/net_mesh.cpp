@@ -5,6 +5,7 @@
 #include "boolean_detail.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -227,16 +228,42 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
 }
 
 void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
-  (void)ctx;
+  // Triangles in Morton order of their box centres, then ranges halved: a
+  // linear BVH (one parallel sort instead of a median search per level).
   const std::size_t nt = m.tri.size();
   out.nodes.clear();
   out.order.resize(nt);
-  std::iota(out.order.begin(), out.order.end(), 0u);
   if (nt == 0) return;
-  std::vector<Vec3d> centre(nt);
+  Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (std::size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 3; ++k) centre[t][k] = 0.5 * (m.box[t][static_cast<std::size_t>(k)] + m.box[t][static_cast<std::size_t>(k + 3)]);
-  out.nodes.reserve(2 * nt / 2 + 1);
+    for (int k = 0; k < 3; ++k) {
+      const double c = 0.5 * (m.box[t][static_cast<std::size_t>(k)] + m.box[t][static_cast<std::size_t>(k + 3)]);
+      lo[k] = std::min(lo[k], c);
+      hi[k] = std::max(hi[k], c);
+    }
+  const Vec3d ext = (hi - lo).cwiseMax(Vec3d::Constant(1e-300));
+  auto spread = [](std::uint64_t x) {  // 21 bits -> every third of 63
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+  };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> key(nt);
+  par::for_each_n(ctx, nt, [&](std::size_t t) {
+    std::uint64_t code = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double c = 0.5 * (m.box[t][static_cast<std::size_t>(k)] + m.box[t][static_cast<std::size_t>(k + 3)]);
+      const double u = std::clamp((c - lo[k]) / ext[k], 0.0, 1.0);
+      code |= spread(static_cast<std::uint64_t>(u * 2097151.0)) << k;
+    }
+    key[t] = {code, static_cast<std::uint32_t>(t)};
+  });
+  par::sort(ctx, key.begin(), key.end(), std::less<>());
+  for (std::size_t i = 0; i < nt; ++i) out.order[i] = key[i].second;
+  out.nodes.reserve(nt / 2 + 8);
   struct Job {
     std::uint32_t node, first, count;
   };
@@ -245,26 +272,12 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
   while (!stack.empty()) {
     const Job j = stack.back();
     stack.pop_back();
-    std::array<double, 6> box = m.box[out.order[j.first]];
-    Vec3d lo = centre[out.order[j.first]], hi = lo;
-    for (std::uint32_t i = j.first; i < j.first + j.count; ++i) {
-      merge_box(box, m.box[out.order[i]]);
-      lo = lo.cwiseMin(centre[out.order[i]]);
-      hi = hi.cwiseMax(centre[out.order[i]]);
-    }
-    out.nodes[j.node].box = box;
     if (j.count <= 4) {
       out.nodes[j.node].first = j.first;
       out.nodes[j.node].count = j.count;
       continue;
     }
-    int axis = 0;
-    (hi - lo).maxCoeff(&axis);
     const std::uint32_t half = j.count / 2;
-    auto b = out.order.begin() + j.first;
-    std::nth_element(b, b + half, b + j.count, [&](std::uint32_t x, std::uint32_t y) {
-      return centre[x][axis] != centre[y][axis] ? centre[x][axis] < centre[y][axis] : x < y;
-    });
     const auto left = static_cast<std::uint32_t>(out.nodes.size());
     out.nodes[j.node].left = left;
     out.nodes.push_back({});
@@ -272,74 +285,132 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
     stack.push_back({left, j.first, half});
     stack.push_back({left + 1, j.first + half, j.count - half});
   }
+  // Boxes bottom-up: children always come after their parent.
+  for (std::size_t n = out.nodes.size(); n-- > 0;) {
+    Bvh::Node& node = out.nodes[n];
+    if (node.left == kNil) {
+      node.box = m.box[out.order[node.first]];
+      for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i) merge_box(node.box, m.box[out.order[i]]);
+    } else {
+      node.box = out.nodes[node.left].box;
+      merge_box(node.box, out.nodes[node.left + 1].box);
+    }
+  }
 }
 
 namespace {
 
-template <class Emit>
-void query(const Bvh& bvh, const std::array<double, 6>& box, std::vector<std::uint32_t>& stack, Emit&& emit) {
-  stack.clear();
-  stack.push_back(0);
-  while (!stack.empty()) {
-    const Bvh::Node& n = bvh.nodes[stack.back()];
-    stack.pop_back();
-    if (!overlap(n.box, box)) continue;
-    if (n.left != kNil) {
-      stack.push_back(n.left);
-      stack.push_back(n.left + 1);
-      continue;
-    }
-    for (std::uint32_t i = n.first; i < n.first + n.count; ++i) emit(bvh.order[i]);
-  }
-}
+/// Pairs of overlapping triangle boxes by a simultaneous traversal of two
+/// hierarchies (or one against itself, i < j): node pairs are expanded
+/// breadth-first into a frontier of independent tasks, run in parallel, and
+/// the pairs are sorted, so the list is the same for any thread count.
+// The frontier stops growing at 256 node pairs; one step makes at most
+// three of each, so tasks (the frontier plus task 0) stay below this.
+constexpr std::size_t kMaxTasks = 1024;
 
-template <class Filter>
-std::vector<std::array<std::uint32_t, 2>> collect(const TriMesh& a, const TriMesh& b, const Bvh& bvh,
-                                                  const ExecContext& ctx, Filter&& keep) {
-  std::vector<std::array<std::uint32_t, 2>> pairs;
-  if (bvh.nodes.empty()) return pairs;
-  const std::size_t nt = a.tri.size();
-  // Blocks of fixed size, results concatenated in block order: the list is
-  // the same for any thread count (and sorted: blocks are in index order).
-  constexpr std::size_t kBlock = 2048;
-  const std::size_t blocks = (nt + kBlock - 1) / kBlock;
-  std::vector<std::vector<std::array<std::uint32_t, 2>>> part(blocks);
-  std::array<double, 6> bb{b.bounds.lo.x(), b.bounds.lo.y(), b.bounds.lo.z(),
-                           b.bounds.hi.x(), b.bounds.hi.y(), b.bounds.hi.z()};
-  ExecContext c = ctx;
-  c.sequential_threshold = std::max<std::size_t>(1, ctx.sequential_threshold / kBlock);
-  c.grain = 1;
-  par::for_each_n(c, blocks, [&](std::size_t blk) {
-    std::vector<std::uint32_t> stack;
-    std::vector<std::uint32_t> hits;
-    auto& out = part[blk];
-    const std::size_t end = std::min(nt, (blk + 1) * kBlock);
-    for (std::size_t i = blk * kBlock; i < end; ++i) {
-      if (!overlap(a.box[i], bb)) continue;
-      hits.clear();
-      query(bvh, a.box[i], stack, [&](std::uint32_t j) {
-        if (keep(static_cast<std::uint32_t>(i), j)) hits.push_back(j);
+template <class Visit>
+void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb, bool self, const ExecContext& ctx,
+                std::size_t& tasks, Visit&& visit) {
+  tasks = 0;
+  if (ba.nodes.empty() || bb.nodes.empty()) return;
+  using NodePair = std::array<std::uint32_t, 2>;
+  auto leaf = [](const Bvh::Node& n) { return n.left == kNil; };
+  // Children to visit for a node pair (self: unordered pairs only).
+  auto expand = [&](const NodePair& np, auto&& push) {
+    const Bvh::Node& x = ba.nodes[np[0]];
+    const Bvh::Node& y = bb.nodes[np[1]];
+    if (self && np[0] == np[1]) {
+      push({x.left, x.left});
+      push({x.left, x.left + 1});
+      push({x.left + 1, x.left + 1});
+      return;
+    }
+    const bool split_x = !leaf(x) && (leaf(y) || x.count == 0);
+    if (split_x) {
+      push({x.left, np[1]});
+      push({x.left + 1, np[1]});
+    } else {
+      push({np[0], y.left});
+      push({np[0], y.left + 1});
+    }
+  };
+  auto leaf_pairs = [&](const NodePair& np, std::size_t task) {
+    const Bvh::Node& x = ba.nodes[np[0]];
+    const Bvh::Node& y = bb.nodes[np[1]];
+    for (std::uint32_t i = x.first; i < x.first + x.count; ++i)
+      for (std::uint32_t j = y.first; j < y.first + y.count; ++j) {
+        std::uint32_t ti = ba.order[i], tj = bb.order[j];
+        if (self) {
+          if (ti == tj) continue;
+          if (np[0] == np[1] && i > j) continue;  // each unordered pair once inside one leaf
+          if (ti > tj) std::swap(ti, tj);
+        }
+        if (overlap(a.box[ti], b.box[tj])) visit(task, ti, tj);
+      }
+  };
+  auto both_leaves = [&](const NodePair& np) { return leaf(ba.nodes[np[0]]) && leaf(bb.nodes[np[1]]); };
+  // Breadth-first frontier.
+  std::vector<NodePair> frontier{{0, 0}};
+  if (!overlap(ba.nodes[0].box, bb.nodes[0].box)) return;
+  std::vector<NodePair> direct;  // leaf pairs met while building the frontier: task 0
+  while (!frontier.empty() && frontier.size() < 256) {
+    std::vector<NodePair> next;
+    for (const NodePair& np : frontier) {
+      if (both_leaves(np)) {
+        direct.push_back(np);
+        continue;
+      }
+      expand(np, [&](const NodePair& c) {
+        if (overlap(ba.nodes[c[0]].box, bb.nodes[c[1]].box)) next.push_back(c);
       });
-      std::sort(hits.begin(), hits.end());
-      for (std::uint32_t j : hits) out.push_back({static_cast<std::uint32_t>(i), j});
+    }
+    frontier = std::move(next);
+  }
+  tasks = frontier.size() + 1;
+  for (const NodePair& np : direct) leaf_pairs(np, 0);
+  ExecContext c = ctx;
+  c.sequential_threshold = 2;
+  c.grain = 1;
+  par::for_each_n(c, frontier.size(), [&](std::size_t k) {
+    std::vector<NodePair> stack{frontier[k]};
+    while (!stack.empty()) {
+      const NodePair np = stack.back();
+      stack.pop_back();
+      if (both_leaves(np)) {
+        leaf_pairs(np, k + 1);
+        continue;
+      }
+      expand(np, [&](const NodePair& ch) {
+        if (overlap(ba.nodes[ch[0]].box, bb.nodes[ch[1]].box)) stack.push_back(ch);
+      });
     }
   });
-  std::size_t total = 0;
-  for (const auto& p : part) total += p.size();
-  pairs.reserve(total);
-  for (const auto& p : part) pairs.insert(pairs.end(), p.begin(), p.end());
-  return pairs;
 }
 
 }  // namespace
 
-std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_b, const TriMesh& b,
-                                                            const ExecContext& ctx) {
-  return collect(a, b, bvh_b, ctx, [](std::uint32_t, std::uint32_t) { return true; });
+std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
+                                                            const Bvh& bvh_b, const ExecContext& ctx) {
+  // One list per task (each task writes only its own).
+  std::vector<std::vector<std::array<std::uint32_t, 2>>> lists(kMaxTasks);
+  std::size_t tasks = 0;
+  dual_visit(a, bvh_a, b, bvh_b, false, ctx, tasks,
+             [&](std::size_t task, std::uint32_t i, std::uint32_t j) { lists[task].push_back({i, j}); });
+  std::vector<std::array<std::uint32_t, 2>> pairs;
+  for (std::size_t k = 0; k < tasks; ++k) pairs.insert(pairs.end(), lists[k].begin(), lists[k].end());
+  // Sorted: the same list for any thread count.
+  par::sort(ctx, pairs.begin(), pairs.end(), [](const auto& x, const auto& y) { return x < y; });
+  return pairs;
 }
 
-std::vector<std::array<std::uint32_t, 2>> self_pairs(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
-  return collect(m, m, bvh, ctx, [](std::uint32_t i, std::uint32_t j) { return i < j; });
+std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
+  std::vector<std::array<std::uint32_t, 2>> first(kMaxTasks, {kNil, kNil});
+  std::size_t tasks = 0;
+  dual_visit(m, bvh, m, bvh, true, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+    if (std::array<std::uint32_t, 2>{i, j} < first[task] && triangles_cross(m, i, j)) first[task] = {i, j};
+  });
+  // The smallest crossing pair over all tasks: the same for any thread count.
+  return *std::min_element(first.begin(), first.end());
 }
 
 }  // namespace atelier::net_detail

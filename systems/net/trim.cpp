@@ -98,10 +98,11 @@ Expected<TrimReport> trim_net(const PolygonSoupView& net, std::span<const Vec3d>
   if (Status s = build_tri_mesh(band, "band", S, ctx, true); !s)
     return fail(ErrorCode::kInvalidArgument, "trim: the extruded curve is not a valid band (", s.message(),
                 "): a curve crossing itself or with repeated points?");
-  Bvh bvh_s;
+  Bvh bvh_a, bvh_s;
+  build_bvh(A, bvh_a, ctx);
   build_bvh(S, bvh_s, ctx);
   Cut cut;
-  if (Status s = cut_nets(A, S, bvh_s, ctx, cut); !s) return s;
+  if (Status s = cut_nets(A, bvh_a, S, bvh_s, ctx, cut); !s) return s;
   rep.cut_points = cut.new_keys.size();
 
   // Parts: components of pieces; does a part reach the net's boundary? its area?
