@@ -11,7 +11,7 @@
 // rest stays plain doubles (docs/glossary.md, net Booleans).
 #include "boolean_detail.h"
 
-#include <CGAL/Constrained_triangulation_2.h>
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
@@ -90,7 +90,7 @@ int locate_line(const Vec3d& p, const Vec3d& q, const std::array<Vec3d, 3>& c) {
   int o[3];
   int pos = 0, neg = 0, zeros = 0;
   for (int k = 0; k < 3; ++k) {
-    o[k] = sgn(CGAL::orientation(pi(p), pi(q), pi(c[k]), pi(c[(k + 1) % 3])));
+    o[k] = orient3d(p, q, c[k], c[(k + 1) % 3]);
     pos += o[k] > 0;
     neg += o[k] < 0;
     zeros += o[k] == 0;
@@ -284,6 +284,25 @@ int winding_any(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, 
 }  // namespace
 
 int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
+  // Shewchuk's first-stage filter (orient3d, error bound A = (7 + 56 eps) eps
+  // times the permanent): decides almost every call without CGAL's call
+  // overhead; CGAL's filtered predicate (exact when it must be) takes the rest.
+  const double adx = a.x() - d.x(), ady = a.y() - d.y(), adz = a.z() - d.z();
+  const double bdx = b.x() - d.x(), bdy = b.y() - d.y(), bdz = b.z() - d.z();
+  const double cdx = c.x() - d.x(), cdy = c.y() - d.y(), cdz = c.z() - d.z();
+  const double bc = bdy * cdz - bdz * cdy, ca = cdy * adz - cdz * ady, ab = ady * bdz - adz * bdy;
+  const double det = adx * bc + bdx * ca + cdx * ab;
+  const double perm = (std::abs(bdy * cdz) + std::abs(bdz * cdy)) * std::abs(adx) +
+                      (std::abs(cdy * adz) + std::abs(cdz * ady)) * std::abs(bdx) +
+                      (std::abs(ady * bdz) + std::abs(adz * bdy)) * std::abs(cdx);
+  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
+  if (std::isfinite(perm) && perm > 1e-250) {
+    const double bound = kBound * perm;
+    // Shewchuk's determinant is positive when d lies on the side opposite
+    // to the normal (b - a) x (c - a).
+    if (det > bound) return -1;
+    if (-det > bound) return 1;
+  }
   return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
 }
 
@@ -373,7 +392,11 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
   using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Ke>;
   using Fb = CGAL::Constrained_triangulation_face_base_2<Ke>;
   using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
-  using Ct = CGAL::Constrained_triangulation_2<Ke, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
+  // Delaunay: among the triangulations with the cut segments, the one that
+  // avoids slivers. Nearly collinear cut points (a net cutting the coplanar
+  // fan of a split planar polygon) would otherwise give triangles a rounding
+  // of the points can fold over.
+  using Ct = CGAL::Constrained_Delaunay_triangulation_2<Ke, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
   const TriMesh& m = side == 0 ? a : b;
   const std::uint32_t offset = side == 0 ? 0u : static_cast<std::uint32_t>(a.p.size());
   const auto& tv = m.tri[t];
@@ -466,6 +489,13 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
       if (h0 != h1) ct.insert_constraint(h0, h1);
     }
     for (auto f = ct.finite_faces_begin(); f != ct.finite_faces_end(); ++f) {
+      if (CGAL::orientation(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()) != CGAL::LEFT_TURN) {
+        std::ostringstream msg;
+        msg << "net boolean: a refined triangle of triangle " << t << " of " << m.name << " is flat ("
+            << on_edge[0].size() << "," << on_edge[1].size() << "," << on_edge[2].size() << " edge points, " << inside.size()
+            << " inside)";
+        return {ErrorCode::kInternal, msg.str()};
+      }
       std::array<std::uint32_t, 3> tri{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
       if (pr.sign < 0) std::swap(tri[1], tri[2]);
       out.push_back(tri);
