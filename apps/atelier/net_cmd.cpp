@@ -1,9 +1,5 @@
 #include "net_cmd.h"
 
-#include <algorithm>
-#include <cctype>
-#include <nlohmann/json.hpp>
-
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/native.h>
 #include <atelier/io/obj.h>
@@ -13,6 +9,10 @@
 #include <atelier/systems/net/boolean.h>
 #include <atelier/systems/net/round_off.h>
 #include <atelier/systems/net/trim.h>
+
+#include <algorithm>
+#include <cctype>
+#include <nlohmann/json.hpp>
 
 namespace atelier::cli {
 
@@ -122,15 +122,19 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
     if (o.mode == BooleanMode::kPaper) {
       j["correspondence"] = opt.correspondence;
       j["merged_pairs"] = r.merged_pairs;
-      j["valence"] = {{"vertices", r.valence.vertices}, {"irregular", r.valence.irregular},
-                      {"min", r.valence.min},           {"max", r.valence.max},
+      j["valence"] = {{"vertices", r.valence.vertices},
+                      {"irregular", r.valence.irregular},
+                      {"min", r.valence.min},
+                      {"max", r.valence.max},
                       {"mean", r.valence.mean}};
     }
     if (o.join == BooleanJoin::kMeshes) {
       j["join"] = opt.join;
       j["rule"] = opt.rule;
-      j["connecting"] = {{"triangles", r.connecting.triangles}, {"quads", r.connecting.quads},
-                         {"other", r.connecting.other}, {"irregular_vertices", r.connecting.irregular_vertices}};
+      j["connecting"] = {{"triangles", r.connecting.triangles},
+                         {"quads", r.connecting.quads},
+                         {"other", r.connecting.other},
+                         {"irregular_vertices", r.connecting.irregular_vertices}};
     }
     write_json(opt.json, j);
   }
@@ -161,7 +165,8 @@ int run_trim(const Common& common, const NetTrimOptions& opt, Log& log) {
   o.height = opt.height;
   o.keep_enclosed = opt.keep_enclosed;
   auto r = trim_net(net, curve, o, common.context());
-  if (!r) throw Error(Status(r.status().code(), opt.mesh.string() + ", " + opt.curve.string() + ": " + r.status().message()));
+  if (!r)
+    throw Error(Status(r.status().code(), opt.mesh.string() + ", " + opt.curve.string() + ": " + r.status().message()));
   write_model_file(to_model(r->result, "trimmed"), opt.out);
   if (!opt.band_out.empty()) write_model_file(to_model(r->band, "band"), opt.band_out);
   if (!opt.json.empty())
@@ -176,11 +181,13 @@ int run_trim(const Common& common, const NetTrimOptions& opt, Log& log) {
 CLI::App* add_round_subcommand(CLI::App& app, NetRoundOptions& opt) {
   auto* c = app.add_subcommand("round", "round off a seam by the umbrella energy (seed 004 section 6)");
   c->add_option("--mesh", opt.mesh, "the net")->required();
-  c->add_option("--seam", opt.seam, "vertex indices of the seam (0-based; as written by boolean --seam-out)")->required();
+  c->add_option("--seam", opt.seam, "vertex indices of the seam (0-based; as written by boolean --seam-out)")
+      ->required();
   c->add_option("--out", opt.out, "the rounded net")->required();
   c->add_option("--mu", opt.mu, "weight of curvature")->check(CLI::NonNegativeNumber);
   c->add_option("--nu", opt.nu, "weight of torsion")->check(CLI::NonNegativeNumber);
-  c->add_option("--rings", opt.rings, "free the vertices within this many edges of the seam")->check(CLI::NonNegativeNumber);
+  c->add_option("--rings", opt.rings, "free the vertices within this many edges of the seam")
+      ->check(CLI::NonNegativeNumber);
   c->add_option("--json", opt.json, "report: energies, freed vertices");
   return c;
 }
@@ -198,8 +205,8 @@ int run_round(const Common& common, const NetRoundOptions& opt, Log& log) {
       if (m.alive(NodeIdx{v}) && (source.valid() ? source[NodeIdx{v}] == static_cast<std::int32_t>(id) : v == id))
         found = NodeIdx{v};
     if (!found.valid())
-      throw Error(Status(ErrorCode::kInvalidArgument,
-                         opt.seam.string() + ": vertex " + std::to_string(id) + " is not a vertex of " + opt.mesh.string()));
+      throw Error(Status(ErrorCode::kInvalidArgument, opt.seam.string() + ": vertex " + std::to_string(id) +
+                                                          " is not a vertex of " + opt.mesh.string()));
     seam.push_back(found);
   }
   RoundOptions o;
@@ -213,8 +220,8 @@ int run_round(const Common& common, const NetRoundOptions& opt, Log& log) {
                           {"free_vertices", r.free_nodes},
                           {"terms", r.terms},
                           {"moved", r.moved}});
-  log.info("wrote " + opt.out.string() + " (E " + std::to_string(r.energy_before) + " -> " + std::to_string(r.energy_after) +
-           ")");
+  log.info("wrote " + opt.out.string() + " (E " + std::to_string(r.energy_before) + " -> " +
+           std::to_string(r.energy_after) + ")");
   return kExitOk;
 }
 

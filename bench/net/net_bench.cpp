@@ -22,6 +22,8 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Surface_mesh.h>
+#include <atelier/io/obj.h>
+#include <atelier/systems/net/boolean.h>
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -34,9 +36,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include <atelier/io/obj.h>
-#include <atelier/systems/net/boolean.h>
 
 namespace {
 
@@ -54,7 +53,8 @@ PolygonSoup sphere(int nu, int nv, double r, const Vec3d& c, double turn) {
   for (int j = 1; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {
       const double th = M_PI * j / nv, ph = 2 * M_PI * i / nu;
-      s.positions.push_back(c + rot * (r * Vec3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th))));
+      s.positions.push_back(c +
+                            rot * (r * Vec3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th))));
     }
   s.positions.push_back(c + rot * Vec3d(0, 0, -r));
   auto ring = [&](int j, int i) { return static_cast<std::uint32_t>(1 + (j - 1) * nu + (i % nu)); };
@@ -102,9 +102,12 @@ Case& get_case(const std::string& name) {
     c.a = sphere(nu, nv, 1.0, {0, 0, 0}, 0.0);
     c.b = sphere(nu, nv, 1.0, {0.61, 0.23, 0.17}, 0.7);
   };
-  if (name == "sphere10k") spheres(71, 71);
-  else if (name == "sphere100k") spheres(224, 224);
-  else if (name == "sphere1M") spheres(708, 707);
+  if (name == "sphere10k")
+    spheres(71, 71);
+  else if (name == "sphere100k")
+    spheres(224, 224);
+  else if (name == "sphere1M")
+    spheres(708, 707);
   else {
     const std::map<std::string, std::pair<const char*, const char*>> files = {
         {"havocglass8", {"Havocglass8_left.obj", "Havocglass8_right.obj"}},
@@ -145,7 +148,9 @@ std::map<std::string, PeerFigures>& peers() {
   return m;
 }
 
-const char* op_name(BooleanOp op) { return op == BooleanOp::kUnion ? "union" : "difference"; }
+const char* op_name(BooleanOp op) {
+  return op == BooleanOp::kUnion ? "union" : "difference";
+}
 
 void BM_NetBooleanCgal(benchmark::State& state, std::string pair, BooleanOp op) {
   Case& c = get_case(pair);
@@ -176,7 +181,8 @@ void BM_NetBooleanManifold(benchmark::State& state, std::string pair, BooleanOp 
   Case& c = get_case(pair);
   if (!c.a.face_count()) return state.SkipWithError("shared data absent");
   if (!fs::exists(kManifoldDir / "node_modules" / "manifold-3d"))
-    return state.SkipWithError("manifold-3d not installed: scripts/install-deps.sh --bench (npm install in bench/net/manifold)");
+    return state.SkipWithError(
+        "manifold-3d not installed: scripts/install-deps.sh --bench (npm install in bench/net/manifold)");
   const int reps = 5;
   const std::string cmd = "node " + (kManifoldDir / "manifold_bool.mjs").string() + " " + c.obj_a.string() + " " +
                           c.obj_b.string() + " " + op_name(op) + " " + std::to_string(reps + 1) + " 2>&1";
@@ -244,16 +250,16 @@ const int kRegistered = [] {
       benchmark::RegisterBenchmark(("BM_NetBooleanCgal/" + tag).c_str(), BM_NetBooleanCgal, std::string(pair), op)
           ->Unit(benchmark::kMillisecond)
           ->Iterations(iters);
-      benchmark::RegisterBenchmark(("BM_NetBooleanManifold/" + tag).c_str(), BM_NetBooleanManifold, std::string(pair), op)
+      benchmark::RegisterBenchmark(("BM_NetBooleanManifold/" + tag).c_str(), BM_NetBooleanManifold, std::string(pair),
+                                   op)
           ->Unit(benchmark::kMillisecond)
           ->UseManualTime()
           ->Iterations(1);
       for (int threads : {2, 1})
         for (bool check : {true, false})
-          benchmark::RegisterBenchmark(("BM_NetBoolean/" + tag + "/threads:" + std::to_string(threads) +
-                                        (check ? "" : "/nocheck"))
-                                           .c_str(),
-                                       BM_NetBoolean, std::string(pair), op, threads, check)
+          benchmark::RegisterBenchmark(
+              ("BM_NetBoolean/" + tag + "/threads:" + std::to_string(threads) + (check ? "" : "/nocheck")).c_str(),
+              BM_NetBoolean, std::string(pair), op, threads, check)
               ->Unit(benchmark::kMillisecond)
               ->Iterations(std::max(iters, 3));
     }

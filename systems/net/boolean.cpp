@@ -6,6 +6,7 @@
 // Why this file is long: the cut and the choice of pieces share the
 // per-net tables built here (pairs per triangle, refined triangles, piece
 // components), and splitting them would pass a dozen arrays across files.
+#include <atelier/engine/parallel.h>
 #include <atelier/systems/net/boolean.h>
 
 #include <algorithm>
@@ -13,7 +14,6 @@
 #include <numeric>
 #include <sstream>
 
-#include <atelier/engine/parallel.h>
 #include "boolean_detail.h"
 
 namespace atelier {
@@ -49,7 +49,9 @@ struct UnionFind {
 
 using Tri3 = std::array<std::uint32_t, 3>;
 
-double tri_volume(const Vec3d& a, const Vec3d& b, const Vec3d& c) { return a.dot(b.cross(c)) / 6.0; }
+double tri_volume(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  return a.dot(b.cross(c)) / 6.0;
+}
 
 double mesh_volume(const TriMesh& m) {
   double v = 0;
@@ -57,11 +59,9 @@ double mesh_volume(const TriMesh& m) {
   return v;
 }
 
-
 std::uint64_t edge_key(std::uint32_t u, std::uint32_t v) {
   return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
 }
-
 
 /// Solids that touch along an edge or at a vertex (a union of two boxes
 /// sharing an edge) leave edges in four faces and vertices with several
@@ -115,7 +115,8 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
   }
   // Fans: rotate about a vertex through the previous halfedge's twin.
   std::vector<std::uint32_t> half_begin(nf + 1, 0);
-  for (std::uint32_t f = 0; f < nf; ++f) half_begin[f + 1] = half_begin[f] + static_cast<std::uint32_t>(out.face(f).size());
+  for (std::uint32_t f = 0; f < nf; ++f)
+    half_begin[f + 1] = half_begin[f] + static_cast<std::uint32_t>(out.face(f).size());
   auto prev_in_face = [&](std::uint32_t h) {
     const std::uint32_t f = half[h].face, n = half_begin[f + 1] - half_begin[f];
     return half_begin[f] + (half[h].corner + n - 1) % n;
@@ -222,8 +223,8 @@ Status connect_gaps(PolygonSoup& out, std::vector<std::uint8_t>& face_side, Conn
     std::size_t best = loops.size();
     for (std::size_t j = 0; j < loops.size(); ++j)
       if (loops[j].side != loops[i].side &&
-          (best == loops.size() || (loops[j].centre - loops[i].centre).squaredNorm() <
-                                       (loops[best].centre - loops[i].centre).squaredNorm()))
+          (best == loops.size() ||
+           (loops[j].centre - loops[i].centre).squaredNorm() < (loops[best].centre - loops[i].centre).squaredNorm()))
         best = j;
     return best;
   };
@@ -231,7 +232,8 @@ Status connect_gaps(PolygonSoup& out, std::vector<std::uint8_t>& face_side, Conn
   for (std::size_t i = 0; i < loops.size(); ++i) {
     near[i] = nearest(i);
     if (near[i] == loops.size())
-      return {ErrorCode::kUnsupported, "net boolean: a gap of the connecting meshes has a boundary polygon on one net only"};
+      return {ErrorCode::kUnsupported,
+              "net boolean: a gap of the connecting meshes has a boundary polygon on one net only"};
   }
   ConnectOptions co;
   co.rule = rule;
@@ -354,7 +356,8 @@ PolygonSoup net_polygons(const Model& m) {
           id = static_cast<std::uint32_t>(s.positions.size());
           s.positions.push_back(m.position(v));
           if (src >= 0) {
-            if (static_cast<std::size_t>(src) >= by_source.size()) by_source.resize(static_cast<std::size_t>(src) + 1, kNil);
+            if (static_cast<std::size_t>(src) >= by_source.size())
+              by_source.resize(static_cast<std::size_t>(src) + 1, kNil);
             if (by_source[src] == kNil) by_source[src] = id;
           }
         }
@@ -471,10 +474,18 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
       } else {
         const bool in = inside[s.component[p]] != 0;
         switch (opt.op) {
-          case BooleanOp::kUnion: keep = !in; break;
-          case BooleanOp::kIntersection: keep = in; break;
-          case BooleanOp::kAMinusB: keep = s.side == 0 ? !in : in; break;
-          case BooleanOp::kBMinusA: keep = s.side == 0 ? in : !in; break;
+          case BooleanOp::kUnion:
+            keep = !in;
+            break;
+          case BooleanOp::kIntersection:
+            keep = in;
+            break;
+          case BooleanOp::kAMinusB:
+            keep = s.side == 0 ? !in : in;
+            break;
+          case BooleanOp::kBMinusA:
+            keep = s.side == 0 ? in : !in;
+            break;
         }
       }
       s.keep[p] = keep ? 1 : 0;
@@ -547,7 +558,8 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     }
     std::vector<std::array<std::uint32_t, 2>> curve;
     for (std::uint64_t e : common) {
-      const std::uint32_t u = out_index[static_cast<std::uint32_t>(e >> 32)], w = out_index[static_cast<std::uint32_t>(e)];
+      const std::uint32_t u = out_index[static_cast<std::uint32_t>(e >> 32)],
+                          w = out_index[static_cast<std::uint32_t>(e)];
       if (u != kNil && w != kNil) curve.push_back({u, w});
     }
     if (Status s = apply_paper_mode(out, curve, from_a, from_b, static_cast<int>(opt.correspondence), rep.merged_pairs,

@@ -35,17 +35,17 @@
 // count.
 #pragma once
 
-#include <array>
-#include <cstddef>
-#include <cstdint>
-#include <string_view>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/storage/polygon_soup.h>
 #include <atelier/systems/net/connect.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+#include <vector>
 
 namespace atelier {
 

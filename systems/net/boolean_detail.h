@@ -4,16 +4,16 @@
 // CGAL stays inside boolean_exact.cpp (docs/architecture.md, third-party).
 #pragma once
 
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/polygon_soup.h>
+
 #include <array>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
-
-#include <atelier/engine/exec_context.h>
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
-#include <atelier/storage/polygon_soup.h>
 
 namespace atelier::net_detail {
 
@@ -25,8 +25,12 @@ enum : std::uint8_t { kDimVertex = 0, kDimEdge = 1, kDimFace = 2, kDimNone = 3 }
 [[nodiscard]] constexpr std::uint64_t simplex(std::uint8_t dim, std::uint32_t idx) noexcept {
   return (std::uint64_t{dim} << 32) | idx;
 }
-[[nodiscard]] constexpr std::uint8_t dim_of(std::uint64_t s) noexcept { return static_cast<std::uint8_t>(s >> 32); }
-[[nodiscard]] constexpr std::uint32_t idx_of(std::uint64_t s) noexcept { return static_cast<std::uint32_t>(s); }
+[[nodiscard]] constexpr std::uint8_t dim_of(std::uint64_t s) noexcept {
+  return static_cast<std::uint8_t>(s >> 32);
+}
+[[nodiscard]] constexpr std::uint32_t idx_of(std::uint64_t s) noexcept {
+  return static_cast<std::uint32_t>(s);
+}
 inline constexpr std::uint64_t kNoSimplex = simplex(kDimNone, 0);
 
 /// An intersection point named by the lowest-dimensional simplex of A and of
@@ -42,9 +46,9 @@ struct PointKey {
 /// A closed net split into triangles: n-gons around their centroid
 /// (seed 004 section 2), triangles as they are.
 struct TriMesh {
-  std::vector<Vec3d> p;                           // net vertices, then one centroid per split n-gon
-  std::size_t net_vertices = 0;                   // p[0, net_vertices) are the net's own
-  std::vector<std::array<std::uint32_t, 3>> tri;  // counter-clockwise from outside
+  std::vector<Vec3d> p;                                // net vertices, then one centroid per split n-gon
+  std::size_t net_vertices = 0;                        // p[0, net_vertices) are the net's own
+  std::vector<std::array<std::uint32_t, 3>> tri;       // counter-clockwise from outside
   std::vector<std::array<std::uint32_t, 3>> tri_edge;  // edge k runs tri[k] -> tri[k+1]
   std::vector<std::array<std::uint32_t, 2>> edge;      // (smaller, larger) vertex
   std::vector<std::array<std::uint32_t, 2>> edge_tri;  // the two triangles of an edge
@@ -52,7 +56,7 @@ struct TriMesh {
   std::vector<std::uint32_t> face_tri_begin;           // polygon f has triangles [begin[f], begin[f+1])
   std::vector<std::array<double, 6>> box;              // per triangle: lo xyz, hi xyz (exact min/max)
   Box3d bounds;
-  std::string name;                                    // "A" or "B" in messages
+  std::string name;  // "A" or "B" in messages
 };
 
 /// Builds the triangulated net and checks that it is a closed (unless
@@ -60,17 +64,17 @@ struct TriMesh {
 /// duplicate vertices or degenerate triangles (errors name the polygon).
 /// A boundary edge has edge_tri[e][1] == kNil. Self-intersection is
 /// checked separately.
-[[nodiscard]] Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out,
-                                    const ExecContext& ctx, bool open = false);
+[[nodiscard]] Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx,
+                                    bool open = false);
 
 /// Bounding-volume hierarchy over triangle boxes (median split, leaves of
 /// up to 4 triangles): node i has children or a triangle range.
 struct Bvh {
   struct Node {
     std::array<double, 6> box;
-    std::uint32_t left = kNil;   // inner: left child (right = left + 1); leaf: kNil
-    std::uint32_t first = 0;     // leaf: first index into order
-    std::uint32_t count = 0;     // leaf: triangle count
+    std::uint32_t left = kNil;  // inner: left child (right = left + 1); leaf: kNil
+    std::uint32_t first = 0;    // leaf: first index into order
+    std::uint32_t count = 0;    // leaf: triangle count
   };
   std::vector<Node> nodes;
   std::vector<std::uint32_t> order;  // triangle indices, leaves' ranges
@@ -83,7 +87,8 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
                                                                           const ExecContext& ctx);
 /// The smallest pair i < j of triangles of one mesh that cross
 /// (triangles_cross), or {kNil, kNil} when the mesh does not intersect itself.
-[[nodiscard]] std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx);
+[[nodiscard]] std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh,
+                                                               const ExecContext& ctx);
 
 // ----------------------------------------------------------- exact kernel
 // All decisions below are exact (CGAL's filtered predicates on the input
@@ -145,31 +150,31 @@ struct PointIds {
 struct CutSide {
   const TriMesh* m = nullptr;
   int side = 0;
-  std::uint32_t offset = 0;  // global id of vertex 0
-  std::vector<std::uint32_t> slot;         // triangle -> index in cut, or kNil
-  std::vector<std::uint32_t> cut;          // cut triangles, increasing
-  std::vector<std::vector<PointKey>> points;                      // per cut triangle
-  std::vector<std::vector<std::array<PointKey, 2>>> segments;     // per cut triangle
-  std::vector<std::vector<std::uint32_t>> coplanar_with;          // per cut triangle: the other net's triangles
-  std::vector<std::vector<std::array<std::uint32_t, 3>>> refined;                        // per cut triangle, canonical ids
-  std::vector<std::uint64_t> edges;                               // sorted edges of the refined triangles
+  std::uint32_t offset = 0;                                        // global id of vertex 0
+  std::vector<std::uint32_t> slot;                                 // triangle -> index in cut, or kNil
+  std::vector<std::uint32_t> cut;                                  // cut triangles, increasing
+  std::vector<std::vector<PointKey>> points;                       // per cut triangle
+  std::vector<std::vector<std::array<PointKey, 2>>> segments;      // per cut triangle
+  std::vector<std::vector<std::uint32_t>> coplanar_with;           // per cut triangle: the other net's triangles
+  std::vector<std::vector<std::array<std::uint32_t, 3>>> refined;  // per cut triangle, canonical ids
+  std::vector<std::uint64_t> edges;                                // sorted edges of the refined triangles
   // Pieces: triangle t owns pieces [piece_begin[t], piece_begin[t+1]).
   std::vector<std::uint32_t> piece_begin;
   std::vector<std::array<std::uint32_t, 3>> piece;
   std::vector<std::int8_t> coplanar;  // per piece: 0 no, +1 same orientation as the other net, -1 opposite
   std::vector<std::uint32_t> component;
-  std::vector<std::uint8_t> keep;     // per piece
+  std::vector<std::uint8_t> keep;  // per piece
 };
 
 /// Both nets cut along their intersection.
 struct Cut {
   CutSide sides[2];
   PointIds ids;
-  std::uint32_t nA = 0, nB = 0;                 // ids: A's vertices, then B's, then new points
-  std::vector<std::uint32_t> canon;             // id -> canonical id (A's vertex where a B vertex coincides)
-  std::vector<std::uint64_t> on_a, on_b;        // canonical id -> simplex of A / B holding it, or none
-  std::vector<PointKey> new_keys;               // new points (id nA + nB + k)
-  std::vector<Vec3d> new_points;                // their rounded coordinates
+  std::uint32_t nA = 0, nB = 0;           // ids: A's vertices, then B's, then new points
+  std::vector<std::uint32_t> canon;       // id -> canonical id (A's vertex where a B vertex coincides)
+  std::vector<std::uint64_t> on_a, on_b;  // canonical id -> simplex of A / B holding it, or none
+  std::vector<PointKey> new_keys;         // new points (id nA + nB + k)
+  std::vector<Vec3d> new_points;          // their rounded coordinates
   std::size_t candidate_pairs = 0, intersecting_pairs = 0;
   [[nodiscard]] Vec3d position(const TriMesh& a, const TriMesh& b, std::uint32_t id) const {
     return id < nA ? a.p[id] : (id < nA + nB ? b.p[id - nA] : new_points[id - nA - nB]);

@@ -9,8 +9,6 @@
 // Why not CGAL's corefinement: it runs every vertex of both nets through the
 // exact kernel; here only the triangles that meet the other net see it, the
 // rest stays plain doubles (docs/glossary.md, net Booleans).
-#include "boolean_detail.h"
-
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -21,6 +19,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "boolean_detail.h"
+
 namespace atelier::net_detail {
 
 namespace {
@@ -29,18 +29,30 @@ using Ki = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Ke = CGAL::Exact_predicates_exact_constructions_kernel;
 using Pi = Ki::Point_3;
 
-Pi pi(const Vec3d& v) { return {v.x(), v.y(), v.z()}; }
-Ke::Point_3 pe(const Vec3d& v) { return {v.x(), v.y(), v.z()}; }
+Pi pi(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Ke::Point_3 pe(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
 
-int sgn(CGAL::Orientation o) { return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0); }
+int sgn(CGAL::Orientation o) {
+  return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0);
+}
 
 /// The two coordinates kept when dropping `axis`, in cyclic order, so the
 /// 2D orientation of a projected triangle has the sign of its normal's
 /// component along the axis.
-inline int u_of(int axis) { return (axis + 1) % 3; }
-inline int v_of(int axis) { return (axis + 2) % 3; }
+inline int u_of(int axis) {
+  return (axis + 1) % 3;
+}
+inline int v_of(int axis) {
+  return (axis + 2) % 3;
+}
 
-Ki::Point_2 proj(const Vec3d& p, int axis) { return {p[u_of(axis)], p[v_of(axis)]}; }
+Ki::Point_2 proj(const Vec3d& p, int axis) {
+  return {p[u_of(axis)], p[v_of(axis)]};
+}
 
 int orient2(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) {
   return sgn(CGAL::orientation(proj(a, axis), proj(b, axis), proj(c, axis)));
@@ -181,8 +193,10 @@ Ke::Point_3 exact_point(const TriMesh& a, const TriMesh& b, const PointKey& k) {
     }
     throw Error(Status(ErrorCode::kInternal, "net boolean: an intersection point has no unique construction"));
   };
-  if (dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace) return point_of(CGAL::intersection(line(a, k.a), plane(b, k.b)));
-  if (dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge) return point_of(CGAL::intersection(line(b, k.b), plane(a, k.a)));
+  if (dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace)
+    return point_of(CGAL::intersection(line(a, k.a), plane(b, k.b)));
+  if (dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)
+    return point_of(CGAL::intersection(line(b, k.b), plane(a, k.a)));
   return point_of(CGAL::intersection(line(a, k.a), line(b, k.b)));
 }
 
@@ -396,7 +410,8 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
   // avoids slivers. Nearly collinear cut points (a net cutting the coplanar
   // fan of a split planar polygon) would otherwise give triangles a rounding
   // of the points can fold over.
-  using Ct = CGAL::Constrained_Delaunay_triangulation_2<Ke, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
+  using Ct =
+      CGAL::Constrained_Delaunay_triangulation_2<Ke, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
   const TriMesh& m = side == 0 ? a : b;
   const std::uint32_t offset = side == 0 ? 0u : static_cast<std::uint32_t>(a.p.size());
   const auto& tv = m.tri[t];
@@ -414,7 +429,8 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
     std::vector<std::pair<PointKey, Ct::Vertex_handle>> handle;
     handle.reserve(points.size());
     auto project = [&](const Ke::Point_3& p) {
-      return pr.axis == 0 ? Ke::Point_2(p.y(), p.z()) : (pr.axis == 1 ? Ke::Point_2(p.z(), p.x()) : Ke::Point_2(p.x(), p.y()));
+      return pr.axis == 0 ? Ke::Point_2(p.y(), p.z())
+                          : (pr.axis == 1 ? Ke::Point_2(p.z(), p.x()) : Ke::Point_2(p.x(), p.y()));
     };
     // Points on the triangle's edges go in by their known place (the edge,
     // sorted along it), so no predicate has to find out that they are
@@ -492,8 +508,8 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
       if (CGAL::orientation(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()) != CGAL::LEFT_TURN) {
         std::ostringstream msg;
         msg << "net boolean: a refined triangle of triangle " << t << " of " << m.name << " is flat ("
-            << on_edge[0].size() << "," << on_edge[1].size() << "," << on_edge[2].size() << " edge points, " << inside.size()
-            << " inside)";
+            << on_edge[0].size() << "," << on_edge[1].size() << "," << on_edge[2].size() << " edge points, "
+            << inside.size() << " inside)";
         return {ErrorCode::kInternal, msg.str()};
       }
       std::array<std::uint32_t, 3> tri{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
@@ -524,12 +540,14 @@ Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k) {
   return {coord(p.x()), coord(p.y()), coord(p.z())};
 }
 
-int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q) { return winding_any<Ki>(m, bvh, pi(q), q); }
+int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q) {
+  return winding_any<Ki>(m, bvh, pi(q), q);
+}
 
 int winding_number_centroid(const TriMesh& m, const Bvh& bvh, const TriMesh& a, const TriMesh& b,
                             const std::array<PointKey, 3>& corners3) {
-  const Ke::Point_3 c = CGAL::centroid(exact_point(a, b, corners3[0]), exact_point(a, b, corners3[1]),
-                                       exact_point(a, b, corners3[2]));
+  const Ke::Point_3 c =
+      CGAL::centroid(exact_point(a, b, corners3[0]), exact_point(a, b, corners3[1]), exact_point(a, b, corners3[2]));
   const Vec3d cd(CGAL::to_double(c.x()), CGAL::to_double(c.y()), CGAL::to_double(c.z()));
   return winding_any<Ke>(m, bvh, c, cd);
 }

@@ -17,9 +17,9 @@ struct Step {
 };
 
 struct Rule {
-  int target = 6;            // regular valence
+  int target = 6;  // regular valence
   bool p_side = true, q_side = true;
-  bool count_only = false;   // cost 1 per irregular vertex instead of (v - target)^2
+  bool count_only = false;  // cost 1 per irregular vertex instead of (v - target)^2
   double valence_weight = 0;
   double length_weight = 1;
   std::vector<Step> steps;
@@ -44,7 +44,7 @@ Rule rule_of(ConnectRule r) {
       break;
     case ConnectRule::kQuadRegularVertices:
       x.target = 4, x.count_only = true, x.valence_weight = 1, x.length_weight = 1e-4;
-      x.steps = {{1, 1, 0.0}, {2, 0, 0.0}, {0, 2, 0.0}, {1, 0, 0.25}, {0, 1, 0.25},
+      x.steps = {{1, 1, 0.0},  {2, 0, 0.0},  {0, 2, 0.0},  {1, 0, 0.25}, {0, 1, 0.25},
                  {3, 0, 0.25}, {0, 3, 0.25}, {2, 1, 0.25}, {1, 2, 0.25}};
       break;
     case ConnectRule::kQuadRegularMeshes:
@@ -55,7 +55,9 @@ Rule rule_of(ConnectRule r) {
   return x;
 }
 
-bool quad_rule(ConnectRule r) { return r >= ConnectRule::kQuadValence; }
+bool quad_rule(ConnectRule r) {
+  return r >= ConnectRule::kQuadValence;
+}
 
 template <class... A>
 Status fail(ErrorCode c, const A&... parts) {
@@ -65,7 +67,8 @@ Status fail(ErrorCode c, const A&... parts) {
 }
 
 Status check(std::span<const Vec3d> positions, const BoundaryPolygon& p, const char* name) {
-  if (p.vertices.size() < 3) return fail(ErrorCode::kInvalidArgument, "connect: polygon ", name, " has fewer than 3 vertices");
+  if (p.vertices.size() < 3)
+    return fail(ErrorCode::kInvalidArgument, "connect: polygon ", name, " has fewer than 3 vertices");
   if (!p.valence.empty() && p.valence.size() != p.vertices.size())
     return fail(ErrorCode::kInvalidArgument, "connect: polygon ", name, " has ", p.valence.size(), " valences for ",
                 p.vertices.size(), " vertices");

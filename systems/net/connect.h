@@ -28,25 +28,25 @@
 // Reads: positions, the polygons. Writes: nothing (faces are returned).
 #pragma once
 
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/polygon_soup.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string_view>
 #include <vector>
 
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
-#include <atelier/storage/polygon_soup.h>
-
 namespace atelier {
 
 enum class ConnectRule : std::uint8_t {
-  kTriShortest,         // (a)
-  kTriOneSided,         // (b)
-  kTriTwoSided,         // (c)
-  kQuadValence,         // (i)
-  kQuadRegularVertices, // (ii)
-  kQuadRegularMeshes,   // (iii)
+  kTriShortest,          // (a)
+  kTriOneSided,          // (b)
+  kTriTwoSided,          // (c)
+  kQuadValence,          // (i)
+  kQuadRegularVertices,  // (ii)
+  kQuadRegularMeshes,    // (iii)
 };
 [[nodiscard]] Expected<ConnectRule> parse_connect_rule(std::string_view s);  // a, b, c, i, ii, iii
 
@@ -72,7 +72,7 @@ struct ConnectReport {
   std::size_t triangles = 0, quads = 0, other = 0;
   std::size_t irregular_vertices = 0;  // polygon vertices whose valence ends != 6 (tri) or != 4 (quad rules)
   double new_edge_length = 0.0;
-  double cost = 0.0;                   // the rule's cost of the chosen path
+  double cost = 0.0;  // the rule's cost of the chosen path
 };
 
 /// Closes the gap between P and Q (see above). Errors: fewer than 3

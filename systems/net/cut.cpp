@@ -4,11 +4,12 @@
 // the intersection polygons are edges of both), and the pieces between the
 // intersection polygons. Shared by the Booleans (boolean.cpp) and trimming
 // (trim.cpp).
+#include <atelier/engine/parallel.h>
+
 #include <algorithm>
 #include <numeric>
 #include <sstream>
 
-#include <atelier/engine/parallel.h>
 #include "boolean_detail.h"
 
 namespace atelier::net_detail {
@@ -90,7 +91,7 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
       new_keys.push_back(k);
     }
   }
-  
+
   const std::size_t n_ids = std::size_t{nA} + nB + new_keys.size();
   UnionFind merge(n_ids);
   for (const PointKey& k : ids.keys)
@@ -205,7 +206,8 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
   for (CutSide& s : sides) {
     for (const auto& r : s.refined)
       for (const Tri3& t : r)
-        for (int k = 0; k < 3; ++k) s.edges.push_back(edge_key(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]));
+        for (int k = 0; k < 3; ++k)
+          s.edges.push_back(edge_key(t[static_cast<std::size_t>(k)], t[static_cast<std::size_t>((k + 1) % 3)]));
     std::sort(s.edges.begin(), s.edges.end());
     s.edges.erase(std::unique(s.edges.begin(), s.edges.end()), s.edges.end());
   }
@@ -238,9 +240,9 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
         for (std::uint32_t g : s.coplanar_with[c]) {
           if (in_closure(other, on_other[r[i][0]], g) && in_closure(other, on_other[r[i][1]], g) &&
               in_closure(other, on_other[r[i][2]], g)) {
-            s.coplanar[p0 + i] = static_cast<std::int8_t>(
-                s.side == 0 ? coplanar_orientation(A, static_cast<std::uint32_t>(t), B, g)
-                            : coplanar_orientation(B, static_cast<std::uint32_t>(t), A, g));
+            s.coplanar[p0 + i] =
+                static_cast<std::int8_t>(s.side == 0 ? coplanar_orientation(A, static_cast<std::uint32_t>(t), B, g)
+                                                     : coplanar_orientation(B, static_cast<std::uint32_t>(t), A, g));
             break;
           }
         }
@@ -259,10 +261,12 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
     for (std::uint32_t t : s.cut)
       for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p)
         for (int k = 0; k < 3; ++k)
-          local.emplace_back(edge_key(s.piece[p][static_cast<std::size_t>(k)], s.piece[p][static_cast<std::size_t>((k + 1) % 3)]), p);
+          local.emplace_back(
+              edge_key(s.piece[p][static_cast<std::size_t>(k)], s.piece[p][static_cast<std::size_t>((k + 1) % 3)]), p);
     std::sort(local.begin(), local.end());
     auto piece_tri = [&](std::uint32_t p) {
-      return static_cast<std::uint32_t>(std::upper_bound(s.piece_begin.begin(), s.piece_begin.end(), p) - s.piece_begin.begin() - 1);
+      return static_cast<std::uint32_t>(std::upper_bound(s.piece_begin.begin(), s.piece_begin.end(), p) -
+                                        s.piece_begin.begin() - 1);
     };
     for (std::size_t i = 0; i < local.size();) {
       std::size_t j = i;
@@ -281,15 +285,16 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
           if (edge_key(u, w) != e) continue;
           const std::uint32_t ed = m.tri_edge[t][k];
           const std::uint32_t n = m.edge_tri[ed][0] == t ? m.edge_tri[ed][1] : m.edge_tri[ed][0];
-          if (n == kNil) border = true;  // the net's own boundary (open nets: trimming)
-          else if (s.slot[n] == kNil) q = s.piece_begin[n];
+          if (n == kNil)
+            border = true;  // the net's own boundary (open nets: trimming)
+          else if (s.slot[n] == kNil)
+            q = s.piece_begin[n];
         }
         if (border) {
           i = j;
           continue;
         }
-        if (q == kNil)
-          return fail(ErrorCode::kInternal, "net boolean: refined net ", m.name, " has an unmatched edge");
+        if (q == kNil) return fail(ErrorCode::kInternal, "net boolean: refined net ", m.name, " has an unmatched edge");
       } else {
         return fail(ErrorCode::kInternal, "net boolean: refined net ", m.name, " has an edge in ", j - i, " triangles");
       }

@@ -2,14 +2,14 @@
 // 2-manifold, no duplicate vertices, no degenerate triangles), the box
 // hierarchy and the candidate pairs (seed 004 section 2: "the
 // intersections of the edges of a net with meshes of a second net").
-#include "boolean_detail.h"
+#include <atelier/engine/parallel.h>
 
 #include <algorithm>
 #include <limits>
 #include <numeric>
 #include <sstream>
 
-#include <atelier/engine/parallel.h>
+#include "boolean_detail.h"
 
 namespace atelier::net_detail {
 
@@ -125,7 +125,8 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
       auto what = [&](std::uint32_t v) {
         return (v < nv ? "vertex " + std::to_string(v) : "the centroid") + " of face " + std::to_string(face_using[v]);
       };
-      return fail(ErrorCode::kDegenerate, "net ", nm, ": ", what(x), " and ", what(y), " coincide (duplicate vertices)");
+      return fail(ErrorCode::kDegenerate, "net ", nm, ": ", what(x), " and ", what(y),
+                  " coincide (duplicate vertices)");
     }
 
   // Degenerate triangles (exactly collinear corners).
@@ -137,7 +138,8 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
   for (std::size_t t = 0; t < nt; ++t)
     if (bad[t])
       return fail(ErrorCode::kDegenerate, "net ", nm, ": face ", out.face_of[t],
-                  out.tri.size() == nf ? "" : " (or a triangle of its centroid split)", " is degenerate (collinear corners)");
+                  out.tri.size() == nf ? "" : " (or a triangle of its centroid split)",
+                  " is degenerate (collinear corners)");
 
   // Edges: every undirected edge in exactly two triangles, once each way.
   struct Half {
@@ -150,7 +152,8 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
   par::for_each_n(ctx, nt, [&](std::size_t t) {
     for (std::uint8_t k = 0; k < 3; ++k) {
       const std::uint32_t u = out.tri[t][k], v = out.tri[t][(k + 1) % 3];
-      half[3 * t + k] = {(std::uint64_t{std::min(u, v)} << 32) | std::max(u, v), static_cast<std::uint32_t>(t), k, u < v};
+      half[3 * t + k] = {(std::uint64_t{std::min(u, v)} << 32) | std::max(u, v), static_cast<std::uint32_t>(t), k,
+                         u < v};
     }
   });
   par::sort(ctx, half.begin(), half.end(), [](const Half& x, const Half& y) {
@@ -165,8 +168,8 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
     const auto u = static_cast<std::uint32_t>(half[i].key >> 32), v = static_cast<std::uint32_t>(half[i].key);
     if (j - i == 1) {
       if (!open)
-        return fail(ErrorCode::kTopology, "net ", nm, " is open: edge (", u, ", ", v, ") of face ", out.face_of[half[i].tri],
-                    " has no neighbour");
+        return fail(ErrorCode::kTopology, "net ", nm, " is open: edge (", u, ", ", v, ") of face ",
+                    out.face_of[half[i].tri], " has no neighbour");
       const auto e = static_cast<std::uint32_t>(out.edge.size());
       out.edge.push_back({u, v});
       out.edge_tri.push_back({half[i].tri, kNil});
@@ -178,8 +181,8 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
       return fail(ErrorCode::kNonManifold, "net ", nm, " is non-manifold: edge (", u, ", ", v, ") is shared by faces ",
                   out.face_of[half[i].tri], ", ", out.face_of[half[i + 1].tri], " and ", out.face_of[half[i + 2].tri]);
     if (half[i].forward == half[i + 1].forward)
-      return fail(ErrorCode::kTopology, "net ", nm, " is inconsistently oriented: faces ", out.face_of[half[i].tri], " and ",
-                  out.face_of[half[i + 1].tri], " run edge (", u, ", ", v, ") the same way");
+      return fail(ErrorCode::kTopology, "net ", nm, " is inconsistently oriented: faces ", out.face_of[half[i].tri],
+                  " and ", out.face_of[half[i + 1].tri], " run edge (", u, ", ", v, ") the same way");
     const auto e = static_cast<std::uint32_t>(out.edge.size());
     out.edge.push_back({u, v});
     out.edge_tri.push_back({half[i].tri, half[i + 1].tri});
@@ -217,8 +220,8 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
   });
   for (std::uint32_t v = 0; v < out.p.size(); ++v)
     if (pinched[v])
-      return fail(ErrorCode::kNonManifold, "net ", nm, " is non-manifold at vertex ", v, " (its faces form several fans, e.g. face ",
-                  out.face_of[first[v]], ")");
+      return fail(ErrorCode::kNonManifold, "net ", nm, " is non-manifold at vertex ", v,
+                  " (its faces form several fans, e.g. face ", out.face_of[first[v]], ")");
 
   out.box.resize(nt);
   par::for_each_n(ctx, nt, [&](std::size_t t) { out.box[t] = tri_box(out, static_cast<std::uint32_t>(t)); });
@@ -394,8 +397,9 @@ std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, co
   // One list per task (each task writes only its own).
   std::vector<std::vector<std::array<std::uint32_t, 2>>> lists(kMaxTasks);
   std::size_t tasks = 0;
-  dual_visit(a, bvh_a, b, bvh_b, false, ctx, tasks,
-             [&](std::size_t task, std::uint32_t i, std::uint32_t j) { lists[task].push_back({i, j}); });
+  dual_visit(a, bvh_a, b, bvh_b, false, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+    lists[task].push_back({i, j});
+  });
   std::vector<std::array<std::uint32_t, 2>> pairs;
   for (std::size_t k = 0; k < tasks; ++k) pairs.insert(pairs.end(), lists[k].begin(), lists[k].end());
   // Sorted: the same list for any thread count.

@@ -108,7 +108,8 @@ Status apply_paper_mode(PolygonSoup& out, std::span<const std::array<std::uint32
         auto skip = best[i + 1];
         std::pair<int, double> use{-1, 0.0};
         if (candidate(b + i)) use = {best[i + 2].first + 1, best[i + 2].second + length(b + i)};
-        const bool better = use.first > skip.first || (use.first == skip.first && use.first > 0 && use.second < skip.second);
+        const bool better =
+            use.first > skip.first || (use.first == skip.first && use.first > 0 && use.second < skip.second);
         best[i] = better ? use : skip;
         pick[i] = better ? 1 : 0;
       }

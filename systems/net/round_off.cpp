@@ -1,5 +1,7 @@
 // Rounding-off (seed 004 section 6): the umbrella energy of moments as a
 // least-squares problem over the freed vertices.
+#include <atelier/io/mesh_arrays.h>
+#include <atelier/storage/adjacency.h>
 #include <atelier/systems/net/round_off.h>
 
 #include <Eigen/Sparse>
@@ -7,9 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-
-#include <atelier/io/mesh_arrays.h>
-#include <atelier/storage/adjacency.h>
 
 namespace atelier {
 
@@ -33,7 +32,8 @@ struct Residuals {
   std::size_t terms = 0;
 };
 
-Residuals residuals(const NodeAdjacency& adj, std::span<const std::uint8_t> term, std::size_t nodes, const RoundOptions& o) {
+Residuals residuals(const NodeAdjacency& adj, std::span<const std::uint8_t> term, std::size_t nodes,
+                    const RoundOptions& o) {
   // Delta as rows over node slots.
   auto delta = [&](std::uint32_t p, double w, std::vector<Trip>& t, std::size_t row) {
     const std::uint32_t n = adj.degree(p);
@@ -64,7 +64,8 @@ Residuals residuals(const NodeAdjacency& adj, std::span<const std::uint8_t> term
 
 /// Terms: every vertex whose Delta or torsion involves a free vertex (within
 /// two rings of one).
-std::vector<std::uint8_t> term_set(const NodeAdjacency& adj, std::span<const std::uint8_t> free_mask, std::size_t nodes) {
+std::vector<std::uint8_t> term_set(const NodeAdjacency& adj, std::span<const std::uint8_t> free_mask,
+                                   std::size_t nodes) {
   std::vector<std::uint8_t> t(free_mask.begin(), free_mask.end());
   for (int ring = 0; ring < 2; ++ring) {
     std::vector<std::uint8_t> next = t;
@@ -76,7 +77,9 @@ std::vector<std::uint8_t> term_set(const NodeAdjacency& adj, std::span<const std
   return t;
 }
 
-double energy_of(const SpMat& r, const Eigen::MatrixX3d& x) { return (r * x).squaredNorm(); }
+double energy_of(const SpMat& r, const Eigen::MatrixX3d& x) {
+  return (r * x).squaredNorm();
+}
 
 Eigen::MatrixX3d positions(const Model& m) {
   Eigen::MatrixX3d x(static_cast<int>(m.nodes.position.size()), 3);
@@ -99,19 +102,22 @@ Status check_weights(const RoundOptions& o) {
 Expected<double> umbrella_energy(const Model& m, std::span<const std::uint8_t> free_mask, const RoundOptions& opt) {
   if (Status s = check_weights(opt); !s) return s;
   const std::size_t nodes = m.nodes.position.size();
-  if (free_mask.size() != nodes) return fail(ErrorCode::kInvalidArgument, "round: the free mask needs one entry per node slot");
+  if (free_mask.size() != nodes)
+    return fail(ErrorCode::kInvalidArgument, "round: the free mask needs one entry per node slot");
   const NodeAdjacency adj = build_adjacency(m);
   const auto term = term_set(adj, free_mask, nodes);
   return energy_of(residuals(adj, term, nodes, opt).r, positions(m));
 }
 
-Expected<RoundReport> round_off(Model& m, std::span<const NodeIdx> seam, const RoundOptions& opt, const ExecContext& ctx) {
+Expected<RoundReport> round_off(Model& m, std::span<const NodeIdx> seam, const RoundOptions& opt,
+                                const ExecContext& ctx) {
   (void)ctx;
   if (Status s = check_weights(opt); !s) return s;
   const std::size_t nodes = m.nodes.position.size();
   if (seam.empty()) return fail(ErrorCode::kInvalidArgument, "round: the seam is empty");
   for (NodeIdx v : seam)
-    if (v.value >= nodes || !m.alive(v)) return fail(ErrorCode::kInvalidArgument, "round: seam node ", v.value, " does not exist");
+    if (v.value >= nodes || !m.alive(v))
+      return fail(ErrorCode::kInvalidArgument, "round: seam node ", v.value, " does not exist");
   const NodeAdjacency adj = build_adjacency(m);
   std::vector<std::uint8_t> free_mask(nodes, 0);
   for (NodeIdx v : seam) free_mask[v.value] = 1;
@@ -143,18 +149,22 @@ Expected<RoundReport> round_off(Model& m, std::span<const NodeIdx> seam, const R
   std::vector<Trip> mt;
   for (int row = 0; row < res.r.outerSize(); ++row)
     for (SpMat::InnerIterator it(res.r, row); it; ++it)
-      if (col[static_cast<std::size_t>(it.col())] >= 0) mt.emplace_back(row, col[static_cast<std::size_t>(it.col())], it.value());
+      if (col[static_cast<std::size_t>(it.col())] >= 0)
+        mt.emplace_back(row, col[static_cast<std::size_t>(it.col())], it.value());
   Eigen::SparseMatrix<double> M(res.r.rows(), static_cast<int>(free_nodes.size()));
   M.setFromTriplets(mt.begin(), mt.end());
   const Eigen::SparseMatrix<double> A = M.transpose() * M;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
-  if (solver.info() != Eigen::Success || (solver.vectorD().array() <= 1e-14 * solver.vectorD().cwiseAbs().maxCoeff()).any())
-    return fail(ErrorCode::kDegenerate, "round: the freed region has no unique minimiser (does it touch fixed vertices?)");
+  if (solver.info() != Eigen::Success ||
+      (solver.vectorD().array() <= 1e-14 * solver.vectorD().cwiseAbs().maxCoeff()).any())
+    return fail(ErrorCode::kDegenerate,
+                "round: the freed region has no unique minimiser (does it touch fixed vertices?)");
   const Eigen::MatrixX3d rhs = -(M.transpose() * c);
   const Eigen::MatrixX3d xf = solver.solve(rhs);
   if (!xf.allFinite()) return fail(ErrorCode::kDegenerate, "round: the minimiser is not finite");
   Eigen::MatrixX3d x1 = x0;
-  for (std::size_t k = 0; k < free_nodes.size(); ++k) x1.row(static_cast<int>(free_nodes[k])) = xf.row(static_cast<int>(k));
+  for (std::size_t k = 0; k < free_nodes.size(); ++k)
+    x1.row(static_cast<int>(free_nodes[k])) = xf.row(static_cast<int>(k));
   const double e1 = energy_of(res.r, x1);
   if (!(e1 <= rep.energy_before)) {
     rep.energy_after = rep.energy_before;

@@ -19,15 +19,15 @@
 // freed nodes, geometry_version. On error nothing changes.
 #pragma once
 
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
+
 #include <cstddef>
 #include <filesystem>
 #include <span>
 #include <string_view>
 #include <vector>
-
-#include <atelier/engine/exec_context.h>
-#include <atelier/engine/status.h>
-#include <atelier/storage/model.h>
 
 namespace atelier {
 

@@ -1,6 +1,9 @@
 // Trimming (seed 004 section 6): the band, the cut (cut.cpp), the choice of
 // the enclosed part.
+#include <atelier/io/mesh_arrays.h>
+#include <atelier/systems/net/boolean.h>
 #include <atelier/systems/net/trim.h>
+#include <atelier/systems/spatial/body_bvh.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,9 +11,6 @@
 #include <numeric>
 #include <sstream>
 
-#include <atelier/io/mesh_arrays.h>
-#include <atelier/systems/net/boolean.h>
-#include <atelier/systems/spatial/body_bvh.h>
 #include "boolean_detail.h"
 
 namespace atelier {
@@ -40,12 +40,14 @@ std::vector<Vec3d> parse_curve(std::string_view text, std::string_view name) {
     io_detail::split_blanks(line, tok);
     if (tok.empty() || tok[0][0] == '#') continue;
     if (tok.size() != 3)
-      throw io_detail::parse_error_at_line(name, line_no, "expected 3 numbers (x y z), found " + std::to_string(tok.size()));
+      throw io_detail::parse_error_at_line(name, line_no,
+                                           "expected 3 numbers (x y z), found " + std::to_string(tok.size()));
     Vec3d p;
     for (int k = 0; k < 3; ++k) {
       const auto v = io_detail::parse_double(tok[static_cast<std::size_t>(k)]);
       if (!v || !std::isfinite(*v))
-        throw io_detail::parse_error_at_line(name, line_no, "not a finite number: '" + std::string(tok[static_cast<std::size_t>(k)]) + "'");
+        throw io_detail::parse_error_at_line(
+            name, line_no, "not a finite number: '" + std::string(tok[static_cast<std::size_t>(k)]) + "'");
       p[k] = *v;
     }
     out.push_back(p);
@@ -125,7 +127,8 @@ Expected<TrimReport> trim_net(const PolygonSoupView& net, std::span<const Vec3d>
   }
   rep.parts = roots.size();
   if (roots.size() < 2)
-    return fail(ErrorCode::kInvalidArgument, "trim: the curve does not cut the net into parts (does it lie on the net, "
+    return fail(ErrorCode::kInvalidArgument,
+                "trim: the curve does not cut the net into parts (does it lie on the net, "
                 "and is it closed?)");
   bool any_border = false;
   for (std::uint32_t r : roots) any_border |= border[r] != 0;
@@ -133,8 +136,8 @@ Expected<TrimReport> trim_net(const PolygonSoupView& net, std::span<const Vec3d>
   if (any_border) {
     for (std::uint32_t r : roots) enclosed[r] = !border[r];
   } else {
-    const std::uint32_t smallest =
-        *std::min_element(roots.begin(), roots.end(), [&](std::uint32_t x, std::uint32_t y) { return area[x] < area[y]; });
+    const std::uint32_t smallest = *std::min_element(
+        roots.begin(), roots.end(), [&](std::uint32_t x, std::uint32_t y) { return area[x] < area[y]; });
     enclosed[smallest] = 1;
   }
   side.keep.assign(count, 0);

@@ -16,16 +16,16 @@
 // are allowed here), a curve that does not cut the net into two parts.
 #pragma once
 
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/polygon_soup.h>
+
 #include <cstddef>
 #include <filesystem>
 #include <span>
 #include <string_view>
 #include <vector>
-
-#include <atelier/engine/exec_context.h>
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
-#include <atelier/storage/polygon_soup.h>
 
 namespace atelier {
 

@@ -37,9 +37,9 @@ TEST(NetCli, BooleanVolumesAndReport) {
     double volume;
   } cases[] = {{"intersection", 0.1875}, {"union", 1.8125}, {"difference", 0.8125}};
   for (const auto& c : cases) {
-    const auto r = run_cli("boolean --op " + std::string(c.op) + " " + (d / "a.obj").string() + " " + (d / "b.obj").string() +
-                           " --out " + (d / "r.obj").string() + " --json " + (d / "r.json").string() + " --seam-out " +
-                           (d / "seam.txt").string());
+    const auto r = run_cli("boolean --op " + std::string(c.op) + " " + (d / "a.obj").string() + " " +
+                           (d / "b.obj").string() + " --out " + (d / "r.obj").string() + " --json " +
+                           (d / "r.json").string() + " --seam-out " + (d / "seam.txt").string());
     ASSERT_EQ(r.code, 0) << r.out;
     const auto j = read_json(d / "r.json");
     EXPECT_NEAR(j["volume"]["result"].get<double>(), c.volume, 1e-12) << c.op;
@@ -75,10 +75,12 @@ TEST(NetCli, BadInputIsRefusedAndNothingIsWritten) {
   EXPECT_NE(r.out.find("open.obj"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("face"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(d / "out.obj"));
-  r = run_cli("boolean --op xor " + (d / "a.obj").string() + " " + (d / "a.obj").string() + " --out " + (d / "out.obj").string());
+  r = run_cli("boolean --op xor " + (d / "a.obj").string() + " " + (d / "a.obj").string() + " --out " +
+              (d / "out.obj").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("xor"), std::string::npos);
-  r = run_cli("boolean " + (d / "a.obj").string() + " " + (d / "missing.obj").string() + " --out " + (d / "out.obj").string());
+  r = run_cli("boolean " + (d / "a.obj").string() + " " + (d / "missing.obj").string() + " --out " +
+              (d / "out.obj").string());
   EXPECT_EQ(r.code, 3) << r.out;
   r = run_cli("boolean " + (d / "a.obj").string());
   EXPECT_EQ(r.code, 2) << r.out;

@@ -12,10 +12,10 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Surface_mesh.h>
-#include <gtest/gtest.h>
-
 #include <atelier/io/obj.h>
 #include <atelier/systems/net/boolean.h>
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <iostream>
 
@@ -42,7 +42,9 @@ CGAL::Surface_mesh<typename K::Point_3> to_cgal(const PolygonSoup& s) {
 
 const std::filesystem::path kPairs = std::filesystem::path(ATELIER_SHARED_DATA) / "meshes" / "boolean-pairs";
 
-PolygonSoup load(const std::string& name) { return net_polygons(read_obj(kPairs / name)); }
+PolygonSoup load(const std::string& name) {
+  return net_polygons(read_obj(kPairs / name));
+}
 
 /// CGAL's exact corefinement volume of a op b.
 double cgal_volume(const PolygonSoup& a, const PolygonSoup& b, BooleanOp op) {
@@ -50,10 +52,18 @@ double cgal_volume(const PolygonSoup& a, const PolygonSoup& b, BooleanOp op) {
   CGAL::Surface_mesh<Ke::Point_3> out;
   bool ok = false;
   switch (op) {
-    case BooleanOp::kUnion: ok = PMP::corefine_and_compute_union(ma, mb, out); break;
-    case BooleanOp::kIntersection: ok = PMP::corefine_and_compute_intersection(ma, mb, out); break;
-    case BooleanOp::kAMinusB: ok = PMP::corefine_and_compute_difference(ma, mb, out); break;
-    case BooleanOp::kBMinusA: ok = PMP::corefine_and_compute_difference(mb, ma, out); break;
+    case BooleanOp::kUnion:
+      ok = PMP::corefine_and_compute_union(ma, mb, out);
+      break;
+    case BooleanOp::kIntersection:
+      ok = PMP::corefine_and_compute_intersection(ma, mb, out);
+      break;
+    case BooleanOp::kAMinusB:
+      ok = PMP::corefine_and_compute_difference(ma, mb, out);
+      break;
+    case BooleanOp::kBMinusA:
+      ok = PMP::corefine_and_compute_difference(mb, ma, out);
+      break;
   }
   EXPECT_TRUE(ok);
   return CGAL::to_double(PMP::volume(out));
@@ -84,8 +94,7 @@ TEST_P(SharedPairs, VolumesAgreeWithCgalCorefinement) {
 
 INSTANTIATE_TEST_SUITE_P(Net, SharedPairs,
                          ::testing::Values(Pair{"Havocglass8_left.obj", "Havocglass8_right.obj"},
-                                           Pair{"Offset3.obj", "Offset4.obj"},
-                                           Pair{"Cray_left.obj", "Cray_right.obj"}),
+                                           Pair{"Offset3.obj", "Offset4.obj"}, Pair{"Cray_left.obj", "Cray_right.obj"}),
                          [](const auto& info) { return std::string(info.param.a).substr(0, 5); });
 
 /// Generic analytic pairs too: results are not self-intersecting by CGAL's
@@ -102,7 +111,8 @@ TEST(NetBooleanPairs, SphereResultsAgreeWithCgal) {
     ASSERT_TRUE(r.has_value()) << r.status().to_string();
     {
       auto mesh = to_cgal<Ki>(r->result);
-      std::vector<std::pair<CGAL::Surface_mesh<Ki::Point_3>::Face_index, CGAL::Surface_mesh<Ki::Point_3>::Face_index>> bad;
+      std::vector<std::pair<CGAL::Surface_mesh<Ki::Point_3>::Face_index, CGAL::Surface_mesh<Ki::Point_3>::Face_index>>
+          bad;
       PMP::self_intersections(mesh, std::back_inserter(bad));
       EXPECT_TRUE(bad.empty()) << bad.size() << " crossing face pairs, op " << static_cast<int>(op);
     }

@@ -1,7 +1,6 @@
 // Net Booleans (seed 004 sections 2-3): volumes against analytic values,
 // closed and oriented results, touching and coplanar cases, bad input.
 #include <atelier/systems/net/boolean.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -49,7 +48,10 @@ TEST(NetBoolean, CoplanarCubes) {
   const struct {
     BooleanOp op;
     double volume;
-  } cases[] = {{BooleanOp::kIntersection, 0.5}, {BooleanOp::kUnion, 1.5}, {BooleanOp::kAMinusB, 0.5}, {BooleanOp::kBMinusA, 0.5}};
+  } cases[] = {{BooleanOp::kIntersection, 0.5},
+               {BooleanOp::kUnion, 1.5},
+               {BooleanOp::kAMinusB, 0.5},
+               {BooleanOp::kBMinusA, 0.5}};
   for (const auto& c : cases) {
     const BooleanReport r = run(a, b, c.op);
     EXPECT_NEAR(r.volume, c.volume, 1e-12) << static_cast<int>(c.op);
@@ -63,7 +65,9 @@ TEST(NetBoolean, CoplanarCubes) {
 namespace atelier {
 namespace {
 
-double lens(double r, double d) { return M_PI * (4 * r + d) * (2 * r - d) * (2 * r - d) / 12.0; }
+double lens(double r, double d) {
+  return M_PI * (4 * r + d) * (2 * r - d) * (2 * r - d) / 12.0;
+}
 
 /// Smallest distance from the centre to a face plane: the polyhedron holds
 /// the ball of that radius (and lies in the sphere it is inscribed in).
@@ -111,7 +115,8 @@ TEST(NetBoolean, SameBitsForAnyThreadCount) {
   const BooleanReport r1 = run(a, b, BooleanOp::kUnion, one);
   const BooleanReport r2 = run(a, b, BooleanOp::kUnion, many);
   ASSERT_EQ(r1.result.positions.size(), r2.result.positions.size());
-  EXPECT_EQ(0, std::memcmp(r1.result.positions.data(), r2.result.positions.data(), r1.result.positions.size() * sizeof(Vec3d)));
+  EXPECT_EQ(0, std::memcmp(r1.result.positions.data(), r2.result.positions.data(),
+                           r1.result.positions.size() * sizeof(Vec3d)));
   EXPECT_EQ(r1.result.face_nodes, r2.result.face_nodes);
   EXPECT_EQ(r1.result.face_offsets, r2.result.face_offsets);
 }
@@ -194,7 +199,8 @@ TEST(NetBoolean, RefusesBadNets) {
   // Inward.
   PolygonSoup inward = box({.5, .5, .5}, {2, 2, 2});
   for (std::size_t f = 0; f < inward.face_count(); ++f)
-    std::reverse(inward.face_nodes.begin() + inward.face_offsets[f], inward.face_nodes.begin() + inward.face_offsets[f + 1]);
+    std::reverse(inward.face_nodes.begin() + inward.face_offsets[f],
+                 inward.face_nodes.begin() + inward.face_offsets[f + 1]);
   EXPECT_NE(error(inward).find("inwards"), std::string::npos);
   // Not finite, out of range.
   PolygonSoup nan = box({.5, .5, .5}, {2, 2, 2});

@@ -1,7 +1,6 @@
 // Connecting nets by meshes (seed 004 section 4): strip invariants, rule
 // costs against brute force, branching.
 #include <atelier/systems/net/connect.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -43,15 +42,18 @@ Gap gap(int m, int n, double h = 1.0, double phase = 0.1, double rq = 1.0) {
   }
   std::map<std::pair<std::uint32_t, std::uint32_t>, int> border;
   for (const auto& p : polys)
-    for (std::size_t k = 0; k < p.vertices.size(); ++k) border[{p.vertices[k], p.vertices[(k + 1) % p.vertices.size()]}] = 1;
+    for (std::size_t k = 0; k < p.vertices.size(); ++k)
+      border[{p.vertices[k], p.vertices[(k + 1) % p.vertices.size()]}] = 1;
   for (const auto& [e, n] : use) {
     if (n != 1) return ::testing::AssertionFailure() << "edge used " << n << " times the same way";
     const bool is_border = border.count(e) > 0;
     const bool twin = use.count({e.second, e.first}) > 0;
-    if (is_border == twin) return ::testing::AssertionFailure() << "edge " << e.first << "-" << e.second << " unmatched";
+    if (is_border == twin)
+      return ::testing::AssertionFailure() << "edge " << e.first << "-" << e.second << " unmatched";
   }
   for (const auto& [e, n] : border)
-    if (!use.count(e)) return ::testing::AssertionFailure() << "polygon edge " << e.first << "-" << e.second << " not covered";
+    if (!use.count(e))
+      return ::testing::AssertionFailure() << "polygon edge " << e.first << "-" << e.second << " not covered";
   return ::testing::AssertionSuccess();
 }
 
@@ -121,7 +123,10 @@ TEST(NetConnect, ShortestEdgesRuleIsOptimal) {
     int i = 0, j = 0;
     double len = (P(0) - Q(0)).norm();
     for (int s = 0; s < m + n; ++s) {
-      if (mask >> s & 1) ++i; else ++j;
+      if (mask >> s & 1)
+        ++i;
+      else
+        ++j;
       if (i < m || j < n) len += (P(i) - Q(j)).norm();
     }
     best = std::min(best, len);

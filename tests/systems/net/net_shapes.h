@@ -3,15 +3,15 @@
 // checks every result must pass.
 #pragma once
 
+#include <atelier/storage/builder.h>
+#include <atelier/storage/polygon_soup.h>
+#include <atelier/storage/validate.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <map>
 #include <string>
 
-#include <atelier/storage/builder.h>
-#include <atelier/storage/polygon_soup.h>
-#include <atelier/storage/validate.h>
 #include "support/shapes.h"
 
 namespace atelier::net_test {
@@ -50,8 +50,8 @@ inline PolygonSoup from_shapes(const shapes::Soup& in) {
 /// Icosphere: the icosahedron subdivided `level` times, projected on the sphere.
 inline PolygonSoup icosphere(int level, double r, const Vec3d& centre) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3d> p = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Vec3d> p = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   std::vector<std::array<std::uint32_t, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                                  {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                                                  {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},

@@ -1,13 +1,12 @@
 // Rounding-off (seed 004 section 6): E never rises, fixed vertices keep
 // their bits, the result is the minimiser (no perturbation lowers E).
+#include <atelier/systems/net/boolean.h>
 #include <atelier/systems/net/round_off.h>
-
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <random>
 
-#include <atelier/systems/net/boolean.h>
 #include "net_shapes.h"
 
 namespace atelier {
@@ -55,7 +54,8 @@ TEST(NetRoundOff, LowersEnergyAndKeepsFixedVertices) {
   }
   std::size_t moved = 0;
   for (std::size_t v = 0; v < grown.size(); ++v) {
-    const bool same = std::memcmp(before.nodes.position[v].data(), s.model.nodes.position[v].data(), sizeof(Vec3d)) == 0;
+    const bool same =
+        std::memcmp(before.nodes.position[v].data(), s.model.nodes.position[v].data(), sizeof(Vec3d)) == 0;
     if (!grown[v]) {
       EXPECT_TRUE(same) << v;
     }

@@ -2,7 +2,6 @@
 // N-gon loses exactly its area (N/2) r^2 sin(2 pi / N); the kept and the
 // enclosed parts add up; curve files are parsed strictly.
 #include <atelier/systems/net/trim.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,7 +18,8 @@ PolygonSoup plane(int k) {
     for (int i = 0; i <= k; ++i) s.positions.emplace_back(-2.0 + 4.0 * i / k, -2.0 + 4.0 * j / k, 0.0);
   auto v = [&](int i, int j) { return static_cast<std::uint32_t>(j * (k + 1) + i); };
   for (int j = 0; j < k; ++j)
-    for (int i = 0; i < k; ++i) s.add_face(std::array<std::uint32_t, 4>{v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)});
+    for (int i = 0; i < k; ++i)
+      s.add_face(std::array<std::uint32_t, 4>{v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)});
   return s;
 }
 
