@@ -4,15 +4,17 @@
 #   (none)   what the library and the CLI need (`make demo`)
 #   --test   adds GoogleTest, Chromium (HTML report test) and Open MPI (the
 #            2-rank regen test; the CLI uses MPI when it is installed)
-#   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann)
+#   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann;
+#            Node.js and npm for manifold-3d, installed into bench/net/manifold)
 set -euo pipefail
+bench=0
 pkgs=(build-essential cmake ninja-build pkg-config
       libtbb-dev libeigen3-dev libembree-dev libopenvdb-dev libboost-iostreams-dev
       nlohmann-json3-dev libcli11-dev libcgal-dev zlib1g-dev libpng-dev)
 for arg in "$@"; do
   case "$arg" in
     --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin) ;;
-    --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev) ;;
+    --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev nodejs npm); bench=1 ;;
     *) echo "install-deps: unknown option $arg (use --test, --bench)" >&2; exit 2 ;;
   esac
 done
@@ -26,4 +28,8 @@ if ((${#missing[@]})); then
   [[ $(id -u) -ne 0 ]] && SUDO="sudo"
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+if ((bench)); then
+  # The net Booleans' peer manifold-3d (bench/net/net_bench.cpp runs it with node).
+  npm install --no-audit --no-fund --prefix "$(dirname "$0")/../bench/net/manifold" >/dev/null
 fi

@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "measure_cmd.h"
+#include "net_cmd.h"
 #include "regen_cmd.h"
 #include "render_cmd.h"
 #include <atelier/engine/memory.h>
@@ -62,6 +63,12 @@ int main(int argc, char** argv) {
   auto* measure_cmd = add_measure_subcommand(app, measure_opt);
   RegenOptions regen_opt;
   auto* regen_cmd = add_regen_subcommand(app, regen_opt);
+  NetBooleanOptions boolean_opt;
+  auto* boolean_cmd = add_boolean_subcommand(app, boolean_opt);
+  NetTrimOptions trim_opt;
+  auto* trim_cmd = add_trim_subcommand(app, trim_opt);
+  NetRoundOptions round_opt;
+  auto* round_cmd = add_round_subcommand(app, round_opt);
 
   try {
     app.parse(argc, argv);
@@ -79,6 +86,9 @@ int main(int argc, char** argv) {
     if (*encode_cmd) return run_encode(common, encode_opt, log);
     if (*regen_cmd) return run_regen(common, regen_opt, log);
     if (*measure_cmd) return run_measure(common, measure_opt, log);
+    if (*boolean_cmd) return run_boolean(common, boolean_opt, log);
+    if (*trim_cmd) return run_trim(common, trim_opt, log);
+    if (*round_cmd) return run_round(common, round_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();

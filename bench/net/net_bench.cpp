@@ -1,0 +1,269 @@
+// Net Booleans against their peers, side by side in one run on the same
+// pairs: CGAL's corefine_and_compute_union / _difference with the exact
+// kernel (Epeck, Surface_mesh), and manifold-3d (npm, WASM, one thread),
+// timed in-process by bench/net/manifold/manifold_bool.mjs (node start-up
+// and OBJ parsing excluded; median of the runs after a warm-up run).
+//
+// Per pair and operation the peers run first and store their times; the
+// BM_NetBoolean rows report counters x_cgal = t_cgal / t_ours and
+// x_manifold = t_manifold / t_ours (>1: ours is faster), and the relative
+// volume differences to each peer (vol_cgal, vol_manifold). Rows ending in
+// /nocheck skip the self-intersection test of the inputs (the peers do not
+// check theirs); the default rows include it. CPU time is the main
+// thread's: with threads:2 it misses the second core's work.
+//
+// Pairs: triangulated UV spheres of about 10k, 100k and 1M triangles each
+// (B shifted and turned so the pair is generic), and the shared pairs
+// (../shared/data/meshes/boolean-pairs: Havocglass8, Offset3 x Offset4, Cray).
+//   build/bench/atelier_bench --benchmark_filter=NetBoolean
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/measure.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Surface_mesh.h>
+#include <atelier/io/obj.h>
+#include <atelier/systems/net/boolean.h>
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+using namespace atelier;
+namespace fs = std::filesystem;
+namespace PMP = CGAL::Polygon_mesh_processing;
+using Ke = CGAL::Exact_predicates_exact_constructions_kernel;
+using CgalMesh = CGAL::Surface_mesh<Ke::Point_3>;
+
+/// Triangulated UV sphere: 2 nu (nv - 1) triangles.
+PolygonSoup sphere(int nu, int nv, double r, const Vec3d& c, double turn) {
+  PolygonSoup s;
+  const Eigen::Matrix3d rot = Eigen::AngleAxisd(turn, Vec3d(0.3, 0.5, 0.8).normalized()).toRotationMatrix();
+  s.positions.push_back(c + rot * Vec3d(0, 0, r));
+  for (int j = 1; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double th = M_PI * j / nv, ph = 2 * M_PI * i / nu;
+      s.positions.push_back(c +
+                            rot * (r * Vec3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th))));
+    }
+  s.positions.push_back(c + rot * Vec3d(0, 0, -r));
+  auto ring = [&](int j, int i) { return static_cast<std::uint32_t>(1 + (j - 1) * nu + (i % nu)); };
+  const auto south = static_cast<std::uint32_t>(s.positions.size() - 1);
+  for (int i = 0; i < nu; ++i) s.add_face(std::array<std::uint32_t, 3>{0, ring(1, i), ring(1, i + 1)});
+  for (int j = 1; j + 1 < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      s.add_face(std::array<std::uint32_t, 3>{ring(j, i), ring(j + 1, i), ring(j + 1, i + 1)});
+      s.add_face(std::array<std::uint32_t, 3>{ring(j, i), ring(j + 1, i + 1), ring(j, i + 1)});
+    }
+  for (int i = 0; i < nu; ++i) s.add_face(std::array<std::uint32_t, 3>{south, ring(nv - 1, i + 1), ring(nv - 1, i)});
+  return s;
+}
+
+struct Case {
+  std::string name;
+  PolygonSoup a, b;
+  fs::path obj_a, obj_b;  // for the node peer
+};
+
+const fs::path kShared = fs::path(ATELIER_BENCH_SHARED_DATA) / "meshes" / "boolean-pairs";
+const fs::path kManifoldDir = fs::path(ATELIER_BENCH_SOURCE_DIR) / "bench" / "net" / "manifold";
+
+void write_soup_obj(const PolygonSoup& s, const fs::path& p) {
+  std::ofstream f(p);
+  f.precision(17);
+  for (const Vec3d& x : s.positions) f << "v " << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+  for (std::size_t i = 0; i < s.face_count(); ++i) {
+    f << 'f';
+    for (std::uint32_t v : s.face(i)) f << ' ' << v + 1;
+    f << '\n';
+  }
+}
+
+Case& get_case(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<Case>> cache;
+  auto& slot = cache[name];
+  if (slot) return *slot;
+  slot = std::make_unique<Case>();
+  Case& c = *slot;
+  c.name = name;
+  const fs::path tmp = fs::temp_directory_path() / "atelier-net-bench";
+  fs::create_directories(tmp);
+  auto spheres = [&](int nu, int nv) {
+    c.a = sphere(nu, nv, 1.0, {0, 0, 0}, 0.0);
+    c.b = sphere(nu, nv, 1.0, {0.61, 0.23, 0.17}, 0.7);
+  };
+  if (name == "sphere10k")
+    spheres(71, 71);
+  else if (name == "sphere100k")
+    spheres(224, 224);
+  else if (name == "sphere1M")
+    spheres(708, 707);
+  else {
+    const std::map<std::string, std::pair<const char*, const char*>> files = {
+        {"havocglass8", {"Havocglass8_left.obj", "Havocglass8_right.obj"}},
+        {"offset3x4", {"Offset3.obj", "Offset4.obj"}},
+        {"cray", {"Cray_left.obj", "Cray_right.obj"}}};
+    const auto& f = files.at(name);
+    if (fs::exists(kShared / f.first)) {
+      c.a = net_polygons(read_obj(kShared / f.first));
+      c.b = net_polygons(read_obj(kShared / f.second));
+    }
+  }
+  c.obj_a = tmp / (name + "_a.obj");
+  c.obj_b = tmp / (name + "_b.obj");
+  if (c.a.face_count()) {
+    write_soup_obj(c.a, c.obj_a);
+    write_soup_obj(c.b, c.obj_b);
+  }
+  return c;
+}
+
+CgalMesh to_cgal(const PolygonSoup& s) {
+  std::vector<Ke::Point_3> pts;
+  for (const Vec3d& x : s.positions) pts.emplace_back(x.x(), x.y(), x.z());
+  std::vector<std::vector<std::size_t>> polys;
+  for (std::size_t f = 0; f < s.face_count(); ++f) polys.emplace_back(s.face(f).begin(), s.face(f).end());
+  CgalMesh m;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
+  PMP::triangulate_faces(m);
+  return m;
+}
+
+struct PeerFigures {
+  double cgal_s = 0, manifold_s = 0;
+  double cgal_volume = NAN, manifold_volume = NAN;
+};
+std::map<std::string, PeerFigures>& peers() {
+  static std::map<std::string, PeerFigures> m;
+  return m;
+}
+
+const char* op_name(BooleanOp op) {
+  return op == BooleanOp::kUnion ? "union" : "difference";
+}
+
+void BM_NetBooleanCgal(benchmark::State& state, std::string pair, BooleanOp op) {
+  Case& c = get_case(pair);
+  if (!c.a.face_count()) return state.SkipWithError("shared data absent");
+  const CgalMesh a0 = to_cgal(c.a), b0 = to_cgal(c.b);
+  std::vector<double> times;
+  double volume = NAN;
+  for (auto _ : state) {
+    state.PauseTiming();
+    CgalMesh a = a0, b = b0, out;  // corefinement changes its inputs
+    state.ResumeTiming();
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool ok = op == BooleanOp::kUnion ? PMP::corefine_and_compute_union(a, b, out)
+                                            : PMP::corefine_and_compute_difference(a, b, out);
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    state.PauseTiming();
+    volume = ok ? CGAL::to_double(PMP::volume(out)) : NAN;
+    state.ResumeTiming();
+  }
+  std::sort(times.begin(), times.end());
+  auto& p = peers()[pair + op_name(op)];
+  p.cgal_s = times[times.size() / 2];
+  p.cgal_volume = volume;
+  state.counters["volume"] = volume;
+}
+
+void BM_NetBooleanManifold(benchmark::State& state, std::string pair, BooleanOp op) {
+  Case& c = get_case(pair);
+  if (!c.a.face_count()) return state.SkipWithError("shared data absent");
+  if (!fs::exists(kManifoldDir / "node_modules" / "manifold-3d"))
+    return state.SkipWithError(
+        "manifold-3d not installed: scripts/install-deps.sh --bench (npm install in bench/net/manifold)");
+  const int reps = 5;
+  const std::string cmd = "node " + (kManifoldDir / "manifold_bool.mjs").string() + " " + c.obj_a.string() + " " +
+                          c.obj_b.string() + " " + op_name(op) + " " + std::to_string(reps + 1) + " 2>&1";
+  std::string out;
+  if (FILE* p = popen(cmd.c_str(), "r")) {
+    char buf[4096];
+    std::size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    pclose(p);
+  }
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(out.substr(0, out.find('\n')));
+  } catch (const std::exception&) {
+    return state.SkipWithError(("manifold-3d: " + out.substr(0, 200)).c_str());
+  }
+  if (j.contains("error")) return state.SkipWithError(("manifold-3d: " + j["error"].get<std::string>()).c_str());
+  std::vector<double> ms = j["ms"].get<std::vector<double>>();
+  ms.erase(ms.begin());  // warm-up (JIT, first allocation)
+  std::sort(ms.begin(), ms.end());
+  const double median = ms[ms.size() / 2] * 1e-3;
+  for (auto _ : state) state.SetIterationTime(median);
+  auto& p = peers()[pair + op_name(op)];
+  p.manifold_s = median;
+  p.manifold_volume = j["volume"].get<double>();
+  state.counters["volume"] = p.manifold_volume;
+  state.SetLabel(j["status"].get<std::string>());
+}
+
+void BM_NetBoolean(benchmark::State& state, std::string pair, BooleanOp op, int threads, bool check) {
+  Case& c = get_case(pair);
+  if (!c.a.face_count()) return state.SkipWithError("shared data absent");
+  BooleanOptions o;
+  o.op = op == BooleanOp::kUnion ? BooleanOp::kUnion : BooleanOp::kAMinusB;
+  o.check_self_intersection = check;  // the peers do not check their inputs
+  ExecContext ctx;
+  ctx.threads = threads;
+  std::vector<double> times;
+  double volume = NAN;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto r = net_boolean(c.a, c.b, o, ctx);
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (!r) return state.SkipWithError(r.status().to_string().c_str());
+    volume = r->volume;
+    benchmark::DoNotOptimize(r->result.face_nodes.data());
+  }
+  std::sort(times.begin(), times.end());
+  const double t = times[times.size() / 2];
+  const auto& p = peers()[pair + op_name(op)];
+  if (p.cgal_s > 0) state.counters["x_cgal"] = p.cgal_s / t;
+  if (p.manifold_s > 0) state.counters["x_manifold"] = p.manifold_s / t;
+  if (!std::isnan(p.cgal_volume)) state.counters["vol_cgal"] = (volume - p.cgal_volume) / std::abs(p.cgal_volume);
+  if (!std::isnan(p.manifold_volume))
+    state.counters["vol_manifold"] = (volume - p.manifold_volume) / std::abs(p.manifold_volume);
+  state.counters["volume"] = volume;
+}
+
+const int kRegistered = [] {
+  const std::pair<const char*, int> pairs[] = {{"havocglass8", 20}, {"offset3x4", 20}, {"cray", 20},
+                                               {"sphere10k", 5},    {"sphere100k", 2}, {"sphere1M", 1}};
+  for (const auto& [pair, iters] : pairs)
+    for (BooleanOp op : {BooleanOp::kUnion, BooleanOp::kAMinusB}) {
+      const std::string tag = std::string(pair) + "/" + op_name(op);
+      benchmark::RegisterBenchmark(("BM_NetBooleanCgal/" + tag).c_str(), BM_NetBooleanCgal, std::string(pair), op)
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(iters);
+      benchmark::RegisterBenchmark(("BM_NetBooleanManifold/" + tag).c_str(), BM_NetBooleanManifold, std::string(pair),
+                                   op)
+          ->Unit(benchmark::kMillisecond)
+          ->UseManualTime()
+          ->Iterations(1);
+      for (int threads : {2, 1})
+        for (bool check : {true, false})
+          benchmark::RegisterBenchmark(
+              ("BM_NetBoolean/" + tag + "/threads:" + std::to_string(threads) + (check ? "" : "/nocheck")).c_str(),
+              BM_NetBoolean, std::string(pair), op, threads, check)
+              ->Unit(benchmark::kMillisecond)
+              ->Iterations(std::max(iters, 3));
+    }
+  return 0;
+}();
+
+}  // namespace

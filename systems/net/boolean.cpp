@@ -1,0 +1,576 @@
+// Net Booleans (seed 004 sections 2-3): the entry point, the cut of each
+// net along the intersection polygons and the choice of kept pieces. The
+// exact kernel is boolean_exact.cpp; the nets' checks, the box hierarchy and
+// the candidate pairs are net_mesh.cpp; paper mode is paper_mode.cpp.
+//
+// Why this file is long: the cut and the choice of pieces share the
+// per-net tables built here (pairs per triangle, refined triangles, piece
+// components), and splitting them would pass a dozen arrays across files.
+#include <atelier/engine/parallel.h>
+#include <atelier/systems/net/boolean.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "boolean_detail.h"
+
+namespace atelier {
+
+using namespace net_detail;
+
+namespace {
+
+template <class... A>
+Status fail(ErrorCode c, const A&... parts) {
+  std::ostringstream s;
+  (s << ... << parts);
+  return {c, s.str()};
+}
+
+struct UnionFind {
+  std::vector<std::uint32_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) {
+      parent[x] = parent[parent[x]];
+      x = parent[x];
+    }
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a < b) parent[b] = a;
+    if (b < a) parent[a] = b;
+  }
+};
+
+using Tri3 = std::array<std::uint32_t, 3>;
+
+double tri_volume(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  return a.dot(b.cross(c)) / 6.0;
+}
+
+double mesh_volume(const TriMesh& m) {
+  double v = 0;
+  for (const auto& t : m.tri) v += tri_volume(m.p[t[0]], m.p[t[1]], m.p[t[2]]);
+  return v;
+}
+
+std::uint64_t edge_key(std::uint32_t u, std::uint32_t v) {
+  return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
+}
+
+/// Solids that touch along an edge or at a vertex (a union of two boxes
+/// sharing an edge) leave edges in four faces and vertices with several
+/// fans. The result stays a 2-manifold: at such an edge each net's faces
+/// pair with their own net's (the two solids stay apart there), and a
+/// vertex with several fans gets one copy per fan (coincident vertices).
+Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
+  const std::size_t nf = out.face_count();
+  struct Half {
+    std::uint64_t key;
+    std::uint32_t face, corner;
+    bool forward;
+  };
+  std::vector<Half> half;
+  half.reserve(out.face_nodes.size());
+  for (std::uint32_t f = 0; f < nf; ++f) {
+    const auto c = out.face(f);
+    for (std::uint32_t k = 0; k < c.size(); ++k) {
+      const std::uint32_t u = c[k], v = c[(k + 1) % c.size()];
+      half.push_back({edge_key(u, v), f, k, u < v});
+    }
+  }
+  std::vector<std::uint32_t> id(half.size());
+  std::iota(id.begin(), id.end(), 0u);
+  std::sort(id.begin(), id.end(), [&](std::uint32_t x, std::uint32_t y) {
+    return half[x].key != half[y].key ? half[x].key < half[y].key : x < y;
+  });
+  std::vector<std::uint32_t> twin(half.size(), kNil);
+  bool pinched = false;
+  for (std::size_t i = 0; i < id.size();) {
+    std::size_t j = i;
+    while (j < id.size() && half[id[j]].key == half[id[i]].key) ++j;
+    pinched |= j - i != 2;
+    // Pair forward with backward halfedges, a net's with its own first.
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t x = i; x < j; ++x) {
+        const std::uint32_t hx = id[x];
+        if (twin[hx] != kNil || !half[hx].forward) continue;
+        for (std::size_t y = i; y < j; ++y) {
+          const std::uint32_t hy = id[y];
+          if (twin[hy] != kNil || half[hy].forward) continue;
+          if (pass == 0 && face_side[half[hx].face] != face_side[half[hy].face]) continue;
+          twin[hx] = hy;
+          twin[hy] = hx;
+          break;
+        }
+      }
+    for (std::size_t x = i; x < j; ++x)
+      if (twin[id[x]] == kNil) return {ErrorCode::kInternal, "net boolean: the result has an unmatched edge"};
+    i = j;
+  }
+  // Fans: rotate about a vertex through the previous halfedge's twin.
+  std::vector<std::uint32_t> half_begin(nf + 1, 0);
+  for (std::uint32_t f = 0; f < nf; ++f)
+    half_begin[f + 1] = half_begin[f] + static_cast<std::uint32_t>(out.face(f).size());
+  auto prev_in_face = [&](std::uint32_t h) {
+    const std::uint32_t f = half[h].face, n = half_begin[f + 1] - half_begin[f];
+    return half_begin[f] + (half[h].corner + n - 1) % n;
+  };
+  const std::size_t nv = out.positions.size();
+  std::vector<std::uint32_t> fans(nv, 0);
+  std::vector<std::uint32_t> fan_of(half.size(), kNil);  // per outgoing halfedge (its tail's fan)
+  for (std::uint32_t h = 0; h < half.size(); ++h) {
+    if (fan_of[h] != kNil) continue;
+    const std::uint32_t v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
+    const std::uint32_t fan = fans[v]++;
+    std::uint32_t x = h;
+    do {
+      fan_of[x] = fan;
+      x = twin[prev_in_face(x)];
+    } while (x != h && fan_of[x] == kNil);
+  }
+  for (std::uint32_t v = 0; v < nv; ++v) pinched |= fans[v] > 1;
+  if (!pinched) return {};
+  std::vector<std::uint32_t> copy_base(nv, kNil);
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    if (fans[v] <= 1) continue;
+    copy_base[v] = static_cast<std::uint32_t>(out.positions.size());
+    for (std::uint32_t k = 1; k < fans[v]; ++k) out.positions.push_back(out.positions[v]);
+  }
+  for (std::uint32_t h = 0; h < half.size(); ++h) {
+    std::uint32_t& v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
+    if (copy_base[v] != kNil && fan_of[h] > 0) v = copy_base[v] + fan_of[h] - 1;
+  }
+  return {};
+}
+
+/// Section 4: the gaps left by the dropped cut polygons are closed by
+/// connecting meshes. Boundary loops of the kept parts (along their free
+/// sides) are paired by nearest centroids, A's with B's; a loop facing
+/// several is split (branching).
+Status connect_gaps(PolygonSoup& out, std::vector<std::uint8_t>& face_side, ConnectRule rule, BooleanReport& rep) {
+  const std::size_t nf = out.face_count();
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> directed;  // (u << 32 | v, face)
+  for (std::uint32_t f = 0; f < nf; ++f) {
+    const auto c = out.face(f);
+    for (std::size_t k = 0; k < c.size(); ++k)
+      directed.emplace_back((std::uint64_t{c[k]} << 32) | c[(k + 1) % c.size()], f);
+  }
+  std::sort(directed.begin(), directed.end());
+  auto has = [&](std::uint32_t u, std::uint32_t v) {
+    const std::uint64_t k = (std::uint64_t{u} << 32) | v;
+    const auto it = std::lower_bound(directed.begin(), directed.end(), std::pair{k, 0u});
+    return it != directed.end() && it->first == k;
+  };
+  std::vector<std::uint32_t> valence(out.positions.size(), 0);
+  // Free halfedges v -> u (the twin of a used u -> v is missing), by tail.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> free;  // (tail, head)
+  for (const auto& [k, f] : directed) {
+    const auto u = static_cast<std::uint32_t>(k >> 32), v = static_cast<std::uint32_t>(k);
+    if (!has(v, u)) {
+      free.emplace_back(v, u);
+      ++valence[u];
+      ++valence[v];
+    } else if (u < v) {
+      ++valence[u];
+      ++valence[v];
+    }
+  }
+  std::sort(free.begin(), free.end());
+  std::vector<std::uint8_t> side_of_tail(out.positions.size(), 2);
+  for (const auto& [k, f] : directed) side_of_tail[static_cast<std::uint32_t>(k >> 32)] = face_side[f];
+  std::vector<std::uint8_t> used(free.size(), 0);
+  struct Loop {
+    BoundaryPolygon poly;
+    Vec3d centre = Vec3d::Zero();
+    int side = 0;
+  };
+  std::vector<Loop> loops;
+  for (std::size_t i = 0; i < free.size(); ++i) {
+    if (used[i]) continue;
+    Loop l;
+    std::size_t h = i;
+    while (!used[h]) {
+      used[h] = 1;
+      l.poly.vertices.push_back(free[h].first);
+      const std::uint32_t next = free[h].second;
+      const auto it = std::lower_bound(free.begin(), free.end(), std::pair{next, 0u});
+      std::size_t pick = free.size();
+      for (auto j = it; j != free.end() && j->first == next; ++j)
+        if (!used[static_cast<std::size_t>(j - free.begin())]) {
+          pick = static_cast<std::size_t>(j - free.begin());
+          break;
+        }
+      if (pick == free.size()) break;
+      h = pick;
+    }
+    for (std::uint32_t v : l.poly.vertices) {
+      l.centre += out.positions[v];
+      l.poly.valence.push_back(valence[v]);
+    }
+    l.centre /= static_cast<double>(l.poly.vertices.size());
+    l.side = side_of_tail[l.poly.vertices[0]];
+    loops.push_back(std::move(l));
+  }
+  if (loops.empty()) return {};
+  // Each loop's nearest loop of the other net.
+  auto nearest = [&](std::size_t i) {
+    std::size_t best = loops.size();
+    for (std::size_t j = 0; j < loops.size(); ++j)
+      if (loops[j].side != loops[i].side &&
+          (best == loops.size() ||
+           (loops[j].centre - loops[i].centre).squaredNorm() < (loops[best].centre - loops[i].centre).squaredNorm()))
+        best = j;
+    return best;
+  };
+  std::vector<std::size_t> near(loops.size());
+  for (std::size_t i = 0; i < loops.size(); ++i) {
+    near[i] = nearest(i);
+    if (near[i] == loops.size())
+      return {ErrorCode::kUnsupported,
+              "net boolean: a gap of the connecting meshes has a boundary polygon on one net only"};
+  }
+  ConnectOptions co;
+  co.rule = rule;
+  std::vector<std::uint8_t> done(loops.size(), 0);
+  for (std::size_t i = 0; i < loops.size(); ++i) {
+    if (done[i]) continue;
+    // Loops whose nearest is i: if i faces several, i branches.
+    std::vector<std::size_t> facing;
+    for (std::size_t j = 0; j < loops.size(); ++j)
+      if (!done[j] && near[j] == i) facing.push_back(j);
+    if (facing.empty()) continue;
+    std::vector<BoundaryPolygon> qs;
+    for (std::size_t j : facing) qs.push_back(loops[j].poly);
+    auto r = connect_branching(out.positions, loops[i].poly, qs, co);
+    if (!r) return r.status();
+    for (std::size_t f = 0; f < r->faces.face_count(); ++f) {
+      out.add_face(r->faces.face(f));
+      face_side.push_back(2);
+    }
+    rep.connecting.triangles += r->triangles;
+    rep.connecting.quads += r->quads;
+    rep.connecting.other += r->other;
+    rep.connecting.irregular_vertices += r->irregular_vertices;
+    rep.connecting.new_edge_length += r->new_edge_length;
+    ++rep.gaps;
+    done[i] = 1;
+    for (std::size_t j : facing) done[j] = 1;
+  }
+  for (std::size_t i = 0; i < loops.size(); ++i)
+    if (!done[i])
+      return {ErrorCode::kUnsupported, "net boolean: a boundary polygon of the connecting meshes could not be paired"};
+  return {};
+}
+
+}  // namespace
+
+Expected<BooleanOp> parse_boolean_op(std::string_view s) {
+  if (s == "union") return BooleanOp::kUnion;
+  if (s == "intersection") return BooleanOp::kIntersection;
+  if (s == "difference" || s == "a-b" || s == "a_minus_b") return BooleanOp::kAMinusB;
+  if (s == "b-a" || s == "b_minus_a") return BooleanOp::kBMinusA;
+  return Status(ErrorCode::kInvalidArgument,
+                "unknown Boolean operation '" + std::string(s) + "' (union, intersection, difference, b-a)");
+}
+
+Expected<BooleanMode> parse_boolean_mode(std::string_view s) {
+  if (s == "exact") return BooleanMode::kExact;
+  if (s == "paper") return BooleanMode::kPaper;
+  return Status(ErrorCode::kInvalidArgument, "unknown Boolean mode '" + std::string(s) + "' (exact, paper)");
+}
+
+Expected<BooleanJoin> parse_boolean_join(std::string_view s) {
+  if (s == "cut") return BooleanJoin::kCut;
+  if (s == "meshes") return BooleanJoin::kMeshes;
+  return Status(ErrorCode::kInvalidArgument, "unknown join '" + std::string(s) + "' (cut, meshes)");
+}
+
+Expected<Correspondence> parse_correspondence(std::string_view s) {
+  if (s == "visual") return Correspondence::kVisual;
+  if (s == "topological") return Correspondence::kTopological;
+  if (s == "window2") return Correspondence::kWindowSmall;
+  if (s == "window4") return Correspondence::kWindowLarge;
+  return Status(ErrorCode::kInvalidArgument,
+                "unknown correspondence '" + std::string(s) + "' (visual, topological, window2, window4)");
+}
+
+double soup_volume(const PolygonSoupView& s) {
+  double v = 0;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const std::uint32_t b = s.face_offsets[f], e = s.face_offsets[f + 1];
+    if (e - b == 3) {
+      v += tri_volume(s.positions[s.face_nodes[b]], s.positions[s.face_nodes[b + 1]], s.positions[s.face_nodes[b + 2]]);
+      continue;
+    }
+    Vec3d c = Vec3d::Zero();
+    for (std::uint32_t i = b; i < e; ++i) c += s.positions[s.face_nodes[i]];
+    c /= static_cast<double>(e - b);
+    for (std::uint32_t i = b; i < e; ++i)
+      v += tri_volume(c, s.positions[s.face_nodes[i]], s.positions[s.face_nodes[i + 1 < e ? i + 1 : b]]);
+  }
+  return v;
+}
+
+double soup_area(const PolygonSoupView& s) {
+  double a = 0;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const std::uint32_t b = s.face_offsets[f], e = s.face_offsets[f + 1];
+    Vec3d c = Vec3d::Zero();
+    for (std::uint32_t i = b; i < e; ++i) c += s.positions[s.face_nodes[i]];
+    c /= static_cast<double>(e - b);
+    if (e - b == 3) c = s.positions[s.face_nodes[b]];
+    for (std::uint32_t i = b; i < e; ++i) {
+      const Vec3d& p = s.positions[s.face_nodes[i]];
+      const Vec3d& q = s.positions[s.face_nodes[i + 1 < e ? i + 1 : b]];
+      a += 0.5 * (p - c).cross(q - c).norm();
+    }
+  }
+  return a;
+}
+
+PolygonSoup net_polygons(const Model& m) {
+  PolygonSoup s;
+  const auto source = m.nodes.props.find<std::int32_t>("source_vertex");
+  std::vector<std::uint32_t> index(m.nodes.slots.capacity(), kNil);
+  std::vector<std::uint32_t> by_source;  // source vertex -> the first soup vertex made from it
+  std::vector<NodeIdx> corners;
+  std::vector<std::uint32_t> poly;
+  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
+    if (!m.alive(FaceIdx{f})) continue;
+    m.face_nodes(FaceIdx{f}, corners);
+    poly.clear();
+    for (NodeIdx v : corners) {
+      if (index[v.value] == kNil) {
+        std::uint32_t id = kNil;
+        const std::int32_t src = source.valid() ? source[v] : -1;
+        if (src >= 0 && static_cast<std::size_t>(src) < by_source.size() && by_source[src] != kNil &&
+            s.positions[by_source[src]] == m.position(v))
+          id = by_source[src];
+        if (id == kNil) {
+          id = static_cast<std::uint32_t>(s.positions.size());
+          s.positions.push_back(m.position(v));
+          if (src >= 0) {
+            if (static_cast<std::size_t>(src) >= by_source.size())
+              by_source.resize(static_cast<std::size_t>(src) + 1, kNil);
+            if (by_source[src] == kNil) by_source[src] = id;
+          }
+        }
+        index[v.value] = id;
+      }
+      poly.push_back(index[v.value]);
+    }
+    s.add_face(poly);
+  }
+  return s;
+}
+
+Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoupView& sb, const BooleanOptions& opt,
+                                    const ExecContext& ctx) {
+  BooleanReport rep;
+  TriMesh A, B;
+  if (Status s = build_tri_mesh(sa, "A", A, ctx); !s) return s;
+  if (Status s = build_tri_mesh(sb, "B", B, ctx); !s) return s;
+  rep.volume_a = soup_volume(sa);
+  rep.volume_b = soup_volume(sb);
+  rep.area_a = soup_area(sa);
+  rep.area_b = soup_area(sb);
+  for (const TriMesh* m : {&A, &B})
+    if (!(mesh_volume(*m) > 0))
+      return fail(ErrorCode::kTopology, "net ", m->name,
+                  " encloses no volume or is oriented inwards (signed volume <= 0): reverse its faces");
+  Bvh bvh_a, bvh_b;
+  build_bvh(A, bvh_a, ctx);
+  build_bvh(B, bvh_b, ctx);
+
+  if (opt.check_self_intersection) {
+    for (auto [m, bvh] : {std::pair{&A, &bvh_a}, std::pair{&B, &bvh_b}}) {
+      const auto bad = first_self_crossing(*m, *bvh, ctx);
+      if (bad[0] != kNil)
+        return fail(ErrorCode::kTopology, "net ", m->name, " intersects itself: faces ", m->face_of[bad[0]], " and ",
+                    m->face_of[bad[1]], " cross");
+    }
+  }
+
+  Cut cut;
+  if (Status st = cut_nets(A, bvh_a, B, bvh_b, ctx, cut); !st) return st;
+  rep.candidate_pairs = cut.candidate_pairs;
+  rep.intersecting_pairs = cut.intersecting_pairs;
+  rep.intersection_points = cut.new_keys.size();
+  rep.cut_triangles = cut.sides[0].cut.size() + cut.sides[1].cut.size();
+  auto& sides = cut.sides;
+  const auto& canon = cut.canon;
+  const auto& on_a = cut.on_a;
+  const auto& on_b = cut.on_b;
+  const auto& new_keys = cut.new_keys;
+  const auto& new_points = cut.new_points;
+  const std::uint32_t nA = cut.nA, nB = cut.nB;
+  const std::size_t n_ids = canon.size();
+
+  // ---- winding number of the other net about each component (exact)
+  auto key_of = [&](std::uint32_t id) -> PointKey {
+    if (id < nA) return {simplex(kDimVertex, id), kNoSimplex};
+    if (id < nA + nB) return {kNoSimplex, simplex(kDimVertex, id - nA)};
+    return new_keys[id - nA - nB];
+  };
+  for (CutSide& s : sides) {
+    const TriMesh& other = s.side == 0 ? B : A;
+    const Bvh& other_bvh = s.side == 0 ? bvh_b : bvh_a;
+    const std::vector<std::uint64_t>& on_other = s.side == 0 ? on_b : on_a;
+    const std::uint32_t count = static_cast<std::uint32_t>(s.piece.size());
+    std::vector<std::uint32_t> roots;
+    std::vector<std::uint32_t> probe(count, kNil);  // per root: a vertex off the other net, or kNil
+    std::vector<std::uint32_t> first_piece(count, kNil);
+    for (std::uint32_t p = 0; p < count; ++p) {
+      if (s.coplanar[p] != 0) continue;
+      const std::uint32_t r = s.component[p];
+      if (first_piece[r] == kNil) {
+        first_piece[r] = p;
+        roots.push_back(r);
+      }
+      if (probe[r] != kNil) continue;
+      for (std::uint32_t v : s.piece[p])
+        if (v >= s.offset && v < s.offset + s.m->p.size() && on_other[v] == kNoSimplex) {
+          probe[r] = v;
+          break;
+        }
+    }
+    std::vector<int> wind(roots.size(), 0);
+    std::vector<Status> st(roots.size());
+    ExecContext c = ctx;
+    c.sequential_threshold = 2;
+    c.grain = 1;
+    par::for_each_n(c, roots.size(), [&](std::size_t i) {
+      const std::uint32_t r = roots[i];
+      try {
+        if (probe[r] != kNil) {
+          wind[i] = winding_number(other, other_bvh, s.m->p[probe[r] - s.offset]);
+        } else {
+          const Tri3& t = s.piece[first_piece[r]];
+          wind[i] = winding_number_centroid(other, other_bvh, A, B, {key_of(t[0]), key_of(t[1]), key_of(t[2])});
+        }
+      } catch (const Error& e) {
+        st[i] = e.status();
+      }
+    });
+    for (const Status& x : st)
+      if (!x) return x;
+    std::vector<std::uint8_t> inside(count, 0);
+    for (std::size_t i = 0; i < roots.size(); ++i) inside[roots[i]] = wind[i] != 0;
+    s.keep.assign(count, 0);
+    for (std::uint32_t p = 0; p < count; ++p) {
+      const int cp = s.coplanar[p];
+      bool keep = false;
+      if (cp != 0) {
+        // A coplanar overlap is kept once, as A's triangles: with the same
+        // orientation in a union or an intersection, with opposite ones in
+        // a difference (touching from outside: the face stays).
+        if (s.side == 0) keep = (opt.op == BooleanOp::kUnion || opt.op == BooleanOp::kIntersection) ? cp > 0 : cp < 0;
+      } else {
+        const bool in = inside[s.component[p]] != 0;
+        switch (opt.op) {
+          case BooleanOp::kUnion:
+            keep = !in;
+            break;
+          case BooleanOp::kIntersection:
+            keep = in;
+            break;
+          case BooleanOp::kAMinusB:
+            keep = s.side == 0 ? !in : in;
+            break;
+          case BooleanOp::kBMinusA:
+            keep = s.side == 0 ? in : !in;
+            break;
+        }
+      }
+      s.keep[p] = keep ? 1 : 0;
+    }
+  }
+
+  // ---- intersection polygons: components of the edges both nets share
+  std::vector<std::uint64_t> common;
+  {
+    std::set_intersection(sides[0].edges.begin(), sides[0].edges.end(), sides[1].edges.begin(), sides[1].edges.end(),
+                          std::back_inserter(common));
+    std::vector<std::uint32_t> verts;
+    for (std::uint64_t e : common) {
+      verts.push_back(static_cast<std::uint32_t>(e >> 32));
+      verts.push_back(static_cast<std::uint32_t>(e));
+    }
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    UnionFind uf(verts.size());
+    auto at = [&](std::uint32_t v) {
+      return static_cast<std::uint32_t>(std::lower_bound(verts.begin(), verts.end(), v) - verts.begin());
+    };
+    for (std::uint64_t e : common) uf.unite(at(static_cast<std::uint32_t>(e >> 32)), at(static_cast<std::uint32_t>(e)));
+    for (std::uint32_t i = 0; i < verts.size(); ++i) rep.intersection_polygons += uf.find(i) == i;
+  }
+
+  // ---- the result: kept pieces (whole polygons where untouched)
+  const bool reverse_b = opt.op == BooleanOp::kAMinusB;
+  std::vector<std::uint32_t> out_index(n_ids, kNil);
+  PolygonSoup& out = rep.result;
+  std::vector<std::uint8_t> from_a, from_b;  // per output vertex
+  std::vector<std::uint8_t> face_side;       // per output face: 0 from A, 1 from B
+  if (opt.join == BooleanJoin::kMeshes) {
+    // Section 4: every polygon with a point of intersection is left out.
+    for (CutSide& s : sides) {
+      const TriMesh& m = *s.m;
+      for (std::size_t f = 0; f + 1 < m.face_tri_begin.size(); ++f) {
+        bool cut_polygon = false;
+        for (std::uint32_t t = m.face_tri_begin[f]; t < m.face_tri_begin[f + 1]; ++t) cut_polygon |= s.slot[t] != kNil;
+        if (!cut_polygon) continue;
+        for (std::uint32_t p = s.piece_begin[m.face_tri_begin[f]]; p < s.piece_begin[m.face_tri_begin[f + 1]]; ++p)
+          s.keep[p] = 0;
+      }
+    }
+  }
+  for (CutSide& s : sides) {
+    const bool reverse = s.side == 0 ? opt.op == BooleanOp::kBMinusA : reverse_b;
+    emit_side(cut, A, B, s.side, s.side == 0 ? sa : sb, reverse, out, out_index, face_side);
+  }
+  if (opt.join == BooleanJoin::kMeshes) {
+    if (Status st = connect_gaps(out, face_side, opt.rule, rep); !st) return st;
+  }
+  if (Status st = unpinch(out, face_side); !st) return st;
+  for (std::uint64_t e : common)
+    for (std::uint32_t id : {static_cast<std::uint32_t>(e >> 32), static_cast<std::uint32_t>(e)})
+      if (out_index[id] != kNil) rep.seam.push_back(out_index[id]);
+  std::sort(rep.seam.begin(), rep.seam.end());
+  rep.seam.erase(std::unique(rep.seam.begin(), rep.seam.end()), rep.seam.end());
+  rep.volume = soup_volume(out);
+  rep.area = soup_area(out);
+  if (opt.mode == BooleanMode::kPaper) {
+    // Which output vertices are points of A's intersection polygon (on A's
+    // edges) and of B's (on B's edges): seed 004 section 3 pairs them.
+    from_a.assign(out.positions.size(), 0);
+    from_b.assign(out.positions.size(), 0);
+    for (std::uint32_t id = 0; id < n_ids; ++id) {
+      if (out_index[id] == kNil || canon[id] != id || on_a[id] == kNoSimplex || on_b[id] == kNoSimplex) continue;
+      from_a[out_index[id]] = dim_of(on_a[id]) != kDimFace;
+      from_b[out_index[id]] = dim_of(on_b[id]) != kDimFace;
+    }
+    std::vector<std::array<std::uint32_t, 2>> curve;
+    for (std::uint64_t e : common) {
+      const std::uint32_t u = out_index[static_cast<std::uint32_t>(e >> 32)],
+                          w = out_index[static_cast<std::uint32_t>(e)];
+      if (u != kNil && w != kNil) curve.push_back({u, w});
+    }
+    if (Status s = apply_paper_mode(out, curve, from_a, from_b, static_cast<int>(opt.correspondence), rep.merged_pairs,
+                                    rep.valence.vertices, rep.valence.irregular, rep.valence.min, rep.valence.max,
+                                    rep.valence.mean, rep.seam);
+        !s)
+      return s;
+    rep.volume = soup_volume(out);
+    rep.area = soup_area(out);
+  }
+  return rep;
+}
+
+}  // namespace atelier

@@ -1,0 +1,205 @@
+// Private machinery of the net Booleans (boolean.cpp, boolean_exact.cpp,
+// net_soup.cpp): the triangulated net, simplex keys of intersection points,
+// the box hierarchy for candidate pairs, and the exact kernel's entry points.
+// CGAL stays inside boolean_exact.cpp (docs/architecture.md, third-party).
+#pragma once
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/polygon_soup.h>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace atelier::net_detail {
+
+inline constexpr std::uint32_t kNil = 0xffffffffu;
+
+/// A simplex of one net: dimension (0 vertex, 1 edge, 2 triangle, 3 none)
+/// and index, packed so keys sort and compare as integers.
+enum : std::uint8_t { kDimVertex = 0, kDimEdge = 1, kDimFace = 2, kDimNone = 3 };
+[[nodiscard]] constexpr std::uint64_t simplex(std::uint8_t dim, std::uint32_t idx) noexcept {
+  return (std::uint64_t{dim} << 32) | idx;
+}
+[[nodiscard]] constexpr std::uint8_t dim_of(std::uint64_t s) noexcept {
+  return static_cast<std::uint8_t>(s >> 32);
+}
+[[nodiscard]] constexpr std::uint32_t idx_of(std::uint64_t s) noexcept {
+  return static_cast<std::uint32_t>(s);
+}
+inline constexpr std::uint64_t kNoSimplex = simplex(kDimNone, 0);
+
+/// An intersection point named by the lowest-dimensional simplex of A and of
+/// B holding it (the relative interiors of a net's simplices partition it,
+/// so the pair is unique: the symbolic, exact identity of the point).
+struct PointKey {
+  std::uint64_t a = kNoSimplex;
+  std::uint64_t b = kNoSimplex;
+  friend bool operator==(const PointKey&, const PointKey&) = default;
+  friend auto operator<=>(const PointKey&, const PointKey&) = default;
+};
+
+/// A closed net split into triangles: n-gons around their centroid
+/// (seed 004 section 2), triangles as they are.
+struct TriMesh {
+  std::vector<Vec3d> p;                                // net vertices, then one centroid per split n-gon
+  std::size_t net_vertices = 0;                        // p[0, net_vertices) are the net's own
+  std::vector<std::array<std::uint32_t, 3>> tri;       // counter-clockwise from outside
+  std::vector<std::array<std::uint32_t, 3>> tri_edge;  // edge k runs tri[k] -> tri[k+1]
+  std::vector<std::array<std::uint32_t, 2>> edge;      // (smaller, larger) vertex
+  std::vector<std::array<std::uint32_t, 2>> edge_tri;  // the two triangles of an edge
+  std::vector<std::uint32_t> face_of;                  // net polygon of each triangle
+  std::vector<std::uint32_t> face_tri_begin;           // polygon f has triangles [begin[f], begin[f+1])
+  std::vector<std::array<double, 6>> box;              // per triangle: lo xyz, hi xyz (exact min/max)
+  Box3d bounds;
+  std::string name;  // "A" or "B" in messages
+};
+
+/// Builds the triangulated net and checks that it is a closed (unless
+/// `open` is allowed: trimming), consistently oriented 2-manifold without
+/// duplicate vertices or degenerate triangles (errors name the polygon).
+/// A boundary edge has edge_tri[e][1] == kNil. Self-intersection is
+/// checked separately.
+[[nodiscard]] Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx,
+                                    bool open = false);
+
+/// Bounding-volume hierarchy over triangle boxes (median split, leaves of
+/// up to 4 triangles): node i has children or a triangle range.
+struct Bvh {
+  struct Node {
+    std::array<double, 6> box;
+    std::uint32_t left = kNil;  // inner: left child (right = left + 1); leaf: kNil
+    std::uint32_t first = 0;    // leaf: first index into order
+    std::uint32_t count = 0;    // leaf: triangle count
+  };
+  std::vector<Node> nodes;
+  std::vector<std::uint32_t> order;  // triangle indices, leaves' ranges
+};
+void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
+
+/// Candidate pairs (i in A, j in B) whose closed boxes overlap, sorted.
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_a,
+                                                                          const TriMesh& b, const Bvh& bvh_b,
+                                                                          const ExecContext& ctx);
+/// The smallest pair i < j of triangles of one mesh that cross
+/// (triangles_cross), or {kNil, kNil} when the mesh does not intersect itself.
+[[nodiscard]] std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh,
+                                                               const ExecContext& ctx);
+
+// ----------------------------------------------------------- exact kernel
+// All decisions below are exact (CGAL's filtered predicates on the input
+// doubles, and the lazy exact kernel for constructed points).
+
+/// Sign of the orientation of d against the plane of (a, b, c): +1 on the
+/// side the normal (b - a) x (c - a) points to.
+[[nodiscard]] int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept;
+/// Exactly collinear (or coincident) points: a degenerate triangle.
+[[nodiscard]] bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) noexcept;
+
+/// The intersection points of triangle ta of A and tb of B (exactly
+/// classified, named by their simplex keys; sorted, unique) and whether the
+/// two triangles are coplanar. Empty when they are disjoint.
+struct PairHit {
+  std::vector<PointKey> points;
+  bool coplanar = false;
+};
+void intersect_pair(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb, PairHit& out);
+
+/// True when triangles t1 and t2 of one net intersect other than in the
+/// vertices and edge they share (exact).
+[[nodiscard]] bool triangles_cross(const TriMesh& m, std::uint32_t t1, std::uint32_t t2);
+
+/// Global ids of intersection points: sorted unique keys; a key naming a
+/// vertex of A is that vertex, one naming a vertex of B (and none of A) is
+/// nA + that vertex, any other gets nA + nB + its rank among such keys.
+struct PointIds {
+  std::vector<PointKey> keys;     // sorted unique
+  std::vector<std::uint32_t> id;  // per key
+  [[nodiscard]] std::uint32_t find(const PointKey& k) const;
+};
+
+/// Refines triangle t of one side (0: A, 1: B) by the given intersection
+/// points (keys whose simplex on this side lies in the triangle's closure)
+/// and constraint segments, by a constrained triangulation in exact
+/// arithmetic. Appends triangles of global ids, oriented like t.
+[[nodiscard]] Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
+                                     std::span<const PointKey> points,
+                                     std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
+                                     std::vector<std::array<std::uint32_t, 3>>& out);
+
+/// Coordinates of a new intersection point, rounded from its exact value.
+[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k);
+
+/// Winding number of the closed net m about a point: a double point not on
+/// m, or the centroid of three intersection points / vertices (exact), by an
+/// exact ray parity with deterministic directions (a direction that meets
+/// an edge or a vertex of m is replaced by the next).
+[[nodiscard]] int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q);
+[[nodiscard]] int winding_number_centroid(const TriMesh& m, const Bvh& bvh, const TriMesh& a, const TriMesh& b,
+                                          const std::array<PointKey, 3>& corners);
+
+/// Same orientation (+1) or opposite (-1) of two coplanar triangles.
+[[nodiscard]] int coplanar_orientation(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb);
+
+/// One net's share of the cut: its cut triangles, their points and
+/// segments, their refinement, and its pieces.
+struct CutSide {
+  const TriMesh* m = nullptr;
+  int side = 0;
+  std::uint32_t offset = 0;                                        // global id of vertex 0
+  std::vector<std::uint32_t> slot;                                 // triangle -> index in cut, or kNil
+  std::vector<std::uint32_t> cut;                                  // cut triangles, increasing
+  std::vector<std::vector<PointKey>> points;                       // per cut triangle
+  std::vector<std::vector<std::array<PointKey, 2>>> segments;      // per cut triangle
+  std::vector<std::vector<std::uint32_t>> coplanar_with;           // per cut triangle: the other net's triangles
+  std::vector<std::vector<std::array<std::uint32_t, 3>>> refined;  // per cut triangle, canonical ids
+  std::vector<std::uint64_t> edges;                                // sorted edges of the refined triangles
+  // Pieces: triangle t owns pieces [piece_begin[t], piece_begin[t+1]).
+  std::vector<std::uint32_t> piece_begin;
+  std::vector<std::array<std::uint32_t, 3>> piece;
+  std::vector<std::int8_t> coplanar;  // per piece: 0 no, +1 same orientation as the other net, -1 opposite
+  std::vector<std::uint32_t> component;
+  std::vector<std::uint8_t> keep;  // per piece
+};
+
+/// Both nets cut along their intersection.
+struct Cut {
+  CutSide sides[2];
+  PointIds ids;
+  std::uint32_t nA = 0, nB = 0;           // ids: A's vertices, then B's, then new points
+  std::vector<std::uint32_t> canon;       // id -> canonical id (A's vertex where a B vertex coincides)
+  std::vector<std::uint64_t> on_a, on_b;  // canonical id -> simplex of A / B holding it, or none
+  std::vector<PointKey> new_keys;         // new points (id nA + nB + k)
+  std::vector<Vec3d> new_points;          // their rounded coordinates
+  std::size_t candidate_pairs = 0, intersecting_pairs = 0;
+  [[nodiscard]] Vec3d position(const TriMesh& a, const TriMesh& b, std::uint32_t id) const {
+    return id < nA ? a.p[id] : (id < nA + nB ? b.p[id - nA] : new_points[id - nA - nB]);
+  }
+};
+
+/// Cuts A and B along their intersection (either may be open: trimming).
+[[nodiscard]] Status cut_nets(const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
+                              const ExecContext& ctx, Cut& out);
+
+/// Appends the kept pieces of one side (`keep` of its CutSide) to `out`:
+/// untouched polygons whole (n-gons stay n-gons), cut ones as triangles;
+/// out_index maps ids to output vertices (kNil: not yet used), face_side
+/// records the side of each face.
+void emit_side(const Cut& cut, const TriMesh& a, const TriMesh& b, int side, const PolygonSoupView& soup, bool reverse,
+               PolygonSoup& out, std::vector<std::uint32_t>& out_index, std::vector<std::uint8_t>& face_side);
+
+/// Paper mode (seed 004 section 3, Fig. 2): on an exact result, the points
+/// of A's and of B's intersection polygons (`from_a`, `from_b` per vertex;
+/// both for points on an edge of each) along each curve of `curve` edges are
+/// paired by the correspondence and each pair merged at its midpoint.
+[[nodiscard]] Status apply_paper_mode(PolygonSoup& result, std::span<const std::array<std::uint32_t, 2>> curve,
+                                      std::span<const std::uint8_t> from_a, std::span<const std::uint8_t> from_b,
+                                      int correspondence, std::size_t& merged, std::size_t& vertices,
+                                      std::size_t& irregular, std::size_t& vmin, std::size_t& vmax, double& vmean,
+                                      std::vector<std::uint32_t>& seam);
+
+}  // namespace atelier::net_detail

@@ -1,0 +1,561 @@
+// The exact kernel of the net Booleans: every topological decision (which
+// simplex of the other net holds a point, which side of a plane a vertex is
+// on, the order of points in a refined triangle, the parity of a ray) is an
+// exact predicate: CGAL's filtered Epick predicates on the input doubles, and
+// the lazy exact kernel (Epeck) for points constructed from two simplices.
+// Constructed points are never rounded before a decision; they are rounded
+// once, for output (point_coordinates).
+//
+// Why not CGAL's corefinement: it runs every vertex of both nets through the
+// exact kernel; here only the triangles that meet the other net see it, the
+// rest stays plain doubles (docs/glossary.md, net Booleans).
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <CGAL/intersections.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "boolean_detail.h"
+
+namespace atelier::net_detail {
+
+namespace {
+
+using Ki = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Ke = CGAL::Exact_predicates_exact_constructions_kernel;
+using Pi = Ki::Point_3;
+
+Pi pi(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Ke::Point_3 pe(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+
+int sgn(CGAL::Orientation o) {
+  return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0);
+}
+
+/// The two coordinates kept when dropping `axis`, in cyclic order, so the
+/// 2D orientation of a projected triangle has the sign of its normal's
+/// component along the axis.
+inline int u_of(int axis) {
+  return (axis + 1) % 3;
+}
+inline int v_of(int axis) {
+  return (axis + 2) % 3;
+}
+
+Ki::Point_2 proj(const Vec3d& p, int axis) {
+  return {p[u_of(axis)], p[v_of(axis)]};
+}
+
+int orient2(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) {
+  return sgn(CGAL::orientation(proj(a, axis), proj(b, axis), proj(c, axis)));
+}
+
+/// A projection axis along which the (non-degenerate) triangle stays
+/// non-degenerate, and the sign of its projected orientation.
+struct Projection {
+  int axis = 2;
+  int sign = 0;
+};
+Projection projection_of(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d n = (b - a).cross(c - a).cwiseAbs();
+  std::array<int, 3> ax{0, 1, 2};
+  std::sort(ax.begin(), ax.end(), [&](int i, int j) { return n[i] > n[j] || (n[i] == n[j] && i < j); });
+  for (int k : ax) {
+    const int s = orient2(a, b, c, k);
+    if (s != 0) return {k, s};
+  }
+  return {2, 0};  // degenerate: refused before we get here
+}
+
+/// Where a point coplanar with triangle (c0, c1, c2) lies: -1 outside,
+/// 0..2 vertex k, 3..5 edge k - 3 (from corner k to k+1), 6 interior.
+int locate_coplanar(const Vec3d& p, const std::array<Vec3d, 3>& c, const Projection& pr) {
+  int o[3];
+  int zeros = 0;
+  for (int k = 0; k < 3; ++k) {
+    o[k] = orient2(c[k], c[(k + 1) % 3], p, pr.axis) * pr.sign;
+    if (o[k] < 0) return -1;
+    zeros += o[k] == 0;
+  }
+  if (zeros == 0) return 6;
+  if (zeros == 1) {
+    for (int k = 0; k < 3; ++k)
+      if (o[k] == 0) return 3 + k;
+  }
+  // Two zero edges meet at their shared corner: edges k and k+1 share k+1.
+  for (int k = 0; k < 3; ++k)
+    if (o[k] == 0 && o[(k + 1) % 3] == 0) return (k + 1) % 3;
+  return -1;
+}
+
+/// Where the line through p, q (crossing the triangle's plane) meets the
+/// triangle: as locate_coplanar.
+int locate_line(const Vec3d& p, const Vec3d& q, const std::array<Vec3d, 3>& c) {
+  int o[3];
+  int pos = 0, neg = 0, zeros = 0;
+  for (int k = 0; k < 3; ++k) {
+    o[k] = orient3d(p, q, c[k], c[(k + 1) % 3]);
+    pos += o[k] > 0;
+    neg += o[k] < 0;
+    zeros += o[k] == 0;
+  }
+  if (pos && neg) return -1;
+  if (zeros == 0) return 6;
+  if (zeros == 1) {
+    for (int k = 0; k < 3; ++k)
+      if (o[k] == 0) return 3 + k;
+  }
+  for (int k = 0; k < 3; ++k)
+    if (o[k] == 0 && o[(k + 1) % 3] == 0) return (k + 1) % 3;
+  return -1;
+}
+
+/// Proper crossing of two coplanar segments in a projection (interiors meet
+/// in one point); touching at an end is found by the vertex tests instead.
+bool proper_crossing(const Vec3d& p, const Vec3d& q, const Vec3d& r, const Vec3d& s, int axis) {
+  const int o1 = orient2(p, q, r, axis), o2 = orient2(p, q, s, axis);
+  if (o1 * o2 >= 0) return false;
+  const int o3 = orient2(r, s, p, axis), o4 = orient2(r, s, q, axis);
+  return o3 * o4 < 0;
+}
+
+std::uint64_t local_simplex(const TriMesh& m, std::uint32_t t, int loc) {
+  if (loc < 3) return simplex(kDimVertex, m.tri[t][static_cast<std::size_t>(loc)]);
+  if (loc < 6) return simplex(kDimEdge, m.tri_edge[t][static_cast<std::size_t>(loc - 3)]);
+  return simplex(kDimFace, t);
+}
+
+std::array<Vec3d, 3> corners(const TriMesh& m, std::uint32_t t) {
+  const auto& v = m.tri[t];
+  return {m.p[v[0]], m.p[v[1]], m.p[v[2]]};
+}
+
+/// One side of a triangle pair: the vertices and edges of triangle `ts` of
+/// net `self` against triangle `to` of net `other`. `s` holds the
+/// orientations of self's corners against other's plane.
+template <class Push>
+void half_pair(const TriMesh& self, std::uint32_t ts, const TriMesh& other, std::uint32_t to, const int* s,
+               Push&& push) {
+  const auto cs = corners(self, ts), co = corners(other, to);
+  Projection pr;
+  bool have_pr = false;
+  auto projection = [&] {
+    if (!have_pr) pr = projection_of(co[0], co[1], co[2]);
+    have_pr = true;
+    return pr;
+  };
+  for (int i = 0; i < 3; ++i) {
+    if (s[i] != 0) continue;
+    const int loc = locate_coplanar(cs[static_cast<std::size_t>(i)], co, projection());
+    if (loc >= 0) push(simplex(kDimVertex, self.tri[ts][static_cast<std::size_t>(i)]), local_simplex(other, to, loc));
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int j = (k + 1) % 3;
+    const std::uint64_t e = simplex(kDimEdge, self.tri_edge[ts][static_cast<std::size_t>(k)]);
+    const Vec3d& p = cs[static_cast<std::size_t>(k)];
+    const Vec3d& q = cs[static_cast<std::size_t>(j)];
+    if (s[k] * s[j] < 0) {
+      const int loc = locate_line(p, q, co);
+      if (loc >= 0) push(e, local_simplex(other, to, loc));
+    } else if (s[k] == 0 && s[j] == 0) {
+      const Projection prj = projection();
+      for (int m = 0; m < 3; ++m)
+        if (proper_crossing(p, q, co[static_cast<std::size_t>(m)], co[static_cast<std::size_t>((m + 1) % 3)], prj.axis))
+          push(e, local_simplex(other, to, 3 + m));
+    }
+  }
+}
+
+// ----------------------------------------------------------- constructions
+
+Ke::Point_3 exact_point(const TriMesh& a, const TriMesh& b, const PointKey& k) {
+  if (dim_of(k.a) == kDimVertex) return pe(a.p[idx_of(k.a)]);
+  if (dim_of(k.b) == kDimVertex) return pe(b.p[idx_of(k.b)]);
+  auto line = [](const TriMesh& m, std::uint64_t e) {
+    const auto& ev = m.edge[idx_of(e)];
+    return Ke::Line_3(pe(m.p[ev[0]]), pe(m.p[ev[1]]));
+  };
+  auto plane = [](const TriMesh& m, std::uint64_t f) {
+    const auto& t = m.tri[idx_of(f)];
+    return Ke::Plane_3(pe(m.p[t[0]]), pe(m.p[t[1]]), pe(m.p[t[2]]));
+  };
+  auto point_of = [](const auto& result) -> Ke::Point_3 {
+    if (result) {
+      if (const Ke::Point_3* p = boost::get<Ke::Point_3>(&*result)) return *p;
+    }
+    throw Error(Status(ErrorCode::kInternal, "net boolean: an intersection point has no unique construction"));
+  };
+  if (dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace)
+    return point_of(CGAL::intersection(line(a, k.a), plane(b, k.b)));
+  if (dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)
+    return point_of(CGAL::intersection(line(b, k.b), plane(a, k.a)));
+  return point_of(CGAL::intersection(line(a, k.a), line(b, k.b)));
+}
+
+// ------------------------------------------------------------ ray parity
+
+bool segment_hits_box(const Vec3d& o, const Vec3d& d, const std::array<double, 6>& box, double eps) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int k = 0; k < 3; ++k) {
+    const double lo = box[static_cast<std::size_t>(k)] - eps, hi = box[static_cast<std::size_t>(k + 3)] + eps;
+    if (d[k] == 0.0) {
+      if (o[k] < lo || o[k] > hi) return false;
+      continue;
+    }
+    double ta = (lo - o[k]) / d[k], tb = (hi - o[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+/// Fixed pseudo-random directions (the same on every run and machine).
+Vec3d ray_direction(int k) {
+  std::uint64_t s = 0x9e3779b97f4a7c15ull * static_cast<std::uint64_t>(k + 1);
+  auto next = [&] {
+    s ^= s >> 31;
+    s *= 0xbf58476d1ce4e5b9ull;
+    s ^= s >> 29;
+    return static_cast<double>(s >> 11) * 0x1.0p-53 * 2.0 - 1.0;
+  };
+  Vec3d d(next(), next(), next());
+  if (d.norm() < 1e-3) d = Vec3d(0.57, 0.61, 0.55);
+  return d.normalized();
+}
+
+/// Winding number by the parity of crossings of a segment from q to a point
+/// outside the net's box, with exact predicates of kernel K; 0 ok, or a
+/// degenerate direction (returns false).
+template <class K>
+bool ray_winding(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, const Vec3d& qd, const Vec3d& r,
+                 int& w) {
+  using P = typename K::Point_3;
+  const double scale = std::max({m.bounds.lo.cwiseAbs().maxCoeff(), m.bounds.hi.cwiseAbs().maxCoeff(),
+                                 qd.cwiseAbs().maxCoeff(), r.cwiseAbs().maxCoeff()});
+  const double eps = 1e-9 * scale + 1e-300;
+  const Vec3d d = r - qd;
+  const P pr(r.x(), r.y(), r.z());
+  w = 0;
+  std::vector<std::uint32_t> stack{0};
+  while (!stack.empty()) {
+    const std::uint32_t n = stack.back();
+    stack.pop_back();
+    const Bvh::Node& node = bvh.nodes[n];
+    if (!segment_hits_box(qd, d, node.box, eps)) continue;
+    if (node.left != kNil) {
+      stack.push_back(node.left);
+      stack.push_back(node.left + 1);
+      continue;
+    }
+    for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
+      const auto& t = m.tri[bvh.order[i]];
+      const P c0(m.p[t[0]].x(), m.p[t[0]].y(), m.p[t[0]].z());
+      const P c1(m.p[t[1]].x(), m.p[t[1]].y(), m.p[t[1]].z());
+      const P c2(m.p[t[2]].x(), m.p[t[2]].y(), m.p[t[2]].z());
+      const int oq = sgn(CGAL::orientation(c0, c1, c2, q));
+      const int orr = sgn(CGAL::orientation(c0, c1, c2, pr));
+      if (orr == 0) return false;  // the far end lies on a plane: try another direction
+      if (oq == orr) continue;
+      if (oq == 0) return false;  // q on the net (callers never ask; be safe)
+      const int e0 = sgn(CGAL::orientation(q, pr, c0, c1));
+      const int e1 = sgn(CGAL::orientation(q, pr, c1, c2));
+      const int e2 = sgn(CGAL::orientation(q, pr, c2, c0));
+      if (e0 == 0 || e1 == 0 || e2 == 0) {
+        if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return false;  // edge or vertex
+        continue;
+      }
+      if (e0 != e1 || e1 != e2) continue;
+      // q behind the triangle (against its outward normal) leaves the solid here.
+      w += oq < 0 ? 1 : -1;
+    }
+  }
+  return true;
+}
+
+template <class K>
+int winding_any(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, const Vec3d& qd) {
+  if (bvh.nodes.empty()) return 0;
+  const Vec3d centre = 0.5 * (m.bounds.lo + m.bounds.hi);
+  const double reach = 2.0 * ((m.bounds.hi - m.bounds.lo).norm() + (qd - centre).norm()) + 1.0;
+  for (int k = 0; k < 64; ++k) {
+    const Vec3d r = qd + reach * ray_direction(k);
+    int w = 0;
+    if (ray_winding<K>(m, bvh, q, qd, r, w)) return w;
+  }
+  throw Error(Status(ErrorCode::kInternal, "net boolean: no generic ray direction found for a winding number"));
+}
+
+}  // namespace
+
+int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
+  // Shewchuk's first-stage filter (orient3d, error bound A = (7 + 56 eps) eps
+  // times the permanent): decides almost every call without CGAL's call
+  // overhead; CGAL's filtered predicate (exact when it must be) takes the rest.
+  const double adx = a.x() - d.x(), ady = a.y() - d.y(), adz = a.z() - d.z();
+  const double bdx = b.x() - d.x(), bdy = b.y() - d.y(), bdz = b.z() - d.z();
+  const double cdx = c.x() - d.x(), cdy = c.y() - d.y(), cdz = c.z() - d.z();
+  const double bc = bdy * cdz - bdz * cdy, ca = cdy * adz - cdz * ady, ab = ady * bdz - adz * bdy;
+  const double det = adx * bc + bdx * ca + cdx * ab;
+  const double perm = (std::abs(bdy * cdz) + std::abs(bdz * cdy)) * std::abs(adx) +
+                      (std::abs(cdy * adz) + std::abs(cdz * ady)) * std::abs(bdx) +
+                      (std::abs(ady * bdz) + std::abs(adz * bdy)) * std::abs(cdx);
+  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
+  if (std::isfinite(perm) && perm > 1e-250) {
+    const double bound = kBound * perm;
+    // Shewchuk's determinant is positive when d lies on the side opposite
+    // to the normal (b - a) x (c - a).
+    if (det > bound) return -1;
+    if (-det > bound) return 1;
+  }
+  return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+}
+
+bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) noexcept {
+  return orient2(a, b, c, 0) == 0 && orient2(a, b, c, 1) == 0 && orient2(a, b, c, 2) == 0;
+}
+
+void intersect_pair(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb, PairHit& out) {
+  out.points.clear();
+  out.coplanar = false;
+  const auto ca = corners(a, ta), cb = corners(b, tb);
+  int s[3], r[3];
+  for (int i = 0; i < 3; ++i) s[i] = orient3d(cb[0], cb[1], cb[2], ca[static_cast<std::size_t>(i)]);
+  if ((s[0] > 0 && s[1] > 0 && s[2] > 0) || (s[0] < 0 && s[1] < 0 && s[2] < 0)) return;
+  for (int j = 0; j < 3; ++j) r[j] = orient3d(ca[0], ca[1], ca[2], cb[static_cast<std::size_t>(j)]);
+  if ((r[0] > 0 && r[1] > 0 && r[2] > 0) || (r[0] < 0 && r[1] < 0 && r[2] < 0)) return;
+  out.coplanar = s[0] == 0 && s[1] == 0 && s[2] == 0;
+  half_pair(a, ta, b, tb, s, [&](std::uint64_t sa, std::uint64_t sb) { out.points.push_back({sa, sb}); });
+  half_pair(b, tb, a, ta, r, [&](std::uint64_t sb, std::uint64_t sa) { out.points.push_back({sa, sb}); });
+  std::sort(out.points.begin(), out.points.end());
+  out.points.erase(std::unique(out.points.begin(), out.points.end()), out.points.end());
+}
+
+bool triangles_cross(const TriMesh& m, std::uint32_t t1, std::uint32_t t2) {
+  const auto& A = m.tri[t1];
+  const auto& B = m.tri[t2];
+  int shared = 0;
+  int ia = -1, ib = -1;  // a shared corner in each
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (A[static_cast<std::size_t>(i)] == B[static_cast<std::size_t>(j)]) {
+        ++shared;
+        ia = i;
+        ib = j;
+      }
+  // Fast exact rejection: the other triangle's own corners strictly on one
+  // side of this one's plane (then they meet at most in shared corners).
+  auto one_side = [&](const std::array<std::uint32_t, 3>& X, const std::array<std::uint32_t, 3>& Y) {
+    int pos = 0, neg = 0;
+    for (std::uint32_t y : Y) {
+      if (std::find(X.begin(), X.end(), y) != X.end()) continue;
+      const int o = orient3d(m.p[X[0]], m.p[X[1]], m.p[X[2]], m.p[y]);
+      pos += o > 0;
+      neg += o < 0;
+      if (o == 0) return false;
+    }
+    return pos == 0 || neg == 0;
+  };
+  if (shared < 2 && (one_side(A, B) || one_side(B, A))) return false;
+  const Ki::Triangle_3 ta(pi(m.p[A[0]]), pi(m.p[A[1]]), pi(m.p[A[2]]));
+  const Ki::Triangle_3 tb(pi(m.p[B[0]]), pi(m.p[B[1]]), pi(m.p[B[2]]));
+  if (shared == 0) return CGAL::do_intersect(ta, tb);
+  if (shared == 1) {
+    const Ki::Segment_3 sa(pi(m.p[A[static_cast<std::size_t>((ia + 1) % 3)]]),
+                           pi(m.p[A[static_cast<std::size_t>((ia + 2) % 3)]]));
+    const Ki::Segment_3 sb(pi(m.p[B[static_cast<std::size_t>((ib + 1) % 3)]]),
+                           pi(m.p[B[static_cast<std::size_t>((ib + 2) % 3)]]));
+    return CGAL::do_intersect(sa, tb) || CGAL::do_intersect(sb, ta);
+  }
+  if (shared == 2) {
+    // The corners not shared; folded onto each other only when coplanar and
+    // on the same side of the shared edge.
+    int oa = 0, ob = 0;
+    for (int i = 0; i < 3; ++i)
+      if (std::find(B.begin(), B.end(), A[static_cast<std::size_t>(i)]) == B.end()) oa = i;
+    for (int j = 0; j < 3; ++j)
+      if (std::find(A.begin(), A.end(), B[static_cast<std::size_t>(j)]) == A.end()) ob = j;
+    const Vec3d& u = m.p[A[static_cast<std::size_t>((oa + 1) % 3)]];
+    const Vec3d& v = m.p[A[static_cast<std::size_t>((oa + 2) % 3)]];
+    const Vec3d& x = m.p[A[static_cast<std::size_t>(oa)]];
+    const Vec3d& y = m.p[B[static_cast<std::size_t>(ob)]];
+    if (orient3d(u, v, x, y) != 0) return false;
+    const Projection pr = projection_of(u, v, x);
+    return orient2(u, v, x, pr.axis) * orient2(u, v, y, pr.axis) > 0;
+  }
+  return true;
+}
+
+std::uint32_t PointIds::find(const PointKey& k) const {
+  const auto it = std::lower_bound(keys.begin(), keys.end(), k);
+  return it != keys.end() && *it == k ? id[static_cast<std::size_t>(it - keys.begin())] : kNil;
+}
+
+Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t, std::span<const PointKey> points,
+                       std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
+                       std::vector<std::array<std::uint32_t, 3>>& out) {
+  using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Ke>;
+  using Fb = CGAL::Constrained_triangulation_face_base_2<Ke>;
+  using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+  // Delaunay: among the triangulations with the cut segments, the one that
+  // avoids slivers. Nearly collinear cut points (a net cutting the coplanar
+  // fan of a split planar polygon) would otherwise give triangles a rounding
+  // of the points can fold over.
+  using Ct =
+      CGAL::Constrained_Delaunay_triangulation_2<Ke, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
+  const TriMesh& m = side == 0 ? a : b;
+  const std::uint32_t offset = side == 0 ? 0u : static_cast<std::uint32_t>(a.p.size());
+  const auto& tv = m.tri[t];
+  const auto c = corners(m, t);
+  const Projection pr = projection_of(c[0], c[1], c[2]);
+  const int u = u_of(pr.axis), v = v_of(pr.axis);
+  auto own = [&](const PointKey& k) { return side == 0 ? k.a : k.b; };
+  try {
+    Ct ct;
+    std::array<Ct::Vertex_handle, 3> corner;
+    for (std::size_t k = 0; k < 3; ++k) {
+      corner[k] = ct.insert(Ke::Point_2(c[k][u], c[k][v]));
+      corner[k]->info() = tv[k] + offset;
+    }
+    std::vector<std::pair<PointKey, Ct::Vertex_handle>> handle;
+    handle.reserve(points.size());
+    auto project = [&](const Ke::Point_3& p) {
+      return pr.axis == 0 ? Ke::Point_2(p.y(), p.z())
+                          : (pr.axis == 1 ? Ke::Point_2(p.z(), p.x()) : Ke::Point_2(p.x(), p.y()));
+    };
+    // Points on the triangle's edges go in by their known place (the edge,
+    // sorted along it), so no predicate has to find out that they are
+    // collinear with its corners: an exact zero the filters cannot certify.
+    std::array<std::vector<std::pair<Ke::Point_3, PointKey>>, 3> on_edge;
+    std::vector<std::pair<Ke::Point_3, PointKey>> inside;
+    for (const PointKey& k : points) {
+      const std::uint64_t s = own(k);
+      if (dim_of(s) == kDimVertex) {
+        for (std::size_t q = 0; q < 3; ++q)
+          if (tv[q] == idx_of(s)) handle.emplace_back(k, corner[q]);
+        continue;
+      }
+      std::size_t slot = 3;
+      if (dim_of(s) == kDimEdge)
+        for (std::size_t q = 0; q < 3; ++q)
+          if (m.tri_edge[t][q] == idx_of(s)) slot = q;
+      (slot < 3 ? on_edge[slot] : inside).emplace_back(exact_point(a, b, k), k);
+    }
+    auto add = [&](Ct::Vertex_handle h, const PointKey& k) -> Status {
+      const std::uint32_t id = ids.find(k);
+      h->info() = id;
+      handle.emplace_back(k, h);
+      return {};
+    };
+    for (std::size_t q = 0; q < 3; ++q) {
+      auto& list = on_edge[q];
+      const Vec3d d = c[(q + 1) % 3] - c[q];
+      int ax = 0;
+      d.cwiseAbs().maxCoeff(&ax);
+      const bool up = d[ax] > 0;
+      std::sort(list.begin(), list.end(), [&](const auto& x, const auto& y) {
+        return up ? x.first[ax] < y.first[ax] : y.first[ax] < x.first[ax];
+      });
+      Ct::Vertex_handle prev = corner[q];
+      for (const auto& [p, k] : list) {
+        Ct::Face_handle f;
+        int i = 0;
+        if (!ct.is_edge(prev, corner[(q + 1) % 3], f, i)) {
+          std::ostringstream msg;
+          msg << "net boolean: points on an edge of triangle " << t << " of " << m.name << " are out of order";
+          return {ErrorCode::kInternal, msg.str()};
+        }
+        const Ct::Vertex_handle h = ct.insert(project(p), Ct::EDGE, f, i);
+        (void)add(h, k);
+        prev = h;
+      }
+    }
+    for (const auto& [p, k] : inside) {
+      const std::size_t before = ct.number_of_vertices();
+      const Ct::Vertex_handle h = ct.insert(project(p));
+      if (ct.number_of_vertices() == before) {
+        std::ostringstream msg;
+        msg << "net boolean: two intersection points coincide in triangle " << t << " of " << m.name;
+        return {ErrorCode::kInternal, msg.str()};
+      }
+      (void)add(h, k);
+    }
+    std::sort(handle.begin(), handle.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    auto find = [&](const PointKey& k) {
+      const auto it = std::lower_bound(handle.begin(), handle.end(), k,
+                                       [](const auto& x, const PointKey& key) { return x.first < key; });
+      return it != handle.end() && it->first == k ? it->second : Ct::Vertex_handle();
+    };
+    for (const auto& seg : constraints) {
+      const Ct::Vertex_handle h0 = find(seg[0]), h1 = find(seg[1]);
+      if (h0 == Ct::Vertex_handle() || h1 == Ct::Vertex_handle()) {
+        std::ostringstream msg;
+        msg << "net boolean: a cut segment of triangle " << t << " of " << m.name << " lacks an end point";
+        return {ErrorCode::kInternal, msg.str()};
+      }
+      if (h0 != h1) ct.insert_constraint(h0, h1);
+    }
+    for (auto f = ct.finite_faces_begin(); f != ct.finite_faces_end(); ++f) {
+      if (CGAL::orientation(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point()) != CGAL::LEFT_TURN) {
+        std::ostringstream msg;
+        msg << "net boolean: a refined triangle of triangle " << t << " of " << m.name << " is flat ("
+            << on_edge[0].size() << "," << on_edge[1].size() << "," << on_edge[2].size() << " edge points, "
+            << inside.size() << " inside)";
+        return {ErrorCode::kInternal, msg.str()};
+      }
+      std::array<std::uint32_t, 3> tri{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
+      if (pr.sign < 0) std::swap(tri[1], tri[2]);
+      out.push_back(tri);
+    }
+  } catch (const Error& e) {
+    return e.status();
+  } catch (const std::exception& e) {
+    std::ostringstream msg;
+    msg << "net boolean: cut segments cross inside triangle " << t << " of " << m.name << " (" << e.what() << ")";
+    return {ErrorCode::kInternal, msg.str()};
+  }
+  return {};
+}
+
+Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k) {
+  const Ke::Point_3 p = exact_point(a, b, k);
+  // The interval approximation when it pins the value within two ulps (the
+  // common case; the same bits on every run), else the exact value rounded.
+  auto coord = [](const Ke::FT& x) {
+    const std::pair<double, double> iv = CGAL::to_interval(x);
+    if (std::isfinite(iv.first) && std::isfinite(iv.second) &&
+        std::nextafter(std::nextafter(iv.first, iv.second), iv.second) >= iv.second)
+      return iv.first + 0.5 * (iv.second - iv.first);
+    return CGAL::to_double(CGAL::exact(x));
+  };
+  return {coord(p.x()), coord(p.y()), coord(p.z())};
+}
+
+int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q) {
+  return winding_any<Ki>(m, bvh, pi(q), q);
+}
+
+int winding_number_centroid(const TriMesh& m, const Bvh& bvh, const TriMesh& a, const TriMesh& b,
+                            const std::array<PointKey, 3>& corners3) {
+  const Ke::Point_3 c =
+      CGAL::centroid(exact_point(a, b, corners3[0]), exact_point(a, b, corners3[1]), exact_point(a, b, corners3[2]));
+  const Vec3d cd(CGAL::to_double(c.x()), CGAL::to_double(c.y()), CGAL::to_double(c.z()));
+  return winding_any<Ke>(m, bvh, c, cd);
+}
+
+int coplanar_orientation(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb) {
+  const auto ca = corners(a, ta), cb = corners(b, tb);
+  const Projection pr = projection_of(ca[0], ca[1], ca[2]);
+  return pr.sign * orient2(cb[0], cb[1], cb[2], pr.axis);
+}
+
+}  // namespace atelier::net_detail

@@ -1,0 +1,97 @@
+// Closed test nets for the net Booleans: boxes (quads), UV spheres (quads and
+// triangle fans, from support/shapes.h), icospheres (triangles), and the
+// checks every result must pass.
+#pragma once
+
+#include <atelier/storage/builder.h>
+#include <atelier/storage/polygon_soup.h>
+#include <atelier/storage/validate.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "support/shapes.h"
+
+namespace atelier::net_test {
+
+/// Axis-aligned box [lo, hi] as 6 outward quads.
+inline PolygonSoup box(const Vec3d& lo, const Vec3d& hi) {
+  PolygonSoup s;
+  for (int i = 0; i < 8; ++i)
+    s.positions.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const std::uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : q) s.add_face(f);
+  return s;
+}
+
+/// Box split into triangles (two per side).
+inline PolygonSoup box_triangles(const Vec3d& lo, const Vec3d& hi) {
+  const PolygonSoup q = box(lo, hi);
+  PolygonSoup s;
+  s.positions = q.positions;
+  for (std::size_t f = 0; f < q.face_count(); ++f) {
+    const auto c = q.face(f);
+    s.add_face(std::array<std::uint32_t, 3>{c[0], c[1], c[2]});
+    s.add_face(std::array<std::uint32_t, 3>{c[0], c[2], c[3]});
+  }
+  return s;
+}
+
+inline PolygonSoup from_shapes(const shapes::Soup& in) {
+  PolygonSoup s;
+  s.positions = in.p;
+  s.face_offsets = in.off;
+  s.face_nodes = in.idx;
+  return s;
+}
+
+/// Icosphere: the icosahedron subdivided `level` times, projected on the sphere.
+inline PolygonSoup icosphere(int level, double r, const Vec3d& centre) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3d> p = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<std::uint32_t, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (auto& x : p) x.normalize();
+  for (int l = 0; l < level; ++l) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+    auto m = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      p.push_back((p[a] + p[b]).normalized());
+      return mid[key] = static_cast<std::uint32_t>(p.size() - 1);
+    };
+    std::vector<std::array<std::uint32_t, 3>> g;
+    for (const auto& x : f) {
+      const std::uint32_t a = m(x[0], x[1]), b = m(x[1], x[2]), c = m(x[2], x[0]);
+      g.push_back({x[0], a, c});
+      g.push_back({x[1], b, a});
+      g.push_back({x[2], c, b});
+      g.push_back({a, b, c});
+    }
+    f = std::move(g);
+  }
+  PolygonSoup s;
+  for (const auto& x : p) s.positions.push_back(centre + r * x);
+  for (const auto& x : f) s.add_face(x);
+  return s;
+}
+
+/// Builds the result into a Model: closed (no boundary), consistently
+/// oriented, 2-manifold (the builder refuses the rest), validate() clean.
+inline ::testing::AssertionResult closed_model(const PolygonSoup& s) {
+  Model m;
+  auto surf = add_polygon_surface(m, "result", s);
+  if (!surf) return ::testing::AssertionFailure() << surf.status().to_string();
+  if (Status v = validate(m); !v) return ::testing::AssertionFailure() << v.to_string();
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e)
+    if (m.alive(EdgeIdx{e}) && m.is_boundary(EdgeIdx{e})) return ::testing::AssertionFailure() << "open edge " << e;
+  return ::testing::AssertionSuccess();
+}
+
+}  // namespace atelier::net_test
