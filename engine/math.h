@@ -3,8 +3,13 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <limits>
 
 namespace atelier {
+
+/// A quiet NaN: "no value" in double columns (unset profile samples, no
+/// depth).
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 using Vec2d = Eigen::Vector2d;
 using Vec3d = Eigen::Vector3d;

@@ -7,9 +7,13 @@
 #include <limits>
 #include <sstream>
 
+#include "boolean_detail.h"
+
 namespace atelier {
 
 namespace {
+
+using net_detail::fail;
 
 struct Step {
   int di, dj;
@@ -57,13 +61,6 @@ Rule rule_of(ConnectRule r) {
 
 bool quad_rule(ConnectRule r) {
   return r >= ConnectRule::kQuadValence;
-}
-
-template <class... A>
-Status fail(ErrorCode c, const A&... parts) {
-  std::ostringstream s;
-  (s << ... << parts);
-  return {c, s.str()};
 }
 
 Status check(std::span<const Vec3d> positions, const BoundaryPolygon& p, const char* name) {

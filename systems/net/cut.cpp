@@ -16,31 +16,6 @@ namespace atelier::net_detail {
 
 namespace {
 
-template <class... A>
-Status fail(ErrorCode c, const A&... parts) {
-  std::ostringstream s;
-  (s << ... << parts);
-  return {c, s.str()};
-}
-
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) {
-      parent[x] = parent[parent[x]];
-      x = parent[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a < b) parent[b] = a;
-    if (b < a) parent[a] = b;
-  }
-};
-
 std::uint64_t edge_key(std::uint32_t u, std::uint32_t v) {
   return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
 }

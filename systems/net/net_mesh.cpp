@@ -15,13 +15,6 @@ namespace atelier::net_detail {
 
 namespace {
 
-template <class... A>
-Status fail(ErrorCode c, const A&... parts) {
-  std::ostringstream s;
-  (s << ... << parts);
-  return {c, s.str()};
-}
-
 std::array<double, 6> tri_box(const TriMesh& m, std::uint32_t t) {
   const auto& v = m.tri[t];
   std::array<double, 6> b{};

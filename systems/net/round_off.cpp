@@ -10,16 +10,13 @@
 #include <cmath>
 #include <sstream>
 
+#include "boolean_detail.h"
+
 namespace atelier {
 
 namespace {
 
-template <class... A>
-Status fail(ErrorCode c, const A&... parts) {
-  std::ostringstream s;
-  (s << ... << parts);
-  return {c, s.str()};
-}
+using net_detail::fail;
 
 using SpMat = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 using Trip = Eigen::Triplet<double>;

@@ -19,13 +19,6 @@ using namespace net_detail;
 
 namespace {
 
-template <class... A>
-Status fail(ErrorCode c, const A&... parts) {
-  std::ostringstream s;
-  (s << ... << parts);
-  return {c, s.str()};
-}
-
 }  // namespace
 
 std::vector<Vec3d> parse_curve(std::string_view text, std::string_view name) {

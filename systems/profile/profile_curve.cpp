@@ -13,7 +13,6 @@ namespace atelier {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 [[nodiscard]] Vec3d lerp(const Vec3d& a, const Vec3d& b, double t) noexcept {
   return (1.0 - t) * a + t * b;
