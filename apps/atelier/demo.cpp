@@ -11,6 +11,16 @@
 // measurements), write_report (report.json), write_html (report.html and
 // its pictures) and print_summary. The algorithms are library calls
 // (systems/garment/regenerate_garment.h, systems/profile/regenerate.h).
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <optional>
+#include <sstream>
+
 #include <atelier/engine/parallel.h>
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/obj.h>
@@ -27,16 +37,6 @@
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/view/render.h>
-
-#include <algorithm>
-#include <array>
-#include <chrono>
-#include <cmath>
-#include <memory>
-#include <nlohmann/json.hpp>
-#include <numeric>
-#include <optional>
-#include <sstream>
 
 #include "commands.h"
 #include "html_report.h"

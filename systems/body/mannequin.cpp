@@ -3,8 +3,6 @@
 // of the rings, and the reference body with its feature curves and points.
 // The topology is in mannequin_topology.cpp, the sampling in
 // mannequin_sampling.cpp.
-#include <atelier/engine/parallel.h>
-#include <atelier/storage/builder.h>
 #include <atelier/systems/body/mannequin.h>
 
 #include <algorithm>
@@ -14,6 +12,9 @@
 #include <numbers>
 #include <sstream>
 #include <tuple>
+
+#include <atelier/engine/parallel.h>
+#include <atelier/storage/builder.h>
 
 #include "mannequin_detail.h"
 

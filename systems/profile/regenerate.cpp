@@ -6,10 +6,7 @@
 // refined, each edge's curve, the nodes' distance bounds) and read best next
 // to the outline that runs them; split over files they would need that
 // state in a header of its own.
-#include <atelier/engine/parallel.h>
-#include <atelier/systems/mesh/subdivide.h>
 #include <atelier/systems/profile/regenerate.h>
-#include <atelier/systems/smooth/fairing.h>
 
 #include <algorithm>
 #include <array>
@@ -17,6 +14,10 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+
+#include <atelier/engine/parallel.h>
+#include <atelier/systems/mesh/subdivide.h>
+#include <atelier/systems/smooth/fairing.h>
 
 namespace atelier {
 

@@ -4,8 +4,6 @@
 // joints, attribute nodes and edges, profiles). Every list is located and
 // sized first, so a bad index never reaches a table, and every error names
 // the file and the JSON pointer of the value.
-#include <atelier/io/mesh_arrays.h>
-#include <atelier/storage/validate.h>
 #include <atelier/systems/profile/template_json.h>
 
 #include <algorithm>
@@ -13,10 +11,14 @@
 #include <cstdint>
 #include <iterator>
 #include <limits>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <atelier/io/mesh_arrays.h>
+#include <atelier/storage/validate.h>
 
 #include "template_json_detail.h"
 

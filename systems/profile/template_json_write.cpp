@@ -2,17 +2,19 @@
 // to_json checks that the file will read back, then writes the template
 // table after table in the order the reader builds them; emit pretty-prints
 // it. A template with tombstones is written compacted.
-#include <atelier/io/atomic_file.h>
-#include <atelier/storage/validate.h>
 #include <atelier/systems/profile/template_json.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <atelier/io/atomic_file.h>
+#include <atelier/storage/validate.h>
 
 #include "template_json_detail.h"
 
