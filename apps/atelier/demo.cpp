@@ -132,8 +132,9 @@ DemoReference set_up(const DemoOptions& opt, const ExecContext& ctx, Log& log) {
   if (!garment) throw Error(garment.status());
   r.garment = std::move(*garment);
 
+  const std::vector<std::array<std::uint32_t, 2>> edges = edges_of(r.garment);
   GarmentEncodeOptions geo;
-  geo.edges = edges_of(r.garment);
+  geo.edges = edges;  // a view: `edges` outlives the encoding
   PolygonSoup shorts_soup = soup_of(r.garment);
   auto family = GarmentFamily::of(ref);
   if (!family) throw Error(family.status());
