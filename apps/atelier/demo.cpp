@@ -4,33 +4,43 @@
 // collision avoidance) and its detail template (shorts), measures quality,
 // and writes meshes, a JSON report, pictures, an HTML report and the
 // bodies' measurements to the output folder.
+//
+// run_demo is the outline; its stages: set_up (the reference mannequin, the
+// shorts encoded on it, the profile templates), run_bodies (the bodies in
+// chunks: the shorts and the profile templates on each, quality, meshes,
+// measurements), write_report (report.json), write_html (report.html and
+// its pictures) and print_summary. The algorithms are library calls
+// (systems/garment/regenerate_garment.h, systems/profile/regenerate.h).
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
-#include "commands.h"
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/builder.h>
 #include <atelier/io/atomic_file.h>
-#include "html_report.h"
 #include <atelier/io/obj.h>
 #include <atelier/io/png.h>
-#include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/body/body_set.h>
-#include <atelier/systems/garment/collision_pass.h>
-#include <atelier/systems/garment/detail_template.h>
-#include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
 #include <atelier/systems/body/measure.h>
+#include <atelier/systems/garment/collision_pass.h>
+#include <atelier/systems/garment/detail_template.h>
+#include <atelier/systems/garment/regenerate_garment.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/profile/project_templates.h>
 #include <atelier/systems/profile/regenerate.h>
+#include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/view/render.h>
-#include <atelier/systems/mesh/fan_triangulation.h>
+
+#include "commands.h"
+#include "html_report.h"
 
 namespace atelier::cli {
 
@@ -62,96 +72,139 @@ struct BodyQuality {
   std::vector<RegenQuality> templates;  // one per profile template
 };
 
-}  // namespace
+// ------------------------------------------------------------------ set-up
 
-int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
-  const auto t_start = std::chrono::steady_clock::now();
-  const ExecContext ctx = common.context();
-  fs::create_directories(opt.out / "meshes");
+/// What every body is regenerated from, made once on the reference
+/// mannequin.
+struct DemoReference {
+  std::shared_ptr<const MannequinTopology> topology;
+  std::shared_ptr<const ReferenceBody> body;
+  Model garment;  // the shorts on the reference body
+  std::shared_ptr<const GarmentFamily> family;
+  std::shared_ptr<const GarmentTemplate> shorts;  // the shorts as a detail template
+  std::vector<ProfileTemplate> templates;         // the project's profile templates
+  Box3d roi;                                      // what the profile templates' collider covers
+  SurfaceTriangles body_triangles;                // for the pictures
+  double encode_s = 0;                            // wall time of the shorts' encoding
+};
 
-  // The reference body and the project's garment: shorts cut from the skin
-  // between the waist and mid-thigh, 8 mm outside it.
+/// The shorts' edges in the model's order, as encode_garment takes them.
+std::vector<std::array<std::uint32_t, 2>> edges_of(const Model& garment) {
+  std::vector<std::array<std::uint32_t, 2>> edges;
+  for (std::uint32_t e = 0; e < garment.edges.slots.capacity(); ++e)
+    edges.push_back({garment.tail(halfedge_of(EdgeIdx{e}, 0)).value, garment.tail(halfedge_of(EdgeIdx{e}, 1)).value});
+  return edges;
+}
+
+/// The reference mannequin; the shorts cut from its skin between the waist
+/// and mid-thigh, 8 mm outside it, encoded as a detail template (seed 001
+/// section 6) with the clearance and edge transfer of the garment pipeline
+/// (systems/garment/regenerate_garment.h); the profile templates authored
+/// on it (systems/profile/project_templates.h). Writes the reference body,
+/// the shorts (.obj, .atd) and the templates' meshes to the output folder.
+DemoReference set_up(const DemoOptions& opt, const ExecContext& ctx, Log& log) {
+  DemoReference r;
   auto topo = make_mannequin_topology();
   if (!topo) throw Error(topo.status());
-  auto topology = std::make_shared<const MannequinTopology>(std::move(*topo));
-  auto ref_body = make_mannequin(MannequinParams{}, *topology);
+  r.topology = std::make_shared<const MannequinTopology>(std::move(*topo));
+  auto ref_body = make_mannequin(MannequinParams{}, *r.topology);
   if (!ref_body) throw Error(ref_body.status());
-  auto ref = std::make_shared<const ReferenceBody>(std::move(*ref_body));
-  const double y_waist = curve_height(*ref, kWaist), y_thigh = curve_height(*ref, kThighLeft);
-  const double y_knee = curve_height(*ref, kKneeLeft);
-  auto garment = skin_band_garment(*ref, 0.5 * (y_thigh + y_knee), y_waist + 0.02, 0.008, 0.40, "shorts");
+  r.body = std::make_shared<const ReferenceBody>(std::move(*ref_body));
+  const ReferenceBody& ref = *r.body;
+  const double y_waist = curve_height(ref, kWaist), y_thigh = curve_height(ref, kThighLeft);
+  const double y_knee = curve_height(ref, kKneeLeft);
+  auto garment = skin_band_garment(ref, 0.5 * (y_thigh + y_knee), y_waist + 0.02, 0.008, 0.40, "shorts");
   if (!garment) throw Error(garment.status());
-  // The shorts as a detail template (seed 001 section 6) with the
-  // clearance and edge transfer of the garment pipeline
-  // (systems/garment/regenerate_garment.h), edges in the Model's order.
-  std::vector<std::array<std::uint32_t, 2>> g_edges;
-  for (std::uint32_t e = 0; e < garment->edges.slots.capacity(); ++e)
-    g_edges.push_back(
-        {garment->tail(halfedge_of(EdgeIdx{e}, 0)).value, garment->tail(halfedge_of(EdgeIdx{e}, 1)).value});
-  PolygonSoup shorts_soup = polygon_soup(*garment);
-  auto family_made = GarmentFamily::of(*ref);
-  if (!family_made) throw Error(family_made.status());
-  const auto family = std::make_shared<const GarmentFamily>(std::move(*family_made));
-  const auto t_enc = std::chrono::steady_clock::now();
+  r.garment = std::move(*garment);
+
+  const std::vector<std::array<std::uint32_t, 2>> edges = edges_of(r.garment);
   GarmentEncodeOptions geo;
-  geo.edges = g_edges;
-  auto shorts = encode_garment(*family, "shorts", std::move(shorts_soup), geo, ctx);
+  geo.edges = edges;  // a view: `edges` outlives the encoding
+  PolygonSoup shorts_soup = polygon_soup(r.garment);
+  auto family = GarmentFamily::of(ref);
+  if (!family) throw Error(family.status());
+  r.family = std::make_shared<const GarmentFamily>(std::move(*family));
+  const auto t_enc = std::chrono::steady_clock::now();
+  auto shorts = encode_garment(*r.family, "shorts", std::move(shorts_soup), geo, ctx);
   if (!shorts) throw Error(shorts.status());
-  const double encode_s = seconds_since(t_enc);
-  const auto shorts_template = std::make_shared<const GarmentTemplate>(std::move(*shorts));
-  const DetailEncoding* enc = &shorts_template->encoding;
-  const std::vector<Vec3d>& g0 = shorts_template->mesh.positions;
-  auto ref_tris = fan_triangulate(ref->model);
-  if (!ref_tris) throw Error(ref_tris.status());
-  write_obj(ref->model, opt.out / "reference_body.obj");
-  write_obj(*garment, opt.out / "garment_template.obj");
-  write_detail(*enc, opt.out / "garment_template.atd");
+  r.encode_s = seconds_since(t_enc);
+  r.shorts = std::make_shared<const GarmentTemplate>(std::move(*shorts));
+  const DetailEncoding& enc = r.shorts->encoding;
+  const std::vector<Vec3d>& g0 = r.shorts->mesh.positions;
+  auto body_tris = fan_triangulate(ref.model);
+  if (!body_tris) throw Error(body_tris.status());
+  r.body_triangles = std::move(*body_tris);
+  write_obj(ref.model, opt.out / "reference_body.obj");
+  write_obj(r.garment, opt.out / "garment_template.obj");
+  write_detail(enc, opt.out / "garment_template.atd");
   log.info("encoded the shorts (" + std::to_string(g0.size()) + " vertices, " +
-           std::to_string(enc->entries() / std::max<std::size_t>(1, g0.size())) + " p-polygons each) on the mannequin");
-  // The profile templates, authored on the reference body (systems/project_templates.h).
-  auto made = make_project_templates(*ref);
+           std::to_string(enc.entries() / std::max<std::size_t>(1, g0.size())) + " p-polygons each) on the mannequin");
+
+  auto made = make_project_templates(ref);
   if (!made) throw Error(made.status());
-  const std::vector<ProfileTemplate> templates = std::move(*made);
+  r.templates = std::move(*made);
   fs::create_directories(opt.out / "templates");
-  Box3d roi;
-  for (const auto& t : templates) {
+  for (const auto& t : r.templates) {
     write_obj(t.model, opt.out / "templates" / (t.name + ".obj"));
-    for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) roi.extend(t.model.nodes.position[v]);
+    for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) r.roi.extend(t.model.nodes.position[v]);
     log.info("profile template '" + t.name + "': " + std::to_string(t.model.num_faces()) + " faces, " +
              std::to_string(t.model.num_surfaces()) + " surfaces, " + std::to_string(t.model.num_joints()) +
              " joints, " + std::to_string(t.profiles.size()) + " profiles");
   }
-  for (const auto& g : g0) roi.extend(g);
-  auto made_regen = GarmentRegenerator::create(family, {shorts_template}, {}, ctx);
-  if (!made_regen) throw Error(made_regen.status());
-  GarmentRegenerator& shorts_regen = *made_regen;
-  // Regenerates the profile templates on one body (also used again for the pictures).
-  // One collider per worker, refitted to each body (systems/regenerate.h).
-  ColliderPool colliders;
-  auto regen_all = [&](std::span<const Vec3d> body, const ExecContext& c, std::vector<RegenResult>& out) -> Status {
-    auto r = regenerate_on_body(templates, *ref, body, roi, {}, {.use_grid = false}, c, colliders);
+  for (const auto& g : g0) r.roi.extend(g);
+  return r;
+}
+
+/// The two library pipelines the demo runs on a body: the garment pipeline
+/// for the shorts, and the profile regeneration of the templates with one
+/// collider per worker, refitted to each body (systems/profile/regenerate.h).
+class Regenerators {
+ public:
+  Regenerators(const DemoReference& ref, const ExecContext& ctx) : ref_(ref) {
+    auto made = GarmentRegenerator::create(ref.family, {ref.shorts}, {}, ctx);
+    if (!made) throw Error(made.status());
+    shorts_ = std::move(*made);
+  }
+  [[nodiscard]] GarmentRegenerator& shorts() noexcept { return shorts_; }
+  /// The profile templates on one body; safe to call from several workers.
+  Status profiles(std::span<const Vec3d> body, const ExecContext& c, std::vector<RegenResult>& out) {
+    auto r = regenerate_on_body(ref_.templates, *ref_.body, body, ref_.roi, {}, {.use_grid = false}, c, colliders_);
     if (!r) return r.status();
     out = std::move(*r);
     return {};
-  };
+  }
 
-  // Bodies, streamed in chunks: memory is bounded by the chunk size.
-  MannequinSource src(topology, opt.bodies, common.seed, ref);
-  BodySet chunk(ref);
+ private:
+  const DemoReference& ref_;
+  GarmentRegenerator shorts_;
+  ColliderPool colliders_;
+};
+
+// ------------------------------------------------------------------ bodies
+
+struct DemoRun {
   std::vector<BodyFailure> failures;
-  std::vector<BodyQuality> quality;
+  std::vector<BodyQuality> quality;  // per completed body, in body order
+};
+
+/// The bodies, streamed in chunks (memory is bounded by the chunk size): on
+/// each chunk the shorts decoded in batches with the edge transfer, the
+/// collision pass and the fit figures, then the profile templates and the
+/// quality of each body in parallel over bodies. Writes the first bodies'
+/// meshes and measurements.csv.
+DemoRun run_bodies(const DemoOptions& opt, const DemoReference& ref, const MannequinSource& src, Regenerators& regen,
+                   const ExecContext& ctx, Log& log) {
+  DemoRun run;
+  BodySet chunk(ref.body);
   std::vector<BodyGarments> fitted;
   std::ostringstream csv;
-  const std::size_t nv = g0.size();
+  const std::size_t nv = ref.shorts->mesh.positions.size();
   log.progress("bodies", 0, src.size());
   for (std::size_t first = 0; first < src.size(); first += opt.chunk) {
     if (ctx.cancelled()) break;
-    src.generate(first, opt.chunk, chunk, failures, ctx);
-    // The shorts on every body of the chunk: decoded in batches, the edge
-    // transfer, the collision pass, the fit figures.
-    if (Status s = shorts_regen.run(chunk, 0, chunk.size(), fitted, ctx); !s) throw Error(s);
-    const double per_body_ms = shorts_regen.last_decode_ms_per_body();
-    // Quality of each body, in parallel over bodies.
+    src.generate(first, opt.chunk, chunk, run.failures, ctx);
+    if (Status s = regen.shorts().run(chunk, 0, chunk.size(), fitted, ctx); !s) throw Error(s);
+    const double per_body_ms = regen.shorts().last_decode_ms_per_body();
     std::vector<BodyQuality> q(chunk.size());
     std::vector<std::string> errors(chunk.size());
     ExecContext per_body = ctx;
@@ -161,14 +214,14 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       const std::vector<Vec3d> body = chunk.positions(b);
       ExecContext inner = ExecContext::sequential();
       inner.cancel = ctx.cancel;
-      std::vector<RegenResult> regen;
-      if (Status s = regen_all(body, inner, regen); !s) {
+      std::vector<RegenResult> profiles;
+      if (Status s = regen.profiles(body, inner, profiles); !s) {
         errors[b] = s.message();
         return;
       }
       if (first + b < opt.meshes) {
-        for (std::size_t k = 0; k < regen.size(); ++k)
-          write_obj(regen[k].model, opt.out / "meshes" / (chunk.name(b) + "_" + templates[k].name + ".obj"));
+        for (std::size_t k = 0; k < profiles.size(); ++k)
+          write_obj(profiles[k].model, opt.out / "meshes" / (chunk.name(b) + "_" + ref.templates[k].name + ".obj"));
       }
       if (!fitted[b].status) {
         errors[b] = fitted[b].status.message();
@@ -184,19 +237,19 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       r.max_depth = fit.max_depth;
       r.strain_p95 = fit.strain_p95;
       r.decode_ms = per_body_ms;
-      for (const auto& x : regen) r.templates.push_back(x.quality);
+      for (const auto& x : profiles) r.templates.push_back(x.quality);
     });
     for (std::size_t b = 0; b < chunk.size(); ++b) {
       if (!errors[b].empty()) {
-        failures.push_back({first + b, chunk.name(b), Status(ErrorCode::kInternal, errors[b])});
+        run.failures.push_back({first + b, chunk.name(b), Status(ErrorCode::kInternal, errors[b])});
         continue;
       }
-      quality.push_back(q[b]);
-      if (quality.size() <= opt.meshes) {
-        Model body = ref->model;
+      run.quality.push_back(q[b]);
+      if (run.quality.size() <= opt.meshes) {
+        Model body = ref.body->model;
         chunk.positions(b, body.nodes.position);
         write_obj(body, opt.out / "meshes" / (chunk.name(b) + "_body.obj"));
-        Model gm = *garment;
+        Model gm = ref.garment;
         // Written in float precision, as the decoded garment is kept.
         const std::vector<Vec3d>& fit = fitted[b].garments[0].positions;
         for (std::size_t v = 0; v < nv; ++v) gm.nodes.position[v] = round_to_float(fit[v]);
@@ -204,32 +257,51 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       }
     }
     Status s = measurements_csv(
-        csv, *ref, chunk.size(), [&](std::size_t i) { return chunk.positions(i); }, ctx, first == 0, first);
+        csv, *ref.body, chunk.size(), [&](std::size_t i) { return chunk.positions(i); }, ctx, first == 0, first);
     if (!s) throw Error(s);
     log.progress("bodies", std::min(src.size(), first + opt.chunk), src.size());
   }
   log.end_progress();
   write_atomically(opt.out / "measurements.csv", [&](AtomicFile& f) { f.write(csv.str()); });
+  return run;
+}
 
-  // Report.
-  const double total_s = seconds_since(t_start);
+// ------------------------------------------------------------------ report
+
+/// Totals over the completed bodies, for report.json and the summary.
+struct DemoTotals {
+  std::size_t bodies_with_penetration = 0;
+  double worst_depth = 0, strain_sum = 0, decode_sum = 0;
+  double nq = 1;                                       // completed bodies (at least 1, a divisor)
+  nlohmann::json templates = nlohmann::json::array();  // per profile template
+  std::size_t template_inside = 0;                     // profile template nodes inside, over all bodies
+  double template_crack = 0;                           // largest crack of any profile template
+};
+
+/// report.json: the run, the shorts, the summary, the failures, the quality
+/// of each body and the per-template totals over all bodies. Returns the
+/// report and the totals.
+std::pair<nlohmann::json, DemoTotals> write_report(const Common& common, const DemoOptions& opt,
+                                                   const DemoReference& ref, const DemoRun& run, double total_s) {
+  const std::vector<BodyQuality>& quality = run.quality;
+  const DetailEncoding& enc = ref.shorts->encoding;
+  const std::size_t nv = ref.shorts->mesh.positions.size();
+  DemoTotals tot;
   nlohmann::json rep;
   rep["tool"] = "atelier demo";
   rep["seed"] = common.seed;
   rep["bodies"] = opt.bodies;
   rep["garment"] = {{"name", "shorts"},
                     {"vertices", nv},
-                    {"faces", garment->num_faces()},
-                    {"p_polygons_per_vertex", enc->entries() / std::max<std::size_t>(1, nv)},
-                    {"encoding_bytes", enc->bytes()}};
-  std::size_t bodies_with_penetration = 0;
-  double worst_depth = 0, strain_sum = 0, decode_sum = 0;
+                    {"faces", ref.garment.num_faces()},
+                    {"p_polygons_per_vertex", enc.entries() / std::max<std::size_t>(1, nv)},
+                    {"encoding_bytes", enc.bytes()}};
   nlohmann::json per = nlohmann::json::array();
   for (const auto& r : quality) {
-    bodies_with_penetration += r.inside > 0;
-    worst_depth = std::max(worst_depth, r.max_depth);
-    strain_sum += r.strain_p95;
-    decode_sum += r.decode_ms;
+    tot.bodies_with_penetration += r.inside > 0;
+    tot.worst_depth = std::max(tot.worst_depth, r.max_depth);
+    tot.strain_sum += r.strain_p95;
+    tot.decode_sum += r.decode_ms;
     per.push_back({{"body", r.name},
                    {"inside_vertices", r.inside},
                    {"max_depth_m", r.max_depth},
@@ -239,25 +311,22 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
                    {"collision_pushed", r.pushed},
                    {"decode_ms", r.decode_ms}});
   }
-  const double nq = std::max<double>(1, static_cast<double>(quality.size()));
+  tot.nq = std::max<double>(1, static_cast<double>(quality.size()));
   rep["summary"] = {{"completed", quality.size()},
-                    {"failed", failures.size()},
-                    {"bodies_with_penetration", bodies_with_penetration},
-                    {"worst_penetration_m", worst_depth},
-                    {"mean_edge_strain_p95", strain_sum / nq},
-                    {"mean_decode_ms_per_body", decode_sum / nq},
-                    {"encode_s", encode_s},
+                    {"failed", run.failures.size()},
+                    {"bodies_with_penetration", tot.bodies_with_penetration},
+                    {"worst_penetration_m", tot.worst_depth},
+                    {"mean_edge_strain_p95", tot.strain_sum / tot.nq},
+                    {"mean_decode_ms_per_body", tot.decode_sum / tot.nq},
+                    {"encode_s", ref.encode_s},
                     {"total_s", total_s},
                     {"bodies_per_s", static_cast<double>(quality.size()) / total_s}};
   nlohmann::json fails = nlohmann::json::array();
-  for (const auto& f : failures) fails.push_back({{"body", f.name}, {"reason", f.status.to_string()}});
+  for (const auto& f : run.failures) fails.push_back({{"body", f.name}, {"reason", f.status.to_string()}});
   rep["failures"] = fails;
   rep["bodies_quality"] = per;
   // Profile templates: per template totals over all bodies.
-  nlohmann::json tsum = nlohmann::json::array();
-  std::size_t template_inside = 0;
-  double template_crack = 0;
-  for (std::size_t k = 0; k < templates.size(); ++k) {
+  for (std::size_t k = 0; k < ref.templates.size(); ++k) {
     std::size_t inside = 0, nodes = 0;
     double crack = 0, prof = 0, clr = 0, ms = 0, u2 = 0, min_d = INFINITY;
     for (const auto& r : quality) {
@@ -272,30 +341,78 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
       min_d = std::min(min_d, q.min_distance);
       ms += q.ms;
     }
-    template_inside += inside;
-    template_crack = std::max(template_crack, crack);
-    tsum.push_back({{"template", templates[k].name},
-                    {"nodes", nodes},
-                    {"inside_nodes_total", inside},
-                    {"min_distance_m", std::isfinite(min_d) ? min_d : 0.0},
-                    {"max_crack_m", crack},
-                    {"max_profile_error_m", prof},
-                    {"max_node_clearance_error_m", clr},
-                    {"max_umbrella", u2},
-                    {"mean_ms", ms / nq}});
+    tot.template_inside += inside;
+    tot.template_crack = std::max(tot.template_crack, crack);
+    tot.templates.push_back({{"template", ref.templates[k].name},
+                             {"nodes", nodes},
+                             {"inside_nodes_total", inside},
+                             {"min_distance_m", std::isfinite(min_d) ? min_d : 0.0},
+                             {"max_crack_m", crack},
+                             {"max_profile_error_m", prof},
+                             {"max_node_clearance_error_m", clr},
+                             {"max_umbrella", u2},
+                             {"mean_ms", ms / tot.nq}});
   }
-  rep["profile_templates"] = tsum;
+  rep["profile_templates"] = tot.templates;
   write_atomically(opt.out / "report.json", [&](AtomicFile& f) { f.write(rep.dump(1)); });
+  return {std::move(rep), std::move(tot)};
+}
 
-  // The HTML report: per-body rows, summary, and pictures of a sample of
-  // bodies and of the worst body by each measure.
+/// Front and side pictures of one body (by its index in the source) with
+/// the profile templates and the shorts regenerated on it again; nothing
+/// when a step fails (a failed shorts fit is logged).
+std::optional<RgbImage> picture_of(std::size_t index, const std::string& name, const DemoReference& ref,
+                                   const MannequinSource& src, Regenerators& regen, const ExecContext& ctx, Log& log) {
+  BodySet one(ref.body);
+  std::vector<BodyFailure> f1;
+  src.generate(index, 1, one, f1, ctx);
+  if (one.size() != 1) return std::nullopt;
+  const std::vector<Vec3d> body = one.positions(0);
+  std::vector<RegenResult> profiles;
+  if (!regen.profiles(body, ctx, profiles)) return std::nullopt;
+  std::vector<BodyGarments> one_fit;
+  if (Status st = regen.shorts().run(one, 0, 1, one_fit, ctx); !st || !one_fit[0].status) {
+    log.warn("picture of " + name + ": " + (st ? one_fit[0].status : st).to_string());
+    return std::nullopt;
+  }
+  const std::vector<Vec3d>& shorts_d = one_fit[0].garments[0].positions;
+  auto shorts_tris = fan_triangulate(ref.garment);
+  std::vector<SurfaceTriangles> gt;
+  for (const auto& r : profiles) gt.push_back(fan_triangulate(r.model).value());
+  std::vector<RenderTriangles> scene;
+  scene.push_back({body, ref.body_triangles.triangles, body_colour()});
+  for (std::size_t k = 0; k < profiles.size(); ++k)
+    scene.push_back({profiles[k].model.nodes.position, gt[k].triangles, garment_colour(k)});
+  if (shorts_tris) scene.push_back({shorts_d, shorts_tris->triangles, garment_colour(profiles.size())});
+  std::vector<RgbImage> views;
+  for (View view : {View::kFront, View::kSide}) {
+    RenderParams rp;
+    rp.view = view;
+    rp.width = 360;
+    rp.height = 560;
+    rp.outlines = true;
+    auto img = render_scene(scene, rp, ctx);
+    if (img) views.push_back(std::move(img->image));
+  }
+  if (views.size() != 2) return std::nullopt;
+  auto both = side_by_side(views);
+  if (!both) return std::nullopt;
+  return std::move(*both);
+}
+
+/// report.html: the summary, a row per body, and pictures of a sample of
+/// bodies and of the worst body by each measure (written to pictures/).
+void write_html(const DemoOptions& opt, const DemoReference& ref, const MannequinSource& src, Regenerators& regen,
+                const DemoRun& run, const nlohmann::json& rep, const DemoTotals& tot, const ExecContext& ctx,
+                Log& log) {
+  const std::vector<BodyQuality>& quality = run.quality;
   nlohmann::json html;
   html["title"] = "atelier demo: " + std::to_string(quality.size()) + " mannequin bodies";
   html["summary"] = rep["summary"];
-  html["summary"]["profile_template_nodes_inside"] = template_inside;
-  html["summary"]["profile_template_max_crack_m"] = template_crack;
+  html["summary"]["profile_template_nodes_inside"] = tot.template_inside;
+  html["summary"]["profile_template_max_crack_m"] = tot.template_crack;
   std::vector<std::string> columns = {"body", "shorts_inside", "shorts_min_clearance_mm", "shorts_strain_p95"};
-  for (const auto& t : templates)
+  for (const auto& t : ref.templates)
     for (const char* c : {"_inside", "_min_distance_mm", "_profile_error_mm", "_crack_mm", "_ms"})
       columns.push_back(t.name + c);
   html["columns"] = columns;
@@ -305,9 +422,9 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
                           {"shorts_inside", r.inside},
                           {"shorts_min_clearance_mm", 1000 * r.min_clearance},
                           {"shorts_strain_p95", r.strain_p95}};
-    for (std::size_t k = 0; k < r.templates.size() && k < templates.size(); ++k) {
+    for (std::size_t k = 0; k < r.templates.size() && k < ref.templates.size(); ++k) {
       const RegenQuality& q = r.templates[k];
-      const std::string& n = templates[k].name;
+      const std::string& n = ref.templates[k].name;
       row[n + "_inside"] = q.inside;
       row[n + "_min_distance_mm"] = 1000 * q.min_distance;
       row[n + "_profile_error_mm"] = 1000 * q.profile_error;
@@ -345,42 +462,10 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
         break;
       }
     if (index == src.size()) continue;
-    BodySet one(ref);
-    std::vector<BodyFailure> f1;
-    src.generate(index, 1, one, f1, ctx);
-    if (one.size() != 1) continue;
-    const std::vector<Vec3d> body = one.positions(0);
-    std::vector<RegenResult> regen;
-    if (!regen_all(body, ctx, regen)) continue;
-    std::vector<BodyGarments> one_fit;
-    if (Status st = shorts_regen.run(one, 0, 1, one_fit, ctx); !st || !one_fit[0].status) {
-      log.warn("picture of " + name + ": " + (st ? one_fit[0].status : st).to_string());
-      continue;
-    }
-    const std::vector<Vec3d>& shorts_d = one_fit[0].garments[0].positions;
-    auto shorts_tris = fan_triangulate(*garment);
-    std::vector<SurfaceTriangles> gt;
-    for (const auto& r : regen) gt.push_back(fan_triangulate(r.model).value());
-    std::vector<RenderTriangles> scene;
-    scene.push_back({body, ref_tris->triangles, body_colour()});
-    for (std::size_t k = 0; k < regen.size(); ++k)
-      scene.push_back({regen[k].model.nodes.position, gt[k].triangles, garment_colour(k)});
-    if (shorts_tris) scene.push_back({shorts_d, shorts_tris->triangles, garment_colour(regen.size())});
-    std::vector<RgbImage> views;
-    for (View view : {View::kFront, View::kSide}) {
-      RenderParams rp;
-      rp.view = view;
-      rp.width = 360;
-      rp.height = 560;
-      rp.outlines = true;
-      auto img = render_scene(scene, rp, ctx);
-      if (img) views.push_back(std::move(img->image));
-    }
-    if (views.size() != 2) continue;
-    auto both = side_by_side(views);
-    if (!both) continue;
+    const std::optional<RgbImage> picture = picture_of(index, name, ref, src, regen, ctx, log);
+    if (!picture) continue;
     const std::string file = "pictures/" + name + ".png";
-    write_png(*both, opt.out / file);
+    write_png(*picture, opt.out / file);
     pictures.push_back({{"title", name + " (" + why + ")"},
                         {"path", file},
                         {"caption", "front and side: body, top with collar, skirt, trousers, shorts"}});
@@ -389,14 +474,18 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   HtmlReportOptions ho;
   ho.picture_dir = opt.out;
   write_html_report(html, opt.out / "report.html", ho);
+}
 
-  std::printf("atelier demo: %zu bodies regenerated, %zu failed, in %.1f s (%.1f bodies/s)\n", quality.size(),
-              failures.size(), total_s, static_cast<double>(quality.size()) / total_s);
-  std::printf("  shorts: %zu vertices, decode %.3f ms per body, edge strain p95 %.1f%% (mean over bodies)\n", nv,
-              decode_sum / nq, 100.0 * strain_sum / nq);
+void print_summary(const DemoOptions& opt, const DemoReference& ref, const DemoRun& run, const DemoTotals& tot,
+                   double total_s) {
+  const std::size_t completed = run.quality.size();
+  std::printf("atelier demo: %zu bodies regenerated, %zu failed, in %.1f s (%.1f bodies/s)\n", completed,
+              run.failures.size(), total_s, static_cast<double>(completed) / total_s);
+  std::printf("  shorts: %zu vertices, decode %.3f ms per body, edge strain p95 %.1f%% (mean over bodies)\n",
+              ref.shorts->mesh.positions.size(), tot.decode_sum / tot.nq, 100.0 * tot.strain_sum / tot.nq);
   std::printf("  penetration: %zu of %zu bodies have garment vertices inside the body (worst %.1f mm)\n",
-              bodies_with_penetration, quality.size(), 1000.0 * worst_depth);
-  for (const auto& t : tsum)
+              tot.bodies_with_penetration, completed, 1000.0 * tot.worst_depth);
+  for (const auto& t : tot.templates)
     std::printf(
         "  %-9s %6zu nodes, %zu nodes inside over all bodies, max crack %.1e m, max profile error %.2f mm, %.1f ms per "
         "body\n",
@@ -405,7 +494,29 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
         1000 * t["max_profile_error_m"].get<double>(), t["mean_ms"].get<double>());
   std::printf("  report: %s\n", fs::absolute(opt.out / "report.html").string().c_str());
   std::printf("  data:   %s\n", fs::absolute(opt.out / "report.json").string().c_str());
-  return failures.empty() ? kExitOk : kExitPartial;
+}
+
+}  // namespace
+
+int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const ExecContext ctx = common.context();
+  fs::create_directories(opt.out / "meshes");
+
+  // The reference mannequin, the shorts encoded on it, the profile templates.
+  const DemoReference ref = set_up(opt, ctx, log);
+  Regenerators regen(ref, ctx);
+
+  // Every body: the shorts and the profile templates regenerated, quality.
+  const MannequinSource src(ref.topology, opt.bodies, common.seed, ref.body);
+  const DemoRun run = run_bodies(opt, ref, src, regen, ctx, log);
+
+  // The reports and the pictures.
+  const double total_s = seconds_since(t_start);
+  const auto [rep, totals] = write_report(common, opt, ref, run, total_s);
+  write_html(opt, ref, src, regen, run, rep, totals, ctx, log);
+  print_summary(opt, ref, run, totals, total_s);
+  return run.failures.empty() ? kExitOk : kExitPartial;
 }
 
 }  // namespace atelier::cli

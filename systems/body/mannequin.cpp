@@ -1,3 +1,8 @@
+// The mannequin's measurements and positions (systems/body/mannequin.h):
+// parameter checks, the cross sections fitted to the girths, the positions
+// of the rings, and the reference body with its feature curves and points.
+// The topology is in mannequin_topology.cpp, the sampling in
+// mannequin_sampling.cpp.
 #include <atelier/systems/body/mannequin.h>
 
 #include <algorithm>
@@ -11,36 +16,22 @@
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/builder.h>
 
+#include "mannequin_detail.h"
+
 namespace atelier {
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// ---------------------------------------------------------------- layout
-// Torso key levels (ring index of each is fixed by the resolution).
-enum TorsoKey { kTCrotch, kTHip, kTWaist, kTUnderbust, kTBust, kTArmpit, kTShoulder, kTNeckBase, kTNeckTop, kTKeys };
-enum LegKey { kLCrotch, kLThigh, kLKnee, kLAnkle, kLKeys };
-// Nominal segment lengths (m) at the default body; ring counts follow them
-// so that rings are about 6/L cm apart. The shoulder segment is counted by
-// its slanted length, not its rise.
-constexpr std::array<double, kTKeys - 1> kTorsoSeg = {0.10, 0.17, 0.10, 0.09, 0.035, 0.15, 0.09, 0.06};
-constexpr std::array<std::uint32_t, kTKeys - 1> kTorsoMin = {2, 2, 2, 2, 1, 2, 2, 1};
-constexpr std::array<double, kLKeys - 1> kLegSeg = {0.04, 0.26, 0.39};
-constexpr std::array<std::uint32_t, kLKeys - 1> kLegMin = {2, 3, 3};
-constexpr double kArmSeg = 0.12;
-
-std::uint32_t seg_count(double len, std::uint32_t level, std::uint32_t min) {
-  const double h = 0.06 / level;
-  return std::max<std::uint32_t>(min, static_cast<std::uint32_t>(std::lround(len / h)));
-}
-
 // ------------------------------------------------------------ 2D helpers
 struct P2 {
   double x, z;
 };
 
-double cross2(const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.z - o.z) - (a.z - o.z) * (b.x - o.x); }
+double cross2(const P2& o, const P2& a, const P2& b) {
+  return (a.x - o.x) * (b.z - o.z) - (a.z - o.z) * (b.x - o.x);
+}
 
 // Perimeter of the convex hull (Andrew's monotone chain): a tape measure
 // bridges the concave parts of a cross section.
@@ -89,7 +80,9 @@ P2 section_point(const Section& s, double t) {
 }
 
 // Torso column angles: j = 0 is the centre front (+z), j = N/4 the left side (+x).
-double torso_angle(std::uint32_t j, std::uint32_t n) { return kPi / 2 - 2 * kPi * j / n; }
+double torso_angle(std::uint32_t j, std::uint32_t n) {
+  return kPi / 2 - 2 * kPi * j / n;
+}
 
 // Hull perimeter of the N-gon of section s sampled at the given angles.
 double section_girth(const Section& s, std::span<const double> angles) {
@@ -165,12 +158,18 @@ Status validate_params(const MannequinParams& p) {
   };
   const double H = p.height;
   const Range ranges[] = {
-      {"height", p.height, 1.40, 2.10},          {"neck_girth", p.neck_girth, 0.27, 0.56},
-      {"bust_girth", p.bust_girth, 0.68, 1.55},  {"underbust_girth", p.underbust_girth, 0.58, 1.45},
-      {"waist_girth", p.waist_girth, 0.50, 1.55}, {"hip_girth", p.hip_girth, 0.72, 1.60},
-      {"thigh_girth", p.thigh_girth, 0.38, 0.90}, {"knee_girth", p.knee_girth, 0.26, 0.58},
-      {"ankle_girth", p.ankle_girth, 0.16, 0.36}, {"upper_arm_girth", p.upper_arm_girth, 0.18, 0.52},
-      {"shoulder_width", p.shoulder_width, 0.30, 0.56}, {"back_length", p.back_length, 0.30, 0.58},
+      {"height", p.height, 1.40, 2.10},
+      {"neck_girth", p.neck_girth, 0.27, 0.56},
+      {"bust_girth", p.bust_girth, 0.68, 1.55},
+      {"underbust_girth", p.underbust_girth, 0.58, 1.45},
+      {"waist_girth", p.waist_girth, 0.50, 1.55},
+      {"hip_girth", p.hip_girth, 0.72, 1.60},
+      {"thigh_girth", p.thigh_girth, 0.38, 0.90},
+      {"knee_girth", p.knee_girth, 0.26, 0.58},
+      {"ankle_girth", p.ankle_girth, 0.16, 0.36},
+      {"upper_arm_girth", p.upper_arm_girth, 0.18, 0.52},
+      {"shoulder_width", p.shoulder_width, 0.30, 0.56},
+      {"back_length", p.back_length, 0.30, 0.58},
   };
   for (const auto& r : ranges)
     if (!(r.v >= r.lo && r.v <= r.hi)) return bad(r.name, r.v, r.lo, r.hi);
@@ -188,245 +187,44 @@ Status validate_params(const MannequinParams& p) {
   // below the nape, waist back_length below it, crotch at the inseam.
   const double nape = 0.848 * H, armpit = nape - 0.118 * H, waist = nape - p.back_length;
   if (waist > armpit - 0.08) return inconsistent("back_length too short: the waist must be 8 cm below the armpit");
-  if (waist < p.inseam + 0.12) return inconsistent("back_length + inseam too long: the waist must be 12 cm above the crotch");
+  if (waist < p.inseam + 0.12)
+    return inconsistent("back_length + inseam too long: the waist must be 12 cm above the crotch");
   return {};
 }
 
 double requested_girth(const MannequinParams& p, std::int32_t id) noexcept {
   switch (id) {
-    case kNeckBase: return p.neck_girth;
-    case kBust: return p.bust_girth;
-    case kUnderbust: return p.underbust_girth;
-    case kWaist: return p.waist_girth;
-    case kHip: return p.hip_girth;
+    case kNeckBase:
+      return p.neck_girth;
+    case kBust:
+      return p.bust_girth;
+    case kUnderbust:
+      return p.underbust_girth;
+    case kWaist:
+      return p.waist_girth;
+    case kHip:
+      return p.hip_girth;
     case kThighLeft:
-    case kThighRight: return p.thigh_girth;
+    case kThighRight:
+      return p.thigh_girth;
     case kKneeLeft:
-    case kKneeRight: return p.knee_girth;
+    case kKneeRight:
+      return p.knee_girth;
     case kAnkleLeft:
-    case kAnkleRight: return p.ankle_girth;
+    case kAnkleRight:
+      return p.ankle_girth;
     case kUpperArmLeft:
-    case kUpperArmRight: return p.upper_arm_girth;
-    default: return std::numeric_limits<double>::quiet_NaN();
+    case kUpperArmRight:
+      return p.upper_arm_girth;
+    default:
+      return std::numeric_limits<double>::quiet_NaN();
   }
-}
-
-// -------------------------------------------------------------- topology
-
-Expected<MannequinTopology> make_mannequin_topology(const MannequinResolution& res) {
-  if (res.around < 16 || res.around % 16 != 0)
-    return Status(ErrorCode::kInvalidArgument, "mannequin resolution: around must be a positive multiple of 16");
-  if (res.level < 1 || res.level > 64)
-    return Status(ErrorCode::kInvalidArgument, "mannequin resolution: level must be in [1, 64]");
-  MannequinTopology t;
-  t.res = res;
-  const std::uint32_t N = res.around, L = res.level;
-  t.key_torso.assign(kTKeys, 0);
-  for (int k = 0; k + 1 < kTKeys; ++k) t.key_torso[k + 1] = t.key_torso[k] + seg_count(kTorsoSeg[k], L, kTorsoMin[k]);
-  t.key_leg.assign(kLKeys, 0);
-  for (int k = 0; k + 1 < kLKeys; ++k) t.key_leg[k + 1] = t.key_leg[k] + seg_count(kLegSeg[k], L, kLegMin[k]);
-  t.torso_rings = t.key_torso[kTNeckTop] + 1;
-  t.leg_rings = t.key_leg[kLAnkle] + 1;
-  const std::uint32_t K = seg_count(kArmSeg, L, 3);
-  t.arm_rings = K + 1;
-  t.key_arm = {0, static_cast<std::uint32_t>(std::lround(0.75 * K)), K};
-
-  const std::uint32_t iap = t.key_torso[kTArmpit], ish = t.key_torso[kTShoulder];
-  const std::uint32_t w = N / 16;
-  const std::uint32_t lc0 = N / 4 - w, lc1 = N / 4 + w, rc0 = 3 * N / 4 - w, rc1 = 3 * N / 4 + w;
-  auto in_hole = [&](std::uint32_t i, std::uint32_t j) {  // node removed (inside an armhole)
-    return i > iap && i < ish && ((j > lc0 && j < lc1) || (j > rc0 && j < rc1));
-  };
-  auto quad_in_hole = [&](std::uint32_t i, std::uint32_t j) {  // band quad (i,j) removed
-    return i >= iap && i < ish && ((j >= lc0 && j < lc1) || (j >= rc0 && j < rc1));
-  };
-
-  // Nodes: torso, bridge, legs, arms, apexes.
-  std::uint32_t next = 0;
-  t.torso_node.assign(std::size_t{t.torso_rings} * N, -1);
-  for (std::uint32_t i = 0; i < t.torso_rings; ++i)
-    for (std::uint32_t j = 0; j < N; ++j)
-      if (!in_hole(i, j)) t.torso_node[std::size_t{i} * N + j] = static_cast<std::int32_t>(next++);
-  auto T = [&](std::uint32_t i, std::uint32_t j) { return static_cast<std::uint32_t>(t.torso_node[std::size_t{i} * N + j % N]); };
-  const std::uint32_t nbridge = N / 2 - 1;
-  t.bridge_base = next;
-  next += nbridge;
-  t.left_leg_base = next;
-  next += (t.leg_rings - 1) * N;
-  t.right_leg_base = next;
-  next += (t.leg_rings - 1) * N;
-  // Armhole loops: bottom row forward, up the back column, top row back,
-  // down the front column (left); the right loop is its mirror image.
-  for (std::uint32_t j = lc0; j < lc1; ++j) t.left_loop.push_back(T(iap, j));
-  for (std::uint32_t i = iap; i < ish; ++i) t.left_loop.push_back(T(i, lc1));
-  for (std::uint32_t j = lc1; j > lc0; --j) t.left_loop.push_back(T(ish, j));
-  for (std::uint32_t i = ish; i > iap; --i) t.left_loop.push_back(T(i, lc0));
-  for (std::uint32_t v : t.left_loop) {
-    // mirror (i, j) -> (i, N - j)
-    const auto it = std::find(t.torso_node.begin(), t.torso_node.end(), static_cast<std::int32_t>(v));
-    const std::size_t idx = static_cast<std::size_t>(it - t.torso_node.begin());
-    t.right_loop.push_back(T(static_cast<std::uint32_t>(idx / N), N - static_cast<std::uint32_t>(idx % N)));
-  }
-  const std::uint32_t M = static_cast<std::uint32_t>(t.left_loop.size());
-  t.arm_around = M;
-  t.left_arm_base = next;
-  next += K * M;
-  t.right_arm_base = next;
-  next += K * M;
-  t.neck_apex = next++;
-  t.left_foot_apex = next++;
-  t.right_foot_apex = next++;
-  t.left_hand_apex = next++;
-  t.right_hand_apex = next++;
-  t.num_nodes = next;
-
-  auto leg = [&](bool left, std::uint32_t r, std::uint32_t m) -> std::uint32_t {
-    m %= N;
-    if (r == 0) {
-      if (m <= N / 2) return left ? T(0, m) : T(0, (N - m) % N);
-      return t.bridge_base + (m - N / 2 - 1);  // back to front
-    }
-    return (left ? t.left_leg_base : t.right_leg_base) + (r - 1) * N + m;
-  };
-  auto arm = [&](bool left, std::uint32_t k, std::uint32_t m) -> std::uint32_t {
-    m %= M;
-    if (k == 0) return left ? t.left_loop[m] : t.right_loop[m];
-    return (left ? t.left_arm_base : t.right_arm_base) + (k - 1) * M + m;
-  };
-
-  // Faces, counter-clockwise seen from outside (checked by the tests through
-  // the signed volume).
-  t.face_offsets.assign(1, 0);
-  auto face = [&](std::initializer_list<std::uint32_t> f) {
-    t.face_nodes.insert(t.face_nodes.end(), f);
-    t.face_offsets.push_back(static_cast<std::uint32_t>(t.face_nodes.size()));
-  };
-  for (std::uint32_t i = 0; i + 1 < t.torso_rings; ++i)
-    for (std::uint32_t j = 0; j < N; ++j)
-      if (!quad_in_hole(i, j)) face({T(i, j), T(i, j + 1), T(i + 1, j + 1), T(i + 1, j)});
-  for (std::uint32_t j = 0; j < N; ++j) face({T(t.torso_rings - 1, j), T(t.torso_rings - 1, j + 1), t.neck_apex});
-  for (bool left : {true, false}) {
-    for (std::uint32_t r = 0; r + 1 < t.leg_rings; ++r)
-      for (std::uint32_t m = 0; m < N; ++m) {
-        if (left)
-          face({leg(true, r + 1, m), leg(true, r + 1, m + 1), leg(true, r, m + 1), leg(true, r, m)});
-        else
-          face({leg(false, r + 1, m), leg(false, r, m), leg(false, r, m + 1), leg(false, r + 1, m + 1)});
-      }
-    const std::uint32_t last = t.leg_rings - 1;
-    const std::uint32_t apex = left ? t.left_foot_apex : t.right_foot_apex;
-    for (std::uint32_t m = 0; m < N; ++m) {
-      if (left)
-        face({leg(true, last, m + 1), leg(true, last, m), apex});
-      else
-        face({leg(false, last, m), leg(false, last, m + 1), apex});
-    }
-  }
-  for (bool left : {true, false}) {
-    for (std::uint32_t k = 0; k < K; ++k)
-      for (std::uint32_t m = 0; m < M; ++m) {
-        if (left)
-          face({arm(true, k, m), arm(true, k, m + 1), arm(true, k + 1, m + 1), arm(true, k + 1, m)});
-        else
-          face({arm(false, k, m), arm(false, k + 1, m), arm(false, k + 1, m + 1), arm(false, k, m + 1)});
-      }
-    const std::uint32_t apex = left ? t.left_hand_apex : t.right_hand_apex;
-    for (std::uint32_t m = 0; m < M; ++m) {
-      if (left)
-        face({arm(true, K, m), arm(true, K, m + 1), apex});
-      else
-        face({arm(false, K, m + 1), arm(false, K, m), apex});
-    }
-  }
-
-  // Feature curves (node lists) and points.
-  auto ring = [&](std::uint32_t i) {
-    std::vector<std::uint32_t> v;
-    for (std::uint32_t j = 0; j < N; ++j) v.push_back(T(i, j));
-    return v;
-  };
-  auto leg_ring = [&](bool left, std::uint32_t r) {
-    std::vector<std::uint32_t> v;
-    for (std::uint32_t m = 0; m < N; ++m) v.push_back(leg(left, r, m));
-    return v;
-  };
-  auto arm_ring = [&](bool left, std::uint32_t k) {
-    std::vector<std::uint32_t> v;
-    for (std::uint32_t m = 0; m < M; ++m) v.push_back(arm(left, k, m));
-    return v;
-  };
-  auto column = [&](std::uint32_t j, std::uint32_t from, std::uint32_t to) {  // from > to: downwards
-    std::vector<std::uint32_t> v;
-    for (std::uint32_t i = from + 1; i-- > to;) v.push_back(T(i, j));
-    return v;
-  };
-  const std::uint32_t inb = t.key_torso[kTNeckBase];
-  auto add = [&](std::int32_t id, const char* name, bool closed, std::vector<std::uint32_t> nodes) {
-    t.curves.push_back({id, name, closed, std::move(nodes)});
-  };
-  add(kNeckBase, "neck_base", true, ring(inb));
-  add(kShoulderLeft, "shoulder_left", false, column(N / 4, inb, ish));
-  add(kShoulderRight, "shoulder_right", false, column(3 * N / 4, inb, ish));
-  add(kArmholeLeft, "armhole_left", true, t.left_loop);
-  add(kArmholeRight, "armhole_right", true, t.right_loop);
-  add(kBust, "bust", true, ring(t.key_torso[kTBust]));
-  add(kUnderbust, "underbust", true, ring(t.key_torso[kTUnderbust]));
-  add(kWaist, "waist", true, ring(t.key_torso[kTWaist]));
-  add(kHip, "hip", true, ring(t.key_torso[kTHip]));
-  add(kThighLeft, "thigh_left", true, leg_ring(true, t.key_leg[kLThigh]));
-  add(kThighRight, "thigh_right", true, leg_ring(false, t.key_leg[kLThigh]));
-  add(kKneeLeft, "knee_left", true, leg_ring(true, t.key_leg[kLKnee]));
-  add(kKneeRight, "knee_right", true, leg_ring(false, t.key_leg[kLKnee]));
-  add(kAnkleLeft, "ankle_left", true, leg_ring(true, t.key_leg[kLAnkle]));
-  add(kAnkleRight, "ankle_right", true, leg_ring(false, t.key_leg[kLAnkle]));
-  add(kCentreFront, "centre_front", false, column(0, inb, 0));
-  add(kCentreBack, "centre_back", false, column(N / 2, inb, 0));
-  for (bool left : {true, false}) {
-    std::vector<std::uint32_t> side = column(left ? N / 4 : 3 * N / 4, iap, 0);
-    for (std::uint32_t r = 1; r < t.leg_rings; ++r) side.push_back(leg(left, r, N / 4));
-    add(left ? kSideLeft : kSideRight, left ? "side_left" : "side_right", false, std::move(side));
-  }
-  add(kUpperArmLeft, "upper_arm_left", true, arm_ring(true, t.key_arm[1]));
-  add(kUpperArmRight, "upper_arm_right", true, arm_ring(false, t.key_arm[1]));
-
-  std::int32_t pid = 1;
-  auto name_of = [&](std::int32_t c) -> std::string {
-    for (const auto& c2 : t.curves)
-      if (c2.id == c) return c2.name;
-    return "?";
-  };
-  auto point = [&](std::int32_t c1, std::int32_t c2, std::uint32_t node) {
-    t.points.push_back({pid++, name_of(c1) + "_x_" + name_of(c2), node, c1, c2});
-  };
-  point(kNeckBase, kCentreFront, T(inb, 0));
-  point(kNeckBase, kCentreBack, T(inb, N / 2));
-  point(kNeckBase, kShoulderLeft, T(inb, N / 4));
-  point(kNeckBase, kShoulderRight, T(inb, 3 * N / 4));
-  point(kShoulderLeft, kArmholeLeft, T(ish, N / 4));
-  point(kShoulderRight, kArmholeRight, T(ish, 3 * N / 4));
-  point(kArmholeLeft, kSideLeft, T(iap, N / 4));
-  point(kArmholeRight, kSideRight, T(iap, 3 * N / 4));
-  const std::pair<std::int32_t, TorsoKey> girths[] = {
-      {kBust, kTBust}, {kUnderbust, kTUnderbust}, {kWaist, kTWaist}, {kHip, kTHip}};
-  for (const auto& [c, key] : girths) {
-    const std::uint32_t i = t.key_torso[key];
-    point(c, kCentreFront, T(i, 0));
-    point(c, kCentreBack, T(i, N / 2));
-    point(c, kSideLeft, T(i, N / 4));
-    point(c, kSideRight, T(i, 3 * N / 4));
-  }
-  const std::tuple<std::int32_t, std::int32_t, LegKey> legs[] = {
-      {kThighLeft, kThighRight, kLThigh}, {kKneeLeft, kKneeRight, kLKnee}, {kAnkleLeft, kAnkleRight, kLAnkle}};
-  for (const auto& [cl, cr, key] : legs) {
-    point(cl, kSideLeft, leg(true, t.key_leg[key], N / 4));
-    point(cr, kSideRight, leg(false, t.key_leg[key], N / 4));
-  }
-  return t;
 }
 
 // ------------------------------------------------------------- geometry
 
 Expected<std::vector<Vec3d>> mannequin_positions(const MannequinParams& p, const MannequinTopology& t) {
+  using namespace mannequin_detail;  // NOLINT(google-build-using-namespace): the layout's key levels
   if (Status s = validate_params(p); !s) return s;
   const std::uint32_t N = t.res.around;
   const double H = p.height;
@@ -508,7 +306,7 @@ Expected<std::vector<Vec3d>> mannequin_positions(const MannequinParams& p, const
   for (std::uint32_t b = 1; b <= nb; ++b) {
     const double s = double(b) / double(nb + 1);
     pos[t.bridge_base + b - 1] = (1 - s) * back + s * front;
-    pos[t.bridge_base + b - 1].x() = 0;  // exactly on the symmetry line: the
+    pos[t.bridge_base + b - 1].x() = 0;    // exactly on the symmetry line: the
     pos[t.bridge_base + b - 1].y() = y_c;  // two legs' first bands meet only there
   }
 
@@ -655,7 +453,8 @@ Expected<ReferenceBody> make_mannequin(const MannequinParams& p, const Mannequin
     if (Status st = add_feature_curve(body, c.id, c.name, path, c.closed); !st) return st;
   }
   for (const auto& q : t.points)
-    if (Status st = add_feature_point(body, q.id, q.name, {AttribNodeKind::kVertex, q.node, Vec3d::Zero(), 0}, q.c1, q.c2);
+    if (Status st =
+            add_feature_point(body, q.id, q.name, {AttribNodeKind::kVertex, q.node, Vec3d::Zero(), 0}, q.c1, q.c2);
         !st)
       return st;
   return body;
@@ -670,7 +469,8 @@ Expected<ReferenceBody> make_mannequin(const MannequinParams& p, const Mannequin
 Expected<std::vector<ReferenceBody>> make_mannequins(std::span<const MannequinParams> params,
                                                      const MannequinTopology& t, const ExecContext& ctx) {
   for (std::size_t i = 0; i < params.size(); ++i)
-    if (Status s = validate_params(params[i]); !s) return Status(s.code(), "body " + std::to_string(i) + ": " + s.message());
+    if (Status s = validate_params(params[i]); !s)
+      return Status(s.code(), "body " + std::to_string(i) + ": " + s.message());
   std::vector<ReferenceBody> out(params.size());
   std::vector<Status> status(params.size());
   ExecContext c = ctx;
@@ -685,143 +485,6 @@ Expected<std::vector<ReferenceBody>> make_mannequins(std::span<const MannequinPa
   });
   for (std::size_t i = 0; i < status.size(); ++i)
     if (!status[i]) return Status(status[i].code(), "body " + std::to_string(i) + ": " + status[i].message());
-  return out;
-}
-
-// -------------------------------------------------------------- sampling
-
-namespace {
-
-// xoshiro256** (Blackman & Vigna) seeded by splitmix64: fixed integer
-// arithmetic, so the stream is the same on every platform.
-class Xoshiro256 {
- public:
-  explicit Xoshiro256(std::uint64_t seed) noexcept {
-    for (auto& x : s_) {
-      seed += 0x9e3779b97f4a7c15ull;
-      std::uint64_t z = seed;
-      z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-      z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-      x = z ^ (z >> 31);
-    }
-  }
-  std::uint64_t next() noexcept {
-    const std::uint64_t r = rotl(s_[1] * 5, 7) * 9;
-    const std::uint64_t t = s_[1] << 17;
-    s_[2] ^= s_[0];
-    s_[3] ^= s_[1];
-    s_[1] ^= s_[2];
-    s_[0] ^= s_[3];
-    s_[2] ^= t;
-    s_[3] = rotl(s_[3], 45);
-    return r;
-  }
-  double uniform() noexcept { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-  /// Marsaglia polar method: only sqrt (correctly rounded) and log.
-  double normal() noexcept {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    double u, v, s;
-    do {
-      u = 2 * uniform() - 1;
-      v = 2 * uniform() - 1;
-      s = u * u + v * v;
-    } while (s >= 1 || s == 0);
-    const double f = std::sqrt(-2 * std::log(s) / s);
-    spare_ = v * f;
-    has_spare_ = true;
-    return u * f;
-  }
-
- private:
-  static std::uint64_t rotl(std::uint64_t x, int k) noexcept { return (x << k) | (x >> (64 - k)); }
-  std::uint64_t s_[4];
-  double spare_ = 0;
-  bool has_spare_ = false;
-};
-
-double clampz(double z) { return std::clamp(z, -2.5, 2.5); }
-
-}  // namespace
-
-MannequinParams sample_mannequin(std::uint64_t seed, std::size_t index) {
-  // Body `index` has its own stream, its seed a splitmix64 finalisation of
-  // (seed, index): any body is drawn without the ones before it, so a body
-  // source holds no per-body state.
-  std::uint64_t z = seed + (static_cast<std::uint64_t>(index) + 1) * 0x9E3779B97F4A7C15ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  Xoshiro256 rng(z ^ (z >> 31));
-  {
-    const bool female = rng.uniform() < 0.5;
-    // Latent factors: stature and size (adiposity/build). Girths grow weakly
-    // with stature and strongly with size; each measure adds its own noise.
-    const double zh = clampz(rng.normal()), zs = clampz(rng.normal()), zb = clampz(rng.normal());
-    MannequinParams p;
-    p.height = female ? 1.640 + 0.065 * zh : 1.760 + 0.070 * zh;
-    const double hs = p.height / (female ? 1.64 : 1.76);
-    const double gh = std::pow(hs, 0.5);  // girth vs stature
-    auto girth = [&](double base, double ks, double noise) {
-      return base * gh * std::exp(ks * zs + noise * clampz(rng.normal()));
-    };
-    if (female) {
-      p.neck_girth = girth(0.345, 0.05, 0.03);
-      p.bust_girth = girth(0.93, 0.09, 0.03);
-      p.underbust_girth = p.bust_girth * std::clamp(0.84 + 0.03 * zb, 0.76, 0.92);
-      p.waist_girth = girth(0.76, 0.13, 0.04);
-      p.hip_girth = girth(1.00, 0.08, 0.03);
-      p.thigh_girth = girth(0.58, 0.10, 0.04);
-      p.knee_girth = girth(0.37, 0.06, 0.03);
-      p.ankle_girth = girth(0.225, 0.04, 0.03);
-      p.upper_arm_girth = girth(0.28, 0.11, 0.04);
-      p.shoulder_width = 0.385 * hs * std::exp(0.02 * zs + 0.03 * clampz(rng.normal()));
-      p.back_length = 0.405 * hs * std::exp(0.03 * clampz(rng.normal()));
-      p.inseam = p.height * std::clamp(0.455 + 0.012 * rng.normal(), 0.40, 0.50);
-    } else {
-      p.neck_girth = girth(0.39, 0.05, 0.03);
-      p.bust_girth = girth(1.00, 0.08, 0.03);
-      p.underbust_girth = p.bust_girth * std::clamp(0.91 + 0.02 * zb, 0.84, 0.97);
-      p.waist_girth = girth(0.88, 0.12, 0.04);
-      p.hip_girth = girth(1.00, 0.07, 0.03);
-      p.thigh_girth = girth(0.56, 0.09, 0.04);
-      p.knee_girth = girth(0.385, 0.05, 0.03);
-      p.ankle_girth = girth(0.235, 0.04, 0.03);
-      p.upper_arm_girth = girth(0.31, 0.09, 0.04);
-      p.shoulder_width = 0.44 * hs * std::exp(0.02 * zs + 0.03 * clampz(rng.normal()));
-      p.back_length = 0.44 * hs * std::exp(0.03 * clampz(rng.normal()));
-      p.inseam = p.height * std::clamp(0.46 + 0.012 * rng.normal(), 0.40, 0.50);
-    }
-    // Clamps that keep the set inside validate_params' ranges and order.
-    p.height = std::clamp(p.height, 1.45, 2.05);
-    p.inseam = std::clamp(p.inseam, 0.39 * p.height, 0.51 * p.height);
-    auto cl = [](double& v, double lo, double hi) { v = std::clamp(v, lo, hi); };
-    cl(p.neck_girth, 0.28, 0.54);
-    cl(p.bust_girth, 0.70, 1.50);
-    cl(p.underbust_girth, 0.60, p.bust_girth);
-    cl(p.waist_girth, 0.52, 1.50);
-    cl(p.hip_girth, 0.74, 1.55);
-    cl(p.thigh_girth, 0.40, 0.74 * p.hip_girth);
-    cl(p.knee_girth, 0.28, 0.88 * p.thigh_girth);
-    cl(p.ankle_girth, 0.17, 0.84 * p.knee_girth);
-    cl(p.upper_arm_girth, 0.19, 0.44 * p.bust_girth);
-    p.neck_girth = std::min(p.neck_girth, 0.49 * p.bust_girth);
-    cl(p.shoulder_width, std::max(0.31, 0.42 * p.neck_girth + 0.11), 0.55);
-    const double nape = 0.848 * p.height, armpit = nape - 0.118 * p.height;
-    // waist between (crotch + 0.13) and (armpit - 0.09)
-    p.back_length = std::clamp(p.back_length, std::max(0.31, nape - (armpit - 0.09)),
-                               std::min(0.57, 0.463 * p.height - 0.135));
-    if (nape - p.back_length < p.inseam + 0.13) p.inseam = nape - p.back_length - 0.13;
-    p.inseam = std::max(p.inseam, 0.385 * p.height);
-    return p;
-  }
-}
-
-std::vector<MannequinParams> sample_mannequins(std::size_t n, std::uint64_t seed) {
-  std::vector<MannequinParams> out;
-  out.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) out.push_back(sample_mannequin(seed, i));
   return out;
 }
 
