@@ -2,7 +2,9 @@
 // cameras, and strokes made by projecting known 3D curves.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <cstdint>
 #include <vector>
 
@@ -55,6 +57,68 @@ inline std::vector<Vec2d> project(const Camera& c, const std::vector<Vec3d>& pts
   std::vector<Vec2d> out;
   for (const auto& p : pts) out.push_back(c.project(p).head<2>());
   return out;
+}
+
+}  // namespace atelier::sketch_test
+
+namespace atelier::sketch_test {
+
+/// A polygon soup builder.
+struct Soup {
+  std::vector<Vec3d> p;
+  std::vector<std::uint32_t> off{0}, idx;
+  void face(std::initializer_list<std::uint32_t> f) {
+    idx.insert(idx.end(), f);
+    off.push_back(static_cast<std::uint32_t>(idx.size()));
+  }
+  [[nodiscard]] PolygonSoupView view() const { return {p, off, idx}; }
+};
+
+/// An (nu+1) x (nv+1) grid of quads (or triangles) over f(u, v), u, v in
+/// [0, 1]; faces counter-clockwise in (u, v).
+template <class F>
+Soup grid(int nu, int nv, F f, bool triangles = false) {
+  Soup s;
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i <= nu; ++i) s.p.push_back(f(double(i) / nu, double(j) / nv));
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (nu + 1) + i); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      if (triangles) {
+        s.face({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+        s.face({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      } else {
+        s.face({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+      }
+    }
+  return s;
+}
+
+/// A Z-fold strip seen from +z: panel A (front, facing +z) for x in
+/// [-1, 0.5], folding back under itself (panel B, facing -z) to x = -0.5,
+/// then forward again (panel C) to x = 1, farther back. From the front the
+/// visible surface jumps from A to C at x = 0.5 (seed 001 Fig. 10).
+inline Model z_fold(int n = 10) {
+  auto f = [](double u, double v) {
+    const double t = 3 * u, y = -1 + 2 * v;
+    if (t <= 1) return Vec3d(-1 + 1.5 * t, y, 0.5);
+    if (t <= 2) return Vec3d(0.5 - (t - 1), y, 0.5 - 0.5 * (t - 1));
+    return Vec3d(-0.5 + 1.5 * (t - 2), y, -0.5 * (t - 2));
+  };
+  Model m;
+  (void)add_polygon_surface(m, "fold", grid(3 * n, n, f).view()).value();
+  return m;
+}
+
+/// Pixel distance from q to the polyline.
+inline double distance_to_polyline(const std::vector<Vec2d>& line, const Vec2d& q) {
+  double best = INFINITY;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    const Vec2d a = line[i], d = line[i + 1] - a;
+    const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (a + t * d - q).norm());
+  }
+  return best;
 }
 
 }  // namespace atelier::sketch_test
