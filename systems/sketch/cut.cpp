@@ -537,8 +537,9 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
         }
         cyc.push_back(x);
         hmap[h] = x;
-        // The twin moves too unless another piece's face holds it (a seam).
-        if (!m.face(twin(h)).valid()) hmap[twin(h)] = twin(x);
+        // The twin moves too unless another piece's face holds it (a seam),
+        // or a piece moved before already took it.
+        if (!m.face(twin(h)).valid()) hmap.emplace(twin(h), twin(x));
       }
       const FaceIdx nf = m.new_face(ns.idx, cyc);
       m.faces.flags[nf.value] = o.flags;

@@ -69,7 +69,8 @@ struct FanPlan {
   FanKey fan;
   NodeIdx n[3];
   std::vector<std::array<std::uint32_t, 3>> tris;  // point ids
-  Vec2d c2[3];                                      // corners in the fan's plane frame
+  std::vector<std::array<Vec2d, 3>> tri2;           // their corners in the fan's plane frame
+  Vec2d c2[3];                                      // the fan's corners in that frame
   bool kept = false;                                // no points: the fan triangle stays as it is
 };
 
@@ -715,6 +716,16 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       } else if (Status s = triangulate_fan(pl, fp, cons, inner, side, m); !s) {
         return s;
       }
+      // Corners of the new triangles in the fan's frame (for re-attaching
+      // face-nodes and probes once the model has changed).
+      for (const auto& t : fp.tris) {
+        std::array<Vec2d, 3> c;
+        for (int x = 0; x < 3; ++x) {
+          const Vec3d b = pl.bary_in(t[x], fk);
+          c[x] = b[0] * fp.c2[0] + b[1] * fp.c2[1] + b[2] * fp.c2[2];
+        }
+        fp.tri2.push_back(c);
+      }
       P.fans.emplace(fk, std::move(fp));
     }
   }
@@ -874,11 +885,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       const auto& nf = fan_faces.at(t.fan);
       double best = -INFINITY;
       for (std::size_t x = 0; x < fp.tris.size(); ++x) {
-        Vec2d c[3];
-        for (int k = 0; k < 3; ++k) {
-          const Vec3d b = pl.bary_in(fp.tris[x][k], t.fan);
-          c[k] = b[0] * fp.c2[0] + b[1] * fp.c2[1] + b[2] * fp.c2[2];
-        }
+        const auto& c = fp.tri2[x];
         const double area = cross2(c[1] - c[0], c[2] - c[0]);
         if (!(area > 0)) continue;
         const Vec3d w(cross2(c[1] - q, c[2] - q) / area, cross2(c[2] - q, c[0] - q) / area,
