@@ -154,7 +154,11 @@ class Reader {
                                   (vp.is_array() ? "an array of " + std::to_string(vp.size()) : type_of(vp)));
     c.width = pixels(vp[0], ptr + "/viewport/0");
     c.height = pixels(vp[1], ptr + "/viewport/1");
-    if (Status s = c.check(); !s) fail(ptr, s.message());
+    if (Status s = c.check(); !s) {
+      std::string msg = s.message();
+      if (msg.rfind("camera: ", 0) == 0) msg = msg.substr(8);
+      fail(ptr, msg);
+    }
     return c;
   }
 
@@ -282,7 +286,7 @@ Expected<StrokeFile> parse_strokes(std::string_view bytes, std::string_view file
     if (!lit.empty())
       return Status(ErrorCode::kParse, name + ":" + line_column(bytes, at) + ": non-finite number '" + lit +
                                            "' (JSON has no NaN or Infinity)");
-    const bool truncated = e.byte >= bytes.size();
+    const bool truncated = e.byte > bytes.size();
     std::string what = e.what();
     if (const auto p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
     return Status(ErrorCode::kParse, name + ":" + line_column(bytes, at) + ": " +
