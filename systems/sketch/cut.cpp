@@ -4,12 +4,12 @@
 #include <atelier/systems/sketch/cut.h>
 
 #include <algorithm>
-#include <deque>
 #include <limits>
 #include <map>
 #include <numeric>
 #include <set>
 
+#include <atelier/engine/parallel.h>
 #include <atelier/engine/status_format.h>
 #include <atelier/storage/topology.h>
 
@@ -18,14 +18,6 @@ namespace atelier {
 namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-
-double face_area(const Model& m, FaceIdx f, std::vector<NodeIdx>& c) {
-  m.face_nodes(f, c);
-  double a = 0;
-  for (std::size_t k = 1; k + 1 < c.size(); ++k)
-    a += 0.5 * (m.position(c[k]) - m.position(c[0])).cross(m.position(c[k + 1]) - m.position(c[0])).norm();
-  return a;
-}
 
 struct PieceData {
   SurfaceIdx surface;
@@ -41,8 +33,28 @@ struct Pieces {
   std::vector<std::uint8_t> crossed_comp;
 };
 
-/// Pieces of the surfaces the curve edges lie in.
-Pieces find_pieces(const Model& m, const RetriangulationResult& r) {
+/// Union-find over face slots; the root of a set is its smallest index, so
+/// sets come out ordered and independent of the order of unions.
+struct FaceSets {
+  std::vector<std::uint32_t> parent;
+  explicit FaceSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) {
+      parent[x] = parent[parent[x]];
+      x = parent[x];
+    }
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+/// Pieces of the surfaces the curve edges lie in: one pass over the edges
+/// (union-find), one over the faces.
+Pieces find_pieces(const Model& m, const RetriangulationResult& r, const ExecContext& ctx) {
   Pieces P;
   P.curve_edge.assign(m.edges.slots.capacity(), 0);
   std::vector<std::uint8_t> touched(m.surfaces.slots.capacity(), 0);
@@ -52,59 +64,53 @@ Pieces find_pieces(const Model& m, const RetriangulationResult& r) {
       touched[m.surface_of(edge_of(h)).value] = 1;
     }
   const std::size_t nf = m.faces.slots.capacity();
+  FaceSets pieces(nf), comps(nf);
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e})) continue;
+    const FaceIdx f0 = m.halfedges.face[2 * e], f1 = m.halfedges.face[2 * e + 1];
+    if (!f0.valid() || !f1.valid() || !touched[m.faces.surface[f0.value].value]) continue;
+    comps.unite(f0.value, f1.value);
+    if (!P.curve_edge[e]) pieces.unite(f0.value, f1.value);
+  }
+  // Face areas (fan triangles) in parallel; sums below run in face order.
+  std::vector<double> area(nf, 0.0);
+  par::for_each_n(ctx, nf, [&](std::size_t f) {
+    if (!m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value]) return;
+    const HalfedgeIdx h0 = m.faces.halfedge[f];
+    const Vec3d& p0 = m.position(m.tail(h0));
+    HalfedgeIdx h = m.next(h0);
+    double a = 0;
+    for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
+      a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
+    area[f] = a;
+  });
   P.piece_of.assign(nf, kNone);
-  std::vector<std::uint32_t> comp_of(nf, kNone);
-  std::vector<NodeIdx> c;
-  std::deque<FaceIdx> q;
+  std::vector<std::uint32_t> comp_id(nf, kNone);
   std::uint32_t ncomp = 0;
-  for (std::uint32_t f0 = 0; f0 < nf; ++f0) {
-    const FaceIdx f{f0};
-    if (!m.alive(f) || !touched[m.faces.surface[f0].value]) continue;
-    if (comp_of[f0] == kNone) {  // component ignoring curves
-      comp_of[f0] = ncomp;
-      q.push_back(f);
-      while (!q.empty()) {
-        const FaceIdx g = q.front();
-        q.pop_front();
-        m.for_each_face_halfedge(g, [&](HalfedgeIdx h) {
-          const FaceIdx o = m.face(twin(h));
-          if (o.valid() && comp_of[o.value] == kNone) {
-            comp_of[o.value] = ncomp;
-            q.push_back(o);
-          }
-        });
-      }
-      ++ncomp;
+  for (std::uint32_t f = 0; f < nf; ++f) {
+    const FaceIdx fi{f};
+    if (!m.alive(fi) || !touched[m.faces.surface[f].value]) continue;
+    const std::uint32_t rp = pieces.find(f), rc = comps.find(f);
+    if (rc == f) comp_id[f] = ncomp++;
+    if (rp == f) {
+      P.piece_of[f] = static_cast<std::uint32_t>(P.data.size());
+      PieceData d;
+      d.surface = m.faces.surface[f];
+      d.comp = comp_id[rc];
+      P.data.push_back(std::move(d));
+    } else {
+      P.piece_of[f] = P.piece_of[rp];
     }
-    if (P.piece_of[f0] != kNone) continue;
-    const auto id = static_cast<std::uint32_t>(P.data.size());
-    PieceData d;
-    d.surface = m.faces.surface[f0];
-    d.comp = comp_of[f0];
-    P.piece_of[f0] = id;
-    q.push_back(f);
-    while (!q.empty()) {
-      const FaceIdx g = q.front();
-      q.pop_front();
-      d.faces.push_back(g);
-      d.area += face_area(m, g, c);
-      m.for_each_face_halfedge(g, [&](HalfedgeIdx h) {
-        if (P.curve_edge[edge_of(h).value]) return;
-        const FaceIdx o = m.face(twin(h));
-        if (o.valid() && P.piece_of[o.value] == kNone) {
-          P.piece_of[o.value] = id;
-          q.push_back(o);
-        }
-      });
-    }
-    std::sort(d.faces.begin(), d.faces.end());
-    P.data.push_back(std::move(d));
+    PieceData& d = P.data[P.piece_of[f]];
+    d.faces.push_back(fi);  // increasing: faces are visited in index order
+    d.area += area[f];
   }
   P.crossed_comp.assign(ncomp, 0);
   for (std::uint32_t e = 0; e < P.curve_edge.size(); ++e)
     if (P.curve_edge[e])
       for (unsigned s = 0; s < 2; ++s)
-        if (const FaceIdx f = m.face(halfedge_of(EdgeIdx{e}, s)); f.valid()) P.crossed_comp[comp_of[f.value]] = 1;
+        if (const FaceIdx f = m.face(halfedge_of(EdgeIdx{e}, s)); f.valid())
+          P.crossed_comp[P.data[P.piece_of[f.value]].comp] = 1;
   return P;
 }
 
@@ -187,10 +193,11 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, std::size_t& nodes
                        me.value, " in joint ", j.value, " (a seam to another surface); cut elsewhere or partition");
     trimmed.insert(me);
   }
-  std::sort(corners.begin(), corners.end());
-  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
   std::vector<NodeIdx> dying_nodes;
+  std::vector<std::uint8_t> seen(m.nodes.slots.capacity(), 0);
   for (NodeIdx v : corners) {
+    if (seen[v.value]) continue;
+    seen[v.value] = 1;
     bool all = true;
     m.for_each_outgoing(v, [&](HalfedgeIdx h) { all &= edge_dies[edge_of(h).value] != 0; });
     if (all) dying_nodes.push_back(v);
@@ -287,7 +294,7 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
   if (opt.pick) ro.probes.push_back(*opt.pick);
   auto rt = retriangulate_curves(m, curves, ro, ctx);
   if (!rt) return rt.status();
-  const Pieces P = find_pieces(m, *rt);
+  const Pieces P = find_pieces(m, *rt, ctx);
   CutResult out;
   out.faces_added = rt->faces_added;
   out.nodes_added = rt->nodes_added;
@@ -297,9 +304,24 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
     const SurfaceLocation& l = rt->probes.back();
     FaceIdx f;
     if (l.kind == AttribNodeKind::kFace) f = FaceIdx{l.element};
-    if (!f.valid() || rt->probe_margin.back() <= 0)
-      return Status(ErrorCode::kInvalidArgument, "cut: the pick lies on an edge or a node (on the curve?); pick "
-                                                 "inside a face of the side to remove");
+    if (!f.valid())
+      return Status(ErrorCode::kInvalidArgument, "cut: the pick is not inside a face; pick inside a face of the "
+                                                 "side to remove");
+    if (rt->probe_margin.back() <= 0) {
+      // On a side of its face: ambiguous only when that side is on a curve.
+      std::vector<HalfedgeIdx> hs;
+      m.face_halfedges(f, hs);
+      const std::size_t n = hs.size();
+      const std::size_t c[3] = {0, l.corner + 1u, l.corner + 2u};
+      for (int i = 0; i < 3; ++i) {
+        if (l.param[i] > 0) continue;
+        const NodeIdx a = m.tail(hs[c[(i + 1) % 3] % n]), b = m.tail(hs[c[(i + 2) % 3] % n]);
+        const HalfedgeIdx h = m.find_halfedge(a, b);
+        if (h.valid() && P.curve_edge[edge_of(h).value])
+          return Status(ErrorCode::kInvalidArgument, "cut: the pick lies on the cut curve; pick inside the side to "
+                                                     "remove");
+      }
+    }
     const std::uint32_t p = P.piece_of[f.value];
     if (p == kNone)
       return Status(ErrorCode::kInvalidArgument, "cut: the pick is on a surface the curves do not cross");
@@ -360,7 +382,7 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
     if (auto r = m.resolve(c); r) cur.push_back(*r);
   auto rt = retriangulate_curves(m, curves, opt.retriangulate, ctx);
   if (!rt) return rt.status();
-  const Pieces P = find_pieces(m, *rt);
+  const Pieces P = find_pieces(m, *rt, ctx);
   PartitionResult out;
   out.faces_added = rt->faces_added;
   out.nodes_added = rt->nodes_added;

@@ -28,7 +28,7 @@ double TracedCurve::length() const noexcept {
 namespace {
 
 using i64 = std::int64_t;
-using i128 = __int128;
+__extension__ typedef __int128 i128;  // exact orientation of 57-bit coordinates
 
 constexpr double kSnap = 65536.0;                // snapped pixel grid: 2^-16 pixel
 constexpr double kMaxPixel = 1099511627776.0;    // 2^40 pixels
@@ -428,15 +428,27 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
     for (std::size_t fi = ch * kChunk; fi < end && out.status; ++fi) {
       const FaceIdx f{static_cast<std::uint32_t>(fi)};
       if (!m.alive(f) || !surf_mask[m.faces.surface[fi].value]) continue;
+      // Cull by the face's screen box first (most faces lie away from the stroke).
+      {
+        bool ok = true;
+        double lox = INFINITY, loy = INFINITY, hix = -INFINITY, hiy = -INFINITY;
+        m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
+          const std::uint32_t v = m.halfedges.tail[h.value].value;
+          ok &= sc.ok[v] != 0;
+          lox = std::min(lox, double(sc.snapped[v].x));
+          hix = std::max(hix, double(sc.snapped[v].x));
+          loy = std::min(loy, double(sc.snapped[v].y));
+          hiy = std::max(hiy, double(sc.snapped[v].y));
+        });
+        if (!ok || hix < sd.box2.lo.x() || lox > sd.box2.hi.x() || hiy < sd.box2.lo.y() || loy > sd.box2.hi.y())
+          continue;
+      }
       fan_triangles(m, f, hs, tris);
       if (hs.size() > 257) {
         out.status = status_of(ErrorCode::kInvalidArgument, "painting: face ", fi, " has ", hs.size(),
                                " corners (at most 257)");
         return;
       }
-      bool ok = true;
-      for (HalfedgeIdx h : hs) ok &= sc.ok[m.tail(h).value] != 0;
-      if (!ok) continue;
       for (const FanTri& t : tris) {
         double lox = INFINITY, loy = INFINITY, hix = -INFINITY, hiy = -INFINITY;
         for (NodeIdx v : t.n) {
@@ -893,12 +905,26 @@ Expected<CurvePoint> locate_pixel(const Model& m, const Camera& camera, const Ve
     for (std::size_t fi = ch * kChunk; fi < end; ++fi) {
       const FaceIdx f{static_cast<std::uint32_t>(fi)};
       if (!m.alive(f) || !(*mask)[m.faces.surface[fi].value]) continue;
+      {
+        bool ok = true;
+        i64 lox = INT64_MAX, loy = INT64_MAX, hix = INT64_MIN, hiy = INT64_MIN;
+        m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
+          const std::uint32_t v = m.halfedges.tail[h.value].value;
+          ok &= sc->ok[v] != 0;
+          lox = std::min(lox, sc->snapped[v].x);
+          hix = std::max(hix, sc->snapped[v].x);
+          loy = std::min(loy, sc->snapped[v].y);
+          hiy = std::max(hiy, sc->snapped[v].y);
+        });
+        if (!ok || hix < q.x || lox > q.x || hiy < q.y || loy > q.y) continue;
+      }
       fan_triangles(m, f, hs, tris);
-      bool ok = hs.size() <= 257;
-      for (HalfedgeIdx h : hs) ok &= sc->ok[m.tail(h).value] != 0;
-      if (!ok) continue;
+      if (hs.size() > 257) continue;
       for (const FanTri& t : tris) {
         const P2 cc[3] = {sc->snapped[t.n[0].value], sc->snapped[t.n[1].value], sc->snapped[t.n[2].value]};
+        if (std::max({cc[0].x, cc[1].x, cc[2].x}) < q.x || std::min({cc[0].x, cc[1].x, cc[2].x}) > q.x ||
+            std::max({cc[0].y, cc[1].y, cc[2].y}) < q.y || std::min({cc[0].y, cc[1].y, cc[2].y}) > q.y)
+          continue;  // the pixel is outside the triangle's box (the perturbed point too)
         int sg[3];
         for (int k = 0; k < 3; ++k) {
           const int a = k, b = (k + 1) % 3;

@@ -813,6 +813,16 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
     face_flags[i] = m.faces.flags[faces[i].value];
     face_surf[i] = m.faces.surface[faces[i].value];
   }
+  {
+    // One growth of every column instead of one per append (a model fresh
+    // from a copy or a reader has no spare capacity).
+    std::size_t new_nodes = 0, splits = 0, tris = 0;
+    for (const Pt& p : P.pts) new_nodes += !p.node.valid();
+    for (const auto& [e, list] : P.edge_pts) splits += list.size();
+    for (const auto& [fk, fp] : P.fans) tris += fp.tris.size();
+    m.reserve(m.nodes.slots.capacity() + new_nodes, m.edges.slots.capacity() + splits + 3 * tris,
+              m.faces.slots.capacity() + tris);
+  }
   for (Pt& p : P.pts)
     if (!p.node.valid()) {
       p.node = m.new_node(p.surface, p.pos);
