@@ -7,9 +7,10 @@
 // the picked component removed (AABB-tree ray); and, for painting, the
 // sheet's intersection polylines (PMP::surface_intersection).
 //
-// Same pieces: before timing, both cuts are run once and the pieces' areas
-// compared (counters "pieces" and "area_diff", the largest relative
-// difference of matched piece areas). Inputs are copied outside the timed
+// Same pieces: before timing, both cuts are run once: the removed piece's
+// area, the area left and the components left must agree (counters
+// "pieces", the components after CGAL's split, and "area_diff", the largest
+// relative difference). Inputs are copied outside the timed
 // region. Our side runs on 1 and 2 threads.
 #include <benchmark/benchmark.h>
 
@@ -21,6 +22,7 @@
 #include <atelier/io/makehuman/mhclo.h>
 #include <atelier/io/obj.h>
 #include <atelier/storage/builder.h>
+#include <atelier/storage/topology.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/mesh/subdivide.h>
 #include <atelier/systems/sketch/cut.h>
@@ -131,8 +133,13 @@ Expected<CutResult> ours(Model& m, const Case& c, const ExecContext& ctx) {
   return cut_along_curves(m, edges_of(*p), {.pick = pick->location}, ctx);
 }
 
-/// The CGAL user's cut; returns the component areas before removal.
-std::vector<double> theirs(CMesh& tm, CMesh& sheet, const K::Ray_3& ray) {
+/// The CGAL user's cut; returns the removed component's area and the
+/// areas of the components left.
+struct TheirCut {
+  double removed = 0;
+  std::vector<double> left;
+};
+TheirCut theirs(CMesh& tm, CMesh& sheet, const K::Ray_3& ray) {
   PMP::split(tm, sheet);
   auto cc = tm.add_property_map<CMesh::Face_index, std::size_t>("f:cc", 0).first;
   const std::size_t n = PMP::connected_components(tm, cc);
@@ -142,11 +149,15 @@ std::vector<double> theirs(CMesh& tm, CMesh& sheet, const K::Ray_3& ray) {
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
   Tree tree(faces(tm).first, faces(tm).second, tm);
   const auto hit = tree.first_intersection(ray);
+  TheirCut out;
+  const std::size_t dropped = hit ? cc[hit->second] : n;
   if (hit) {
-    const std::vector<std::size_t> drop{cc[hit->second]};
-    PMP::remove_connected_components(tm, drop, cc);
+    PMP::remove_connected_components(tm, std::vector<std::size_t>{dropped}, cc);
+    out.removed = area[dropped];
   }
-  return area;
+  for (std::size_t i = 0; i < n; ++i)
+    if (i != dropped) out.left.push_back(area[i]);
+  return out;
 }
 
 void prepare(Case& c, Model m, std::vector<Vec3d> line, const Vec3d& pick) {
@@ -161,7 +172,8 @@ void prepare(Case& c, Model m, std::vector<Vec3d> line, const Vec3d& pick) {
   c.sheet = sweep(c.camera, c.stroke, box);
   const auto [o, d] = c.camera.ray(c.pick);
   c.pick_ray = K::Ray_3(K::Point_3(o.x(), o.y(), o.z()), K::Vector_3(d.x(), d.y(), d.z()));
-  // Same pieces: both cuts once, piece areas matched in sorted order.
+  // Same pieces: both cuts once; the removed piece's area, the area left
+  // and the number of components left must agree.
   Model mine = c.model;
   auto r = ours(mine, c, ExecContext::sequential());
   if (!r) {
@@ -169,38 +181,17 @@ void prepare(Case& c, Model m, std::vector<Vec3d> line, const Vec3d& pick) {
     return;
   }
   CMesh tm = c.cgal, sh = c.sheet;
-  std::vector<double> a = theirs(tm, sh, c.pick_ray), b;
-  // CGAL counts every component of the mesh; ours the pieces of the ones the
-  // curves cross. Add the untouched components (those of the input whose
-  // area is not the crossed one's, the sum of our pieces).
-  double crossed = 0;
-  for (const Piece& p : r->pieces) {
-    b.push_back(p.area);
-    crossed += p.area;
-  }
-  {
-    CMesh whole = c.cgal;
-    auto cc = whole.add_property_map<CMesh::Face_index, std::size_t>("f:cc", 0).first;
-    std::vector<double> comp(PMP::connected_components(whole, cc), 0.0);
-    for (auto f : whole.faces()) comp[cc[f]] += PMP::face_area(f, whole);
-    bool skipped = false;
-    for (double x : comp) {
-      if (!skipped && std::abs(x - crossed) <= 1e-9 * crossed) {
-        skipped = true;
-        continue;
-      }
-      b.push_back(x);
-    }
-  }
-  std::sort(a.begin(), a.end());
-  std::sort(b.begin(), b.end());
-  c.pieces = r->pieces.size();
-  if (a.size() != b.size()) {
-    c.error = "the cuts give " + std::to_string(b.size()) + " (ours) and " + std::to_string(a.size()) +
+  const TheirCut t = theirs(tm, sh, c.pick_ray);
+  double left = 0;
+  for (double a : t.left) left += a;
+  const std::size_t ours_left = static_cast<std::size_t>(count_topology(mine).components);
+  c.pieces = t.left.size() + 1;
+  if (ours_left != t.left.size()) {
+    c.error = "the cuts leave " + std::to_string(ours_left) + " (ours) and " + std::to_string(t.left.size()) +
               " (CGAL) components";
     return;
   }
-  for (std::size_t i = 0; i < a.size(); ++i) c.area_diff = std::max(c.area_diff, std::abs(a[i] - b[i]) / b[i]);
+  c.area_diff = std::max(std::abs(r->removed_area - t.removed) / t.removed, std::abs(r->kept_area - left) / left);
 }
 
 /// A 200-point wavy line across `box` at height fraction `h`, in the z = centre plane.

@@ -285,6 +285,62 @@ struct SeamSide {
   std::uint32_t a = 0, b = 0;
 };
 
+/// The piece holding face `start`: faces connected to it across edges that
+/// are not on a curve (in face order), and its area.
+struct OnePiece {
+  std::vector<FaceIdx> faces;
+  std::vector<std::uint8_t> in;  // per face slot
+  double area = 0;
+};
+OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_t>& curve_edge) {
+  OnePiece p;
+  p.in.assign(m.faces.slots.capacity(), 0);
+  std::vector<FaceIdx> stack{start};
+  p.in[start.value] = 1;
+  while (!stack.empty()) {
+    const FaceIdx f = stack.back();
+    stack.pop_back();
+    p.faces.push_back(f);
+    const HalfedgeIdx h0 = m.faces.halfedge[f.value];
+    const Vec3d& p0 = m.position(m.tail(h0));
+    HalfedgeIdx h = h0;
+    do {
+      const HalfedgeIdx n = m.next(h);
+      if (h != h0 && n != h0) p.area += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
+      if (!curve_edge[edge_of(h).value]) {
+        const FaceIdx o = m.face(twin(h));
+        if (o.valid() && !p.in[o.value]) {
+          p.in[o.value] = 1;
+          stack.push_back(o);
+        }
+      }
+      h = n;
+    } while (h != h0);
+  }
+  std::sort(p.faces.begin(), p.faces.end());
+  return p;
+}
+
+/// Area and face count of the live faces of the given surfaces (parallel,
+/// summed in a fixed order).
+std::pair<double, std::size_t> surface_totals(const Model& m, const std::vector<std::uint8_t>& touched,
+                                              const ExecContext& ctx) {
+  using Acc = std::pair<double, std::size_t>;
+  return par::transform_reduce(
+      ctx, m.faces.slots.capacity(), Acc{0.0, 0},
+      [&](std::size_t f) -> Acc {
+        if (!m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value]) return {0.0, 0};
+        const HalfedgeIdx h0 = m.faces.halfedge[f];
+        const Vec3d& p0 = m.position(m.tail(h0));
+        HalfedgeIdx h = m.next(h0);
+        double a = 0;
+        for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
+          a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
+        return {a, 1};
+      },
+      [](const Acc& x, const Acc& y) { return Acc{x.first + y.first, x.second + y.second}; });
+}
+
 }  // namespace
 
 Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curves, const CutOptions& opt,
@@ -294,19 +350,29 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
   if (opt.pick) ro.probes.push_back(*opt.pick);
   auto rt = retriangulate_curves(m, curves, ro, ctx);
   if (!rt) return rt.status();
-  const Pieces P = find_pieces(m, *rt, ctx);
   CutResult out;
   out.faces_added = rt->faces_added;
   out.nodes_added = rt->nodes_added;
   out.crossings = rt->crossings;
-  std::vector<std::uint8_t> remove(P.data.size(), 0);
+  std::vector<FaceIdx> rm;
   if (opt.pick) {
+    // The picked side only: the piece holding the pick, grown across edges
+    // that are not on a curve; it must meet a face of another piece across
+    // a curve edge (else the curve separates nothing).
     const SurfaceLocation& l = rt->probes.back();
     FaceIdx f;
     if (l.kind == AttribNodeKind::kFace) f = FaceIdx{l.element};
     if (!f.valid())
       return Status(ErrorCode::kInvalidArgument, "cut: the pick is not inside a face; pick inside a face of the "
                                                  "side to remove");
+    std::vector<std::uint8_t> curve_edge(m.edges.slots.capacity(), 0), touched(m.surfaces.slots.capacity(), 0);
+    for (const auto& ch : rt->chains)
+      for (HalfedgeIdx h : ch) {
+        curve_edge[edge_of(h).value] = 1;
+        touched[m.surface_of(edge_of(h)).value] = 1;
+      }
+    if (!touched[m.faces.surface[f.value].value])
+      return Status(ErrorCode::kInvalidArgument, "cut: the pick is on a surface the curves do not cross");
     if (rt->probe_margin.back() <= 0) {
       // On a side of its face: ambiguous only when that side is on a curve.
       std::vector<HalfedgeIdx> hs;
@@ -317,22 +383,39 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
         if (l.param[i] > 0) continue;
         const NodeIdx a = m.tail(hs[c[(i + 1) % 3] % n]), b = m.tail(hs[c[(i + 2) % 3] % n]);
         const HalfedgeIdx h = m.find_halfedge(a, b);
-        if (h.valid() && P.curve_edge[edge_of(h).value])
+        if (h.valid() && curve_edge[edge_of(h).value])
           return Status(ErrorCode::kInvalidArgument, "cut: the pick lies on the cut curve; pick inside the side to "
                                                      "remove");
       }
     }
-    const std::uint32_t p = P.piece_of[f.value];
-    if (p == kNone)
-      return Status(ErrorCode::kInvalidArgument, "cut: the pick is on a surface the curves do not cross");
+    const OnePiece pc = piece_from(m, f, curve_edge);
     bool separates = false;
-    for (std::uint32_t q = 0; q < P.data.size(); ++q) separates |= q != p && P.data[q].comp == P.data[p].comp;
+    for (const auto& ch : rt->chains)
+      for (HalfedgeIdx h : ch) {
+        const FaceIdx a = m.face(h), b = m.face(twin(h));
+        separates |= a.valid() && b.valid() && pc.in[a.value] != pc.in[b.value];
+      }
     if (!separates)
       return Status(ErrorCode::kInvalidArgument,
                     "cut: the curve does not separate the surface (the picked side is all of it); a cut all the "
                     "way round a closed body or a tube needs penetrated painting (\"through\": true)");
-    remove[p] = 1;
+    const auto [total_area, total_faces] = surface_totals(m, touched, ctx);
+    Piece removed;
+    removed.surface = m.handle(m.faces.surface[f.value]);
+    removed.faces = pc.faces.size();
+    removed.area = pc.area;
+    removed.removed = true;
+    Piece kept;  // everything else of the surfaces the curves cross
+    kept.surface = removed.surface;
+    kept.faces = total_faces - pc.faces.size();
+    kept.area = total_area - pc.area;
+    out.pieces = {removed, kept};
+    out.removed_area = removed.area;
+    out.kept_area = kept.area;
+    rm = pc.faces;
   } else {
+    const Pieces P = find_pieces(m, *rt, ctx);
+    std::vector<std::uint8_t> remove(P.data.size(), 0);
     bool any = false;
     for (std::uint32_t comp = 0; comp < P.crossed_comp.size(); ++comp) {
       if (!P.crossed_comp[comp]) continue;
@@ -352,20 +435,19 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
       return Status(ErrorCode::kInvalidArgument,
                     "cut: the curves do not separate the surface; a cut all the way round a closed body or a tube "
                     "needs penetrated painting (\"through\": true)");
+    for (std::uint32_t q = 0; q < P.data.size(); ++q) {
+      if (!P.crossed_comp[P.data[q].comp]) continue;
+      Piece pc;
+      pc.surface = m.handle(P.data[q].surface);
+      pc.faces = P.data[q].faces.size();
+      pc.area = P.data[q].area;
+      pc.removed = remove[q] != 0;
+      (pc.removed ? out.removed_area : out.kept_area) += pc.area;
+      out.pieces.push_back(pc);
+      if (remove[q]) rm.insert(rm.end(), P.data[q].faces.begin(), P.data[q].faces.end());
+    }
+    std::sort(rm.begin(), rm.end());
   }
-  std::vector<FaceIdx> rm;
-  for (std::uint32_t q = 0; q < P.data.size(); ++q) {
-    if (!P.crossed_comp[P.data[q].comp]) continue;
-    Piece pc;
-    pc.surface = m.handle(P.data[q].surface);
-    pc.faces = P.data[q].faces.size();
-    pc.area = P.data[q].area;
-    pc.removed = remove[q] != 0;
-    (pc.removed ? out.removed_area : out.kept_area) += pc.area;
-    out.pieces.push_back(pc);
-    if (remove[q]) rm.insert(rm.end(), P.data[q].faces.begin(), P.data[q].faces.end());
-  }
-  std::sort(rm.begin(), rm.end());
   out.faces_removed = rm.size();
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "cut cancelled");
   if (Status s = remove_faces(m, rm, out.nodes_removed); !s) return s;

@@ -5,9 +5,11 @@
 // not on a curve.
 //
 //  - Cutting removes the faces on one side: the piece holding a picked
-//    surface point (the "second stroke" of Fig. 12), or, without a pick,
-//    every piece of a crossed component but its largest (by area). A curve
-//    that separates nothing is refused and nothing changes.
+//    surface point (the "second stroke" of Fig. 12; only that piece is
+//    grown, so the cost is the removed side's, plus one pass for the
+//    areas), or, without a pick, every piece of a crossed component but its
+//    largest (by area). A curve that separates nothing is refused and
+//    nothing changes.
 //  - Partitioning makes every piece its own MESHSURFACE (the first piece of
 //    each surface keeps it; the others get "<name>.<k>"), seam nodes and
 //    edges are duplicated, and neighbouring pieces are joined by MESHJOINTs
@@ -63,7 +65,11 @@ struct CutOptions {
 };
 
 struct CutResult {
-  std::vector<Piece> pieces;  // the pieces of the crossed components, removed ones included
+  /// With a pick: the removed piece, then the rest of the surfaces the
+  /// curves cross (one entry: the picked side is grown, the rest is not
+  /// split into pieces). Without: every piece of the crossed components,
+  /// removed ones included.
+  std::vector<Piece> pieces;
   double removed_area = 0, kept_area = 0;
   std::size_t faces_removed = 0, nodes_removed = 0;
   std::size_t faces_added = 0, nodes_added = 0, crossings = 0;  // by the re-triangulation

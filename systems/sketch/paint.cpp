@@ -885,8 +885,9 @@ Expected<CurvePoint> locate_pixel(const Model& m, const Camera& camera, const Ve
   if (!mask) return mask.status();
   if (!pixel.allFinite() || !(std::abs(pixel.x()) < kMaxPixel) || !(std::abs(pixel.y()) < kMaxPixel))
     return Status(ErrorCode::kInvalidArgument, "pick: the pixel is not finite");
-  auto sc = checked_screen(m, camera, ctx);
-  if (!sc) return sc.status();
+  auto scr = checked_screen(m, camera, ctx);
+  if (!scr) return scr.status();
+  const Screen* sc = &*scr;
   StrokeData sd;
   sd.px = {pixel};
   sd.snapped = {P2{std::llround(pixel.x() * kSnap), std::llround(pixel.y() * kSnap)}};

@@ -60,7 +60,8 @@ namespace atelier {
 struct PaintOptions {
   /// Penetrated painting (Fig. 11b): every layer the rays cross.
   bool through = false;
-  /// Surfaces to paint on (empty: every live surface).
+  /// Surfaces to paint on (empty: every live surface). Other surfaces
+  /// neither receive curves nor hide anything.
   std::vector<SurfaceIdx> surfaces;
   /// Stored in attrib_edges.feature_id of the painted curves.
   std::int32_t feature_id = -1;
@@ -92,10 +93,10 @@ struct TraceResult {
 /// Traces the stroke (pixels) on the model through `camera` (seed 001
 /// section 5, "mesh painting"). Reads: nodes, faces, halfedges, joints.
 /// Writes nothing. Errors: kInvalidArgument (bad camera, fewer than 2
-/// distinct or non-finite stroke points, a dead surface in options,
-/// a face with more than 257 corners), kNotFound-like kInvalidArgument when
-/// the stroke misses every face, kDegenerate for painting across a fold,
-/// an occluding part or a gap (message names the stroke point), kCancelled.
+/// distinct or non-finite stroke points, a dead surface in options, a face
+/// with more than 257 corners, a stroke that crosses no face), kDegenerate
+/// for painting across a fold, an occluding part or a gap (the message
+/// names the stroke point), kCancelled.
 [[nodiscard]] Expected<TraceResult> trace_stroke(const Model& model, const Camera& camera,
                                                  std::span<const Vec2d> stroke, const PaintOptions& options = {},
                                                  const ExecContext& ctx = {});

@@ -247,3 +247,28 @@ TEST(Retriangulate, CurvesAlongEdgesAndThroughVertices) {
   EXPECT_EQ(r->chains[0].size(), 8u);
   EXPECT_EQ(r->chains[1].size(), 8u);
 }
+
+TEST(Retriangulate, DegenerateFacesAreRefusedCleanly) {
+  // A strip of triangles with one of zero area (three collinear nodes) in
+  // the stroke's way: painting goes through, re-triangulating refuses it.
+  Soup s;
+  s.p = {Vec3d(-1, -1, 0), Vec3d(0, -1, 0), Vec3d(1, -1, 0), Vec3d(-1, 1, 0), Vec3d(0, 1, 0), Vec3d(1, 1, 0),
+         Vec3d(0, 0, 0)};
+  s.face({0, 1, 4});
+  s.face({0, 4, 3});
+  s.face({1, 2, 5});
+  s.face({1, 5, 4});
+  // Node 6 lies on edge 1-4 only geometrically: the face (1, 6, 4) has no area.
+  Model m;
+  (void)add_polygon_surface(m, "strip", s.view()).value();
+  (void)add_polygon_surface(m, "sliver", PolygonSoupView{s.p, std::vector<std::uint32_t>{0, 3}, std::vector<std::uint32_t>{1, 6, 4}}).value();
+  const Camera cam = Camera::orthographic(Vec3d(0, 0, 5), Vec3d::Zero(), Vec3d::UnitY(), 2.0, 400, 400);
+  auto p = paint_stroke(m, cam, project(cam, {Vec3d(-1.5, 0.1, 0), Vec3d(1.5, 0.12, 0)}), {.through = true});
+  ASSERT_TRUE(p) << p.status().to_string();
+  const Model before = m;
+  auto r = retriangulate_curves(m, edges_of(*p));
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().code(), ErrorCode::kDegenerate);
+  EXPECT_NE(r.status().message().find("no area"), std::string::npos) << r.status().message();
+  EXPECT_EQ(diff_tables(before, m), "");
+}
