@@ -552,7 +552,12 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
     }
   // Move the pieces, recording old halfedge -> new halfedge and the copies
   // of their nodes.
-  std::map<HalfedgeIdx, HalfedgeIdx> hmap;                        // old halfedge of a moved face -> new
+  // Old halfedge of a moved face -> its new halfedge (indexed by the old
+  // halfedge; only halfedges that exist now are keys).
+  std::vector<HalfedgeIdx> hmap(2 * m.edges.slots.capacity());
+  auto hmapped = [&](HalfedgeIdx h) { return h.value < hmap.size() && hmap[h.value].valid(); };
+  std::vector<NodeIdx> nmap(m.nodes.slots.capacity());  // per piece: old node -> its copy
+  std::set<NodeIdx> seam_nodes;
   std::map<std::pair<NodeIdx, std::uint32_t>, NodeIdx> copy_of;  // (old node, piece) -> its copy
   std::vector<SurfaceIdx> piece_surface(P.data.size());
   for (std::uint32_t q = 0; q < P.data.size(); ++q) piece_surface[q] = P.data[q].surface;
@@ -570,17 +575,21 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
       std::uint8_t flags;
     };
     std::vector<OldFace> old;
-    std::set<NodeIdx> nodes;
-    std::set<EdgeIdx> edges;
+    std::vector<NodeIdx> nodes;
+    std::vector<EdgeIdx> edges;
     for (FaceIdx f : pd.faces) {
       OldFace o{f, {}, m.faces.flags[f.value]};
       m.face_halfedges(f, o.hs);
       for (HalfedgeIdx h : o.hs) {
-        nodes.insert(m.tail(h));
-        edges.insert(edge_of(h));
+        nodes.push_back(m.tail(h));
+        edges.push_back(edge_of(h));
       }
       old.push_back(std::move(o));
     }
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
     // Mesh edges of the piece (entirely in it: those across pieces were cut
     // above) move with it, keeping their place in their joint.
     struct OldMeshEdge {
@@ -621,18 +630,16 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
       m.mesh_edges.joint[o.idx.value] = {};  // re-pointed below, by member position
       m.delete_mesh_edge(o.idx);
     }
-    std::map<NodeIdx, NodeIdx> nmap;
     for (NodeIdx v : nodes) {
       const NodeIdx nv = m.new_node(ns.idx, m.position(v));
       m.nodes.uv[nv.value] = m.nodes.uv[v.value];
       m.nodes.position_backup[nv.value] = m.nodes.position_backup[v.value];
-      nmap[v] = nv;
-      copy_of[{v, q}] = nv;
+      nmap[v.value] = nv;
     }
     for (const OldFace& o : old) {
       std::vector<HalfedgeIdx> cyc;
       for (HalfedgeIdx h : o.hs) {
-        const NodeIdx a = nmap.at(m.tail(h)), b = nmap.at(m.head(h));
+        const NodeIdx a = nmap[m.tail(h).value], b = nmap[m.head(h).value];
         HalfedgeIdx x = m.find_halfedge(a, b);
         if (!x.valid()) {
           const EdgeIdx e = m.new_edge(a, b);
@@ -640,10 +647,10 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
           x = halfedge_of(e, 0);
         }
         cyc.push_back(x);
-        hmap[h] = x;
+        hmap[h.value] = x;
         // The twin moves too unless another piece's face holds it (a seam),
         // or a piece moved before already took it.
-        if (!m.face(twin(h)).valid()) hmap.emplace(twin(h), twin(x));
+        if (!m.face(twin(h)).valid() && !hmap[twin(h).value].valid()) hmap[twin(h).value] = twin(x);
       }
       const FaceIdx nf = m.new_face(ns.idx, cyc);
       m.faces.flags[nf.value] = o.flags;
@@ -659,26 +666,26 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
       auto& an = m.attrib_nodes;
       if (an.kind[i] == AttribNodeKind::kEdge) {
         const HalfedgeIdx h{an.element[i]};
-        if (!edges.count(edge_of(h)) || !hmap.count(h)) continue;
+        if (!std::binary_search(edges.begin(), edges.end(), edge_of(h)) || !hmapped(h)) continue;
         // On the moved side: the edge goes, or this side lost its face.
         if (edge_dies[edge_of(h).value] || !m.face(h).valid()) {
-          an.element[i] = hmap.at(h).value;
+          an.element[i] = hmap[h.value].value;
           an.surface[i] = ns.idx;
         }
       } else if (an.kind[i] == AttribNodeKind::kVertex) {
         const NodeIdx v{an.element[i]};
-        if (!nmap.count(v)) continue;
+        if (!std::binary_search(nodes.begin(), nodes.end(), v)) continue;
         bool interior = true;
         m.for_each_outgoing(v, [&](HalfedgeIdx h) { interior &= edge_dies[edge_of(h).value] != 0; });
         if (interior) {
-          an.element[i] = nmap.at(v).value;
+          an.element[i] = nmap[v.value].value;
           an.surface[i] = ns.idx;
         }
       }
     }
     for (const OldMeshEdge& o : old_me) {
       std::vector<HalfedgeIdx> chain;
-      for (HalfedgeIdx h : o.chain) chain.push_back(hmap.at(h));
+      for (HalfedgeIdx h : o.chain) chain.push_back(hmap[h.value]);
       const MeshEdgeIdx nm = m.new_mesh_edge(ns.idx, chain);
       if (o.joint.valid()) {
         const auto row = m.joints.members.row(o.joint.value);
@@ -691,10 +698,16 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
     for (EdgeIdx e : edges)
       if (edge_dies[e.value]) m.delete_edge(e);
     for (NodeIdx v : nodes) {
-      if (m.is_isolated(v) && !m.nodes.in_face[v.value].valid())
+      // A seam node (shared with a piece not moved yet, or with one moved
+      // before): remember its copy in this piece.
+      if (m.is_isolated(v) && !m.nodes.in_face[v.value].valid()) {
         m.delete_node(v);
-      else
+        if (seam_nodes.count(v)) copy_of[{v, q}] = nmap[v.value];
+      } else {
         ++out.seam_nodes;
+        seam_nodes.insert(v);
+        copy_of[{v, q}] = nmap[v.value];
+      }
     }
   }
   // Face-nodes follow their faces.
@@ -758,8 +771,7 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<SeamSide>> by_pair;
   for (const SeamSide& s : seams) by_pair[{s.a, s.b}].push_back(s);
   auto mapped = [&](HalfedgeIdx h) {
-    auto it = hmap.find(h);
-    return it == hmap.end() ? h : it->second;
+    return hmapped(h) ? hmap[h.value] : h;
   };
   for (auto& [pair, list] : by_pair) {
     std::sort(list.begin(), list.end(), [](const SeamSide& x, const SeamSide& y) { return x.h < y.h; });

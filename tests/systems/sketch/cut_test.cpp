@@ -82,7 +82,9 @@ TEST(Cut, APlaneCutOfASphereLeavesAHemisphere) {
     // The upper half went: every node left is at y <= 0, the area left is the
     // original mesh clipped by the plane, and the areas add up.
     for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-      if (m.alive(NodeIdx{v})) EXPECT_LE(m.nodes.position[v].y(), 1e-12);
+      if (m.alive(NodeIdx{v})) {
+        EXPECT_LE(m.nodes.position[v].y(), 1e-12);
+      }
     EXPECT_NEAR(fan_area(m), clipped_area(original, Vec3d::UnitY(), 0.0), 1e-12 * a0);
     EXPECT_NEAR(r->kept_area, fan_area(m), 1e-12 * a0);
     EXPECT_NEAR(r->removed_area + r->kept_area, a0, 1e-12 * a0);
@@ -288,4 +290,35 @@ TEST(Cut, AJointOnTheRemovedSideIsRefused) {
   ASSERT_FALSE(r);
   EXPECT_EQ(r.status().code(), ErrorCode::kJointRefused) << r.status().to_string();
   EXPECT_EQ(diff_tables(before, m), "");
+}
+
+TEST(Partition, OtherCurvesAcrossASeamAreSplitPerSurface) {
+  Model m = icosphere(4);
+  const Camera cam = front_ortho();
+  auto feature = paint_stroke(m, cam, project(cam, {Vec3d(-0.9, 0.05, 0), Vec3d(0.9, 0.1, 0)}), {.feature_id = 11});
+  ASSERT_TRUE(feature);
+  std::vector<Vec3d> before_pts;
+  for (AttribNodeIdx a : m.attrib_edges.nodes.row(edges_of(*feature)[0].idx.value))
+    before_pts.push_back(m.attrib_position_on_surface(a));
+  auto ring = paint_stroke(m, cam, ring_stroke(cam, Vec3d(0.05, 0.0, 0), 0.4));
+  ASSERT_TRUE(ring);
+  auto r = partition_along_curves(m, edges_of(*ring));
+  ASSERT_TRUE(r) << r.status().to_string();
+  ASSERT_TRUE(validate(m)) << validate(m).to_string();
+  // The feature curve now lies on two surfaces: one attribute edge per run.
+  std::vector<AttribEdgeIdx> runs;
+  for (std::uint32_t e = 0; e < m.attrib_edges.slots.capacity(); ++e)
+    if (m.alive(AttribEdgeIdx{e}) && m.attrib_edges.feature_id[e] == 11) runs.push_back(AttribEdgeIdx{e});
+  EXPECT_EQ(runs.size(), 3u);  // outside, inside the ring, outside
+  std::size_t nodes = 0;
+  for (AttribEdgeIdx e : runs) {
+    nodes += m.attrib_edges.nodes.size(e.value);
+    for (AttribNodeIdx a : m.attrib_edges.nodes.row(e.value)) {
+      const Vec3d p = m.attrib_position_on_surface(a);
+      double best = INFINITY;
+      for (const Vec3d& q : before_pts) best = std::min(best, (p - q).norm());
+      EXPECT_LT(best, 1e-12);  // every node still where the curve was
+    }
+  }
+  EXPECT_GE(nodes, before_pts.size());
 }

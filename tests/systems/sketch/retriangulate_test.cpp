@@ -38,7 +38,9 @@ void expect_clean(const Model& before, const Model& after, const Retriangulation
                   std::span<const AttribEdge> curves) {
   ASSERT_TRUE(validate(after)) << validate(after).to_string();
   for (std::uint32_t v = 0; v < before.nodes.slots.capacity(); ++v)
-    if (before.alive(NodeIdx{v})) ASSERT_EQ(before.nodes.position[v], after.nodes.position[v]) << "node " << v;
+    if (before.alive(NodeIdx{v})) {
+      ASSERT_EQ(before.nodes.position[v], after.nodes.position[v]) << "node " << v;
+    }
   const double a0 = fan_area(before), a1 = fan_area(after);
   EXPECT_NEAR(a1, a0, 1e-12 * a0);
   EXPECT_EQ(count_topology(after).implied_holes(), after.complex_holes);
@@ -47,7 +49,9 @@ void expect_clean(const Model& before, const Model& after, const Retriangulation
     const auto& ch = r.chains[c];
     for (std::size_t k = 0; k < ch.size(); ++k) {
       ASSERT_TRUE(ch[k].valid() && after.alive(ch[k]));
-      if (k + 1 < ch.size()) EXPECT_EQ(after.head(ch[k]), after.tail(ch[k + 1]));
+      if (k + 1 < ch.size()) {
+        EXPECT_EQ(after.head(ch[k]), after.tail(ch[k + 1]));
+      }
     }
     for (AttribNodeIdx a : after.attrib_edges.nodes.row(curves[c].idx.value))
       EXPECT_EQ(after.attrib_nodes.kind[a.value], AttribNodeKind::kVertex);

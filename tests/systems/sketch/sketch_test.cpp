@@ -61,7 +61,9 @@ TEST(Sketch, AStrokeFileDrivesEveryTool) {
   EXPECT_GT(r->tools[1].removed_area, 0.0);
   // The picked (lower) side went.
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-    if (m.alive(NodeIdx{v})) EXPECT_GT(m.nodes.position[v].y(), -0.9);
+    if (m.alive(NodeIdx{v})) {
+      EXPECT_GT(m.nodes.position[v].y(), -0.9);
+    }
   EXPECT_EQ(r->tools[2].strokes, 2u);
   EXPECT_EQ(r->tools[2].pieces.size(), 3u);
   EXPECT_EQ(m.num_surfaces(), 3u);
