@@ -1,14 +1,14 @@
 #include "sketch_cmd.h"
 
-#include <cstdio>
-#include <nlohmann/json.hpp>
-
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/native.h>
 #include <atelier/io/obj.h>
 #include <atelier/io/off.h>
 #include <atelier/io/ply.h>
 #include <atelier/systems/sketch/sketch.h>
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
 
 namespace atelier::cli {
 
@@ -40,8 +40,11 @@ nlohmann::json report_json(const Model& m, const atelier::SketchReport& r, const
                            const fs::path& strokes, const Status& overall) {
   nlohmann::json tools = nlohmann::json::array();
   for (const StrokeReport& t : r.tools) {
-    nlohmann::json j = {{"stroke", t.stroke}, {"strokes", t.strokes},     {"tool", to_string(t.tool)},
-                        {"through", t.through}, {"ok", t.status.is_ok()}};
+    nlohmann::json j = {{"stroke", t.stroke},
+                        {"strokes", t.strokes},
+                        {"tool", to_string(t.tool)},
+                        {"through", t.through},
+                        {"ok", t.status.is_ok()}};
     if (!t.name.empty()) j["name"] = t.name;
     if (!t.status) {
       j["error"] = t.status.message();
@@ -80,11 +83,14 @@ nlohmann::json report_json(const Model& m, const atelier::SketchReport& r, const
     if (t.tool == StrokeTool::kCut) j["removed_area"] = t.removed_area;
     tools.push_back(j);
   }
-  nlohmann::json root = {{"mesh", mesh.string()}, {"strokes", strokes.string()}, {"ok", overall.is_ok()},
-                         {"failed", r.failed},    {"tools", tools}};
+  nlohmann::json root = {{"mesh", mesh.string()},
+                         {"strokes", strokes.string()},
+                         {"ok", overall.is_ok()},
+                         {"failed", r.failed},
+                         {"tools", tools}};
   if (!overall) root["error"] = overall.message();
-  root["result"] = {{"surfaces", m.num_surfaces()}, {"nodes", m.num_nodes()}, {"faces", m.num_faces()},
-                    {"joints", m.num_joints()}};
+  root["result"] = {
+      {"surfaces", m.num_surfaces()}, {"nodes", m.num_nodes()}, {"faces", m.num_faces()}, {"joints", m.num_joints()}};
   return root;
 }
 

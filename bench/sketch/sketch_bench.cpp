@@ -12,23 +12,6 @@
 // "pieces", the components after CGAL's split, and "area_diff", the largest
 // relative difference). Inputs are copied outside the timed
 // region. Our side runs on 1 and 2 threads.
-#include <benchmark/benchmark.h>
-
-#include <algorithm>
-#include <cmath>
-#include <filesystem>
-#include <vector>
-
-#include <atelier/io/makehuman/mhclo.h>
-#include <atelier/io/obj.h>
-#include <atelier/storage/builder.h>
-#include <atelier/storage/topology.h>
-#include <atelier/systems/body/makehuman_body.h>
-#include <atelier/systems/mesh/subdivide.h>
-#include <atelier/systems/sketch/cut.h>
-#include <atelier/systems/sketch/paint.h>
-#include <atelier/systems/spatial/body_bvh.h>
-
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -38,6 +21,21 @@
 #include <CGAL/Polygon_mesh_processing/intersection.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Surface_mesh.h>
+#include <atelier/io/makehuman/mhclo.h>
+#include <atelier/io/obj.h>
+#include <atelier/storage/builder.h>
+#include <atelier/storage/topology.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/mesh/subdivide.h>
+#include <atelier/systems/sketch/cut.h>
+#include <atelier/systems/sketch/paint.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <vector>
 
 namespace {
 
@@ -247,7 +245,9 @@ const Case& suit() {
   return c;
 }
 
-const Case& get(int which) { return which == 0 ? spot() : suit(); }
+const Case& get(int which) {
+  return which == 0 ? spot() : suit();
+}
 
 void counters(benchmark::State& st, const Case& c) {
   st.counters["triangles"] = static_cast<double>(c.model.num_faces());
@@ -276,8 +276,14 @@ void BM_SketchCut(benchmark::State& st) {
   }
   counters(st, c);
 }
-BENCHMARK(BM_SketchCut)->ArgNames({"mesh", "threads"})->Args({0, 1})->Args({0, 2})->Args({1, 1})->Args({1, 2})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SketchCut)
+    ->ArgNames({"mesh", "threads"})
+    ->Args({0, 1})
+    ->Args({0, 2})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_SketchCut_CgalSplit(benchmark::State& st) {
   const Case& c = get(static_cast<int>(st.range(0)));
@@ -296,8 +302,12 @@ void BM_SketchCut_CgalSplit(benchmark::State& st) {
   }
   counters(st, c);
 }
-BENCHMARK(BM_SketchCut_CgalSplit)->ArgNames({"mesh", "threads"})->Args({0, 1})->Args({1, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SketchCut_CgalSplit)
+    ->ArgNames({"mesh", "threads"})
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_SketchPaint(benchmark::State& st) {
   const Case& c = get(static_cast<int>(st.range(0)));
@@ -321,9 +331,15 @@ void BM_SketchPaint(benchmark::State& st) {
   counters(st, c);
   st.counters["curve_points"] = static_cast<double>(points);
 }
-BENCHMARK(BM_SketchPaint)->ArgNames({"mesh", "threads", "through"})
-    ->Args({0, 1, 1})->Args({0, 2, 1})->Args({1, 1, 1})->Args({1, 2, 1})->Args({1, 1, 0})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SketchPaint)
+    ->ArgNames({"mesh", "threads", "through"})
+    ->Args({0, 1, 1})
+    ->Args({0, 2, 1})
+    ->Args({1, 1, 1})
+    ->Args({1, 2, 1})
+    ->Args({1, 1, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_SketchPaint_CgalIntersection(benchmark::State& st) {
   const Case& c = get(static_cast<int>(st.range(0)));
@@ -341,7 +357,11 @@ void BM_SketchPaint_CgalIntersection(benchmark::State& st) {
   counters(st, c);
   st.counters["curve_points"] = static_cast<double>(points);
 }
-BENCHMARK(BM_SketchPaint_CgalIntersection)->ArgNames({"mesh", "threads", "through"})->Args({0, 1, 1})->Args({1, 1, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SketchPaint_CgalIntersection)
+    ->ArgNames({"mesh", "threads", "through"})
+    ->Args({0, 1, 1})
+    ->Args({1, 1, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace

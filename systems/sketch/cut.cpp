@@ -1,6 +1,9 @@
 // Why this file is long: cutting and partitioning share the pieces, the
 // bookkeeping of attribute nodes, mesh edges and joints on removed or moved
 // faces, and the snapshot that makes both transactional.
+#include <atelier/engine/parallel.h>
+#include <atelier/engine/status_format.h>
+#include <atelier/storage/topology.h>
 #include <atelier/systems/sketch/cut.h>
 
 #include <algorithm>
@@ -8,10 +11,6 @@
 #include <map>
 #include <numeric>
 #include <set>
-
-#include <atelier/engine/parallel.h>
-#include <atelier/engine/status_format.h>
-#include <atelier/storage/topology.h>
 
 namespace atelier {
 
@@ -27,7 +26,7 @@ struct PieceData {
 };
 
 struct Pieces {
-  std::vector<std::uint32_t> piece_of;  // per face slot
+  std::vector<std::uint32_t> piece_of;   // per face slot
   std::vector<std::uint8_t> curve_edge;  // per edge slot
   std::vector<PieceData> data;           // ordered by smallest face
   std::vector<std::uint8_t> crossed_comp;
@@ -224,7 +223,9 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, std::size_t& nodes
   return {};
 }
 
-void recount_holes(Model& m) { m.complex_holes = count_topology(m).implied_holes(); }
+void recount_holes(Model& m) {
+  m.complex_holes = count_topology(m).implied_holes();
+}
 
 /// Restores the snapshot on every error path.
 struct Rollback {
@@ -338,7 +339,9 @@ std::pair<double, std::size_t> surface_totals(const Model& m, const std::vector<
           a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
         return {a, 1};
       },
-      [](const Acc& x, const Acc& y) { return Acc{x.first + y.first, x.second + y.second}; });
+      [](const Acc& x, const Acc& y) {
+        return Acc{x.first + y.first, x.second + y.second};
+      });
 }
 
 }  // namespace
@@ -363,8 +366,9 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
     FaceIdx f;
     if (l.kind == AttribNodeKind::kFace) f = FaceIdx{l.element};
     if (!f.valid())
-      return Status(ErrorCode::kInvalidArgument, "cut: the pick is not inside a face; pick inside a face of the "
-                                                 "side to remove");
+      return Status(ErrorCode::kInvalidArgument,
+                    "cut: the pick is not inside a face; pick inside a face of the "
+                    "side to remove");
     std::vector<std::uint8_t> curve_edge(m.edges.slots.capacity(), 0), touched(m.surfaces.slots.capacity(), 0);
     for (const auto& ch : rt->chains)
       for (HalfedgeIdx h : ch) {
@@ -384,8 +388,9 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
         const NodeIdx a = m.tail(hs[c[(i + 1) % 3] % n]), b = m.tail(hs[c[(i + 2) % 3] % n]);
         const HalfedgeIdx h = m.find_halfedge(a, b);
         if (h.valid() && curve_edge[edge_of(h).value])
-          return Status(ErrorCode::kInvalidArgument, "cut: the pick lies on the cut curve; pick inside the side to "
-                                                     "remove");
+          return Status(ErrorCode::kInvalidArgument,
+                        "cut: the pick lies on the cut curve; pick inside the side to "
+                        "remove");
       }
     }
     const OnePiece pc = piece_from(m, f, curve_edge);
@@ -481,8 +486,7 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
     moves[q] = 1;
     any = true;
   }
-  if (!any)
-    return Status(ErrorCode::kInvalidArgument, "partition: the curves do not separate the surface into pieces");
+  if (!any) return Status(ErrorCode::kInvalidArgument, "partition: the curves do not separate the surface into pieces");
   // Seam edges: curve edges with different pieces on their two sides.
   std::vector<SeamSide> seams;
   for (std::uint32_t e = 0; e < P.curve_edge.size(); ++e) {
@@ -745,11 +749,12 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
       if (!copied.count(v)) continue;
       SurfaceIdx want;
       if (ci != curve_index.end()) {
-        if (auto it = curve_left[ci->second].find(v); it != curve_left[ci->second].end()) want = piece_surface[it->second];
+        if (auto it = curve_left[ci->second].find(v); it != curve_left[ci->second].end())
+          want = piece_surface[it->second];
       }
       for (std::size_t d = 1; d < nodes.size() && !want.valid(); ++d)
-        for (std::int64_t kk : {static_cast<std::int64_t>(k) - static_cast<std::int64_t>(d),
-                                static_cast<std::int64_t>(k + d)}) {
+        for (std::int64_t kk :
+             {static_cast<std::int64_t>(k) - static_cast<std::int64_t>(d), static_cast<std::int64_t>(k + d)}) {
           if (kk < 0 || kk >= static_cast<std::int64_t>(nodes.size()) || want.valid()) continue;
           const AttribNodeIdx b = nodes[kk];
           const bool b_seam = an.kind[b.value] == AttribNodeKind::kVertex && copied.count(NodeIdx{an.element[b.value]});
@@ -770,9 +775,7 @@ Expected<PartitionResult> partition_along_curves(Model& m, std::span<const Attri
   // the side of the smaller piece (one surface), their twins on the other.
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<SeamSide>> by_pair;
   for (const SeamSide& s : seams) by_pair[{s.a, s.b}].push_back(s);
-  auto mapped = [&](HalfedgeIdx h) {
-    return hmapped(h) ? hmap[h.value] : h;
-  };
+  auto mapped = [&](HalfedgeIdx h) { return hmapped(h) ? hmap[h.value] : h; };
   for (auto& [pair, list] : by_pair) {
     std::sort(list.begin(), list.end(), [](const SeamSide& x, const SeamSide& y) { return x.h < y.h; });
     std::vector<HalfedgeIdx> ha, hb;

@@ -34,26 +34,26 @@
 // mesh edge); kUnsupported (ring nodes in faces to remove or move).
 #pragma once
 
-#include <cstddef>
-#include <optional>
-#include <span>
-#include <string>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/storage/surface_location.h>
 #include <atelier/systems/sketch/retriangulate.h>
 
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
 namespace atelier {
 
 /// One piece: faces of one surface connected across non-curve edges.
 struct Piece {
-  Surface surface;         // after the operation (partitioning: its own surface)
+  Surface surface;  // after the operation (partitioning: its own surface)
   std::size_t faces = 0;
-  double area = 0;         // sum of fan-triangle areas
-  bool removed = false;    // cutting: the piece removed
+  double area = 0;       // sum of fan-triangle areas
+  bool removed = false;  // cutting: the piece removed
 };
 
 struct CutOptions {
@@ -84,11 +84,11 @@ struct PartitionOptions {
 };
 
 struct PartitionResult {
-  std::vector<Piece> pieces;           // every piece of the surfaces the curves run on
-  std::vector<Surface> new_surfaces;   // surfaces made for pieces
-  std::vector<Joint> joints;           // seams between pieces
+  std::vector<Piece> pieces;                                    // every piece of the surfaces the curves run on
+  std::vector<Surface> new_surfaces;                            // surfaces made for pieces
+  std::vector<Joint> joints;                                    // seams between pieces
   std::size_t faces_added = 0, nodes_added = 0, crossings = 0;  // by the re-triangulation
-  std::size_t seam_nodes = 0;          // nodes duplicated along seams
+  std::size_t seam_nodes = 0;                                   // nodes duplicated along seams
 };
 
 /// Partitions the surfaces along the curves (see above).

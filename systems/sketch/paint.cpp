@@ -3,6 +3,9 @@
 // per-triangle pieces, splicing into chains and layers, the visible-layer
 // choice); splitting them would only move shared private types into a
 // detail header read by nobody else.
+#include <atelier/engine/parallel.h>
+#include <atelier/engine/status_format.h>
+#include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/sketch/paint.h>
 
 #include <algorithm>
@@ -12,10 +15,6 @@
 #include <limits>
 #include <map>
 #include <sstream>
-
-#include <atelier/engine/parallel.h>
-#include <atelier/engine/status_format.h>
-#include <atelier/systems/mesh/edit.h>
 
 namespace atelier {
 
@@ -30,12 +29,14 @@ namespace {
 using i64 = std::int64_t;
 __extension__ typedef __int128 i128;  // exact orientation of 57-bit coordinates
 
-constexpr double kSnap = 65536.0;                // snapped pixel grid: 2^-16 pixel
-constexpr double kMaxPixel = 1099511627776.0;    // 2^40 pixels
-constexpr std::size_t kChunk = 4096;             // faces per parallel chunk (fixed: results do not depend on threads)
-constexpr double kStepTolerance = 1e-12;         // |ds| below this is no step (turn detection)
+constexpr double kSnap = 65536.0;              // snapped pixel grid: 2^-16 pixel
+constexpr double kMaxPixel = 1099511627776.0;  // 2^40 pixels
+constexpr std::size_t kChunk = 4096;           // faces per parallel chunk (fixed: results do not depend on threads)
+constexpr double kStepTolerance = 1e-12;       // |ds| below this is no step (turn detection)
 
-int sgn(i128 v) noexcept { return (v > 0) - (v < 0); }
+int sgn(i128 v) noexcept {
+  return (v > 0) - (v < 0);
+}
 
 struct P2 {
   i64 x = 0, y = 0;
@@ -118,7 +119,7 @@ struct StrokeData {
   std::vector<std::size_t> original;  // index in the caller's stroke
   std::vector<Vec4d> plane;           // per segment: world plane through the eye and the segment
   bool closed = false;
-  Box3d box2;                         // x, y of the snapped bounding box (z unused)
+  Box3d box2;  // x, y of the snapped bounding box (z unused)
   [[nodiscard]] std::size_t segments() const noexcept { return px.size() - 1; }
 };
 
@@ -224,10 +225,10 @@ struct Section {
   std::vector<Piece> pieces;
   std::size_t triangles = 0;
   [[nodiscard]] std::uint32_t find(const VKey& k) const {
-    auto it = std::lower_bound(vertices.begin(), vertices.end(), k,
-                               [](const Vertex& v, const VKey& x) { return v.key < x; });
+    auto it =
+        std::lower_bound(vertices.begin(), vertices.end(), k, [](const Vertex& v, const VKey& x) { return v.key < x; });
     return it != vertices.end() && it->key == k ? static_cast<std::uint32_t>(it - vertices.begin())
-                                               : std::numeric_limits<std::uint32_t>::max();
+                                                : std::numeric_limits<std::uint32_t>::max();
   }
 };
 
@@ -236,7 +237,7 @@ struct FanTri {
   FaceIdx face;
   std::uint32_t fan = 0, degree = 0;
   NodeIdx n[3];
-  HalfedgeIdx real[3];  // the face halfedge along side k, or invalid for a fan diagonal
+  HalfedgeIdx real[3];                // the face halfedge along side k, or invalid for a fan diagonal
   std::uint32_t diag[3] = {0, 0, 0};  // for diagonals: d with the diagonal c0 - c_d
 };
 
@@ -445,8 +446,8 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
       }
       fan_triangles(m, f, hs, tris);
       if (hs.size() > 257) {
-        out.status = status_of(ErrorCode::kInvalidArgument, "painting: face ", fi, " has ", hs.size(),
-                               " corners (at most 257)");
+        out.status =
+            status_of(ErrorCode::kInvalidArgument, "painting: face ", fi, " has ", hs.size(), " corners (at most 257)");
         return;
       }
       for (const FanTri& t : tris) {
@@ -472,7 +473,8 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
     s.triangles += o.triangles;
   }
   // Edge crossings are computed by both faces of the edge, bit-identically.
-  std::stable_sort(s.vertices.begin(), s.vertices.end(), [](const Vertex& a, const Vertex& b) { return a.key < b.key; });
+  std::stable_sort(s.vertices.begin(), s.vertices.end(),
+                   [](const Vertex& a, const Vertex& b) { return a.key < b.key; });
   s.vertices.erase(std::unique(s.vertices.begin(), s.vertices.end(),
                                [](const Vertex& a, const Vertex& b) { return a.key == b.key; }),
                    s.vertices.end());
@@ -677,7 +679,9 @@ std::string pixel_text(const StrokeData& sd, std::size_t j) {
 /// s-range and depth keys of a piece at its ends (ordered by s).
 struct PieceSpan {
   double s0 = 0, k0 = 0, s1 = 0, k1 = 0;
-  [[nodiscard]] double key_at(double x) const { return s1 > s0 ? k0 + (k1 - k0) * (x - s0) / (s1 - s0) : std::max(k0, k1); }
+  [[nodiscard]] double key_at(double x) const {
+    return s1 > s0 ? k0 + (k1 - k0) * (x - s0) / (s1 - s0) : std::max(k0, k1);
+  }
 };
 
 PieceSpan span_of(const Section& s, std::uint32_t p) {
@@ -697,10 +701,13 @@ PieceSpan span_of(const Section& s, std::uint32_t p) {
 /// the section, i.e. exactly what the stroke covers on screen.
 Expected<Run> visible_run(const Section& s, const StrokeData& sd, const std::vector<Run>& runs) {
   const std::size_t n = sd.px.size();
-  if (s.pieces.empty()) return Status(ErrorCode::kInvalidArgument, "painting: the stroke crosses no face of the surfaces");
+  if (s.pieces.empty())
+    return Status(ErrorCode::kInvalidArgument, "painting: the stroke crosses no face of the surfaces");
   std::vector<PieceSpan> spans(s.pieces.size());
   for (std::uint32_t p = 0; p < s.pieces.size(); ++p) spans[p] = span_of(s, p);
-  auto near_point = [&](double x) { return std::min<std::size_t>(static_cast<std::size_t>(std::max(0.0, x + 0.5)), n - 1); };
+  auto near_point = [&](double x) {
+    return std::min<std::size_t>(static_cast<std::size_t>(std::max(0.0, x + 0.5)), n - 1);
+  };
   // The stroke's shadow: the union of the pieces' s-ranges, one interval.
   std::vector<std::pair<double, double>> ranges;
   for (const PieceSpan& sp : spans) ranges.emplace_back(sp.s0, sp.s1);
@@ -865,9 +872,8 @@ Expected<PaintResult> paint_stroke(Model& m, const Camera& camera, std::span<con
         flush();
         cur = p.surface;
       }
-      const AttribNodeIdx a =
-          m.new_attrib_node(p.surface, p.location.kind, p.location.element, p.location.param, p.position,
-                            p.location.corner);
+      const AttribNodeIdx a = m.new_attrib_node(p.surface, p.location.kind, p.location.element, p.location.param,
+                                                p.position, p.location.corner);
       if (k == 0) first = a;
       nodes.push_back(a);
       ++pc.nodes;

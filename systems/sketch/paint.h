@@ -44,16 +44,16 @@
 // do not clip.
 #pragma once
 
-#include <cstdint>
-#include <span>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/storage/surface_location.h>
 #include <atelier/systems/view/camera.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
 
 namespace atelier {
 
@@ -85,9 +85,9 @@ struct TracedCurve {
 };
 
 struct TraceResult {
-  std::vector<TracedCurve> curves;     // painting: one; penetrated painting: every layer, ordered by first s then depth
-  std::size_t triangles_crossed = 0;   // fan triangles cut by the sheet (all layers)
-  std::size_t stroke_points = 0;       // after removing repeated points
+  std::vector<TracedCurve> curves;    // painting: one; penetrated painting: every layer, ordered by first s then depth
+  std::size_t triangles_crossed = 0;  // fan triangles cut by the sheet (all layers)
+  std::size_t stroke_points = 0;      // after removing repeated points
 };
 
 /// Traces the stroke (pixels) on the model through `camera` (seed 001
@@ -126,7 +126,6 @@ struct PaintResult {
 /// same exact tests as painting. Errors: kInvalidArgument when no face of
 /// the surfaces lies under it (or a bad camera / pixel).
 [[nodiscard]] Expected<CurvePoint> locate_pixel(const Model& model, const Camera& camera, const Vec2d& pixel,
-                                                std::span<const SurfaceIdx> surfaces = {},
-                                                const ExecContext& ctx = {});
+                                                std::span<const SurfaceIdx> surfaces = {}, const ExecContext& ctx = {});
 
 }  // namespace atelier

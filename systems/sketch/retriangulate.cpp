@@ -2,12 +2,13 @@
 // plan (points, segments, split edges, per-fan triangulations) that must be
 // complete before the first write for the operator to be transactional;
 // planning and applying read the same private tables.
-#include <atelier/systems/sketch/retriangulate.h>
-
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <atelier/engine/status_format.h>
+#include <atelier/systems/mesh/edit.h>
+#include <atelier/systems/sketch/retriangulate.h>
 
 #include <algorithm>
 #include <array>
@@ -16,9 +17,6 @@
 #include <limits>
 #include <map>
 #include <unordered_map>
-
-#include <atelier/engine/status_format.h>
-#include <atelier/systems/mesh/edit.h>
 
 namespace atelier {
 
@@ -31,8 +29,8 @@ using Fb = CGAL::Constrained_triangulation_face_base_2<K, Fbi>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 // Crossings are inserted beforehand; a constraint may still pass through a
 // collinear point (it is then split there, which the edge check reports).
-using Cdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds,
-                                                      CGAL::No_constraint_intersection_requiring_constructions_tag>;
+using Cdt =
+    CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
@@ -69,9 +67,9 @@ struct FanPlan {
   FanKey fan;
   NodeIdx n[3];
   std::vector<std::array<std::uint32_t, 3>> tris;  // point ids
-  std::vector<std::array<Vec2d, 3>> tri2;           // their corners in the fan's plane frame
-  Vec2d c2[3];                                      // the fan's corners in that frame
-  bool kept = false;                                // no points: the fan triangle stays as it is
+  std::vector<std::array<Vec2d, 3>> tri2;          // their corners in the fan's plane frame
+  Vec2d c2[3];                                     // the fan's corners in that frame
+  bool kept = false;                               // no points: the fan triangle stays as it is
 };
 
 struct Plan {
@@ -82,7 +80,7 @@ struct Plan {
   std::map<FanKey, std::vector<std::uint32_t>> fan_pts;                             // (face, fan) -> pids
   std::vector<Segment> segments;
   std::vector<std::vector<std::vector<std::uint32_t>>> curve_seg;  // per curve, per row pair: its segments in order
-  std::vector<FaceIdx> faces;                          // faces to replace
+  std::vector<FaceIdx> faces;                                      // faces to replace
   std::map<FanKey, FanPlan> fans;
   std::unordered_map<std::uint32_t, std::vector<HalfedgeIdx>> face_hs;
   std::size_t crossings = 0;
@@ -140,8 +138,10 @@ class Planner {
     const auto& an = m_.attrib_nodes;
     const std::uint32_t el = an.element[a.value];
     switch (an.kind[a.value]) {
-      case AttribNodeKind::kVertex: return node_loc(NodeIdx{el});
-      case AttribNodeKind::kEdge: return halfedge_loc(HalfedgeIdx{el}, std::clamp(an.param[a.value].x(), 0.0, 1.0));
+      case AttribNodeKind::kVertex:
+        return node_loc(NodeIdx{el});
+      case AttribNodeKind::kEdge:
+        return halfedge_loc(HalfedgeIdx{el}, std::clamp(an.param[a.value].x(), 0.0, 1.0));
       case AttribNodeKind::kFace: {
         const FaceIdx f{el};
         const std::uint32_t j = an.corner[a.value];
@@ -156,7 +156,8 @@ class Planner {
 
   Vec3d position(const Loc& l) {
     switch (l.k) {
-      case LK::kNode: return m_.position(NodeIdx{l.a});
+      case LK::kNode:
+        return m_.position(NodeIdx{l.a});
       case LK::kEdge: {
         const HalfedgeIdx h0 = halfedge_of(EdgeIdx{l.a}, 0);
         return (1 - l.u) * m_.position(m_.tail(h0)) + l.u * m_.position(m_.head(h0));
@@ -174,9 +175,12 @@ class Planner {
   }
   SurfaceIdx surface(const Loc& l) const {
     switch (l.k) {
-      case LK::kNode: return m_.nodes.surface[l.a];
-      case LK::kEdge: return m_.surface_of(EdgeIdx{l.a});
-      default: return m_.faces.surface[l.a];
+      case LK::kNode:
+        return m_.nodes.surface[l.a];
+      case LK::kEdge:
+        return m_.surface_of(EdgeIdx{l.a});
+      default:
+        return m_.faces.surface[l.a];
     }
   }
 
@@ -253,7 +257,9 @@ class Planner {
         out.push_back({l.a, l.b - 2});
         out.push_back({l.a, l.b - 1});
         break;
-      case LK::kFan: out.push_back({l.a, l.b}); break;
+      case LK::kFan:
+        out.push_back({l.a, l.b});
+        break;
     }
     std::sort(out.begin(), out.end());
     return out;
@@ -270,7 +276,9 @@ class Planner {
       return -1;
     };
     switch (l.k) {
-      case LK::kNode: b[at(NodeIdx{l.a})] = 1; break;
+      case LK::kNode:
+        b[at(NodeIdx{l.a})] = 1;
+        break;
       case LK::kEdge: {
         const HalfedgeIdx h0 = halfedge_of(EdgeIdx{l.a}, 0);
         b[at(m_.tail(h0))] = 1 - l.u;
@@ -281,7 +289,9 @@ class Planner {
         b[0] = 1 - l.u;
         b[at(corner(FaceIdx{l.a}, l.b))] = l.u;
         break;
-      case LK::kFan: b = l.bary; break;
+      case LK::kFan:
+        b = l.bary;
+        break;
     }
     return b;
   }
@@ -293,7 +303,9 @@ class Planner {
   double snap_;
 };
 
-double cross2(const Vec2d& a, const Vec2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross2(const Vec2d& a, const Vec2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 /// The curve's segments, split at the fan diagonals of polygon faces when
 /// two consecutive points share a face but no fan triangle.
@@ -323,11 +335,17 @@ Status add_segment(Planner& pl, std::uint32_t a, std::uint32_t b, std::uint32_t 
         HalfedgeIdx real;
         std::uint32_t d = 0;
         if (i == 2) {
-          if (j == 0) real = h[0]; else d = j + 1;
+          if (j == 0)
+            real = h[0];
+          else
+            d = j + 1;
         } else if (i == 0) {
           real = h[j + 1];
         } else {
-          if (j + 3 == k) real = h[k - 1]; else d = j + 2;
+          if (j + 3 == k)
+            real = h[k - 1];
+          else
+            d = j + 2;
         }
         if (real.valid()) {
           s.side_kind = LK::kEdge;
@@ -357,8 +375,8 @@ Status add_segment(Planner& pl, std::uint32_t a, std::uint32_t b, std::uint32_t 
     for (const auto& y : fb)
       if (x.first == y.first) faces.push_back(x.first);
   if (faces.empty() || depth > 0)
-    return status_of(ErrorCode::kInvalidArgument, "curve ", curve, ": consecutive nodes at (",
-                     P.pts[a].pos.transpose(), ") and (", P.pts[b].pos.transpose(), ") share no face");
+    return status_of(ErrorCode::kInvalidArgument, "curve ", curve, ": consecutive nodes at (", P.pts[a].pos.transpose(),
+                     ") and (", P.pts[b].pos.transpose(), ") share no face");
   const FaceIdx f{faces.front()};
   const auto& h = pl.hs(f);
   const std::size_t k = h.size();
@@ -419,7 +437,7 @@ Status cross_segments(Planner& pl, const FanKey& fk, const std::vector<std::uint
       }
       const double t = cross2(C - A, s) / den, w = cross2(C - A, r) / den;
       if (t < -snap || t > 1 + snap || w < -snap || w > 1 + snap) continue;
-      const bool t_in = t > snap && t < 1 - snap, w_in = w > snap && w < 1 - snap;
+      const bool t_in = t > snap && t<1 - snap, w_in = w> snap && w < 1 - snap;
       if (t_in && w_in) {
         const Vec3d b = pl.bary_in(s1.a, fk) * (1 - t) + pl.bary_in(s1.b, fk) * t;
         const std::uint32_t q = pl.add(pl.fan_loc(FaceIdx{fk.first}, fk.second, b));
@@ -541,7 +559,8 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   }
   for (std::size_t i = 0; i < cur.size(); ++i)
     for (std::size_t j = i + 1; j < cur.size(); ++j)
-      if (cur[i] == cur[j]) return status_of(ErrorCode::kInvalidArgument, "retriangulate: curve ", cur[i].value, " given twice");
+      if (cur[i] == cur[j])
+        return status_of(ErrorCode::kInvalidArgument, "retriangulate: curve ", cur[i].value, " given twice");
   Planner pl(m, opt.snap);
   Plan& P = pl.P;
   // 1. Curve points and segments.
@@ -573,9 +592,9 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
     if (Status s = cross_segments(pl, fk, segs, opt.snap); !s) return s;
   for (Segment& s : P.segments) {
     std::sort(s.inner.begin(), s.inner.end());
-    s.inner.erase(std::unique(s.inner.begin(), s.inner.end(),
-                              [](const auto& x, const auto& y) { return x.second == y.second; }),
-                  s.inner.end());
+    s.inner.erase(
+        std::unique(s.inner.begin(), s.inner.end(), [](const auto& x, const auto& y) { return x.second == y.second; }),
+        s.inner.end());
   }
   // 3. Joints: every member's corresponding edge gets the same points.
   {
@@ -753,7 +772,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   std::vector<std::uint8_t> replaced(m.faces.slots.capacity(), 0);
   for (FaceIdx f : faces) replaced[f.value] = 1;
   struct Move {
-    AttribNodeIdx a;          // invalid for a probe
+    AttribNodeIdx a;  // invalid for a probe
     std::size_t probe = 0;
     SurfaceLocation from;
   };
@@ -771,13 +790,13 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   }
   for (std::size_t i = 0; i < opt.probes.size(); ++i) {
     const SurfaceLocation& l = opt.probes[i];
-    const bool ok = l.kind == AttribNodeKind::kVertex   ? l.element < m.nodes.slots.capacity() && m.alive(NodeIdx{l.element})
-                    : l.kind == AttribNodeKind::kEdge   ? l.element < 2 * m.edges.slots.capacity() &&
-                                                            m.alive(HalfedgeIdx{l.element})
-                                                        : l.element < m.faces.slots.capacity() &&
-                                                            m.alive(FaceIdx{l.element}) &&
-                                                            l.corner + 3u <= m.face_degree(FaceIdx{l.element});
-    if (!ok || !l.param.allFinite()) return status_of(ErrorCode::kInvalidArgument, "retriangulate: probe ", i, " is not on the model");
+    const bool ok =
+        l.kind == AttribNodeKind::kVertex ? l.element < m.nodes.slots.capacity() && m.alive(NodeIdx{l.element})
+        : l.kind == AttribNodeKind::kEdge ? l.element < 2 * m.edges.slots.capacity() && m.alive(HalfedgeIdx{l.element})
+                                          : l.element < m.faces.slots.capacity() && m.alive(FaceIdx{l.element}) &&
+                                                l.corner + 3u <= m.face_degree(FaceIdx{l.element});
+    if (!ok || !l.param.allFinite())
+      return status_of(ErrorCode::kInvalidArgument, "retriangulate: probe ", i, " is not on the model");
     moves.push_back({AttribNodeIdx{}, i, l});
   }
   // Plan each move as (fan, bary) or (edge, u) in pre-apply terms.

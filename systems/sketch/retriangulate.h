@@ -37,14 +37,14 @@
 // face to replace), kTopology (a new edge would duplicate an existing one).
 #pragma once
 
-#include <cstddef>
-#include <span>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/storage/surface_location.h>
+
+#include <cstddef>
+#include <span>
+#include <vector>
 
 namespace atelier {
 

@@ -1,9 +1,8 @@
+#include <atelier/systems/sketch/paint.h>
 #include <atelier/systems/sketch/sketch.h>
 
 #include <algorithm>
 #include <sstream>
-
-#include <atelier/systems/sketch/paint.h>
 
 namespace atelier {
 

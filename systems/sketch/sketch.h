@@ -20,15 +20,15 @@
 // instead (each tool is transactional on its own) and the call succeeds.
 #pragma once
 
-#include <cstddef>
-#include <string>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/view/strokes.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
 
 namespace atelier {
 
@@ -43,12 +43,12 @@ struct SketchOptions {
 /// What one tool did (a cut with its pick, or a run of partition strokes,
 /// is one tool; its report sits at its first stroke).
 struct StrokeReport {
-  std::size_t stroke = 0;      // index in the file
-  std::size_t strokes = 1;     // strokes this tool used
+  std::size_t stroke = 0;   // index in the file
+  std::size_t strokes = 1;  // strokes this tool used
   StrokeTool tool = StrokeTool::kPaint;
   bool through = false;
   std::string name;
-  Status status;               // not ok: the tool failed and changed nothing
+  Status status;  // not ok: the tool failed and changed nothing
   std::vector<double> curve_lengths;
   std::vector<bool> curve_closed;
   std::vector<AttribEdge> curves;  // painting: the attribute edges made

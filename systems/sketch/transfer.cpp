@@ -1,8 +1,7 @@
+#include <atelier/engine/status_format.h>
 #include <atelier/systems/sketch/transfer.h>
 
 #include <map>
-
-#include <atelier/engine/status_format.h>
 
 namespace atelier {
 
@@ -13,9 +12,9 @@ Status check_same_topology(const Model& a, const Model& b) {
   if (a.nodes.slots.capacity() != b.nodes.slots.capacity() || a.edges.slots.capacity() != b.edges.slots.capacity() ||
       a.faces.slots.capacity() != b.faces.slots.capacity() ||
       a.surfaces.slots.capacity() != b.surfaces.slots.capacity())
-    return status_of(ErrorCode::kMismatch, "the models differ in topology: ", a.num_nodes(), " nodes, ",
-                     a.num_edges(), " edges, ", a.num_faces(), " faces against ", b.num_nodes(), ", ", b.num_edges(),
-                     ", ", b.num_faces(), " (another template, level or garment?)");
+    return status_of(ErrorCode::kMismatch, "the models differ in topology: ", a.num_nodes(), " nodes, ", a.num_edges(),
+                     " edges, ", a.num_faces(), " faces against ", b.num_nodes(), ", ", b.num_edges(), ", ",
+                     b.num_faces(), " (another template, level or garment?)");
   for (std::uint32_t s = 0; s < a.surfaces.slots.capacity(); ++s)
     if (a.alive(SurfaceIdx{s}) != b.alive(SurfaceIdx{s})) return differ("surface", s);
   for (std::uint32_t v = 0; v < a.nodes.slots.capacity(); ++v) {
@@ -29,7 +28,8 @@ Status check_same_topology(const Model& a, const Model& b) {
     if (!a.alive(x)) continue;
     for (unsigned s = 0; s < 2; ++s) {
       const HalfedgeIdx h = halfedge_of(x, s);
-      if (a.tail(h) != b.tail(h) || a.face(h) != b.face(h) || a.next(h) != b.next(h)) return differ("halfedge", h.value);
+      if (a.tail(h) != b.tail(h) || a.face(h) != b.face(h) || a.next(h) != b.next(h))
+        return differ("halfedge", h.value);
     }
   }
   for (std::uint32_t f = 0; f < a.faces.slots.capacity(); ++f) {
@@ -64,7 +64,8 @@ Expected<std::vector<AttribEdge>> transfer_curves(const Model& from, std::span<c
       }
       row.push_back(it->second);
     }
-    const AttribEdgeIdx ne = to.new_attrib_edge(from.attrib_edges.surface[e.value], from.attrib_edges.feature_id[e.value], row);
+    const AttribEdgeIdx ne =
+        to.new_attrib_edge(from.attrib_edges.surface[e.value], from.attrib_edges.feature_id[e.value], row);
     out.push_back(to.handle(ne));
   }
   return out;

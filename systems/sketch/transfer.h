@@ -24,11 +24,11 @@
 // attribute nodes and edges (appended; p_3d computed on `to`). Transactional.
 #pragma once
 
-#include <span>
-#include <vector>
-
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+
+#include <span>
+#include <vector>
 
 namespace atelier {
 

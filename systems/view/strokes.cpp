@@ -1,13 +1,11 @@
+#include <atelier/io/atomic_file.h>
 #include <atelier/systems/view/strokes.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
-
-#include <atelier/io/atomic_file.h>
+#include <sstream>
 
 namespace atelier {
 
@@ -209,8 +207,8 @@ class Reader {
       const Vec2d q(number(p[0], ip + "/0"), number(p[1], ip + "/1"));
       for (int k = 0; k < 2; ++k)
         if (!(std::abs(q[k]) <= limits_.max_coordinate))
-          fail(ip + "/" + std::to_string(k), "coordinate beyond +-" + std::to_string(limits_.max_coordinate) +
-                                                 " pixels");
+          fail(ip + "/" + std::to_string(k),
+               "coordinate beyond +-" + std::to_string(limits_.max_coordinate) + " pixels");
       s.points.push_back(q);
     }
     if (s.tool == StrokeTool::kPick) {

@@ -20,15 +20,15 @@
 // non-finite value on any input (the parser is a fuzzing entry point).
 #pragma once
 
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/systems/view/camera.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
-#include <atelier/systems/view/camera.h>
 
 namespace atelier {
 

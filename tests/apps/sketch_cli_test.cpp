@@ -1,4 +1,9 @@
 // `atelier sketch` on good and bad inputs (runs the built binary).
+#include <atelier/io/native.h>
+#include <atelier/io/obj.h>
+#include <atelier/storage/builder.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/view/strokes.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -6,11 +11,6 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include <atelier/io/native.h>
-#include <atelier/io/obj.h>
-#include <atelier/storage/builder.h>
-#include <atelier/storage/validate.h>
-#include <atelier/systems/view/strokes.h>
 #include "support/run_command.h"
 #include "support/shapes.h"
 
@@ -20,7 +20,9 @@ using namespace atelier;
 namespace {
 
 using Run = atelier::testing::CommandResult;
-Run run(const std::string& args) { return atelier::testing::run_cli(args); }
+Run run(const std::string& args) {
+  return atelier::testing::run_cli(args);
+}
 
 struct Files {
   fs::path dir, mesh, strokes;
@@ -48,7 +50,8 @@ Files setup(const std::string& name, bool fold = false) {
   s.strokes.push_back(stroke(StrokeTool::kCut, c, {Vec3d(-1.4, -0.5, 0), Vec3d(1.4, -0.45, 0)}, true));
   s.strokes.push_back(stroke(StrokeTool::kPick, c, {Vec3d(0, -0.8, 0)}));
   std::vector<Vec3d> ring;
-  for (int k = 0; k <= 24; ++k) ring.push_back(Vec3d(0.25 * std::cos(2 * M_PI * k / 24), 0.25 * std::sin(2 * M_PI * k / 24), 0));
+  for (int k = 0; k <= 24; ++k)
+    ring.push_back(Vec3d(0.25 * std::cos(2 * M_PI * k / 24), 0.25 * std::sin(2 * M_PI * k / 24), 0));
   ring.back() = ring.front();
   s.strokes.push_back(stroke(StrokeTool::kPartition, c, ring));
   if (fold) s.strokes.insert(s.strokes.begin(), stroke(StrokeTool::kCut, c, {Vec3d(-1.4, 0.2, 0), Vec3d(1.4, 0.2, 0)}));
@@ -113,7 +116,8 @@ TEST(SketchCli, BadStrokeFilesNameTheFileAndTheJsonLocation) {
       {"nan.json", "{" + cam + R"(, "strokes": [{"points": [[1, NaN], [3, 4]], "tool": "paint"}]})", "non-finite"},
       {"missing.json", "{" + cam + R"(, "strokes": [{"tool": "paint"}]})", "at /strokes/0: missing key \"points\""},
       {"one.json", "{" + cam + R"(, "strokes": [{"points": [[1, 2]], "tool": "cut"}]})", "/strokes/0/points"},
-      {"singular.json", R"({"camera": {"view": [1,0,0,0, 0,1,0,0, 0,0,1,-5, 0,0,0,1], "projection": [0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,0], "viewport": [8, 8]}, "strokes": []})",
+      {"singular.json",
+       R"({"camera": {"view": [1,0,0,0, 0,1,0,0, 0,0,1,-5, 0,0,0,1], "projection": [0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,0], "viewport": [8, 8]}, "strokes": []})",
        "singular"},
       {"syntax.json", "{\n  \"camera\": [}", "syntax.json:2:"},
   };
@@ -140,8 +144,8 @@ TEST(SketchCli, BadMeshesAndOptions) {
     EXPECT_EQ(r.code, 3) << bad << ": " << r.out;
     EXPECT_NE(r.out.find(bad), std::string::npos) << r.out;
   }
-  auto nomesh = run("sketch --mesh " + (f.dir / "none.obj").string() + " --strokes " + f.strokes.string() +
-                    " --out " + out.string());
+  auto nomesh = run("sketch --mesh " + (f.dir / "none.obj").string() + " --strokes " + f.strokes.string() + " --out " +
+                    out.string());
   EXPECT_EQ(nomesh.code, 3);
   EXPECT_NE(nomesh.out.find("none.obj"), std::string::npos);
   EXPECT_EQ(run(args(f, f.dir / "out.xyz")).code, 3);

@@ -1,11 +1,10 @@
 // Cutting and partitioning (seed 001 section 5, Figs. 12-13 and 15).
-#include <atelier/systems/sketch/cut.h>
-
-#include <gtest/gtest.h>
-
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
+#include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/sketch/paint.h>
+#include <gtest/gtest.h>
+
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -41,7 +40,8 @@ double clipped_area(const Model& m, const Vec3d& n, double d) {
       if (sp <= 0) poly.push_back(p);
       if ((sp < 0 && sq > 0) || (sp > 0 && sq < 0)) poly.push_back(p + sp / (sp - sq) * (q - p));
     }
-    for (std::size_t k = 1; k + 1 < poly.size(); ++k) a += 0.5 * (poly[k] - poly[0]).cross(poly[k + 1] - poly[0]).norm();
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k)
+      a += 0.5 * (poly[k] - poly[0]).cross(poly[k + 1] - poly[0]).norm();
   }
   return a;
 }
@@ -152,10 +152,13 @@ TEST(Cut, ACurveThatSeparatesNothingIsRefused) {
 TEST(Cut, OpenSurfacesAndAttributesOnTheRemovedSide) {
   // A visible stroke across an open saddle of quads separates it.
   Model m;
-  (void)add_polygon_surface(m, "saddle", grid(12, 10, [](double u, double v) {
-                                           const double x = -1 + 2 * u, y = -1 + 2 * v;
-                                           return Vec3d(x, y, 0.2 * x * y);
-                                         }).view())
+  (void)add_polygon_surface(m, "saddle",
+                            grid(12, 10,
+                                 [](double u, double v) {
+                                   const double x = -1 + 2 * u, y = -1 + 2 * v;
+                                   return Vec3d(x, y, 0.2 * x * y);
+                                 })
+                                .view())
       .value();
   const Camera cam = front_persp();
   auto feature = paint_stroke(m, cam, project(cam, {Vec3d(0.1, -1.3, 0), Vec3d(0.15, 1.3, 0)}));  // crosses the cut
@@ -280,8 +283,7 @@ TEST(Cut, AJointOnTheRemovedSideIsRefused) {
   auto ring = paint_stroke(m, cam, ring_stroke(cam, Vec3d(0, 0.3, 0), 0.3));
   ASSERT_TRUE(ring);
   ASSERT_TRUE(partition_along_curves(m, edges_of(*ring)));
-  auto p = paint_stroke(m, cam, project(cam, {Vec3d(-1.5, 0.25, 0), Vec3d(1.5, 0.3, 0)}), {.through = true},
-                        {});
+  auto p = paint_stroke(m, cam, project(cam, {Vec3d(-1.5, 0.25, 0), Vec3d(1.5, 0.3, 0)}), {.through = true}, {});
   ASSERT_TRUE(p) << p.status().to_string();
   const Model before = m;
   auto pick = locate_pixel(m, cam, cam.project(Vec3d(0.8, 0.45, 0)).head<2>(), std::vector<SurfaceIdx>{SurfaceIdx{0}});

@@ -8,13 +8,6 @@
 //  - a MakeHuman garment through the detail-template path (decode, edge
 //    transfer, collision pass; the chain `regenerate_garment` wraps is not
 //    on main yet, so the test calls its parts directly).
-#include <atelier/systems/sketch/transfer.h>
-
-#include <gtest/gtest.h>
-
-#include <filesystem>
-#include <mutex>
-
 #include <atelier/engine/parallel.h>
 #include <atelier/io/makehuman/mhclo.h>
 #include <atelier/io/obj.h>
@@ -28,6 +21,12 @@
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/sketch/paint.h>
+#include <atelier/systems/sketch/transfer.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <mutex>
+
 #include "support/project_templates.h"
 #include "systems/sketch/sketch_fixtures.h"
 

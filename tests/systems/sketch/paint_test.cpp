@@ -1,13 +1,12 @@
 // Painting and penetrated painting (seed 001 section 5, Figs. 9-11) with
 // strokes made by projecting known 3D curves.
+#include <atelier/storage/validate.h>
+#include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/sketch/paint.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include <atelier/storage/validate.h>
-#include <atelier/systems/sketch/cut.h>
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -48,7 +47,10 @@ void expect_on_stroke(const Model& m, const Camera& cam, const std::vector<Vec2d
       EXPECT_NEAR(l.param.sum(), 1.0, 1e-12);
     }
     EXPECT_LT((position_of(m, p) - p.position).norm(), 1e-12 * scale);
-    EXPECT_EQ(m.faces.surface[l.kind == AttribNodeKind::kFace ? l.element : m.face(HalfedgeIdx{l.element}).valid() ? m.face(HalfedgeIdx{l.element}).value : m.face(twin(HalfedgeIdx{l.element})).value], p.surface);
+    EXPECT_EQ(m.faces.surface[l.kind == AttribNodeKind::kFace          ? l.element
+                              : m.face(HalfedgeIdx{l.element}).valid() ? m.face(HalfedgeIdx{l.element}).value
+                                                                       : m.face(twin(HalfedgeIdx{l.element})).value],
+              p.surface);
     // The plane through the rays of the segment's ends (through the eye
     // for a perspective camera).
     const auto i = std::min<std::size_t>(static_cast<std::size_t>(std::floor(p.s)), stroke.size() - 2);
@@ -68,7 +70,9 @@ void expect_on_stroke(const Model& m, const Camera& cam, const std::vector<Vec2d
 double max_edge(const Model& m) {
   double h = 0;
   for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e)
-    if (m.alive(EdgeIdx{e})) h = std::max(h, (m.position(m.head(halfedge_of(EdgeIdx{e}, 0))) - m.position(m.tail(halfedge_of(EdgeIdx{e}, 0)))).norm());
+    if (m.alive(EdgeIdx{e}))
+      h = std::max(
+          h, (m.position(m.head(halfedge_of(EdgeIdx{e}, 0))) - m.position(m.tail(halfedge_of(EdgeIdx{e}, 0)))).norm());
   return h;
 }
 
@@ -141,8 +145,8 @@ TEST(Paint, StraightStrokeAcrossASphereGivesThePlaneSphereCircle) {
     for (const auto* r : {&*vis, &*all})
       for (const auto& c : r->curves)
         for (const auto& p : c.points) {
-          EXPECT_NEAR(p.position.y(), y0, 1e-12);           // in the plane
-          EXPECT_LE(p.position.norm(), 1.0 + 1e-12);         // on the chords of the sphere
+          EXPECT_NEAR(p.position.y(), y0, 1e-12);     // in the plane
+          EXPECT_LE(p.position.norm(), 1.0 + 1e-12);  // on the chords of the sphere
           EXPECT_GT(p.position.norm(), 1.0 - 0.02 / (1 << (level - 2)) / (1 << (level - 2)));
         }
     // The front half, up to the mesh's own silhouette (within an edge of z = 0).
@@ -215,9 +219,8 @@ TEST(Paint, AnOccludingPartMakesPaintingFail) {
   // A sphere with a thin strap in front of it (another surface); the stroke
   // points all lie on the sphere, the strap passes between two of them.
   Model m = icosphere(3);
-  (void)add_polygon_surface(m, "strap", grid(2, 10, [](double u, double v) {
-                                          return Vec3d(0.45 + 0.1 * u, -1.2 + 2.4 * v, 1.5);
-                                        }).view())
+  (void)add_polygon_surface(
+      m, "strap", grid(2, 10, [](double u, double v) { return Vec3d(0.45 + 0.1 * u, -1.2 + 2.4 * v, 1.5); }).view())
       .value();
   const Camera cam = front_ortho();
   const auto stroke = project(cam, {Vec3d(-0.8, 0.1, 0), Vec3d(0.2, 0.1, 0), Vec3d(0.8, 0.1, 0)});
@@ -237,7 +240,10 @@ TEST(Paint, StrokesThroughVerticesAndAlongEdges) {
   // A planar grid whose nodes project exactly onto pixel centres; strokes
   // along a grid line and through grid nodes diagonally.
   Model m;
-  (void)add_polygon_surface(m, "plate", grid(8, 8, [](double u, double v) { return Vec3d(-1 + 2 * u, -1 + 2 * v, 0); }, true).view())
+  (void)add_polygon_surface(m, "plate",
+                            grid(
+                                8, 8, [](double u, double v) { return Vec3d(-1 + 2 * u, -1 + 2 * v, 0); }, true)
+                                .view())
       .value();
   const Camera cam = Camera::orthographic(Vec3d(0, 0, 5), Vec3d::Zero(), Vec3d::UnitY(), 2.0, 800, 800);
   for (const auto& pts : {std::vector<Vec3d>{Vec3d(-1.5, 0, 0), Vec3d(1.5, 0, 0)},            // along edges
@@ -263,7 +269,8 @@ TEST(Paint, ClosedStrokesGiveClosedCurvesAndStoreThem) {
   Model m = icosphere(3);
   const Camera cam = front_persp();
   std::vector<Vec3d> ring;
-  for (int k = 0; k <= 30; ++k) ring.push_back(Vec3d(0.3 * std::cos(2 * M_PI * k / 30), 0.3 * std::sin(2 * M_PI * k / 30), 0.9));
+  for (int k = 0; k <= 30; ++k)
+    ring.push_back(Vec3d(0.3 * std::cos(2 * M_PI * k / 30), 0.3 * std::sin(2 * M_PI * k / 30), 0.9));
   auto stroke = project(cam, ring);
   stroke.back() = stroke.front();
   auto r = paint_stroke(m, cam, stroke, {.feature_id = 7});
@@ -276,7 +283,8 @@ TEST(Paint, ClosedStrokesGiveClosedCurvesAndStoreThem) {
   EXPECT_EQ(row.front(), row.back());  // a closed ATTRIB_EDGE repeats its first node
   EXPECT_EQ(m.attrib_edges.feature_id[e.idx.value], 7);
   EXPECT_TRUE(validate(m)) << validate(m).to_string();
-  for (AttribNodeIdx a : row) EXPECT_LT((m.attrib_position_on_surface(a) - m.attrib_nodes.position[a.value]).norm(), 1e-12);
+  for (AttribNodeIdx a : row)
+    EXPECT_LT((m.attrib_position_on_surface(a) - m.attrib_nodes.position[a.value]).norm(), 1e-12);
   // Penetrated: the front ring and the back ring.
   auto t = trace_stroke(m, cam, stroke, {.through = true});
   ASSERT_TRUE(t);
@@ -355,7 +363,8 @@ TEST(Paint, CurvesCrossJointsBetweenSurfaces) {
   Model m = icosphere(3);
   const Camera cam = front_ortho();
   std::vector<Vec3d> ring;
-  for (int k = 0; k <= 32; ++k) ring.push_back(Vec3d(0.4 * std::cos(2 * M_PI * k / 32), 0.4 * std::sin(2 * M_PI * k / 32), 0));
+  for (int k = 0; k <= 32; ++k)
+    ring.push_back(Vec3d(0.4 * std::cos(2 * M_PI * k / 32), 0.4 * std::sin(2 * M_PI * k / 32), 0));
   auto rs = project(cam, ring);
   rs.back() = rs.front();
   auto p = paint_stroke(m, cam, rs);

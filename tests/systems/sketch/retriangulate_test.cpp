@@ -1,12 +1,11 @@
 // Re-triangulation by painted curves (seed 002 section 3.1, Figs. 2-3).
-#include <atelier/systems/sketch/retriangulate.h>
-
-#include <gtest/gtest.h>
-
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/sketch/paint.h>
+#include <atelier/systems/sketch/retriangulate.h>
+#include <gtest/gtest.h>
+
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -69,15 +68,20 @@ TEST(Retriangulate, CurvesBecomeEdgesOldNodesStayAreaIsKept) {
   cases.push_back({"icosphere", icosphere(3)});
   {
     Model q;  // planar quads
-    (void)add_polygon_surface(q, "plate", grid(9, 7, [](double u, double v) { return Vec3d(-1 + 2 * u, -1 + 2 * v, 0.2 * u); }).view()).value();
+    (void)add_polygon_surface(
+        q, "plate", grid(9, 7, [](double u, double v) { return Vec3d(-1 + 2 * u, -1 + 2 * v, 0.2 * u); }).view())
+        .value();
     cases.push_back({"quads", std::move(q)});
   }
   {
     Model q;  // non-planar quads (a saddle): the fan triangles' area is kept
-    (void)add_polygon_surface(q, "saddle", grid(9, 7, [](double u, double v) {
-                                             const double x = -1 + 2 * u, y = -1 + 2 * v;
-                                             return Vec3d(x, y, 0.3 * x * y);
-                                           }).view())
+    (void)add_polygon_surface(q, "saddle",
+                              grid(9, 7,
+                                   [](double u, double v) {
+                                     const double x = -1 + 2 * u, y = -1 + 2 * v;
+                                     return Vec3d(x, y, 0.3 * x * y);
+                                   })
+                                  .view())
         .value();
     cases.push_back({"saddle", std::move(q)});
   }
@@ -95,7 +99,8 @@ TEST(Retriangulate, CurvesBecomeEdgesOldNodesStayAreaIsKept) {
       std::vector<std::vector<Vec3d>> traced;
       for (const AttribEdge& e : curves) {
         traced.emplace_back();
-        for (AttribNodeIdx a : m.attrib_edges.nodes.row(e.idx.value)) traced.back().push_back(m.attrib_nodes.position[a.value]);
+        for (AttribNodeIdx a : m.attrib_edges.nodes.row(e.idx.value))
+          traced.back().push_back(m.attrib_nodes.position[a.value]);
       }
       const Model before = m;
       auto r = retriangulate_curves(m, curves);
@@ -138,7 +143,8 @@ TEST(Retriangulate, TwoCrossingCurvesShareOneNode) {
   // Both attribute edges hold a node on it.
   for (const AttribEdge& e : curves) {
     bool has = false;
-    for (AttribNodeIdx x : m.attrib_edges.nodes.row(e.idx.value)) has |= m.attrib_nodes.element[x.value] == common[0].value;
+    for (AttribNodeIdx x : m.attrib_edges.nodes.row(e.idx.value))
+      has |= m.attrib_nodes.element[x.value] == common[0].value;
     EXPECT_TRUE(has);
   }
   // The crossing lies on both strokes' planes: it projects onto both.
@@ -157,12 +163,15 @@ TEST(Retriangulate, OtherAttributesStayWhereTheyWere) {
   ASSERT_TRUE(feat && cut);
   std::vector<std::pair<AttribNodeIdx, Vec3d>> where;
   for (auto e : edges_of(*feat))
-    for (AttribNodeIdx a : m.attrib_edges.nodes.row(e.idx.value)) where.emplace_back(a, m.attrib_position_on_surface(a));
+    for (AttribNodeIdx a : m.attrib_edges.nodes.row(e.idx.value))
+      where.emplace_back(a, m.attrib_position_on_surface(a));
   const SurfaceLocation probe{AttribNodeKind::kFace, where[where.size() / 2].first.value, Vec3d(0.2, 0.3, 0.5), 0};
   RetriangulateOptions opt;
   // A probe in a face of the first curve: followed into the new faces.
   std::vector<NodeIdx> fc;
-  const FaceIdx pf{m.attrib_nodes.kind[where[1].first.value] == AttribNodeKind::kFace ? m.attrib_nodes.element[where[1].first.value] : 0};
+  const FaceIdx pf{m.attrib_nodes.kind[where[1].first.value] == AttribNodeKind::kFace
+                       ? m.attrib_nodes.element[where[1].first.value]
+                       : 0};
   m.face_nodes(pf, fc);
   const Vec3d probe_at = 0.2 * m.position(fc[0]) + 0.3 * m.position(fc[1]) + 0.5 * m.position(fc[2]);
   opt.probes.push_back({AttribNodeKind::kFace, pf.value, Vec3d(0.2, 0.3, 0.5), 0});
@@ -176,7 +185,10 @@ TEST(Retriangulate, OtherAttributesStayWhereTheyWere) {
   const SurfaceLocation& l = r->probes[0];
   ASSERT_EQ(l.kind, AttribNodeKind::kFace);
   m.face_nodes(FaceIdx{l.element}, fc);
-  EXPECT_LT((l.param[0] * m.position(fc[0]) + l.param[1] * m.position(fc[1]) + l.param[2] * m.position(fc[2]) - probe_at).norm(), 1e-12);
+  EXPECT_LT(
+      (l.param[0] * m.position(fc[0]) + l.param[1] * m.position(fc[1]) + l.param[2] * m.position(fc[2]) - probe_at)
+          .norm(),
+      1e-12);
 }
 
 TEST(Retriangulate, JointsStayCrackFree) {
@@ -185,7 +197,8 @@ TEST(Retriangulate, JointsStayCrackFree) {
   Model m = icosphere(3);
   const Camera cam = front_ortho();
   std::vector<Vec3d> ring;
-  for (int k = 0; k <= 32; ++k) ring.push_back(Vec3d(0.45 * std::cos(2 * M_PI * k / 32), 0.45 * std::sin(2 * M_PI * k / 32), 0));
+  for (int k = 0; k <= 32; ++k)
+    ring.push_back(Vec3d(0.45 * std::cos(2 * M_PI * k / 32), 0.45 * std::sin(2 * M_PI * k / 32), 0));
   auto rs = project(cam, ring);
   rs.back() = rs.front();
   auto p = paint_stroke(m, cam, rs);
@@ -236,7 +249,11 @@ TEST(Retriangulate, CurvesAlongEdgesAndThroughVertices) {
   // A grid whose lines the strokes follow exactly: curve points on nodes and
   // curve segments along edges (no new faces needed there).
   Model m;
-  (void)add_polygon_surface(m, "plate", grid(8, 8, [](double u, double v) { return Vec3d(-1 + 2 * u, -1 + 2 * v, 0); }, true).view()).value();
+  (void)add_polygon_surface(m, "plate",
+                            grid(
+                                8, 8, [](double u, double v) { return Vec3d(-1 + 2 * u, -1 + 2 * v, 0); }, true)
+                                .view())
+      .value();
   const Camera cam = Camera::orthographic(Vec3d(0, 0, 5), Vec3d::Zero(), Vec3d::UnitY(), 2.0, 800, 800);
   auto a = paint_stroke(m, cam, project(cam, {Vec3d(-1.5, 0, 0), Vec3d(1.5, 0, 0)}));
   auto b = paint_stroke(m, cam, project(cam, {Vec3d(-1.5, -1.5, 0), Vec3d(1.5, 1.5, 0)}));
@@ -256,8 +273,8 @@ TEST(Retriangulate, DegenerateFacesAreRefusedCleanly) {
   // A strip of triangles with one of zero area (three collinear nodes) in
   // the stroke's way: painting goes through, re-triangulating refuses it.
   Soup s;
-  s.p = {Vec3d(-1, -1, 0), Vec3d(0, -1, 0), Vec3d(1, -1, 0), Vec3d(-1, 1, 0), Vec3d(0, 1, 0), Vec3d(1, 1, 0),
-         Vec3d(0, 0, 0)};
+  s.p = {Vec3d(-1, -1, 0), Vec3d(0, -1, 0), Vec3d(1, -1, 0), Vec3d(-1, 1, 0),
+         Vec3d(0, 1, 0),   Vec3d(1, 1, 0),  Vec3d(0, 0, 0)};
   s.face({0, 1, 4});
   s.face({0, 4, 3});
   s.face({1, 2, 5});
@@ -265,7 +282,9 @@ TEST(Retriangulate, DegenerateFacesAreRefusedCleanly) {
   // Node 6 lies on edge 1-4 only geometrically: the face (1, 6, 4) has no area.
   Model m;
   (void)add_polygon_surface(m, "strip", s.view()).value();
-  (void)add_polygon_surface(m, "sliver", PolygonSoupView{s.p, std::vector<std::uint32_t>{0, 3}, std::vector<std::uint32_t>{1, 6, 4}}).value();
+  (void)add_polygon_surface(m, "sliver",
+                            PolygonSoupView{s.p, std::vector<std::uint32_t>{0, 3}, std::vector<std::uint32_t>{1, 6, 4}})
+      .value();
   const Camera cam = Camera::orthographic(Vec3d(0, 0, 5), Vec3d::Zero(), Vec3d::UnitY(), 2.0, 400, 400);
   auto p = paint_stroke(m, cam, project(cam, {Vec3d(-1.5, 0.1, 0), Vec3d(1.5, 0.12, 0)}), {.through = true});
   ASSERT_TRUE(p) << p.status().to_string();

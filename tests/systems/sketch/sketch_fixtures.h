@@ -2,17 +2,17 @@
 // cameras, and strokes made by projecting known 3D curves.
 #pragma once
 
-#include <algorithm>
-#include <cmath>
-#include <initializer_list>
-#include <cstdint>
-#include <vector>
-
 #include <atelier/engine/math.h>
 #include <atelier/storage/builder.h>
 #include <atelier/storage/model.h>
 #include <atelier/systems/mesh/subdivide.h>
 #include <atelier/systems/view/camera.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <initializer_list>
+#include <vector>
 
 namespace atelier::sketch_test {
 
@@ -20,12 +20,11 @@ namespace atelier::sketch_test {
 /// every node pushed onto the sphere. Closed, outward, triangles only.
 inline Model icosphere(int levels, double r = 1.0, const Vec3d& centre = Vec3d::Zero()) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3d> p = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  const std::uint32_t f[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                  {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                  {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                  {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  std::vector<Vec3d> p = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  const std::uint32_t f[20][3] = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                  {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                  {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   std::vector<std::uint32_t> off{0}, idx;
   for (auto& tri : f) {
     idx.insert(idx.end(), tri, tri + 3);

@@ -1,10 +1,9 @@
 // Stroke files driving the tools (systems/sketch/sketch.h).
-#include <atelier/systems/sketch/sketch.h>
-
-#include <gtest/gtest.h>
-
 #include <atelier/io/native.h>
 #include <atelier/storage/validate.h>
+#include <atelier/systems/sketch/sketch.h>
+#include <gtest/gtest.h>
+
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -32,7 +31,8 @@ std::vector<Vec2d> ring(const Camera& cam, const Vec3d& c, double r) {
 StrokeFile session(const Camera& cam) {
   StrokeFile f;
   f.camera = cam;
-  f.strokes.push_back(make(StrokeTool::kPaint, project(cam, {Vec3d(-0.6, 0.7, 0), Vec3d(0.6, 0.65, 0)}), false, "mark"));
+  f.strokes.push_back(
+      make(StrokeTool::kPaint, project(cam, {Vec3d(-0.6, 0.7, 0), Vec3d(0.6, 0.65, 0)}), false, "mark"));
   f.strokes.push_back(make(StrokeTool::kCut, project(cam, {Vec3d(-1.5, -0.5, 0), Vec3d(1.5, -0.45, 0)}), true));
   f.strokes.push_back(make(StrokeTool::kPick, {cam.project(Vec3d(0.1, -0.8, 0.5)).head<2>()}));
   f.strokes.push_back(make(StrokeTool::kPartition, ring(cam, Vec3d(-0.35, 0.1, 0), 0.22)));
@@ -89,7 +89,8 @@ TEST(Sketch, AFailingStrokeLeavesTheModelAsItWas) {
   StrokeFile f;
   f.camera = cam;
   f.strokes.push_back(make(StrokeTool::kPaint, project(cam, {Vec3d(-0.9, 0.5, 0), Vec3d(0.2, 0.5, 0)}), false));
-  f.strokes.push_back(make(StrokeTool::kCut, project(cam, {Vec3d(-1.2, 0.1, 0), Vec3d(1.2, 0.1, 0)}), false, "across the fold"));
+  f.strokes.push_back(
+      make(StrokeTool::kCut, project(cam, {Vec3d(-1.2, 0.1, 0), Vec3d(1.2, 0.1, 0)}), false, "across the fold"));
   f.strokes.push_back(make(StrokeTool::kPaintThrough, project(cam, {Vec3d(-1.2, -0.3, 0), Vec3d(1.2, -0.3, 0)})));
   const Model before = m;
   auto r = apply_strokes(m, f);

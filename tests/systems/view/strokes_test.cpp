@@ -1,7 +1,6 @@
 // Stroke files (systems/view/strokes.h): exact round trip, and every kind of
 // malformed input refused with the file name and the JSON location.
 #include <atelier/systems/view/strokes.h>
-
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -113,11 +112,10 @@ TEST(Strokes, MissingKeysAndWrongTypesNameTheLocation) {
                  "unknown key");
   expect_refused(minimal(R"([{"points": [[0,0],[1,"2"]], "tool": "cut"}])"), "/strokes/0/points/1/1",
                  "expected a number");
-  expect_refused(minimal(R"([{"points": [[0,0],[1,2,3]], "tool": "cut"}])"), "/strokes/0/points/1",
-                 "expected a point");
+  expect_refused(minimal(R"([{"points": [[0,0],[1,2,3]], "tool": "cut"}])"), "/strokes/0/points/1", "expected a point");
   expect_refused(minimal(R"({"points": []})"), "/strokes", "expected an array");
-  expect_refused(minimal(R"([{"points": [[0,0],[1,1]], "tool": "cut", "through": "yes"}])"),
-                 "/strokes/0/through", "true or false");
+  expect_refused(minimal(R"([{"points": [[0,0],[1,1]], "tool": "cut", "through": "yes"}])"), "/strokes/0/through",
+                 "true or false");
   expect_refused(variant("\"view\": [", "\"view\": [1,"), "/camera/view", "16 numbers");
   expect_refused(variant("\"viewport\": [", "\"viewport\": [0, "), "/camera/viewport", "[width, height]");
 }
@@ -125,8 +123,8 @@ TEST(Strokes, MissingKeysAndWrongTypesNameTheLocation) {
 TEST(Strokes, BadNumbersAndCamerasAreRefused) {
   // NaN and Infinity are not JSON; other writers produce them anyway.
   expect_refused(minimal(R"([{"points": [[0,NaN],[1,1]], "tool": "paint"}])"), "bad.json:", "non-finite number 'NaN'");
-  expect_refused(minimal(R"([{"points": [[0,-Infinity],[1,1]], "tool": "paint"}])"), "bad.json:",
-                 "non-finite number '-Infinity'");
+  expect_refused(minimal(R"([{"points": [[0,-Infinity],[1,1]], "tool": "paint"}])"),
+                 "bad.json:", "non-finite number '-Infinity'");
   expect_refused(minimal(R"([{"points": [[0,1e999],[1,1]], "tool": "paint"}])"), "bad.json:", "1e999");
   expect_refused(minimal(R"([{"points": [[0,1e12],[1,1]], "tool": "paint"}])"), "/strokes/0/points/0/1", "beyond");
   // A singular camera: a projection that flattens everything.
@@ -148,8 +146,9 @@ TEST(Strokes, TooFewPointsAndMisplacedPicks) {
   expect_refused(minimal(R"([{"points": [[3,4]], "tool": "pick"}])"), "/strokes/0", "must follow a cut");
   expect_refused(minimal(R"([{"points": [[0,0],[1,1]], "tool": "paint"}, {"points": [[3,4]], "tool": "pick"}])"),
                  "/strokes/1", "must follow a cut");
-  expect_refused(minimal(R"([{"points": [[0,0],[1,1]], "tool": "cut"}, {"points": [[3,4]], "tool": "pick", "through": true}])"),
-                 "/strokes/1/through");
+  expect_refused(
+      minimal(R"([{"points": [[0,0],[1,1]], "tool": "cut"}, {"points": [[3,4]], "tool": "pick", "through": true}])"),
+      "/strokes/1/through");
 }
 
 TEST(Strokes, SyntaxErrorsNameLineAndColumn) {
@@ -181,9 +180,15 @@ TEST(Strokes, RandomDamageIsRefusedCleanly) {
     for (int e = 0; e < edits; ++e) {
       const std::size_t at = rng() % t.size();
       switch (rng() % 3) {
-        case 0: t[at] = static_cast<char>(rng() % 256); break;
-        case 1: t.erase(at, 1 + rng() % 8); break;
-        default: t.insert(at, 1, "[]{},:\"0e-.aN"[rng() % 13]); break;
+        case 0:
+          t[at] = static_cast<char>(rng() % 256);
+          break;
+        case 1:
+          t.erase(at, 1 + rng() % 8);
+          break;
+        default:
+          t.insert(at, 1, "[]{},:\"0e-.aN"[rng() % 13]);
+          break;
       }
       if (t.empty()) t = "{";
     }
