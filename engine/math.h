@@ -28,4 +28,20 @@ struct Box3d {
 
 [[nodiscard]] inline bool is_finite(const Vec3d& p) noexcept { return p.allFinite(); }
 
+/// x rounded to the nearest float, as a double (what a float file or column
+/// stores). Not `double(float(x))` alone: GCC 12's SLP vectorizer at -O2/-O3
+/// may drop a double -> float -> double round trip in loops (seen on
+/// `p.cast<float>().cast<double>()` of Vec3d in a range-for: x and y came
+/// back unrounded), so the float is pinned in a register by an empty asm.
+[[nodiscard]] inline double round_to_float(double x) noexcept {
+  float f = static_cast<float>(x);
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+  __asm__("" : "+x"(f));
+#endif
+  return static_cast<double>(f);
+}
+[[nodiscard]] inline Vec3d round_to_float(const Vec3d& p) noexcept {
+  return {round_to_float(p.x()), round_to_float(p.y()), round_to_float(p.z())};
+}
+
 }  // namespace atelier

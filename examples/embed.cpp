@@ -13,12 +13,15 @@
 #include <vector>
 
 #include <atelier/engine/exec_context.h>
-#include <atelier/systems/spatial/body_bvh.h>
-#include <atelier/systems/garment/detail_template.h>
+#include <atelier/storage/builder.h>
+#include <atelier/systems/body/body_set.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
 #include <atelier/systems/body/reference_body.h>
+#include <atelier/systems/garment/regenerate_garment.h>
+#include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/view/render.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 using namespace atelier;
 
@@ -71,27 +74,38 @@ int main() {
     std::printf("  %.*s %zu/%zu\n", static_cast<int>(stage.size()), stage.data(), done, total);
   };
 
-  // 4. Encode on the reference body, decode on every body in memory.
-  const BodyPolygons polygons = BodyPolygons::from_model(reference->model);
-  auto encoding = encode_detail(polygons, skin_positions(*reference), garment_vertices, {}, ctx);
-  if (!encoding) return fail("encode", encoding.status());
-  auto tris = fan_triangulate(reference->model);
-  if (!tris) return fail("triangulate", tris.status());
+  // 4. Encode on the reference body (detail template, clearance, edge
+  //    transfer), then the garment pipeline on every body in memory:
+  //    batched decoding, the skin's local stretch, the collision pass and
+  //    the fit figures (systems/garment/regenerate_garment.h).
+  auto family = GarmentFamily::of(*reference);
+  if (!family) return fail("family", family.status());
+  PolygonSoup soup = polygon_soup(*garment);
+  auto shorts = encode_garment(*family, "shorts", soup, {}, ctx);
+  if (!shorts) return fail("encode", shorts.status());
+  const auto shared_family = std::make_shared<const GarmentFamily>(std::move(*family));
+  const auto shared_shorts = std::make_shared<const GarmentTemplate>(std::move(*shorts));
+  auto regenerator = GarmentRegenerator::create(shared_family, {shared_shorts}, {}, ctx);
+  if (!regenerator) return fail("pipeline", regenerator.status());
+  BodySet set(std::make_shared<const ReferenceBody>(*reference));
+  for (std::size_t b = 0; b < bodies.size(); ++b)
+    if (Status s = set.add("body-" + std::to_string(b), bodies[b]); !s) return fail("body", s);
 
-  std::vector<Vec3d> decoded(garment_vertices.size());
+  std::vector<BodyGarments> fitted;
   double worst_clearance = 1e300;
   std::size_t inside = 0;
-  for (std::size_t b = 0; b < bodies.size(); ++b) {
+  for (std::size_t b = 0; b < set.size(); ++b) {  // one body per call, to report progress per body
     if (ctx.cancelled()) break;
-    if (Status s = decode_detail(*encoding, polygons, bodies[b], decoded, ctx); !s) return fail("decode", s);
-    BodyBvh bvh;  // the body's surface, for the garment's clearance
-    if (Status s = bvh.build(bodies[b], tris->triangles, {}, ctx); !s) return fail("bvh", s);
-    std::vector<double> sd(decoded.size());
-    if (Status s = bvh.signed_distances(decoded, sd, ctx); !s) return fail("distance", s);
-    worst_clearance = std::min(worst_clearance, *std::min_element(sd.begin(), sd.end()));
-    inside += static_cast<std::size_t>(std::count_if(sd.begin(), sd.end(), [](double d) { return d < 0.0; }));
+    if (Status s = regenerator->run(set, b, 1, fitted, ctx); !s) return fail("regenerate", s);
+    if (!fitted[0].status) return fail("regenerate", fitted[0].status);
+    const GarmentQuality& q = fitted[0].garments[0].quality;
+    worst_clearance = std::min(worst_clearance, q.min_clearance);
+    inside += q.inside;
     ctx.report("bodies", b + 1, bodies.size());
   }
+  const std::vector<Vec3d> decoded = fitted[0].garments[0].positions;  // the last body's garment
+  auto tris = fan_triangulate(reference->model);
+  if (!tris) return fail("triangulate", tris.status());
 
   // 5. A picture in memory (ray cast, no GPU): the last body and garment.
   BodyBvh body_bvh, garment_bvh;
@@ -115,15 +129,15 @@ int main() {
     if (done >= 2) cancelling.cancel.cancel();
   };
   std::size_t decoded_before_cancel = 0;
-  for (std::size_t b = 0; b < bodies.size() && !cancelling.cancelled(); ++b) {
-    if (Status s = decode_detail(*encoding, polygons, bodies[b], decoded, cancelling); !s) break;
+  for (std::size_t b = 0; b < set.size() && !cancelling.cancelled(); ++b) {
+    if (Status s = regenerator->run(set, b, 1, fitted, cancelling); !s) break;
     cancelling.report("bodies", ++decoded_before_cancel, bodies.size());
   }
-  auto again = encode_detail(polygons, skin_positions(*reference), garment_vertices, {}, cancelling);
+  auto again = encode_garment(*shared_family, "again", soup, {}, cancelling);
   const bool encode_cancelled = !again && again.status().code() == ErrorCode::kCancelled;
 
   std::printf("atelier embed: %zu bodies, garment %zu vertices, %zu p-polygon entries\n", bodies.size(),
-              garment_vertices.size(), encoding->entries());
+              garment_vertices.size(), shared_shorts->encoding.entries());
   std::printf("worst clearance %.2f mm, %zu vertices inside a body\n", 1000.0 * worst_clearance, inside);
   std::printf("picture %ux%u: %zu body+garment pixels, %zu garment pixels\n", picture->image.width,
               picture->image.height, picture->covered_pixels, garment_pixels);

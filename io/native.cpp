@@ -9,7 +9,7 @@
 #include <type_traits>
 
 #include <atelier/io/atomic_file.h>
-#include <atelier/io/crc32.h>
+#include <atelier/io/checksum.h>
 #include <atelier/io/mesh_arrays.h>
 #include <atelier/storage/validate.h>
 
@@ -37,10 +37,6 @@ std::string tag_name(std::uint32_t t) {
     s[static_cast<std::size_t>(k)] = (c >= 32 && c < 127) ? c : '?';
   }
   return s;
-}
-
-std::uint32_t crc32(std::string_view bytes) noexcept {
-  return io_detail::crc32(bytes.data(), bytes.size());
 }
 
 // ------------------------------------------------------------------ writing

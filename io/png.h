@@ -1,17 +1,16 @@
-// PNG output for pictures (issue #6: rendered bodies and garments), with a
-// minimal reader used by the tests and by the HTML report's size checks.
+// PNG for pictures (rendered bodies and garments) and the HTML report's
+// checks, through libpng (Debian's libpng-dev), the library every PNG tool
+// trusts, instead of a codec of our own.
 //
-// Writing: 8-bit RGB, non-interlaced, one IDAT compressed with zlib; each row
-// gets the PNG filter (None, Sub, Up, Average, Paeth) with the smallest sum of
-// absolute differences (the heuristic of the PNG specification, section
-// 12.8), so output bytes depend only on the pixels. Files are written through
-// an AtomicFile (all or nothing).
+// Writing: 8-bit RGB, non-interlaced, one IDAT; libpng tries every filter
+// per row (the heuristic of the PNG specification, section 12.8), so output
+// bytes depend only on the pixels and the libpng version. Files are written
+// through an AtomicFile (all or nothing).
 //
-// Reading: 8-bit greyscale, grey+alpha, RGB or RGBA, non-interlaced (what
-// write_png and most tools produce); every chunk CRC is checked, IDAT chunks
-// are concatenated and inflated, all five filters are undone. The result is
-// always RGB8 (alpha dropped, grey replicated). Anything else throws
-// Error(kParse) naming the problem; unreadable files throw Error(kIo).
+// Reading: anything libpng reads (any bit depth, palette, grey, alpha,
+// interlacing), as RGB8 (alpha composed on black, grey replicated); chunk
+// CRCs are checked by libpng. Damaged data throws Error(kParse) naming the
+// input; unreadable files throw Error(kIo).
 #pragma once
 
 #include <cstddef>
@@ -41,9 +40,6 @@ struct RgbImage {
   }
   friend bool operator==(const RgbImage&, const RgbImage&) = default;
 };
-
-/// CRC-32 of the PNG specification (ISO 3309 polynomial), as stored in chunks.
-[[nodiscard]] std::uint32_t png_crc32(std::span<const std::uint8_t> bytes) noexcept;
 
 /// Encodes the image as PNG bytes. Throws Error(kInvalidArgument) for an
 /// empty image or a pixel array of the wrong size. `level` is zlib's 0..9.

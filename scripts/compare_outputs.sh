@@ -17,7 +17,7 @@
 #   with the shared data: encode and regen of a MakeHuman garment on 20 adults.
 # Timings are not results: report.json's and report.html's timing fields and
 # timing.json are dropped before comparing, and so are the demo pictures
-# chosen by a timing ("highest top_ms"). Exit 0 when every other file is
+# chosen by a timing ("highest top_ms"); pictures are compared by pixels. Exit 0 when every other file is
 # identical; else the differing files are listed and the exit code is 1.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -99,6 +99,53 @@ for dirpath, _, files in os.walk(root):
                 if os.path.exists(pic):
                     os.remove(pic)
             os.remove(p)  # its tables and pictures come from report.json and pictures/
+# Pictures are compared by their pixels: the PNG encoder (libpng since
+# issue 19) decides the compressed bytes.
+import struct, zlib
+def png_pixels(path):
+    b = open(path, 'rb').read()
+    pos, idat, w, h = 8, b'', 0, 0
+    while pos < len(b):
+        n, t = struct.unpack('>I4s', b[pos:pos + 8])
+        data = b[pos + 8:pos + 8 + n]
+        if t == b'IHDR':
+            w, h, depth, colour = struct.unpack('>IIBB', data[:10])
+            assert depth == 8 and colour == 2 and data[12] == 0, path
+        elif t == b'IDAT':
+            idat += data
+        pos += 12 + n
+    raw, out, prev, stride = zlib.decompress(idat), bytearray(), bytearray(3 * w), 3 * w
+    for y in range(h):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - 3] if i >= 3 else 0
+            c = prev[i - 3] if i >= 3 else 0
+            pb = prev[i]
+            if f == 1: line[i] = (line[i] + a) & 255
+            elif f == 2: line[i] = (line[i] + pb) & 255
+            elif f == 3: line[i] = (line[i] + (a + pb) // 2) & 255
+            elif f == 4:
+                pa, pp, pc = abs(pb - c), abs(a - c), abs(a + pb - 2 * c)
+                line[i] = (line[i] + (a if pa <= pp and pa <= pc else pb if pp <= pc else c)) & 255
+        out += line
+        prev = line
+    return b'%d %d\n' % (w, h) + bytes(out)
+# Detail templates are compared by their content: version 2 of the .atd
+# format (issue 19) ends in a CRC-32 where version 1 had an FNV-1a sum.
+for dirpath, _, files in os.walk(root):
+    for f in files:
+        if f.endswith('.atd'):
+            p = os.path.join(dirpath, f)
+            b = open(p, 'rb').read()
+            version = struct.unpack('<I', b[8:12])[0]
+            open(p + '.content', 'wb').write(b[:8] + b[12:len(b) - (8 if version == 1 else 4)])
+            os.remove(p)
+for dirpath, _, files in os.walk(root):
+    for f in files:
+        if f.endswith('.png'):
+            p = os.path.join(dirpath, f)
+            open(p + '.pixels', 'wb').write(png_pixels(p))
+            os.remove(p)
 EOF
   # Pictures are removed with report.html above; the one chosen by a timing
   # ("(highest top_ms)" in its title) is dropped, the others compared.
@@ -119,6 +166,39 @@ if diff -rq "$work/out-old" "$work/out-new" >"$work/diff.txt"; then
   echo "identical: $count files (demo, encode, regen$([[ -d $data/makehuman ]] && echo ', MakeHuman regen'))"
   exit 0
 fi
-echo "DIFFERENT ($(wc -l <"$work/diff.txt") of $count files):"
-cat "$work/diff.txt"
+echo "DIFFERENT ($(wc -l <"$work/diff.txt") of $count files); by how much:"
+# For differing OBJ files the largest vertex coordinate difference, for JSON
+# files the largest difference of a number (same keys required), per folder.
+python3 - "$work/out-old" "$work/out-new" <<'EOF2'
+import json, os, sys
+old, new = sys.argv[1], sys.argv[2]
+def verts(p):
+    return [tuple(map(float, l.split()[1:4])) for l in open(p) if l.startswith('v ')]
+def nums(x, out, path=''):
+    if isinstance(x, dict):
+        for k in sorted(x): nums(x[k], out, path + '/' + k)
+    elif isinstance(x, list):
+        for i, v in enumerate(x): nums(v, out, path + '[%d]' % i)
+    else: out[path] = x
+summary = {}
+for dirpath, _, files in os.walk(old):
+    for f in files:
+        a = os.path.join(dirpath, f); b = a.replace(old, new, 1)
+        if not os.path.exists(b) or open(a, 'rb').read() == open(b, 'rb').read(): continue
+        group = os.path.relpath(dirpath, old).split(os.sep)[0] + '/*' + os.path.splitext(f)[1]
+        d = float('nan')
+        if f.endswith('.obj'):
+            va, vb = verts(a), verts(b)
+            if len(va) == len(vb): d = max(max(abs(x - y) for x, y in zip(p, q)) for p, q in zip(va, vb))
+        elif f.endswith('.json'):
+            na, nb = {}, {}
+            nums(json.load(open(a)), na); nums(json.load(open(b)), nb)
+            if na.keys() == nb.keys():
+                d = max([abs(na[k] - nb[k]) for k in na if isinstance(na[k], (int, float)) and not isinstance(na[k], bool)] + [0])
+                if any(na[k] != nb[k] for k in na if not isinstance(na[k], (int, float)) or isinstance(na[k], bool)): d = float('nan')
+        n, m = summary.get(group, (0, 0.0))
+        summary[group] = (n + 1, m if d != d or m != m else max(m, d)) if d == d else (n + 1, float('nan'))
+for g, (n, m) in sorted(summary.items()):
+    print('  %-28s %4d files differ, largest difference %s' % (g, n, 'structural' if m != m else '%.3g' % m))
+EOF2
 exit 1

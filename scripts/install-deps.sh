@@ -8,7 +8,7 @@
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
       libtbb-dev libeigen3-dev libembree-dev libopenvdb-dev libboost-iostreams-dev
-      nlohmann-json3-dev libcli11-dev libcgal-dev zlib1g-dev)
+      nlohmann-json3-dev libcli11-dev libcgal-dev zlib1g-dev libpng-dev)
 for arg in "$@"; do
   case "$arg" in
     --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin) ;;

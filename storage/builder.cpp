@@ -177,4 +177,19 @@ Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonS
   return surf;
 }
 
+PolygonSoup polygon_soup(const Model& m, SurfaceIdx only) {
+  PolygonSoup s;
+  s.positions.assign(m.nodes.position.begin(), m.nodes.position.begin() + m.nodes.slots.capacity());
+  std::vector<NodeIdx> fn;
+  std::vector<std::uint32_t> ids;
+  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
+    if (!m.alive(FaceIdx{f}) || (only.valid() && m.faces.surface[f] != only)) continue;
+    m.face_nodes(FaceIdx{f}, fn);
+    ids.clear();
+    for (NodeIdx v : fn) ids.push_back(v.value);
+    s.add_face(ids);
+  }
+  return s;
+}
+
 }  // namespace atelier

@@ -23,4 +23,9 @@ namespace atelier {
 [[nodiscard]] Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonSoupView& arrays,
                                                     const ExecContext& ctx = {});
 
+/// The inverse: the model's live faces (of one surface, or all) in index
+/// order as a polygon soup over node indices, with every node slot's
+/// position (dead slots included, so indices stay the model's).
+[[nodiscard]] PolygonSoup polygon_soup(const Model& m, SurfaceIdx only = {});
+
 }  // namespace atelier

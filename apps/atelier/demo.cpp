@@ -14,6 +14,7 @@
 
 #include "commands.h"
 #include <atelier/engine/parallel.h>
+#include <atelier/storage/builder.h>
 #include <atelier/io/atomic_file.h>
 #include "html_report.h"
 #include <atelier/io/obj.h>
@@ -22,13 +23,14 @@
 #include <atelier/systems/body/body_set.h>
 #include <atelier/systems/garment/collision_pass.h>
 #include <atelier/systems/garment/detail_template.h>
-#include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
 #include <atelier/systems/body/measure.h>
 #include <atelier/systems/profile/project_templates.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/view/render.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier::cli {
 
@@ -60,13 +62,6 @@ struct BodyQuality {
   std::vector<RegenQuality> templates;  // one per profile template
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
-
 }  // namespace
 
 int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
@@ -86,39 +81,28 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   const double y_knee = curve_height(*ref, kKneeLeft);
   auto garment = skin_band_garment(*ref, 0.5 * (y_thigh + y_knee), y_waist + 0.02, 0.008, 0.40, "shorts");
   if (!garment) throw Error(garment.status());
-  std::vector<Vec3d> g0;
-  for (std::uint32_t v = 0; v < garment->nodes.slots.capacity(); ++v) g0.push_back(garment->nodes.position[v]);
+  // The shorts as a detail template (seed 001 section 6) with the
+  // clearance and edge transfer of the garment pipeline
+  // (systems/garment/regenerate_garment.h), edges in the Model's order.
   std::vector<std::array<std::uint32_t, 2>> g_edges;
   for (std::uint32_t e = 0; e < garment->edges.slots.capacity(); ++e)
     g_edges.push_back(
         {garment->tail(halfedge_of(EdgeIdx{e}, 0)).value, garment->tail(halfedge_of(EdgeIdx{e}, 1)).value});
-
-  const BodyPolygons poly = BodyPolygons::from_model(ref->model);
-  // The collision pass of the detail garment (systems/collision_pass.h): its
-  // clearance on the reference body is part of the encoding.
+  PolygonSoup shorts_soup = polygon_soup(*garment);
+  auto family_made = GarmentFamily::of(*ref);
+  if (!family_made) throw Error(family_made.status());
+  const auto family = std::make_shared<const GarmentFamily>(std::move(*family_made));
+  const auto t_enc = std::chrono::steady_clock::now();
+  GarmentEncodeOptions geo;
+  geo.edges = g_edges;
+  auto shorts = encode_garment(*family, "shorts", std::move(shorts_soup), geo, ctx);
+  if (!shorts) throw Error(shorts.status());
+  const double encode_s = seconds_since(t_enc);
+  const auto shorts_template = std::make_shared<const GarmentTemplate>(std::move(*shorts));
+  const DetailEncoding* enc = &shorts_template->encoding;
+  const std::vector<Vec3d>& g0 = shorts_template->mesh.positions;
   auto ref_tris = fan_triangulate(ref->model);
   if (!ref_tris) throw Error(ref_tris.status());
-  auto coll_topo =
-      CollisionTopology::build(ref_tris->triangles, static_cast<std::uint32_t>(ref->model.nodes.slots.capacity()));
-  if (!coll_topo) throw Error(coll_topo.status());
-  const std::vector<Vec3d> ref_pos = skin_positions(*ref);
-  Box3d g_box;
-  for (const auto& g : g0) g_box.extend(g);
-  CollisionBody ref_coll;
-  if (Status s = ref_coll.build(*coll_topo, ref_pos, {.roi = g_box}, ctx); !s) throw Error(s);
-  auto clearance_enc = encode_clearance(g0, ref_coll, ctx);
-  if (!clearance_enc) throw Error(clearance_enc.status());
-  auto g_adj = adjacency_from_edges(g0.size(), g_edges);
-  if (!g_adj) throw Error(g_adj.status());
-  // Each decoded garment then takes on the local stretch of the skin under
-  // it (systems/edge_transfer.h) before the pass.
-  auto transfer = encode_edge_transfer(g0, g_edges, ref_coll, {}, ctx);
-  if (!transfer) throw Error(transfer.status());
-  const std::span<const Triangle> body_tris = (*coll_topo)->triangles();
-  const auto t_enc = std::chrono::steady_clock::now();
-  auto enc = encode_detail(poly, skin_positions(*ref), g0, {}, ctx);
-  if (!enc) throw Error(enc.status());
-  const double encode_s = seconds_since(t_enc);
   write_obj(ref->model, opt.out / "reference_body.obj");
   write_obj(*garment, opt.out / "garment_template.obj");
   write_detail(*enc, opt.out / "garment_template.atd");
@@ -138,6 +122,9 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
              " joints, " + std::to_string(t.profiles.size()) + " profiles");
   }
   for (const auto& g : g0) roi.extend(g);
+  auto made_regen = GarmentRegenerator::create(family, {shorts_template}, {}, ctx);
+  if (!made_regen) throw Error(made_regen.status());
+  GarmentRegenerator& shorts_regen = *made_regen;
   // Regenerates the profile templates on one body (also used again for the pictures).
   // One collider per worker, refitted to each body (systems/regenerate.h).
   ColliderPool colliders;
@@ -153,22 +140,17 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   BodySet chunk(ref);
   std::vector<BodyFailure> failures;
   std::vector<BodyQuality> quality;
-  std::vector<Vec3f> decoded;
-  // The encoding rearranged for batches and the pass buffers: made once for
-  // the whole job, not per chunk.
-  const DetailDecoder decoder(*enc, ctx);
-  DecodeWorkspace workspace;
+  std::vector<BodyGarments> fitted;
   std::ostringstream csv;
   const std::size_t nv = g0.size();
   log.progress("bodies", 0, src.size());
   for (std::size_t first = 0; first < src.size(); first += opt.chunk) {
     if (ctx.cancelled()) break;
     src.generate(first, opt.chunk, chunk, failures, ctx);
-    const auto t0 = std::chrono::steady_clock::now();
-    decoded.resize(chunk.size() * nv);
-    if (Status s = decode_detail_batch(decoder, poly, chunk, 0, chunk.size(), decoded, workspace, ctx); !s)
-      throw Error(s);
-    const double per_body_ms = 1000.0 * seconds_since(t0) / static_cast<double>(std::max<std::size_t>(1, chunk.size()));
+    // The shorts on every body of the chunk: decoded in batches, the edge
+    // transfer, the collision pass, the fit figures.
+    if (Status s = shorts_regen.run(chunk, 0, chunk.size(), fitted, ctx); !s) throw Error(s);
+    const double per_body_ms = shorts_regen.last_decode_ms_per_body();
     // Quality of each body, in parallel over bodies.
     std::vector<BodyQuality> q(chunk.size());
     std::vector<std::string> errors(chunk.size());
@@ -188,44 +170,19 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
         for (std::size_t k = 0; k < regen.size(); ++k)
           write_obj(regen[k].model, opt.out / "meshes" / (chunk.name(b) + "_" + templates[k].name + ".obj"));
       }
-      std::vector<Vec3d> g(nv);
-      for (std::size_t v = 0; v < nv; ++v) g[v] = decoded[b * nv + v].cast<double>();
-      if (Status s = apply_edge_transfer(*transfer, body, body_tris, g, inner); !s) {
-        errors[b] = s.message();
+      if (!fitted[b].status) {
+        errors[b] = fitted[b].status.message();
         return;
       }
-      // Collision pass: out of the body, back to the encoded clearance.
-      CollisionBody cb;
-      if (Status s = cb.build(*coll_topo, body, {.roi = g_box}, inner); !s) {
-        errors[b] = s.message();
-        return;
-      }
-      // The pass's last exact query of each vertex gives its clearance.
-      std::vector<BodyDistance> fin;
-      auto pass = resolve_collisions(g, *g_adj, *clearance_enc, cb, {}, fin, inner);
-      if (!pass) {
-        errors[b] = pass.status().message();
-        return;
-      }
-      for (std::size_t v = 0; v < nv; ++v) decoded[b * nv + v] = g[v].cast<float>();
-      std::vector<double> sd(nv);
-      for (std::size_t v = 0; v < nv; ++v) sd[v] = fin[v].distance;
+      const GarmentQuality& fit = fitted[b].garments[0].quality;
       BodyQuality& r = q[b];
       r.name = chunk.name(b);
-      r.pushed = pass->pushed;
-      r.min_clearance = *std::min_element(sd.begin(), sd.end());
-      r.mean_clearance = std::accumulate(sd.begin(), sd.end(), 0.0) / static_cast<double>(nv);
-      for (double d : sd)
-        if (d < 0) {
-          ++r.inside;
-          r.max_depth = std::max(r.max_depth, -d);
-        }
-      std::vector<double> strain;
-      for (const auto& e : g_edges) {
-        const double l0 = (g0[e[0]] - g0[e[1]]).norm(), l = (g[e[0]] - g[e[1]]).norm();
-        strain.push_back(std::abs(l / l0 - 1.0));
-      }
-      r.strain_p95 = percentile(strain, 0.95);
+      r.pushed = fit.pushed;
+      r.min_clearance = fit.min_clearance;
+      r.mean_clearance = fit.mean_clearance;
+      r.inside = fit.inside;
+      r.max_depth = fit.max_depth;
+      r.strain_p95 = fit.strain_p95;
       r.decode_ms = per_body_ms;
       for (const auto& x : regen) r.templates.push_back(x.quality);
     });
@@ -240,7 +197,9 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
         chunk.positions(b, body.nodes.position);
         write_obj(body, opt.out / "meshes" / (chunk.name(b) + "_body.obj"));
         Model gm = *garment;
-        for (std::size_t v = 0; v < nv; ++v) gm.nodes.position[v] = decoded[b * nv + v].cast<double>();
+        // Written in float precision, as the decoded garment is kept.
+        const std::vector<Vec3d>& fit = fitted[b].garments[0].positions;
+        for (std::size_t v = 0; v < nv; ++v) gm.nodes.position[v] = round_to_float(fit[v]);
         write_obj(gm, opt.out / "meshes" / (chunk.name(b) + "_shorts.obj"));
       }
     }
@@ -393,14 +352,12 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
     const std::vector<Vec3d> body = one.positions(0);
     std::vector<RegenResult> regen;
     if (!regen_all(body, ctx, regen)) continue;
-    std::vector<Vec3f> shorts(nv);
-    if (!decode_detail_batch(*enc, poly, one, 0, 1, shorts, ctx)) continue;
-    std::vector<Vec3d> shorts_d(nv);
-    for (std::size_t v = 0; v < nv; ++v) shorts_d[v] = shorts[v].cast<double>();
-    if (!apply_edge_transfer(*transfer, body, body_tris, shorts_d, ctx)) continue;
-    CollisionBody cb;
-    if (!cb.build(*coll_topo, body, {.roi = g_box}, ctx)) continue;
-    if (!resolve_collisions(shorts_d, *g_adj, *clearance_enc, cb, {}, ctx)) continue;
+    std::vector<BodyGarments> one_fit;
+    if (Status st = shorts_regen.run(one, 0, 1, one_fit, ctx); !st || !one_fit[0].status) {
+      log.warn("picture of " + name + ": " + (st ? one_fit[0].status : st).to_string());
+      continue;
+    }
+    const std::vector<Vec3d>& shorts_d = one_fit[0].garments[0].positions;
     auto shorts_tris = fan_triangulate(*garment);
     std::vector<SurfaceTriangles> gt;
     for (const auto& r : regen) gt.push_back(fan_triangulate(r.model).value());

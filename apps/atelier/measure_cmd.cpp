@@ -6,6 +6,7 @@
 #include <atelier/io/atomic_file.h>
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/garment/fit_measure.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier::cli {
 

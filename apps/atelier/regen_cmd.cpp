@@ -14,16 +14,16 @@
 #include <atelier/engine/parallel.h>
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/makehuman/makehuman.h>
-#include <atelier/io/makehuman/mhclo.h>
+#include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/io/obj.h>
-#include <atelier/systems/garment/collision_pass.h>
 #include <atelier/systems/garment/detail_template.h>
-#include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/profile/project_templates.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/profile/template_json.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier::cli {
 
@@ -51,68 +51,6 @@ nlohmann::json quality_json(const RegenQuality& q) {
           {"pushed", q.pushed}};
 }
 
-/// The garment of an OBJ file (read_base_mesh: every `v`, every `f` of every
-/// group), positions times `scale`.
-PolygonSoup read_garment_obj(const fs::path& file, double scale) {
-  const makehuman::BaseMesh m = makehuman::read_base_mesh(file);
-  PolygonSoup g;
-  for (const Vec3f& p : m.positions) g.positions.push_back(scale * p.cast<double>());
-  for (const auto& grp : m.groups)
-    for (std::size_t f = 0; f + 1 < grp.face_offsets.size(); ++f) {
-      for (std::uint32_t k = grp.face_offsets[f]; k < grp.face_offsets[f + 1]; ++k)
-        g.face_nodes.push_back(grp.face_nodes[k]);
-      g.face_offsets.push_back(static_cast<std::uint32_t>(g.face_nodes.size()));
-    }
-  if (g.positions.empty()) throw Error(Status(ErrorCode::kInvalidArgument, file.string() + ": no vertices"));
-  if (g.face_nodes.empty()) throw Error(Status(ErrorCode::kInvalidArgument, file.string() + ": no faces"));
-  return g;
-}
-
-/// Writes the garment with `positions` (float precision: what
-/// read_garment_obj gives back, so encoding and regeneration see the same
-/// reference garment).
-void write_garment_obj(const PolygonSoup& g, std::span<const Vec3d> positions, const fs::path& file) {
-  write_atomically(file, [&](AtomicFile& f) {
-    char line[128];
-    for (const Vec3d& p : positions) {
-      const int n =
-          std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", static_cast<double>(static_cast<float>(p.x())),
-                        static_cast<double>(static_cast<float>(p.y())), static_cast<double>(static_cast<float>(p.z())));
-      f.write(line, static_cast<std::size_t>(n));
-    }
-    std::string face;
-    for (std::size_t k = 0; k + 1 < g.face_offsets.size(); ++k) {
-      face = "f";
-      for (std::uint32_t i = g.face_offsets[k]; i < g.face_offsets[k + 1]; ++i)
-        face += " " + std::to_string(g.face_nodes[i] + 1);
-      face += "\n";
-      f.write(face);
-    }
-  });
-}
-
-/// The collision body of a reference body's skin (shared topology, built once).
-std::shared_ptr<const CollisionTopology> collision_topology(const ReferenceBody& ref) {
-  auto tris = fan_triangulate(ref.model);
-  if (!tris) throw Error(tris.status());
-  auto topo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(ref.model.nodes.slots.capacity()));
-  if (!topo) throw Error(Status(topo.status().code(), "reference body: " + topo.status().message()));
-  return *topo;
-}
-
-/// A detail template ready to regenerate: the encoding, the garment on the
-/// reference body, and its clearance there (the collision pass's target).
-struct DetailJob {
-  std::string name;
-  DetailEncoding enc;
-  PolygonSoup mesh;  // positions: on the reference body
-  std::vector<std::array<std::uint32_t, 2>> edges;
-  std::vector<double> rest;  // edge lengths on the reference body
-  NodeAdjacency adjacency;
-  ClearanceEncoding clearance;
-  EdgeTransfer transfer;  // the skin's local stretch, applied after decoding
-};
-
 }  // namespace
 
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
@@ -134,61 +72,43 @@ namespace {
 
 /// `encode --garment`: the detail template of a garment on `ref` (seed 001
 /// section 6), written as <stem>.atd with the garment as <stem>.obj.
-void encode_garment(const Common& common, const EncodeOptions& opt, const ReferenceBody& ref,
-                    const makehuman::HumanLibrary* lib, Log& log) {
+void encode_garment_files(const Common& common, const EncodeOptions& opt, const ReferenceBody& ref,
+                          const makehuman::HumanLibrary* lib, Log& log) {
   const ExecContext ctx = common.context();
   const fs::path& file = opt.garment;
   if (!fs::exists(file)) throw Error(Status(ErrorCode::kIo, file.string() + ": no such file"));
-  PolygonSoup g;
   const std::string ext = file.extension().string();
+  Expected<PolygonSoup> g = Status(ErrorCode::kInvalidArgument,
+                                   file.string() + ": unknown garment format (use .obj or .mhclo)");
   if (ext == ".mhclo") {
     if (!lib)
       throw Error(Status(ErrorCode::kInvalidArgument,
                          file.string() + ": a .mhclo garment is bound to the MakeHuman base mesh: use --reference "
                                          "makehuman (or give the garment as an OBJ on the mannequin)"));
-    const auto binding = makehuman::read_mhclo(file, lib->vertex_count());
-    g = read_garment_obj(file.parent_path() / binding.obj_file, 1.0);
-    if (g.positions.size() != binding.refs.size())
-      throw Error(Status(ErrorCode::kMismatch, file.string() + ": " + std::to_string(binding.refs.size()) +
-                                                   " bound vertices but " + binding.obj_file + " has " +
-                                                   std::to_string(g.positions.size())));
-    // The binding's fit on the default body, the reference body's shape.
-    std::vector<Vec3f> H(lib->vertex_count());
-    lib->build(makehuman::MacroParams{}, H);
-    g.positions = makehuman::fit_binding(binding, H);
-    for (Vec3d& p : g.positions) p *= makehuman::kMakeHumanToMetres;
+    g = makehuman::fitted_garment(*lib, file);
   } else if (ext == ".obj") {
-    g = read_garment_obj(file, opt.scale);
-  } else {
-    throw Error(Status(ErrorCode::kInvalidArgument, file.string() + ": unknown garment format (use .obj or .mhclo)"));
+    g = read_garment_mesh(file, opt.scale);
   }
+  if (!g) throw Error(g.status());
   // Float precision, as the .obj beside the template stores it.
-  for (Vec3d& p : g.positions) p = p.cast<float>().cast<double>();
-  const std::string name = file.stem().string();
-  const std::vector<Vec3d> skin = skin_positions(ref);
-  const BodyPolygons poly = BodyPolygons::from_model(ref.model);
-  auto enc = encode_detail(poly, skin, g.positions, {}, ctx);
-  if (!enc) throw Error(Status(enc.status().code(), file.string() + ": " + enc.status().message()));
-  // Where the garment sits on the reference body: what the collision pass
-  // restores on every other body (systems/collision_pass.h).
-  CollisionBody cb;
-  if (Status s = cb.build(collision_topology(ref), skin, {}, ctx); !s) throw Error(s);
-  auto clear = encode_clearance(g.positions, cb, ctx);
-  if (!clear) throw Error(Status(clear.status().code(), file.string() + ": " + clear.status().message()));
+  for (Vec3d& p : g->positions) p = round_to_float(p);
+  auto family = GarmentFamily::of(ref);
+  if (!family) throw Error(family.status());
+  auto t = encode_garment(*family, file.stem().string(), std::move(*g), {}, ctx);
+  if (!t) throw Error(Status(t.status().code(), file.string() + ": " + t.status().message()));
   std::size_t inside = 0;
   double min_c = std::numeric_limits<double>::infinity();
-  for (float c : clear->clearance) {
+  for (float c : t->clearance.clearance) {
     inside += c < 0;
     min_c = std::min(min_c, static_cast<double>(c));
   }
-  fs::create_directories(opt.out);
-  write_garment_obj(g, g.positions, opt.out / (name + ".obj"));
-  write_detail(*enc, opt.out / (name + ".atd"));  // last: the template is complete with its mesh
+  write_garment_template(*t, opt.out);
+  const std::string& name = t->name;
   std::printf(
       "%s: %zu vertices, %zu faces, %zu p-polygons per vertex, clearance on the reference %.1f mm (min), "
       "%zu vertices inside -> %s\n",
-      name.c_str(), g.positions.size(), g.face_offsets.size() - 1,
-      enc->entries() / std::max<std::size_t>(1, g.positions.size()), 1000 * min_c, inside,
+      name.c_str(), t->mesh.positions.size(), t->mesh.face_count(),
+      t->encoding.entries() / std::max<std::size_t>(1, t->mesh.positions.size()), 1000 * min_c, inside,
       (opt.out / (name + ".atd")).string().c_str());
   if (inside > 0)
     log.warn(name + ": " + std::to_string(inside) +
@@ -211,7 +131,7 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
   fs::create_directories(opt.out);
   int written = 0;
   if (!opt.garment.empty()) {
-    encode_garment(common, opt, ref, lib ? &*lib : nullptr, log);
+    encode_garment_files(common, opt, ref, lib ? &*lib : nullptr, log);
     ++written;
   }
   const std::string which = opt.name.empty() ? (opt.garment.empty() ? "all" : "") : opt.name;
@@ -258,9 +178,8 @@ namespace {
 /// One rank's part of a regen run, from its set-up to its share of bodies.
 struct RegenJob {
   std::vector<ProfileTemplate> templates;
-  std::vector<DetailJob> details;
-  BodyPolygons poly;                                 // details: the reference's polygons
-  std::shared_ptr<const CollisionTopology> collide;  // details: the reference's skin
+  std::vector<std::shared_ptr<const GarmentTemplate>> details;
+  std::shared_ptr<const GarmentFamily> family;  // details: the reference's polygons and skin
   std::unique_ptr<BodySource> src;
   fs::path bodies_dir;
   // This rank's work, for timing.json.
@@ -282,43 +201,13 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   const auto ref = job.src->reference();
   if (!detail_files.empty()) {
     const ExecContext ctx = common.context();
-    job.poly = BodyPolygons::from_model(ref->model);
-    job.collide = collision_topology(*ref);
-    const std::vector<Vec3d> skin = skin_positions(*ref);
-    CollisionBody cb;
-    if (Status s = cb.build(job.collide, skin, {}, ctx); !s) throw Error(s);
+    auto family = GarmentFamily::of(*ref);
+    if (!family) throw Error(family.status());
+    job.family = std::make_shared<const GarmentFamily>(std::move(*family));
     for (const fs::path& f : detail_files) {
-      DetailJob d;
-      d.name = f.stem().string();
-      if (!fs::exists(f)) throw Error(Status(ErrorCode::kIo, f.string() + ": no such file"));
-      d.enc = read_detail(f);
-      if (Status s = check_topology(d.enc, job.poly); !s)
-        throw Error(Status(ErrorCode::kMismatch, f.string() + ": encoded on another reference body (" + s.message() +
-                                                     "); encode the garment on this reference with `atelier encode "
-                                                     "--garment`"));
-      fs::path mesh_file = f;
-      mesh_file.replace_extension(".obj");
-      if (!fs::exists(mesh_file))
-        throw Error(Status(ErrorCode::kIo, f.string() + ": its garment mesh " + mesh_file.string() +
-                                               " is missing (`atelier encode --garment` writes both)"));
-      d.mesh = read_garment_obj(mesh_file, 1.0);
-      if (d.mesh.positions.size() != d.enc.vertex_count())
-        throw Error(Status(ErrorCode::kMismatch, mesh_file.string() + " has " +
-                                                     std::to_string(d.mesh.positions.size()) + " vertices, " +
-                                                     f.string() + " encodes " + std::to_string(d.enc.vertex_count())));
-      d.edges = d.mesh.edges();
-      for (const auto& e : d.edges) d.rest.push_back((d.mesh.positions[e[0]] - d.mesh.positions[e[1]]).norm());
-      auto adj = adjacency_from_edges(d.mesh.positions.size(), d.edges);
-      if (!adj) throw Error(Status(adj.status().code(), mesh_file.string() + ": " + adj.status().message()));
-      d.adjacency = std::move(*adj);
-      auto clear = encode_clearance(d.mesh.positions, cb, ctx);
-      if (!clear) throw Error(Status(clear.status().code(), mesh_file.string() + ": " + clear.status().message()));
-      d.clearance = std::move(*clear);
-      auto transfer = encode_edge_transfer(d.mesh.positions, d.edges, cb, {}, ctx);
-      if (!transfer)
-        throw Error(Status(transfer.status().code(), mesh_file.string() + ": " + transfer.status().message()));
-      d.transfer = std::move(*transfer);
-      job.details.push_back(std::move(d));
+      auto d = read_garment_template(*job.family, f, ctx);
+      if (!d) throw Error(d.status());
+      job.details.push_back(std::make_shared<const GarmentTemplate>(std::move(*d)));
     }
   }
   for (const auto& t : job.templates) {
@@ -335,52 +224,10 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   return job;
 }
 
-/// A detail template on one body: decode (seed 001 eqs. 11-12), the edge
-/// transfer (the skin's local stretch, systems/edge_transfer.h), then the
-/// collision pass back to the clearance it had on the reference body.
-/// Returns the garment positions and fills the quality record.
-std::vector<Vec3d> regen_detail(const RegenJob& job, const DetailJob& d, std::span<const Vec3d> body,
-                                nlohmann::json& quality, const ExecContext& ctx) {
-  std::vector<Vec3d> g(d.mesh.positions.size());
-  if (Status s = decode_detail(d.enc, job.poly, body, g, ctx); !s) throw Error(s);
-  if (Status s = apply_edge_transfer(d.transfer, body, job.collide->triangles(), g, ctx); !s) throw Error(s);
-  CollisionBody cb;
-  if (Status s = cb.build(job.collide, body, {}, ctx); !s) throw Error(s);
-  const CollisionParams cp;
-  std::vector<BodyDistance> fin;
-  auto pass = resolve_collisions(g, d.adjacency, d.clearance, cb, cp, fin, ctx);
-  if (!pass) throw Error(pass.status());
-  // From each vertex's exact distance at its final position (the pass's
-  // last query of it; tests check these against BodyBvh), not from the
-  // pass's counters.
-  std::size_t inside = 0;
-  double depth = 0, min_c = std::numeric_limits<double>::infinity(), clear_err = 0;
-  for (std::size_t v = 0; v < g.size(); ++v) {
-    const double sd = fin[v].distance;
-    if (sd < 0) {
-      ++inside;
-      depth = std::max(depth, -sd);
-    }
-    min_c = std::min(min_c, sd);
-    const double target = std::clamp(static_cast<double>(d.clearance.clearance[v]), cp.min_clearance, cp.max_clearance);
-    clear_err = std::max(clear_err, std::abs(sd - target));
-  }
-  std::vector<double> strain(d.edges.size());
-  double strain_max = 0;
-  for (std::size_t e = 0; e < d.edges.size(); ++e) {
-    strain[e] = d.rest[e] > 0 ? std::abs((g[d.edges[e][0]] - g[d.edges[e][1]]).norm() / d.rest[e] - 1.0) : 0.0;
-    strain_max = std::max(strain_max, strain[e]);
-  }
-  double p95 = 0;
-  if (!strain.empty()) {
-    const std::size_t k = std::min(strain.size() - 1, strain.size() * 95 / 100);
-    std::nth_element(strain.begin(), strain.begin() + static_cast<std::ptrdiff_t>(k), strain.end());
-    p95 = strain[k];
-  }
-  quality = {{"vertices", g.size()},     {"inside_nodes", inside},         {"max_depth_m", depth},
-             {"min_clearance_m", min_c}, {"clearance_error_m", clear_err}, {"strain_max", strain_max},
-             {"strain_p95", p95},        {"pushed", pass->pushed}};
-  return g;
+nlohmann::json garment_quality_json(const GarmentQuality& q) {
+  return {{"vertices", q.vertices},         {"inside_nodes", q.inside},          {"max_depth_m", q.max_depth},
+          {"min_clearance_m", q.min_clearance}, {"clearance_error_m", q.clearance_error}, {"strain_max", q.strain_max},
+          {"strain_p95", q.strain_p95},     {"pushed", q.pushed}};
 }
 
 /// Regenerates the bodies of this rank's chunks (mpi::regen_share) that have
@@ -406,6 +253,16 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
   // One collider per worker, refit per body instead of rebuilt (results are
   // identical to fresh builds: Regenerate.PooledCollidersGiveTheSameResults...).
   ColliderPool colliders;
+  // Detail garments: decoded in batches over the chunk, then the edge
+  // transfer, the collision pass with layers and the fit figures
+  // (systems/garment/regenerate_garment.h).
+  std::optional<GarmentRegenerator> regenerator;
+  if (!job.details.empty()) {
+    auto r = GarmentRegenerator::create(job.family, job.details, {}, ctx);
+    if (!r) throw Error(r.status());
+    regenerator = std::move(*r);
+  }
+  std::vector<BodyGarments> garments;
   const std::size_t n = src.size();
   // Progress counts this rank's share; only rank 0 draws it (one bar).
   const bool show = group.rank() == 0;
@@ -438,6 +295,13 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
       nlohmann::json rec = {{"body", failures[f].name}, {"ok", false}, {"reason", failures[f].status.to_string()}};
       write_atomically(bodies_dir / (failures[f].name + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
     }
+    double garment_ms_per_body = 0;
+    if (regenerator) {
+      const auto tg = std::chrono::steady_clock::now();
+      if (Status st = regenerator->run(chunk, 0, chunk.size(), garments, ctx); !st) throw Error(st);
+      garment_ms_per_body = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tg).count() /
+                            static_cast<double>(std::max<std::size_t>(1, chunk.size()));
+    }
     std::vector<std::string> errors(chunk.size());
     std::vector<double> ms(chunk.size(), 0);
     ExecContext per_body = ctx;
@@ -461,16 +325,17 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           regen = std::move(*r);
         }
         nlohmann::json per = nlohmann::json::object();
-        for (const DetailJob& d : job.details) {
-          nlohmann::json q;
-          const std::vector<Vec3d> g = regen_detail(job, d, body, q, inner);
-          if (q["inside_nodes"].get<std::size_t>() > 0)
-            throw Error(Status(ErrorCode::kDegenerate, d.name + ": " + q["inside_nodes"].dump() +
+        for (std::size_t k = 0; k < job.details.size(); ++k) {
+          const GarmentTemplate& d = *job.details[k];
+          if (!garments[b].status) throw Error(garments[b].status);
+          const GarmentResult& g = garments[b].garments[k];
+          if (g.quality.inside > 0)
+            throw Error(Status(ErrorCode::kDegenerate, d.name + ": " + std::to_string(g.quality.inside) +
                                                            " vertices could not be pushed out of the body"));
-          per[d.name] = std::move(q);
+          per[d.name] = garment_quality_json(g.quality);
           if (index < opt.meshes) {
             fs::create_directories(bodies_dir / chunk.name(b));
-            write_garment_obj(d.mesh, g, bodies_dir / chunk.name(b) / (d.name + ".obj"));
+            write_garment_mesh(d.mesh, g.positions, bodies_dir / chunk.name(b) / (d.name + ".obj"));
           }
         }
         for (std::size_t k = 0; k < templates.size(); ++k) {
@@ -492,7 +357,8 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
       }
       // Written last: its presence means every output of this body is complete.
       write_atomically(bodies_dir / (chunk.name(b) + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
-      ms[b] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      ms[b] = garment_ms_per_body +
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     });
     for (std::size_t b = 0; b < chunk.size(); ++b) {
       if (!errors[b].empty()) {
@@ -559,7 +425,7 @@ MergeCounts merge_report(const Common& common, const RegenOptions& opt, const Re
     rest["source"] = opt.bodies.source;
     nlohmann::json names = nlohmann::json::array();
     for (const auto& t : job.templates) names.push_back(t.name);
-    for (const auto& d : job.details) names.push_back(d.name);
+    for (const auto& d : job.details) names.push_back(d->name);
     rest["templates"] = names;
     rest["summary"] = {{"bodies", n},
                        {"completed", m.ok},

@@ -11,6 +11,7 @@
 #include <atelier/io/png.h>
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/view/render.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier::cli {
 

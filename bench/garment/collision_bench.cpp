@@ -16,7 +16,7 @@
 #include <numeric>
 
 #include <atelier/io/makehuman/makehuman.h>
-#include <atelier/io/makehuman/mhclo.h>
+#include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/systems/garment/collision_pass.h>
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/edge_transfer.h>
@@ -24,6 +24,7 @@
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
 #include <atelier/systems/body/reference_body.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -199,8 +200,7 @@ void BM_CollisionQuery(benchmark::State& st) {
 }
 BENCHMARK(BM_CollisionQuery)->Args({1, 0})->Args({1, 1})->Args({0, 0})->Unit(benchmark::kMillisecond);
 
-// The same points through CollisionBody::query_many (clusters of neighbours
-// ordered by hint, one traversal per cluster), on 1 thread: same answers.
+// The same points through CollisionBody::query_many, on 1 thread.
 void BM_CollisionQueryMany(benchmark::State& st) {
   const CollisionScene& s = scene();
   CollisionBody cb;
@@ -214,7 +214,7 @@ void BM_CollisionQueryMany(benchmark::State& st) {
     benchmark::DoNotOptimize(out.data());
   }
   st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * g.size()));
-  st.SetLabel("hinted, clustered");
+  st.SetLabel("hinted");
 }
 BENCHMARK(BM_CollisionQueryMany)->Unit(benchmark::kMillisecond);
 
@@ -236,22 +236,37 @@ void BM_EdgeTransfer(benchmark::State& st) {
 }
 BENCHMARK(BM_EdgeTransfer)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// The set-up alone (grid over the garment's box).
+// The set-up alone. Args: threads, and 1 for a first body (a new topology
+// each time, its own construction not timed: Embree's device and SAH build)
+// instead of a refit.
 void BM_CollisionBodySetup(benchmark::State& st) {
   const CollisionScene& s = scene();
   ExecContext ctx;
   ctx.threads = static_cast<int>(st.range(0));
+  const bool first = st.range(1) != 0;
   std::size_t body = 0;
   for (auto _ : st) {
     const std::size_t b = body++ % s.skins.size();
+    std::shared_ptr<const CollisionTopology> topo = s.topo;
+    if (first) {
+      st.PauseTiming();
+      topo = CollisionTopology::build(s.triangles, static_cast<std::uint32_t>(s.skins[b].size())).value();
+      st.ResumeTiming();
+    }
     CollisionBodyParams cbp;
     for (const Vec3d& q : s.decoded[b]) cbp.roi.extend(q);
     CollisionBody cb;
-    if (Status e = cb.build(s.topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
-    benchmark::DoNotOptimize(cb.hierarchy_nodes());
+    if (Status e = cb.build(topo, s.skins[b], cbp, ctx); !e) st.SkipWithError(e.to_string().c_str());
+    benchmark::DoNotOptimize(cb.positions().data());
+    if (first) {
+      st.PauseTiming();
+      cb = CollisionBody();
+      topo.reset();
+      st.ResumeTiming();
+    }
   }
-  st.SetLabel(s.label);
+  st.SetLabel(std::string(first ? "first body" : "refit") + ", " + s.label);
 }
-BENCHMARK(BM_CollisionBodySetup)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CollisionBodySetup)->ArgsProduct({{1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

@@ -68,12 +68,14 @@ void BM_RegenerateTemplate(benchmark::State& state) {
   state.counters["crack"] = q.crack;
   state.counters["grid_ms"] = grid_ms;
   state.counters["regen_ms"] = q.ms;
+  state.counters["fair_ms"] = q.fair_ms;
+  state.counters["fair_queries"] = static_cast<double>(q.fair_queries);
 }
 BENCHMARK(BM_RegenerateTemplate)
     ->ArgNames({"template", "levels", "threads", "grid"})
     ->ArgsProduct({{0, 1, 2}, {4}, {1, 2}, {0}})
     ->ArgsProduct({{0, 1, 2}, {4}, {2}, {1}})
-    ->ArgsProduct({{1}, {5}, {2}, {0}})
+    ->ArgsProduct({{1}, {5}, {2}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -21,11 +21,11 @@
 #include <CGAL/Polygon_mesh_processing/intersection.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Surface_mesh.h>
-#include <atelier/io/makehuman/mhclo.h>
 #include <atelier/io/obj.h>
 #include <atelier/storage/builder.h>
 #include <atelier/storage/topology.h>
 #include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/systems/mesh/subdivide.h>
 #include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/sketch/paint.h>
@@ -230,12 +230,16 @@ const Case& suit() {
       return x;
     }
     const makehuman::HumanLibrary lib = makehuman::HumanLibrary::load(dir);
-    std::vector<Vec3f> H(lib.vertex_count());
-    lib.build(makehuman::MacroParams{}, H);
-    const auto binding = makehuman::read_mhclo(dir / "clothes" / "male_worksuit01.mhclo", lib.vertex_count());
-    Model m = read_obj(dir / "clothes" / binding.obj_file);
-    auto pos = makehuman::fit_binding(binding, H);
-    for (std::size_t v = 0; v < pos.size(); ++v) m.nodes.position[v] = makehuman::kMakeHumanToMetres * pos[v];
+    auto soup = makehuman::fitted_garment(lib, dir / "clothes" / "male_worksuit01.mhclo");
+    if (!soup) {
+      x.error = soup.status().to_string();
+      return x;
+    }
+    Model m;
+    if (auto s = add_polygon_surface(m, "suit", *soup); !s) {
+      x.error = s.status().to_string();
+      return x;
+    }
     m = triangulated(m);
     for (int l = 0; l < 2; ++l) (void)subdivide_uniform(m).value();
     const Box3d b = bounds(m);

@@ -119,20 +119,4 @@ GarmentBinding read_mhclo(const std::filesystem::path& file, std::uint32_t n) {
   return b;
 }
 
-std::vector<Vec3d> fit_binding(const GarmentBinding& b, std::span<const Vec3f> H) {
-  Vec3d scale(1, 1, 1);
-  for (int k = 0; k < 3; ++k)
-    if (b.has_scale[k])
-      scale[k] = std::abs(static_cast<double>(H[b.scale_a[k]][k]) - static_cast<double>(H[b.scale_b[k]][k])) /
-                 b.scale_d[k];
-  std::vector<Vec3d> out(b.refs.size());
-  for (std::size_t i = 0; i < b.refs.size(); ++i) {
-    const auto& r = b.refs[i];
-    Vec3d p = Vec3d::Zero();
-    for (int k = 0; k < 3; ++k) p += r.w[k] * H[r.v[k]].cast<double>();
-    out[i] = p + r.offset.cwiseProduct(scale);
-  }
-  return out;
-}
-
 }  // namespace atelier::makehuman

@@ -35,7 +35,4 @@ struct GarmentBinding {
 /// a malformed line or a vertex index >= body_vertex_count.
 [[nodiscard]] GarmentBinding read_mhclo(const std::filesystem::path& file, std::uint32_t body_vertex_count);
 
-/// The binding's fit on a body with vertex array H (base.obj units).
-[[nodiscard]] std::vector<Vec3d> fit_binding(const GarmentBinding& b, std::span<const Vec3f> H);
-
 }  // namespace atelier::makehuman

@@ -10,6 +10,7 @@
 #include <atelier/storage/builder.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier {
 

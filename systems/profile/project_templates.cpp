@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier {
 

@@ -15,81 +15,6 @@
 
 namespace atelier {
 
-// ------------------------------------------------------------------ geometry
-
-namespace {
-
-TrianglePoint segment_point(const Vec3d& p, const Vec3d& a, const Vec3d& b) noexcept {
-  const Vec3d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  double t = len2 > 0.0 ? (p - a).dot(ab) / len2 : 0.0;
-  t = std::clamp(t, 0.0, 1.0);
-  TrianglePoint r;
-  r.point = a + t * ab;
-  r.barycentric = {1.0 - t, t, 0.0};
-  return r;
-}
-
-}  // namespace
-
-TrianglePoint closest_point_on_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) noexcept {
-  // Ericson 5.1.5: test the Voronoi regions of the vertices, then the edges,
-  // then the face. The region tests are sign tests on dot products, so the
-  // reported feature is the one whose region holds p up to rounding.
-  TrianglePoint r;
-  const Vec3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return {a, {1, 0, 0}, TriFeature::kVertex0};
-  const Vec3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) return {b, {0, 1, 0}, TriFeature::kVertex1};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-    const double v = d1 / (d1 - d3);
-    return {a + v * ab, {1.0 - v, v, 0.0}, TriFeature::kEdge01};
-  }
-  const Vec3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) return {c, {0, 0, 1}, TriFeature::kVertex2};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-    const double w = d2 / (d2 - d6);
-    return {a + w * ac, {1.0 - w, 0.0, w}, TriFeature::kEdge20};
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return {b + w * (c - b), {0.0, 1.0 - w, w}, TriFeature::kEdge12};
-  }
-  const double sum = va + vb + vc;
-  if (!(sum > 0.0) || !std::isfinite(sum)) {
-    // Degenerate (zero-area) triangle: its closest point is on an edge.
-    TrianglePoint e0 = segment_point(p, a, b);
-    TrianglePoint e1 = segment_point(p, b, c);
-    TrianglePoint e2 = segment_point(p, c, a);
-    const double q0 = (p - e0.point).squaredNorm(), q1 = (p - e1.point).squaredNorm(),
-                 q2 = (p - e2.point).squaredNorm();
-    if (q0 <= q1 && q0 <= q2) {
-      e0.feature = TriFeature::kEdge01;
-      return e0;
-    }
-    if (q1 <= q2) {
-      e1.barycentric = {0.0, e1.barycentric[0], e1.barycentric[1]};
-      e1.feature = TriFeature::kEdge12;
-      return e1;
-    }
-    e2.barycentric = {e2.barycentric[1], 0.0, e2.barycentric[0]};
-    e2.feature = TriFeature::kEdge20;
-    return e2;
-  }
-  const double denom = 1.0 / sum;
-  const double v = vb * denom, w = vc * denom;
-  r.point = a + ab * v + ac * w;
-  r.barycentric = {1.0 - v - w, v, w};
-  r.feature = TriFeature::kFace;
-  return r;
-}
-
 // ---------------------------------------------------------------------- Impl
 
 struct BodyBvh::Impl {
@@ -112,12 +37,12 @@ struct BodyBvh::Impl {
   std::vector<std::uint8_t> used;
 
   // Pseudo-normals (Baerentzen & Aanaes 2005, section 3).
-  std::vector<Vec3d> face_n;                      // unit face normals
-  std::vector<std::array<std::uint32_t, 3>> adj;  // triangle across edge k (k -> k+1)
-  std::vector<std::array<Vec3d, 3>> edge_n;       // sum of the two unit face normals
-  std::vector<Vec3d> vert_n;                      // angle-weighted vertex normals
-  bool closed = false;
-  std::string open_message;
+  // Computed once per commit from systems/spatial/triangle_query.h, so
+  // that they equal the collision body's on-demand ones bit for bit.
+  TriangleTopology topo;
+  std::vector<Vec3d> face_n;                 // unit face normals
+  std::vector<std::array<Vec3d, 3>> edge_n;  // sum of the two unit face normals
+  std::vector<Vec3d> vert_n;                 // angle-weighted vertex normals
 
   Box3d box;
   double scale = 0.0;  // max |coordinate|, for the culling margin
@@ -163,90 +88,24 @@ Status check_device(BodyBvh::Impl& im, const char* what) {
   return {ErrorCode::kInternal, std::string(what) + ": " + im.last_error};
 }
 
-// Edge adjacency by sorting (lo, hi, triangle, slot) keys: deterministic,
-// O(n log n). An edge is "closed" when exactly two triangles use it in
-// opposite directions.
-void build_adjacency(BodyBvh::Impl& im, const ExecContext& ctx) {
-  struct Key {
-    std::uint32_t lo, hi, tri, slot;
-  };
-  const std::size_t n = im.num_tris;
-  std::vector<Key> keys(3 * n);
-  par::for_each_n(ctx, n, [&](std::size_t t) {
-    const Triangle& tr = im.tris[t];
-    for (std::uint32_t k = 0; k < 3; ++k) {
-      const std::uint32_t a = tr[k], b = tr[(k + 1) % 3];
-      keys[3 * t + k] = {std::min(a, b), std::max(a, b), static_cast<std::uint32_t>(t), k};
-    }
-  });
-  par::sort(ctx, keys.begin(), keys.end(), [](const Key& x, const Key& y) {
-    if (x.lo != y.lo) return x.lo < y.lo;
-    if (x.hi != y.hi) return x.hi < y.hi;
-    if (x.tri != y.tri) return x.tri < y.tri;
-    return x.slot < y.slot;
-  });
-  im.adj.assign(n, {kNoTriangle, kNoTriangle, kNoTriangle});
-  im.closed = true;
-  im.open_message.clear();
-  auto fail = [&](const Key& k, const char* why) {
-    if (!im.closed) return;
-    im.closed = false;
-    im.open_message = "edge (" + std::to_string(k.lo) + ", " + std::to_string(k.hi) + ") of triangle " +
-                      std::to_string(k.tri) + " " + why;
-  };
-  for (std::size_t i = 0; i < keys.size();) {
-    std::size_t j = i + 1;
-    while (j < keys.size() && keys[j].lo == keys[i].lo && keys[j].hi == keys[i].hi) ++j;
-    if (keys[i].lo == keys[i].hi) {
-      fail(keys[i], "is degenerate (repeated vertex)");
-    } else if (j - i == 1) {
-      fail(keys[i], "is a boundary edge (the mesh is not closed)");
-    } else if (j - i > 2) {
-      fail(keys[i], "is shared by more than two triangles (non-manifold)");
-    } else {
-      const Key& x = keys[i];
-      const Key& y = keys[i + 1];
-      const bool x_forward = im.tris[x.tri][x.slot] == x.lo;
-      const bool y_forward = im.tris[y.tri][y.slot] == y.lo;
-      if (x_forward == y_forward) fail(x, "is used twice in the same direction (inconsistent orientation)");
-      im.adj[x.tri][x.slot] = y.tri;
-      im.adj[y.tri][y.slot] = x.tri;
-    }
-    i = j;
-  }
-}
-
 void compute_normals(BodyBvh::Impl& im, const ExecContext& ctx) {
   const std::size_t n = im.num_tris;
+  const std::span<const Vec3d> pos = im.pos;
   im.face_n.resize(n);
-  par::for_each_n(ctx, n, [&](std::size_t t) {
-    const Vec3d& a = im.corner(static_cast<std::uint32_t>(t), 0);
-    const Vec3d& b = im.corner(static_cast<std::uint32_t>(t), 1);
-    const Vec3d& c = im.corner(static_cast<std::uint32_t>(t), 2);
-    const Vec3d cr = (b - a).cross(c - a);
-    const double len = cr.norm();
-    im.face_n[t] = len > 0.0 ? Vec3d(cr / len) : Vec3d::Zero();
-  });
+  par::for_each_n(ctx, n, [&](std::size_t t) { im.face_n[t] = unit_face_normal(im.tris[t], pos); });
   im.edge_n.resize(n);
   par::for_each_n(ctx, n, [&](std::size_t t) {
     for (int k = 0; k < 3; ++k) {
-      const std::uint32_t o = im.adj[t][k];
+      const std::uint32_t o = im.topo.across(static_cast<std::uint32_t>(t), k);
       im.edge_n[t][k] = o == kNoTriangle ? im.face_n[t] : Vec3d(im.face_n[t] + im.face_n[o]);
     }
   });
-  // Angle-weighted vertex normals: a sequential scatter in triangle order so
-  // the sums do not depend on scheduling.
-  im.vert_n.assign(im.pos.size(), Vec3d::Zero());
-  for (std::size_t t = 0; t < n; ++t) {
-    const Triangle& tr = im.tris[t];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3d& p = im.pos[tr[k]];
-      const Vec3d u = im.pos[tr[(k + 1) % 3]] - p;
-      const Vec3d v = im.pos[tr[(k + 2) % 3]] - p;
-      const double angle = std::atan2(u.cross(v).norm(), u.dot(v));
-      im.vert_n[tr[k]] += angle * im.face_n[t];
-    }
-  }
+  // Angle-weighted vertex normals, each gathered over its triangles in
+  // triangle order: the sums do not depend on scheduling.
+  im.vert_n.resize(im.pos.size());
+  par::for_each_n(ctx, im.pos.size(), [&](std::size_t v) {
+    im.vert_n[v] = vertex_pseudo_normal(im.topo, pos, static_cast<std::uint32_t>(v));
+  });
 }
 
 Status read_positions(BodyBvh::Impl& im, const ExecContext& ctx) {
@@ -397,7 +256,9 @@ Status BodyBvh::build(const StridedPoints& points, std::span<const Triangle> tri
   for (const Triangle& t : triangles) {
     for (std::uint32_t v : t) im.used[v] = 1;
   }
-  build_adjacency(im, ctx);
+  auto topo = TriangleTopology::build(triangles, static_cast<std::uint32_t>(points.count), ctx);
+  if (!topo) return {topo.status().code(), "BodyBvh: " + topo.status().message()};
+  im.topo = std::move(*topo);
 
   im.device = rtcNewDevice("verbose=0");
   if (!im.device) return {ErrorCode::kInternal, "BodyBvh: rtcNewDevice failed"};
@@ -464,11 +325,12 @@ Box3d BodyBvh::bounds() const noexcept {
   return impl_->box;
 }
 bool BodyBvh::closed() const noexcept {
-  return impl_ && impl_->committed && impl_->closed;
+  return impl_ && impl_->committed && impl_->topo.closed();
 }
 Status BodyBvh::require_closed() const {
   if (empty()) return {ErrorCode::kInvalidArgument, "BodyBvh: not built"};
-  if (!impl_->closed) return {ErrorCode::kTopology, "BodyBvh: mesh is not closed and oriented: " + impl_->open_message};
+  if (!impl_->topo.closed())
+    return {ErrorCode::kTopology, "BodyBvh: mesh is not closed and oriented: " + impl_->topo.open_message()};
   return Status::ok();
 }
 
@@ -629,8 +491,7 @@ SignedHit BodyBvh::signed_distance_to(const Vec3d& p, std::uint32_t t) const noe
   }
   // Baerentzen & Aanaes, theorem 1: sign of (p - c) . n_pseudo at the closest
   // feature is the inside/outside sign for a closed oriented mesh.
-  const double s = (p - r.point).dot(n);
-  out.distance = s < 0.0 ? -d : d;
+  out.distance = pseudo_normal_sign(p, r.point, n) * d;
   const double len = n.norm();
   out.normal = len > 0.0 ? Vec3d(n / len) : Vec3d::Zero();
   return out;
@@ -679,33 +540,6 @@ Status BodyBvh::winding_numbers(std::span<const Vec3d> in, std::span<double> out
   c.sequential_threshold = std::min<std::size_t>(ctx.sequential_threshold, 64);
   return batched("BodyBvh::winding_numbers", !empty(), in, out, c,
                  [this](const Vec3d& p) { return winding_number(p); });
-}
-
-// ------------------------------------------------------------ fan_triangulate
-
-Expected<SurfaceTriangles> fan_triangulate(const Model& model, std::span<const SurfaceIdx> surfaces) {
-  std::vector<std::uint8_t> wanted(model.surfaces.slots.capacity(), surfaces.empty() ? 1 : 0);
-  for (SurfaceIdx s : surfaces) {
-    if (!model.alive(s)) {
-      return Status(ErrorCode::kStaleHandle, "fan_triangulate: surface " + std::to_string(s.value) + " is not alive");
-    }
-    wanted[s.value] = 1;
-  }
-  SurfaceTriangles out;
-  std::vector<NodeIdx> corners;
-  const std::size_t nf = model.faces.slots.capacity();
-  for (std::uint32_t f = 0; f < nf; ++f) {
-    const FaceIdx fi{f};
-    if (!model.alive(fi)) continue;
-    const SurfaceIdx s = model.faces.surface[f];
-    if (!s.valid() || s.value >= wanted.size() || !wanted[s.value]) continue;
-    model.face_nodes(fi, corners);
-    for (std::size_t j = 1; j + 1 < corners.size(); ++j) {
-      out.triangles.push_back({corners[0].value, corners[j].value, corners[j + 1].value});
-      out.face.push_back(fi);
-    }
-  }
-  return out;
 }
 
 }  // namespace atelier

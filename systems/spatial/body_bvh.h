@@ -27,10 +27,9 @@
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/storage/polygon_soup.h>
+#include <atelier/systems/spatial/triangle_query.h>
 
 namespace atelier {
-
-inline constexpr std::uint32_t kNoTriangle = std::numeric_limits<std::uint32_t>::max();
 
 /// Non-owning strided view of 3D points: a column of Vec3f, Vec3d, or xyz
 /// floats inside a larger record. The caller keeps the memory alive (and
@@ -67,21 +66,6 @@ struct StridedPoints {
     return {d[0], d[1], d[2]};
   }
 };
-
-/// Which feature of a triangle holds the closest point: vertex k, edge k
-/// (from corner k to corner k+1 mod 3), or the face interior.
-enum class TriFeature : std::uint8_t { kVertex0, kVertex1, kVertex2, kEdge01, kEdge12, kEdge20, kFace };
-
-/// Exact closest point on one triangle (double precision, Voronoi regions as
-/// in Ericson, Real-Time Collision Detection 5.1.5; degenerate triangles fall
-/// back to their edges). barycentric = weights of corners a, b, c.
-struct TrianglePoint {
-  Vec3d point;
-  Vec3d barycentric;
-  TriFeature feature = TriFeature::kFace;
-};
-[[nodiscard]] TrianglePoint closest_point_on_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b,
-                                                      const Vec3d& c) noexcept;
 
 struct ClosestHit {
   Vec3d point = Vec3d::Zero();
@@ -215,19 +199,5 @@ class BodyBvh {
  private:
   std::unique_ptr<Impl> impl_;
 };
-
-/// Fan triangulation of faces of a Model: face corners c0..c(k-1) give
-/// triangles (c0, c_{j+1}, c_{j+2}) (the attribute-node corner convention),
-/// indices into model.nodes.position (dead slots are never referenced), so
-/// the position column is used directly:
-/// `bvh.build(StridedPoints::of(std::span<const Vec3d>(model.nodes.position)), tri.triangles)`.
-struct SurfaceTriangles {
-  std::vector<Triangle> triangles;
-  std::vector<FaceIdx> face;  // source face of each triangle
-};
-/// Faces of the given surfaces (all live surfaces when empty). Errors on a
-/// dead surface index.
-[[nodiscard]] Expected<SurfaceTriangles> fan_triangulate(const Model& model,
-                                                         std::span<const SurfaceIdx> surfaces = {});
 
 }  // namespace atelier

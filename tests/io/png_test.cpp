@@ -82,7 +82,6 @@ TEST(Png, ChunksHaveValidCrcsAndTheDataInflatesIndependently) {
     const auto* p = reinterpret_cast<const Bytef*>(png.data() + c.offset + 4);
     const auto zcrc = static_cast<std::uint32_t>(crc32(0L, p, c.length + 4));
     EXPECT_EQ(be32(png, c.offset + 8 + c.length), zcrc) << c.type;
-    EXPECT_EQ(png_crc32({p, c.length + 4}), zcrc) << c.type;
   }
   EXPECT_EQ(be32(png, cs[0].offset + 8), 50u);
   EXPECT_EQ(be32(png, cs[0].offset + 12), 40u);

@@ -621,7 +621,8 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
   EXPECT_EQ(back.d, enc->d);
   EXPECT_EQ(back.topology_hash, enc->topology_hash);
   EXPECT_EQ(back.reference_corners, enc->reference_corners);
-  EXPECT_EQ(fs::file_size(p), enc->bytes() + 8 + 4 + 4 + 4 + 8 + 8 + 8 + 8 + 8);
+  // Header (magic, version, sizes, topology hash), the matrix, a CRC-32.
+  EXPECT_EQ(fs::file_size(p), enc->bytes() + 8 + 4 + 4 + 4 + 8 + 8 + 8 + 8 + 4);
   std::string bytes;
   {
     std::ifstream in(p, std::ios::binary);
@@ -655,6 +656,20 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
   flipped[bytes.size() / 2] ^= 0x40;
   expect_error(flipped, "checksum");
   expect_error("hello world, not a template", "bad magic");
+  expect_error(bytes + "x", "1 bytes after the checksum");
+  expect_error(flipped, "byte offset");
+  // Version 1 files (an FNV-1a checksum of 8 bytes) are still read.
+  {
+    std::string v1 = bytes.substr(0, bytes.size() - 4);
+    const std::uint32_t one = 1;
+    std::memcpy(v1.data() + 8, &one, 4);
+    std::uint64_t h = 0xcbf29ce484222325ull;
+    for (const unsigned char c : v1) h = (h ^ c) * 0x100000001b3ull;
+    v1.append(reinterpret_cast<const char*>(&h), 8);
+    const fs::path old = tmp_dir() / "v1.atd";
+    std::ofstream(old, std::ios::binary) << v1;
+    EXPECT_EQ(read_detail(old).a, enc->a);
+  }
   // Writing into a missing folder fails cleanly and leaves nothing behind.
   EXPECT_THROW(write_detail(*enc, tmp_dir() / "no" / "such" / "dir" / "x.atd"), Error);
 }

@@ -25,13 +25,15 @@
 #include <numeric>
 
 #include <atelier/engine/parallel.h>
-#include <atelier/io/makehuman/mhclo.h>
+#include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/io/obj.h>
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/garment/collision_pass.h>
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 using namespace atelier;
 using namespace atelier::makehuman;
@@ -61,10 +63,7 @@ struct Garment {
   std::vector<std::array<std::uint32_t, 2>> edges;
   std::vector<Vec3d> source;  // binding fit on the default body (m)
   std::vector<double> source_sd;
-  DetailEncoding enc;
-  NodeAdjacency adj;
-  ClearanceEncoding clear;
-  EdgeTransfer transfer;
+  GarmentTemplate tmpl;  // encoded through the garment pipeline
   double source_floor_rms = 0;  // RMS of (max(source clearance, min_clearance) - source clearance)
   // Per edge: the body triangle under its midpoint on the source body, and
   // the edge vector in that triangle's (edge 1, edge 2, unit normal) basis.
@@ -98,22 +97,6 @@ double maxv(const std::vector<double>& v) {
   return v.empty() ? 0 : *std::max_element(v.begin(), v.end());
 }
 
-// Unique undirected edges of a polygon soup (real garments may have
-// inconsistently oriented faces, which a Model refuses; strain only needs edges).
-std::vector<std::array<std::uint32_t, 2>> edges_of(const BaseMesh& mesh) {
-  std::vector<std::array<std::uint32_t, 2>> e;
-  for (const auto& g : mesh.groups)
-    for (std::size_t f = 0; f + 1 < g.face_offsets.size(); ++f)
-      for (std::uint32_t k = g.face_offsets[f]; k < g.face_offsets[f + 1]; ++k) {
-        const std::uint32_t a = g.face_nodes[k];
-        const std::uint32_t b = g.face_nodes[k + 1 < g.face_offsets[f + 1] ? k + 1 : g.face_offsets[f]];
-        e.push_back({std::min(a, b), std::max(a, b)});
-      }
-  std::sort(e.begin(), e.end());
-  e.erase(std::unique(e.begin(), e.end()), e.end());
-  return e;
-}
-
 }  // namespace
 
 TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
@@ -129,10 +112,10 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
   const std::vector<Vec3d> skin0 = skin_positions(ref);
   BodyBvh bvh0;
   ASSERT_TRUE(bvh0.build(skin0, tris->triangles));
-  auto ctopo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(skin0.size()));
-  ASSERT_TRUE(ctopo) << ctopo.status().to_string();
+  auto family = GarmentFamily::of(ref);
+  ASSERT_TRUE(family) << family.status().to_string();
   CollisionBody cb0;
-  ASSERT_TRUE(cb0.build(*ctopo, skin0));
+  ASSERT_TRUE(cb0.build(family->collision, skin0));
   const auto& T = tris->triangles;
 
   std::vector<Garment> garments;
@@ -141,26 +124,19 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
       Garment g;
       g.name = e.path().stem().string();
       g.binding = read_mhclo(e.path(), nv_base);
-      const BaseMesh mesh = read_base_mesh(e.path().parent_path() / g.binding.obj_file);
-      ASSERT_EQ(mesh.positions.size(), g.binding.refs.size()) << g.name;
-      g.edges = edges_of(mesh);
+      auto soup = read_garment_mesh(e.path().parent_path() / g.binding.obj_file);
+      ASSERT_TRUE(soup) << soup.status().to_string();
+      ASSERT_EQ(soup->positions.size(), g.binding.refs.size()) << g.name;
+      g.edges = soup->edges();
       for (auto& ed : g.edges) ASSERT_LT(std::max(ed[0], ed[1]), g.binding.refs.size()) << g.name;
       g.source = to_metres(fit_binding(g.binding, H0));
       g.source_sd.resize(g.source.size());
       ASSERT_TRUE(bvh0.signed_distances(g.source, g.source_sd));
-      auto enc = encode_detail(poly, skin0, g.source);
-      ASSERT_TRUE(enc) << g.name << ": " << enc.status().to_string();
-      g.enc = std::move(*enc);
-      auto adj = adjacency_from_edges(g.source.size(), g.edges);
-      ASSERT_TRUE(adj) << g.name;
-      g.adj = std::move(*adj);
-      auto clear = encode_clearance(g.source, cb0);
-      ASSERT_TRUE(clear) << g.name;
-      g.clear = std::move(*clear);
-      auto xfer = encode_edge_transfer(g.source, g.edges, cb0);
-      ASSERT_TRUE(xfer) << g.name << ": " << xfer.status().to_string();
-      g.transfer = std::move(*xfer);
-      for (const float c : g.clear.clearance) {
+      soup->positions = g.source;
+      auto made = encode_garment(*family, g.name, std::move(*soup));
+      ASSERT_TRUE(made) << made.status().to_string();
+      g.tmpl = std::move(*made);
+      for (const float c : g.tmpl.clearance.clearance) {
         const double lift = std::max(0.0, CollisionParams{}.min_clearance - c);
         g.source_floor_rms += lift * lift;
       }
@@ -172,7 +148,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
       }
       // Decoding on the source body gives the source fit back.
       std::vector<Vec3d> back(g.source.size());
-      ASSERT_TRUE(decode_detail(g.enc, poly, skin0, back));
+      ASSERT_TRUE(decode_detail(g.tmpl.encoding, poly, skin0, back));
       for (std::size_t v = 0; v < back.size(); ++v) ASSERT_LT((back[v] - g.source[v]).norm(), 1e-5) << g.name;
       garments.push_back(std::move(g));
     }
@@ -226,31 +202,26 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     }
     PolygonFrames fr;
     for (const auto& g : garments) {
-      std::vector<Vec3d> ours(g.source.size());
-      compute_frames(poly, skin, fr, seq, g.enc.reference_corners);
-      decode_detail(g.enc, fr, ours, seq);
-      const std::vector<Vec3d> raw = ours;
-      if (Status s = apply_edge_transfer(g.transfer, skin, T, ours, seq); !s) {
-        errors[b] = s.to_string();
-        return;
-      }
-      const std::vector<Vec3d> xfd = ours;
-      // The collision pass, with its per-body set-up (grid over the decoded
-      // garment's box only).
+      // The garment pipeline (systems/garment/regenerate_garment.h), and its
+      // first stages alone for the diagnostics: the raw decode, then with
+      // the edge transfer.
+      GarmentRegenOptions stage;
+      stage.collision_pass = false;
+      stage.edge_transfer = false;
+      auto raw_fit = regenerate_garment(*family, g.tmpl, skin, stage, seq);
+      stage.edge_transfer = true;
+      auto xfd_fit = regenerate_garment(*family, g.tmpl, skin, stage, seq);
       const auto t0 = std::chrono::steady_clock::now();
-      CollisionBodyParams cbp;
-      for (const Vec3d& q : ours) cbp.roi.extend(q);
-      CollisionBody cb;
-      if (Status s = cb.build(*ctopo, skin, cbp, seq); !s) {
-        errors[b] = s.to_string();
-        return;
-      }
-      auto pass = resolve_collisions(ours, g.adj, g.clear, cb, CollisionParams{}, seq);
+      auto fit = regenerate_garment(*family, g.tmpl, skin, {}, seq);
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      if (!pass) {
-        errors[b] = g.name + ": " + pass.status().to_string();
+      if (!raw_fit || !xfd_fit || !fit) {
+        errors[b] = g.name + ": " + (!fit ? fit.status() : !xfd_fit ? xfd_fit.status() : raw_fit.status()).to_string();
         return;
       }
+      const std::vector<Vec3d>& raw = raw_fit->positions;
+      const std::vector<Vec3d>& xfd = xfd_fit->positions;
+      const std::vector<Vec3d>& ours = fit->positions;
+      const CollisionReport* pass = &fit->quality.pass;
       const auto peer = to_metres(fit_binding(g.binding, H));
       std::vector<double> sd_o(ours.size()), sd_p(ours.size()), sd_r(ours.size());
       (void)bvh.signed_distances(ours, sd_o, seq);

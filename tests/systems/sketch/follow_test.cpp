@@ -6,18 +6,14 @@
 //  - the project's top (systems/profile/project_templates.h), regenerated
 //    (systems/profile/regenerate.h) on 100 mannequins (sample_mannequin);
 //  - a MakeHuman garment through the detail-template path (decode, edge
-//    transfer, collision pass; the chain `regenerate_garment` wraps is not
-//    on main yet, so the test calls its parts directly).
+//    transfer, collision pass: systems/garment/regenerate_garment.h).
 #include <atelier/engine/parallel.h>
-#include <atelier/io/makehuman/mhclo.h>
-#include <atelier/io/obj.h>
-#include <atelier/storage/adjacency.h>
+#include <atelier/storage/builder.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/body/mannequin.h>
-#include <atelier/systems/garment/collision_pass.h>
-#include <atelier/systems/garment/detail_template.h>
-#include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/garment/makehuman_binding.h>
+#include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/sketch/paint.h>
@@ -199,34 +195,20 @@ TEST(FollowGarment, MakeHumanGarmentThroughTheDetailTemplate) {
   using namespace atelier::makehuman;
   const HumanLibrary lib = HumanLibrary::load(dir);
   const ReferenceBody ref = make_reference_body(lib);
-  const BodyPolygons poly = BodyPolygons::from_model(ref.model);
-  auto tris = fan_triangulate(ref.model);
-  ASSERT_TRUE(tris);
-  std::vector<Vec3f> H0(lib.vertex_count());
-  lib.build(MacroParams{}, H0);
-  const std::vector<Vec3d> skin0 = skin_positions(ref);
-  auto ctopo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(skin0.size()));
-  ASSERT_TRUE(ctopo);
-  CollisionBody cb0;
-  ASSERT_TRUE(cb0.build(*ctopo, skin0));
-  // The garment: its mesh (topology), fitted on the default body by its binding.
-  const GarmentBinding binding = read_mhclo(dir / "clothes" / "female_casualsuit01.mhclo", lib.vertex_count());
-  Model m0 = read_obj(dir / "clothes" / binding.obj_file);
-  std::vector<Vec3d> source = fit_binding(binding, H0);
-  for (Vec3d& p : source) p *= kMakeHumanToMetres;
-  ASSERT_EQ(source.size(), m0.nodes.slots.capacity());  // one node per OBJ vertex, in order
-  m0.nodes.position = source;
+  auto family = GarmentFamily::of(ref);
+  ASSERT_TRUE(family) << family.status().to_string();
+  // The garment fitted on the reference body by its binding (metres); the
+  // model over the same vertices (node i = vertex i).
+  auto soup = fitted_garment(lib, dir / "clothes" / "female_casualsuit01.mhclo");
+  ASSERT_TRUE(soup) << soup.status().to_string();
+  Model m0;
+  ASSERT_TRUE(add_polygon_surface(m0, "suit", *soup));
+  ASSERT_EQ(m0.nodes.slots.capacity(), soup->positions.size());
   std::vector<std::array<std::uint32_t, 2>> edges;
   for (std::uint32_t e = 0; e < m0.edges.slots.capacity(); ++e)
     edges.push_back({m0.tail(halfedge_of(EdgeIdx{e}, 0)).value, m0.head(halfedge_of(EdgeIdx{e}, 0)).value});
-  auto enc = encode_detail(poly, skin0, source);
-  ASSERT_TRUE(enc) << enc.status().to_string();
-  auto adj = adjacency_from_edges(source.size(), edges);
-  ASSERT_TRUE(adj);
-  auto clear = encode_clearance(source, cb0);
-  ASSERT_TRUE(clear);
-  auto xfer = encode_edge_transfer(source, edges, cb0);
-  ASSERT_TRUE(xfer) << xfer.status().to_string();
+  auto garment = encode_garment(*family, "suit", *soup, {.edges = edges});
+  ASSERT_TRUE(garment) << garment.status().to_string();
   const Model unpainted = m0;
 
   // Paint once on the garment on the reference body: shorten the legs below
@@ -248,25 +230,22 @@ TEST(FollowGarment, MakeHumanGarmentThroughTheDetailTemplate) {
   EXPECT_EQ(removed, 2u);  // both lower legs
   EXPECT_GE(expect->partition.size(), 2u);
 
-  // Sampled adult bodies: decode, edge transfer, collision pass, then the
-  // same curves cut and partition the regenerated garment.
+  // Sampled adult bodies through the garment pipeline (decode, edge
+  // transfer, collision pass: regenerate_garment), then the same curves cut
+  // and partition the regenerated garment.
   const auto params = sample_adults(8, 77);
   for (std::size_t b = 0; b < params.size(); ++b) {
     std::vector<Vec3f> H(lib.vertex_count());
     lib.build(params[b], H);
-    std::vector<Vec3d> skin(skin0.size());
+    std::vector<Vec3d> skin(family->reference_positions.size());
     for (std::size_t v = 0; v < skin.size(); ++v) skin[v] = kMakeHumanToMetres * H[v].cast<double>();
-    std::vector<Vec3d> g(source.size());
-    ASSERT_TRUE(decode_detail(*enc, poly, skin, g));
-    ASSERT_TRUE(apply_edge_transfer(*xfer, skin, tris->triangles, g));
-    CollisionBody cb;
-    ASSERT_TRUE(cb.build(*ctopo, skin));
-    auto pass = resolve_collisions(g, *adj, *clear, cb, CollisionParams{});
-    ASSERT_TRUE(pass) << pass.status().to_string();
+    auto fit = regenerate_garment(*family, *garment, skin);
+    ASSERT_TRUE(fit) << "body " << b << ": " << fit.status().to_string();
     Model m = unpainted;
-    m.nodes.position = g;
+    m.nodes.position = fit->positions;
     double moved = 0;
-    for (std::size_t v = 0; v < g.size(); ++v) moved = std::max(moved, (g[v] - source[v]).norm());
+    for (std::size_t v = 0; v < fit->positions.size(); ++v)
+      moved = std::max(moved, (fit->positions[v] - soup->positions[v]).norm());
     EXPECT_GT(moved, 0.01) << "body " << b;  // another body, another garment shape
     auto d = transfer_design(m0, design, m);
     ASSERT_TRUE(d) << d.status().to_string();

@@ -16,6 +16,7 @@
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/spatial/sdf_grid.h>
 #include <atelier/storage/validate.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 
 namespace atelier {
 namespace {

@@ -1,0 +1,127 @@
+// The detail-template file (.atd): magic, version, sizes and topology hash,
+// the CSR matrix, then a checksum of everything before it. Version 2 (what
+// is written) ends in the CRC-32 of the native formats (io/checksum.h) and
+// is written through an AtomicFile; version 1 files (an FNV-1a sum) are
+// still read.
+#include <atelier/systems/garment/detail_template.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/checksum.h>
+#include <atelier/io/mesh_arrays.h>
+#include "detail_template_detail.h"
+
+namespace atelier {
+
+using namespace detail_internal;
+
+namespace {
+
+constexpr char kMagic[8] = {'A', 'T', 'L', 'D', 'E', 'T', 'L', '1'};
+constexpr std::uint32_t kVersion = 2;  // 1: FNV-1a checksum (read only)
+
+template <class T>
+void put(std::string& s, const T& v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T>
+void put_vec(std::string& s, const std::vector<T>& v) {
+  s.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+}  // namespace
+
+void write_detail(const DetailEncoding& enc, const std::filesystem::path& path) {
+  std::string s(kMagic, 8);
+  put(s, kVersion);
+  put(s, enc.polygon_count);
+  put(s, enc.body_node_count);
+  put(s, enc.topology_hash);
+  put(s, static_cast<std::uint64_t>(enc.vertex_count()));
+  put(s, static_cast<std::uint64_t>(enc.entries()));
+  put(s, static_cast<std::uint64_t>(enc.reference_corners.size()));
+  put_vec(s, enc.row);
+  put_vec(s, enc.polygon);
+  put_vec(s, enc.a);
+  put_vec(s, enc.b);
+  put_vec(s, enc.c);
+  put_vec(s, enc.d);
+  put_vec(s, enc.reference_corners);
+  put(s, crc32(s));
+  write_atomically(path, [&](AtomicFile& f) { f.write(s); });
+}
+
+DetailEncoding read_detail(const std::filesystem::path& path) {
+  const std::string s = io_detail::read_file_bytes(path);
+  std::size_t pos = 0;
+  auto fail = [&](const std::string& what) {
+    throw Error(Status(ErrorCode::kParse, path.string() + ": byte offset " + std::to_string(pos) + ": " + what));
+  };
+  auto get = [&](void* dst, std::size_t n, const char* what) {
+    if (n > s.size() - pos) fail(std::string("truncated file (while reading ") + what + ")");
+    std::memcpy(dst, s.data() + pos, n);
+    pos += n;
+  };
+  char magic[8];
+  get(magic, 8, "magic");
+  if (std::memcmp(magic, kMagic, 8) != 0) {
+    pos = 0;
+    fail("not an Atelier detail template (bad magic)");
+  }
+  std::uint32_t version;
+  get(&version, 4, "version");
+  if (version != 1 && version != kVersion) {
+    pos -= 4;
+    fail("unsupported version " + std::to_string(version) + " (this atelier reads versions 1 and 2)");
+  }
+  DetailEncoding e;
+  std::uint64_t nv, ne, nc;
+  get(&e.polygon_count, 4, "header");
+  get(&e.body_node_count, 4, "header");
+  get(&e.topology_hash, 8, "header");
+  get(&nv, 8, "header");
+  get(&ne, 8, "header");
+  get(&nc, 8, "header");
+  const std::size_t sum_bytes = version == 1 ? 8 : 4;
+  // Sizes are checked against the file before anything is allocated.
+  if (nv >= s.size() || ne > s.size() || nc > s.size() || s.size() - pos < (nv + 1) * 4 + ne * 20 + nc * 8 + sum_bytes)
+    fail("truncated file (the sizes in the header exceed the file)");
+  e.row.resize(nv + 1);
+  e.polygon.resize(ne);
+  for (auto* v : {&e.a, &e.b, &e.c, &e.d}) v->resize(ne);
+  get(e.row.data(), e.row.size() * 4, "rows");
+  get(e.polygon.data(), ne * 4, "polygons");
+  for (auto* v : {&e.a, &e.b, &e.c, &e.d}) get(v->data(), ne * 4, "coefficients");
+  e.reference_corners.resize(nc);
+  get(e.reference_corners.data(), nc * 8, "reference corners");
+  const std::size_t body_end = pos;
+  bool ok = false;
+  if (version == 1) {
+    std::uint64_t sum;
+    get(&sum, 8, "checksum");
+    ok = sum == fnv1a(0xcbf29ce484222325ull, s.data(), body_end);
+  } else {
+    std::uint32_t sum;
+    get(&sum, 4, "checksum");
+    ok = sum == crc32(s.data(), body_end);
+  }
+  if (!ok) {
+    pos = body_end;
+    fail("checksum mismatch (corrupted file)");
+  }
+  if (pos != s.size()) fail(std::to_string(s.size() - pos) + " bytes after the checksum");
+  if (e.row.front() != 0 || e.row.back() != ne) fail("row offsets do not cover the entries");
+  for (std::size_t v = 0; v < nv; ++v)
+    if (e.row[v] > e.row[v + 1]) fail("row offsets decrease at vertex " + std::to_string(v));
+  for (std::size_t i = 0; i < ne; ++i)
+    if (e.polygon[i] >= e.polygon_count) fail("entry " + std::to_string(i) + " names a polygon out of range");
+  for (const auto* v : {&e.a, &e.b, &e.c, &e.d})
+    for (std::size_t i = 0; i < ne; ++i)
+      if (!std::isfinite((*v)[i])) fail("entry " + std::to_string(i) + " has a non-finite coefficient");
+  return e;
+}
+
+}  // namespace atelier
