@@ -8,6 +8,7 @@
 #include "net_cmd.h"
 #include "regen_cmd.h"
 #include "render_cmd.h"
+#include "sketch_cmd.h"
 #include <atelier/engine/memory.h>
 #include <atelier/engine/status.h>
 
@@ -69,6 +70,8 @@ int main(int argc, char** argv) {
   auto* trim_cmd = add_trim_subcommand(app, trim_opt);
   NetRoundOptions round_opt;
   auto* round_cmd = add_round_subcommand(app, round_opt);
+  SketchOptions sketch_opt;
+  auto* sketch_cmd = add_sketch_subcommand(app, sketch_opt);
 
   try {
     app.parse(argc, argv);
@@ -89,6 +92,7 @@ int main(int argc, char** argv) {
     if (*boolean_cmd) return run_boolean(common, boolean_opt, log);
     if (*trim_cmd) return run_trim(common, trim_opt, log);
     if (*round_cmd) return run_round(common, round_opt, log);
+    if (*sketch_cmd) return run_sketch(common, sketch_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();

@@ -1,0 +1,123 @@
+// Shared by the sketch tests: analytic meshes (icospheres, tubes, folds),
+// cameras, and strokes made by projecting known 3D curves.
+#pragma once
+
+#include <atelier/engine/math.h>
+#include <atelier/storage/builder.h>
+#include <atelier/storage/model.h>
+#include <atelier/systems/mesh/subdivide.h>
+#include <atelier/systems/view/camera.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <initializer_list>
+#include <vector>
+
+namespace atelier::sketch_test {
+
+/// Icosphere of radius r: the icosahedron split `levels` times (1-to-4),
+/// every node pushed onto the sphere. Closed, outward, triangles only.
+inline Model icosphere(int levels, double r = 1.0, const Vec3d& centre = Vec3d::Zero()) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3d> p = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                          {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  const std::uint32_t f[20][3] = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                  {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                  {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  std::vector<std::uint32_t> off{0}, idx;
+  for (auto& tri : f) {
+    idx.insert(idx.end(), tri, tri + 3);
+    off.push_back(static_cast<std::uint32_t>(idx.size()));
+  }
+  for (auto& q : p) q = centre + r * q.normalized();
+  Model m;
+  (void)add_polygon_surface(m, "sphere", PolygonSoupView{p, off, idx}).value();
+  for (int l = 0; l < levels; ++l) {
+    (void)subdivide_uniform(m).value();
+    for (auto& q : m.nodes.position) q = centre + r * (q - centre).normalized();
+  }
+  return m;
+}
+
+/// Orthographic camera looking down -z at the origin, the square
+/// [-half, half]^2 filling a size x size viewport.
+inline Camera front_ortho(double half = 1.5, int size = 800) {
+  return Camera::orthographic(Vec3d(0, 0, 5), Vec3d::Zero(), Vec3d::UnitY(), half, size, size);
+}
+
+/// Perspective camera at `eye` looking at the origin.
+inline Camera front_persp(const Vec3d& eye = Vec3d(0.3, 0.2, 4), int size = 800) {
+  return Camera::look_at(eye, Vec3d::Zero(), Vec3d::UnitY(), 45.0, size, size);
+}
+
+/// Pixels of 3D points through a camera.
+inline std::vector<Vec2d> project(const Camera& c, const std::vector<Vec3d>& pts) {
+  std::vector<Vec2d> out;
+  for (const auto& p : pts) out.push_back(c.project(p).head<2>());
+  return out;
+}
+
+}  // namespace atelier::sketch_test
+
+namespace atelier::sketch_test {
+
+/// A polygon soup builder.
+struct Soup {
+  std::vector<Vec3d> p;
+  std::vector<std::uint32_t> off{0}, idx;
+  void face(std::initializer_list<std::uint32_t> f) {
+    idx.insert(idx.end(), f);
+    off.push_back(static_cast<std::uint32_t>(idx.size()));
+  }
+  [[nodiscard]] PolygonSoupView view() const { return {p, off, idx}; }
+};
+
+/// An (nu+1) x (nv+1) grid of quads (or triangles) over f(u, v), u, v in
+/// [0, 1]; faces counter-clockwise in (u, v).
+template <class F>
+Soup grid(int nu, int nv, F f, bool triangles = false) {
+  Soup s;
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i <= nu; ++i) s.p.push_back(f(double(i) / nu, double(j) / nv));
+  auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (nu + 1) + i); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      if (triangles) {
+        s.face({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+        s.face({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      } else {
+        s.face({id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+      }
+    }
+  return s;
+}
+
+/// A Z-fold strip seen from +z: panel A (front, facing +z) for x in
+/// [-1, 0.5], folding back under itself (panel B, facing -z) to x = -0.5,
+/// then forward again (panel C) to x = 1, farther back. From the front the
+/// visible surface jumps from A to C at x = 0.5 (seed 001 Fig. 10).
+inline Model z_fold(int n = 10) {
+  auto f = [](double u, double v) {
+    const double t = 3 * u, y = -1 + 2 * v;
+    if (t <= 1) return Vec3d(-1 + 1.5 * t, y, 0.5);
+    if (t <= 2) return Vec3d(0.5 - (t - 1), y, 0.5 - 0.5 * (t - 1));
+    return Vec3d(-0.5 + 1.5 * (t - 2), y, -0.5 * (t - 2));
+  };
+  Model m;
+  (void)add_polygon_surface(m, "fold", grid(3 * n, n, f).view()).value();
+  return m;
+}
+
+/// Pixel distance from q to the polyline.
+inline double distance_to_polyline(const std::vector<Vec2d>& line, const Vec2d& q) {
+  double best = INFINITY;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    const Vec2d a = line[i], d = line[i + 1] - a;
+    const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (a + t * d - q).norm());
+  }
+  return best;
+}
+
+}  // namespace atelier::sketch_test
