@@ -1,0 +1,118 @@
+// Private to systems/pattern: a piece's topology in local numbering and the
+// two phases of the energy-based flattening (Wang, Smith, Yuen 2002) that
+// run on it. Shared by flatten.cpp (the Model side: checks, API, distortion)
+// and flatten_solver.cpp (the numerics).
+#pragma once
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
+
+namespace atelier::pattern_detail {
+
+inline constexpr std::uint32_t kNone = 0xffffffffu;
+
+/// One piece (a surface) in dense local numbering. Polygons are fanned from
+/// their first corner into triangles (CCW seen from the front, as the faces);
+/// every triangle side is a spring, fan diagonals included.
+struct PieceTopology {
+  std::vector<NodeIdx> node;                        // local vertex -> model node (increasing)
+  std::vector<std::array<std::uint32_t, 3>> tri;    // local vertices, CCW
+  std::vector<FaceIdx> tri_face;                    // the face each triangle fans
+  std::vector<std::array<std::uint32_t, 3>> tri_adj;     // triangle across side k = (tri[k], tri[k+1]), or kNone
+  std::vector<std::array<std::uint32_t, 3>> tri_spring;  // spring of side k
+  std::vector<std::array<std::uint32_t, 2>> spring;      // (a, b), a < b
+  std::vector<std::uint8_t> spring_is_edge;              // a model edge (not a fan diagonal)
+  // Vertex -> springs (and the other end), vertex -> triangles, in CSR form.
+  std::vector<std::uint32_t> vs_off, vs_spring, vs_other;
+  std::vector<std::uint32_t> vt_off, vt_tri;
+  /// Boundary loops as local vertex sequences (faceless halfedges in chain
+  /// order: the front of the piece lies to their right).
+  std::vector<std::vector<std::uint32_t>> loops;
+  std::vector<std::vector<HalfedgeIdx>> loop_halfedges;  // the model's faceless halfedges, same order
+
+  [[nodiscard]] std::size_t vertex_count() const noexcept { return node.size(); }
+};
+
+/// The piece's triangles, springs, adjacency and boundary loops; with
+/// `check`, also the conditions of a flattenable piece (flatten.h), as
+/// errors naming the surface. Implemented in flatten.cpp.
+[[nodiscard]] Expected<PieceTopology> build_topology(const Model& m, SurfaceIdx s, bool allow_holes, bool check);
+
+/// Rest state of the spring-mass system for one set of 3D positions.
+struct RestState {
+  std::vector<double> length;     // l_ij per spring (3D)
+  std::vector<double> stiffness;  // C_ij per spring
+  std::vector<double> area;       // 3D area per triangle
+};
+
+struct SolverParams {
+  int relax_rings = 2;
+  int relax_sweeps = 3;
+  int max_iterations = 400;
+  double tolerance = 1e-9;  // relative energy decrease that ends phase 2
+  int memory = 8;           // L-BFGS pairs
+};
+
+struct SolverStats {
+  std::size_t closures = 0;       // phase 1: triangles that closed a loop
+  double energy_phase1 = 0;       // E after phase 1 (or of the warm start)
+  double energy = 0;              // E after phase 2
+  int iterations = 0;             // phase 2 iterations
+  int rejected_steps = 0;         // line-search halvings refused by the flip / overlap guard
+  bool tutte_fallback = false;    // phase 1 left flips: phase 2 started from a Tutte embedding
+  double phase1_ms = 0, phase2_ms = 0, factor_ms = 0;
+};
+
+/// Phase 1 (triangle flattening, [48] section 3): BFS from `seed`, circle
+/// intersections, local relaxation where loops close. Writes uv (local).
+void run_phase1(const PieceTopology& t, const RestState& rest, std::uint32_t seed, const SolverParams& prm,
+                std::vector<Vec2d>& uv, SolverStats& stats);
+
+/// Tutte's barycentric embedding with the boundary loop on a circle (arc
+/// length spacing): flip-free by Tutte's theorem. The fallback start of
+/// phase 2 when phase 1 leaves flipped triangles.
+void tutte_embedding(const PieceTopology& t, const RestState& rest, std::vector<Vec2d>& uv);
+
+/// Signed areas of the 2D triangles (positive when CCW).
+[[nodiscard]] std::size_t count_flipped(const PieceTopology& t, std::span<const Vec2d> uv, const ExecContext& ctx);
+
+/// Pairs of non-adjacent boundary segments that intersect (uniform grid).
+[[nodiscard]] std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec2d> uv);
+
+/// Phase 2 (planar mesh deformation): L-BFGS on E = sum 1/2 C (|Q_i Q_j| - l)^2
+/// with the spring Laplacian as initial Hessian; owns the factorization so
+/// a Flattener keeps its symbolic analysis across bodies.
+class Phase2Solver {
+ public:
+  /// Symbolic analysis of the Laplacian's pattern (once per topology).
+  void analyze(const PieceTopology& t);
+  /// Minimises from uv (flip-free) in place. False when the factorization fails.
+  [[nodiscard]] bool run(const PieceTopology& t, const RestState& rest, const SolverParams& prm, std::vector<Vec2d>& uv,
+                         SolverStats& stats, const ExecContext& ctx);
+
+ private:
+  using SpMat = Eigen::SparseMatrix<double>;
+  SpMat laplacian_;
+  std::vector<std::uint32_t> value_of_spring_[2];  // nonzero slots of each spring's (a,b) and (b,a) entries
+  std::vector<std::uint32_t> value_of_diag_;
+  Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> llt_;
+  mutable std::vector<Vec2d> work_;
+  bool analyzed_ = false;
+  /// x = H0^-1 b for the u and v columns at once.
+  void solve(std::span<const Vec2d> b, std::span<Vec2d> x) const;
+};
+
+/// Spring energy and, when `force` is not empty, dE/dQ per vertex.
+[[nodiscard]] double spring_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                                   std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx);
+
+}  // namespace atelier::pattern_detail

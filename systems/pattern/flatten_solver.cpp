@@ -1,0 +1,523 @@
+// The numerics of the energy-based flattening (Wang, Smith, Yuen 2002, the
+// reference [48] of seed 001 section 7): phase 1 (triangle flattening with
+// local relaxation of the partial spring-mass system), the Tutte fallback,
+// the flip and overlap guards, and phase 2 (planar deformation: L-BFGS on the
+// spring energy with the spring Laplacian as its initial Hessian, after Liu,
+// Bouaziz, Kavan, "Quasi-Newton methods for real-time simulation of
+// hyperelastic materials", ACM TOG 36(3), 2017).
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include <atelier/engine/parallel.h>
+
+#include "flatten_detail.h"
+
+namespace atelier::pattern_detail {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+[[nodiscard]] double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept { return a.x() * b.y() - a.y() * b.x(); }
+
+[[nodiscard]] inline double signed_area2(const Vec2d& a, const Vec2d& b, const Vec2d& c) noexcept {
+  return cross2(b - a, c - a);
+}
+
+/// The third corner c of a triangle (a, b, c), CCW, from the circles of radius
+/// r_a about a and r_b about b ([48] eq. 1: the 3D lengths of the two new
+/// edges). When the current |ab| no longer admits an intersection (after
+/// relaxation), c goes to the nearest point of the circle about a on the
+/// left, so the triangle keeps its orientation.
+[[nodiscard]] Vec2d circle_apex(const Vec2d& a, const Vec2d& b, double ra, double rb) noexcept {
+  const Vec2d ab = b - a;
+  const double d = ab.norm();
+  if (!(d > 0)) return a + Vec2d(0, ra);
+  const Vec2d u = ab / d, left(-u.y(), u.x());
+  const double x = (d * d + ra * ra - rb * rb) / (2 * d);
+  const double h2 = ra * ra - x * x;
+  const double h = std::max(h2 > 0 ? std::sqrt(h2) : 0.0, 1e-3 * std::min(ra, rb));
+  return a + x * u + h * left;
+}
+
+/// Springs of one vertex that belong to a flattened triangle, and the
+/// triangles around it, for the local relaxation of phase 1.
+struct Phase1State {
+  const PieceTopology& t;
+  const RestState& rest;
+  std::vector<Vec2d>& uv;
+  std::vector<std::uint8_t> placed, done, active;  // per vertex, triangle, spring
+
+  /// Energy of v's active springs at position x, with gradient and the
+  /// projected (positive semi-definite) Hessian of each spring:
+  /// C (u u^T + max(0, 1 - l / r) (I - u u^T)).
+  double local(std::uint32_t v, const Vec2d& x, Vec2d* g, Eigen::Matrix2d* H) const {
+    double e = 0;
+    if (g) g->setZero();
+    if (H) H->setZero();
+    for (std::uint32_t k = t.vs_off[v]; k < t.vs_off[v + 1]; ++k) {
+      const std::uint32_t s = t.vs_spring[k];
+      if (!active[s]) continue;
+      const Vec2d d = x - uv[t.vs_other[k]];
+      const double r = d.norm(), l = rest.length[s], c = rest.stiffness[s];
+      e += 0.5 * c * (r - l) * (r - l);
+      if (!(r > 0)) continue;
+      const Vec2d u = d / r;
+      if (g) *g += c * (r - l) * u;
+      if (H) {
+        const Eigen::Matrix2d uu = u * u.transpose();
+        *H += c * (uu + std::max(0.0, 1 - l / r) * (Eigen::Matrix2d::Identity() - uu));
+      }
+    }
+    return e;
+  }
+
+  /// Flattened triangles around v that are not CCW with v at x.
+  [[nodiscard]] int bad_around(std::uint32_t v, const Vec2d& x) const {
+    int bad = 0;
+    for (std::uint32_t k = t.vt_off[v]; k < t.vt_off[v + 1]; ++k) {
+      const std::uint32_t f = t.vt_tri[k];
+      if (!done[f]) continue;
+      const auto& c = t.tri[f];
+      const Vec2d p0 = c[0] == v ? x : uv[c[0]], p1 = c[1] == v ? x : uv[c[1]], p2 = c[2] == v ? x : uv[c[2]];
+      if (!(signed_area2(p0, p1, p2) > 0)) ++bad;
+    }
+    return bad;
+  }
+
+  /// Newton steps on the vertices within `rings` rings of triangle f (over
+  /// flattened springs): the partial system releases its strain ([48]
+  /// section 3.2). A move is kept only when it lowers the local energy and
+  /// does not add a triangle that is not CCW (the flip guard).
+  void relax(std::uint32_t f, int rings, int sweeps, std::vector<std::uint32_t>& region,
+             std::vector<std::uint32_t>& mark, std::uint32_t stamp) {
+    region.assign(t.tri[f].begin(), t.tri[f].end());
+    for (std::uint32_t v : region) mark[v] = stamp;
+    std::size_t begin = 0;
+    for (int r = 0; r < rings; ++r) {
+      const std::size_t end = region.size();
+      for (std::size_t i = begin; i < end; ++i) {
+        const std::uint32_t v = region[i];
+        for (std::uint32_t k = t.vs_off[v]; k < t.vs_off[v + 1]; ++k) {
+          const std::uint32_t w = t.vs_other[k];
+          if (active[t.vs_spring[k]] && mark[w] != stamp) {
+            mark[w] = stamp;
+            region.push_back(w);
+          }
+        }
+      }
+      begin = end;
+    }
+    std::sort(region.begin(), region.end());
+    for (int sweep = 0; sweep < sweeps; ++sweep) {
+      for (std::uint32_t v : region) {
+        Vec2d g;
+        Eigen::Matrix2d H;
+        const double e0 = local(v, uv[v], &g, &H);
+        H.diagonal().array() += 1e-12 * (H.trace() + 1e-300);
+        const double det = H.determinant();
+        if (!(det > 0)) continue;
+        Vec2d step = -H.inverse() * g;
+        const int bad0 = bad_around(v, uv[v]);
+        for (int halving = 0; halving < 5; ++halving, step *= 0.5) {
+          const Vec2d x = uv[v] + step;
+          if (local(v, x, nullptr, nullptr) < e0 && bad_around(v, x) <= bad0) {
+            uv[v] = x;
+            break;
+          }
+        }
+      }
+    }
+  }
+};
+
+}  // namespace
+
+void run_phase1(const PieceTopology& t, const RestState& rest, std::uint32_t seed, const SolverParams& prm,
+                std::vector<Vec2d>& uv, SolverStats& stats) {
+  const auto t0 = Clock::now();
+  const std::size_t n = t.vertex_count(), nt = t.tri.size();
+  uv.assign(n, Vec2d::Zero());
+  Phase1State st{t, rest, uv, std::vector<std::uint8_t>(n, 0), std::vector<std::uint8_t>(nt, 0),
+                 std::vector<std::uint8_t>(t.spring.size(), 0)};
+  auto length = [&](std::uint32_t f, int k) { return rest.length[t.tri_spring[f][k]]; };
+  std::vector<std::uint32_t> queue;
+  queue.reserve(nt);
+  auto finish = [&](std::uint32_t f) {
+    st.done[f] = 1;
+    for (int k = 0; k < 3; ++k) {
+      st.active[t.tri_spring[f][k]] = 1;
+      const std::uint32_t g = t.tri_adj[f][k];
+      if (g != kNone && !st.done[g]) queue.push_back(g);
+    }
+  };
+  {  // The seed triangle: a at the origin, b on +x, c on the left.
+    const auto& c = t.tri[seed];
+    uv[c[0]] = Vec2d::Zero();
+    uv[c[1]] = Vec2d(length(seed, 0), 0);
+    uv[c[2]] = circle_apex(uv[c[0]], uv[c[1]], length(seed, 2), length(seed, 1));
+    for (std::uint32_t v : c) st.placed[v] = 1;
+    finish(seed);
+  }
+  std::vector<std::uint32_t> region, mark(n, 0);
+  std::uint32_t stamp = 0;
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const std::uint32_t f = queue[head];
+    if (st.done[f]) continue;
+    const auto& c = t.tri[f];
+    int k = -1;
+    for (int i = 0; i < 3; ++i)
+      if (!st.placed[c[(i + 2) % 3]]) k = i;
+    if (k < 0) {
+      // All three corners are placed: a loop of triangles closes here.
+      finish(f);
+      ++stats.closures;
+      st.relax(f, prm.relax_rings, prm.relax_sweeps, region, mark, ++stamp);
+      continue;
+    }
+    // Side k = (c[k], c[k+1]) is placed (f was queued across it); the new
+    // corner is c[k+2], at distances |c[k+2] c[k]| (side k+2) and
+    // |c[k+1] c[k+2]| (side k+1).
+    const std::uint32_t a = c[k], b = c[(k + 1) % 3], v = c[(k + 2) % 3];
+    uv[v] = circle_apex(uv[a], uv[b], length(f, (k + 2) % 3), length(f, (k + 1) % 3));
+    st.placed[v] = 1;
+    finish(f);
+  }
+  stats.phase1_ms = ms_since(t0);
+}
+
+void tutte_embedding(const PieceTopology& t, const RestState& rest, std::vector<Vec2d>& uv) {
+  const std::size_t n = t.vertex_count();
+  uv.assign(n, Vec2d::Zero());
+  // The longest loop goes on a circle, clockwise (the front lies to the right
+  // of a boundary chain), spaced by its 3D arc length.
+  std::size_t outer = 0;
+  std::vector<double> perimeter(t.loops.size(), 0);
+  auto edge_len = [&](std::uint32_t a, std::uint32_t b) {
+    for (std::uint32_t k = t.vs_off[a]; k < t.vs_off[a + 1]; ++k)
+      if (t.vs_other[k] == b) return rest.length[t.vs_spring[k]];
+    return 0.0;
+  };
+  for (std::size_t l = 0; l < t.loops.size(); ++l) {
+    const auto& lp = t.loops[l];
+    for (std::size_t i = 0; i < lp.size(); ++i) perimeter[l] += edge_len(lp[i], lp[(i + 1) % lp.size()]);
+    if (perimeter[l] > perimeter[outer]) outer = l;
+  }
+  std::vector<std::uint8_t> fixed(n, 0);
+  const auto& lp = t.loops[outer];
+  const double P = perimeter[outer], R = P / (2 * M_PI);
+  double s = 0;
+  for (std::size_t i = 0; i < lp.size(); ++i) {
+    const double th = -2 * M_PI * s / P;
+    uv[lp[i]] = R * Vec2d(std::cos(th), std::sin(th));
+    fixed[lp[i]] = 1;
+    s += edge_len(lp[i], lp[(i + 1) % lp.size()]);
+  }
+  std::vector<std::uint32_t> free_index(n, kNone);
+  std::uint32_t nf = 0;
+  for (std::size_t v = 0; v < n; ++v)
+    if (!fixed[v]) free_index[v] = nf++;
+  if (nf == 0) return;
+  std::vector<Eigen::Triplet<double>> trip;
+  Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(nf, 2);
+  for (std::size_t v = 0; v < n; ++v) {
+    if (fixed[v]) continue;
+    double diag = 0;
+    for (std::uint32_t k = t.vs_off[v]; k < t.vs_off[v + 1]; ++k) {
+      const double w = rest.stiffness[t.vs_spring[k]];
+      const std::uint32_t o = t.vs_other[k];
+      diag += w;
+      if (fixed[o])
+        rhs.row(free_index[v]) += w * uv[o].transpose();
+      else
+        trip.emplace_back(free_index[v], free_index[o], -w);
+    }
+    trip.emplace_back(free_index[v], free_index[v], diag);
+  }
+  Eigen::SparseMatrix<double> A(nf, nf);
+  A.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(A);
+  if (llt.info() != Eigen::Success) return;
+  const Eigen::MatrixX2d x = llt.solve(rhs);
+  for (std::size_t v = 0; v < n; ++v)
+    if (!fixed[v]) uv[v] = x.row(free_index[v]).transpose();
+}
+
+std::size_t count_flipped(const PieceTopology& t, std::span<const Vec2d> uv, const ExecContext& ctx) {
+  return par::transform_reduce(
+      ctx, t.tri.size(), std::size_t{0},
+      [&](std::size_t f) -> std::size_t {
+        const auto& c = t.tri[f];
+        return signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]) > 0 ? 0 : 1;
+      },
+      [](std::size_t a, std::size_t b) { return a + b; });
+}
+
+std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec2d> uv) {
+  struct Seg {
+    std::uint32_t a, b;
+  };
+  std::vector<Seg> seg;
+  for (const auto& lp : t.loops)
+    for (std::size_t i = 0; i < lp.size(); ++i) seg.push_back({lp[i], lp[(i + 1) % lp.size()]});
+  if (seg.size() < 4) return 0;
+  Eigen::AlignedBox2d box;
+  double mean = 0;
+  for (const Seg& s : seg) {
+    box.extend(uv[s.a]);
+    mean += (uv[s.b] - uv[s.a]).norm();
+  }
+  mean /= static_cast<double>(seg.size());
+  const double cell = std::max(2 * mean, 1e-300);
+  const Vec2d size = box.sizes();
+  const auto nx = static_cast<std::int64_t>(std::min(4096.0, std::floor(size.x() / cell) + 1));
+  const auto ny = static_cast<std::int64_t>(std::min(4096.0, std::floor(size.y() / cell) + 1));
+  const double cx = std::max(size.x() / static_cast<double>(nx), 1e-300);
+  const double cy = std::max(size.y() / static_cast<double>(ny), 1e-300);
+  auto cell_of = [&](const Vec2d& p, std::int64_t& i, std::int64_t& j) {
+    i = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.x() - box.min().x()) / cx), 0, nx - 1);
+    j = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.y() - box.min().y()) / cy), 0, ny - 1);
+  };
+  std::vector<std::pair<std::int64_t, std::uint32_t>> entries;  // (cell, segment)
+  for (std::uint32_t s = 0; s < seg.size(); ++s) {
+    std::int64_t i0, j0, i1, j1;
+    cell_of(uv[seg[s].a], i0, j0);
+    cell_of(uv[seg[s].b], i1, j1);
+    for (std::int64_t i = std::min(i0, i1); i <= std::max(i0, i1); ++i)
+      for (std::int64_t j = std::min(j0, j1); j <= std::max(j0, j1); ++j) entries.emplace_back(j * nx + i, s);
+  }
+  std::sort(entries.begin(), entries.end());
+  auto crosses = [&](const Seg& p, const Seg& q) {
+    if (p.a == q.a || p.a == q.b || p.b == q.a || p.b == q.b) return false;
+    const Vec2d &a = uv[p.a], &b = uv[p.b], &c = uv[q.a], &d = uv[q.b];
+    const double d1 = signed_area2(a, b, c), d2 = signed_area2(a, b, d);
+    const double d3 = signed_area2(c, d, a), d4 = signed_area2(c, d, b);
+    return ((d1 > 0) != (d2 > 0) || d1 == 0 || d2 == 0) && ((d3 > 0) != (d4 > 0) || d3 == 0 || d4 == 0) &&
+           !(d1 == 0 && d2 == 0);  // collinear overlaps are not crossings of distinct segments here
+  };
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> hits;
+  for (std::size_t i = 0; i < entries.size();) {
+    std::size_t j = i;
+    while (j < entries.size() && entries[j].first == entries[i].first) ++j;
+    for (std::size_t x = i; x < j; ++x)
+      for (std::size_t y = x + 1; y < j; ++y)
+        if (crosses(seg[entries[x].second], seg[entries[y].second]))
+          hits.emplace_back(std::min(entries[x].second, entries[y].second),
+                            std::max(entries[x].second, entries[y].second));
+    i = j;
+  }
+  std::sort(hits.begin(), hits.end());
+  return static_cast<std::size_t>(std::unique(hits.begin(), hits.end()) - hits.begin());
+}
+
+double spring_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                     std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx) {
+  const bool want = !gradient.empty();
+  if (want) scratch.resize(t.spring.size());
+  const double e = par::transform_reduce(
+      ctx, t.spring.size(), 0.0,
+      [&](std::size_t s) {
+        const auto& sp = t.spring[s];
+        const Vec2d d = uv[sp[0]] - uv[sp[1]];
+        const double r = d.norm(), l = rest.length[s], c = rest.stiffness[s];
+        if (want) scratch[s] = r > 0 ? Vec2d(c * (r - l) / r * d) : Vec2d::Zero();
+        return 0.5 * c * (r - l) * (r - l);
+      },
+      [](double a, double b) { return a + b; });
+  if (want) {
+    par::for_each_n(ctx, t.vertex_count(), [&](std::size_t v) {
+      Vec2d g = Vec2d::Zero();
+      for (std::uint32_t k = t.vs_off[v]; k < t.vs_off[v + 1]; ++k) {
+        const std::uint32_t s = t.vs_spring[k];
+        if (t.spring[s][0] == v)
+          g += scratch[s];
+        else
+          g -= scratch[s];
+      }
+      gradient[v] = g;
+    });
+  }
+  return e;
+}
+
+void Phase2Solver::analyze(const PieceTopology& t) {
+  const auto n = static_cast<Eigen::Index>(t.vertex_count());
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(n + 2 * t.spring.size());
+  for (Eigen::Index v = 0; v < n; ++v) trip.emplace_back(v, v, 1.0);
+  for (const auto& s : t.spring) {
+    trip.emplace_back(s[0], s[1], -1.0);
+    trip.emplace_back(s[1], s[0], -1.0);
+  }
+  laplacian_.resize(n, n);
+  laplacian_.setFromTriplets(trip.begin(), trip.end());
+  laplacian_.makeCompressed();
+  auto slot = [&](std::uint32_t row, std::uint32_t col) {
+    const int* inner = laplacian_.innerIndexPtr();
+    const int* outer = laplacian_.outerIndexPtr();
+    const int* it = std::lower_bound(inner + outer[col], inner + outer[col + 1], static_cast<int>(row));
+    return static_cast<std::uint32_t>(it - inner);
+  };
+  for (auto& x : value_of_spring_) x.resize(t.spring.size());
+  for (std::size_t s = 0; s < t.spring.size(); ++s) {
+    value_of_spring_[0][s] = slot(t.spring[s][0], t.spring[s][1]);
+    value_of_spring_[1][s] = slot(t.spring[s][1], t.spring[s][0]);
+  }
+  value_of_diag_.resize(t.vertex_count());
+  for (std::uint32_t v = 0; v < t.vertex_count(); ++v) value_of_diag_[v] = slot(v, v);
+  llt_.analyzePattern(laplacian_);
+  analyzed_ = true;
+}
+
+void Phase2Solver::solve(std::span<const Vec2d> b, std::span<Vec2d> x) const {
+  // P^T L L^T P x = b with both columns (u and v) in one pass over the
+  // factor: Eigen's solve streams L once per right-hand side.
+  const auto& L = llt_.matrixL().nestedExpression();
+  const int* outer = L.outerIndexPtr();
+  const int* inner = L.innerIndexPtr();
+  const double* val = L.valuePtr();
+  const int* perm = llt_.permutationP().indices().data();
+  const auto n = static_cast<std::size_t>(L.cols());
+  Vec2d* y = work_.data();
+  for (std::size_t i = 0; i < n; ++i) y[perm[i]] = b[i];
+  for (std::size_t j = 0; j < n; ++j) {  // L y = b (the diagonal leads each column)
+    const Vec2d yj = y[j] / val[outer[j]];
+    y[j] = yj;
+    for (int p = outer[j] + 1; p < outer[j + 1]; ++p) y[inner[p]] -= val[p] * yj;
+  }
+  for (std::size_t j = n; j-- > 0;) {  // L^T x = y
+    Vec2d acc = y[j];
+    for (int p = outer[j] + 1; p < outer[j + 1]; ++p) acc -= val[p] * y[inner[p]];
+    y[j] = acc / val[outer[j]];
+  }
+  for (std::size_t i = 0; i < n; ++i) x[i] = y[perm[i]];
+}
+
+bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const SolverParams& prm, std::vector<Vec2d>& uv,
+                       SolverStats& stats, const ExecContext& ctx) {
+  if (!analyzed_) analyze(t);
+  const auto t0 = Clock::now();
+  const std::size_t n = t.vertex_count();
+  // H0 = the spring Laplacian sum C_ij (e_i - e_j)(e_i - e_j)^T for x and y
+  // alike (the Hessian of E at rest with the transverse terms made equal to
+  // the axial ones), made definite by anchoring vertex 0 with its own
+  // diagonal (translations are the only null space).
+  double* val = laplacian_.valuePtr();
+  std::fill(val, val + laplacian_.nonZeros(), 0.0);
+  for (std::size_t s = 0; s < t.spring.size(); ++s) {
+    const double c = rest.stiffness[s];
+    val[value_of_spring_[0][s]] = -c;
+    val[value_of_spring_[1][s]] = -c;
+    val[value_of_diag_[t.spring[s][0]]] += c;
+    val[value_of_diag_[t.spring[s][1]]] += c;
+  }
+  val[value_of_diag_[0]] *= 2;
+  llt_.factorize(laplacian_);
+  stats.factor_ms = ms_since(t0);
+  if (llt_.info() != Eigen::Success) return false;
+  work_.resize(n);
+
+  // Vectors of R^2n as arrays of Vec2d (u, v interleaved); dot products and
+  // updates through Eigen maps, in a fixed order (thread-independent).
+  using Vec = std::vector<Vec2d>;
+  auto flat = [n](Vec& v) { return Eigen::Map<Eigen::VectorXd>(reinterpret_cast<double*>(v.data()), 2 * n); };
+  auto cflat = [n](const Vec& v) {
+    return Eigen::Map<const Eigen::VectorXd>(reinterpret_cast<const double*>(v.data()), 2 * n);
+  };
+  auto dot = [&](const Vec& a, const Vec& b) { return cflat(a).dot(cflat(b)); };
+  Vec x(uv), xt(n), g(n), gt(n), q(n), r(n), p(n), scratch;
+  double e = spring_energy(t, rest, x, g, scratch, ctx);
+  stats.energy_phase1 = e;
+  const std::size_t overlaps0 = count_boundary_crossings(t, x);
+  // Below this E a length error of 1e-14 relative is reached: nothing is
+  // left to release (a developable piece after phase 1).
+  double scale = 0;
+  for (std::size_t s = 0; s < t.spring.size(); ++s)
+    scale += 0.5 * rest.stiffness[s] * rest.length[s] * rest.length[s];
+  const double tiny = 1e-28 * scale;
+  std::vector<Vec> S, Y;
+  std::vector<double> rho, alpha;
+  int it = 0;
+  for (; it < prm.max_iterations && e > tiny; ++it) {
+    if (ctx.cancelled()) break;
+    // Two-loop recursion with H0^-1 applied by the Cholesky factor.
+    q = g;
+    alpha.assign(S.size(), 0);
+    for (std::size_t i = S.size(); i-- > 0;) {
+      alpha[i] = rho[i] * dot(S[i], q);
+      flat(q) -= alpha[i] * cflat(Y[i]);
+    }
+    solve(q, r);
+    for (std::size_t i = 0; i < S.size(); ++i) {
+      const double beta = rho[i] * dot(Y[i], r);
+      flat(r) += (alpha[i] - beta) * cflat(S[i]);
+    }
+    flat(p) = -cflat(r);
+    double slope = dot(g, p);
+    if (!(slope < 0)) {
+      S.clear(), Y.clear(), rho.clear();
+      solve(g, p);
+      flat(p) = -cflat(p);
+      slope = dot(g, p);
+      if (!(slope < 0)) break;
+    }
+    // Backtracking (Armijo) with the guard: no triangle may flip and the
+    // boundary may not cross itself more than at the start.
+    double step = 1;
+    bool accepted = false;
+    double et = 0;
+    for (int tries = 0; tries < 40; ++tries, step *= 0.5) {
+      flat(xt) = cflat(x) + step * cflat(p);
+      if (count_flipped(t, xt, ctx) > 0) {
+        ++stats.rejected_steps;
+        continue;
+      }
+      et = spring_energy(t, rest, xt, gt, scratch, ctx);
+      if (!(et <= e + 1e-4 * step * slope)) continue;
+      if (count_boundary_crossings(t, xt) > overlaps0) {
+        ++stats.rejected_steps;
+        continue;
+      }
+      accepted = true;
+      break;
+    }
+    if (!accepted) {
+      if (S.empty()) break;
+      S.clear(), Y.clear(), rho.clear();
+      continue;
+    }
+    // Curvature pair (s, y); the oldest pair's storage is reused.
+    Vec sk, yk;
+    if (static_cast<int>(S.size()) == prm.memory) {
+      sk = std::move(S.front()), yk = std::move(Y.front());
+      S.erase(S.begin()), Y.erase(Y.begin()), rho.erase(rho.begin());
+    }
+    sk.resize(n), yk.resize(n);
+    flat(sk) = cflat(xt) - cflat(x);
+    flat(yk) = cflat(gt) - cflat(g);
+    const double sy = dot(sk, yk);
+    if (sy > 1e-300) S.push_back(std::move(sk)), Y.push_back(std::move(yk)), rho.push_back(1 / sy);
+    const double decrease = e - et;
+    std::swap(x, xt);
+    std::swap(g, gt);
+    e = et;
+    if (decrease <= prm.tolerance * e) {
+      ++it;
+      break;
+    }
+  }
+  uv = x;
+  stats.energy = e;
+  stats.iterations = it;
+  stats.phase2_ms = ms_since(t0);
+  return true;
+}
+
+}  // namespace atelier::pattern_detail
