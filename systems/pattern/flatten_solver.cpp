@@ -6,8 +6,6 @@
 // Bouaziz, Kavan, "Quasi-Newton methods for real-time simulation of
 // hyperelastic materials", ACM TOG 36(3), 2017).
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <chrono>
 #include <cmath>
 #include <numeric>

@@ -5,6 +5,7 @@
 #include "atelier/systems/pattern/pattern_files.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <set>
