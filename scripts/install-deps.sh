@@ -2,8 +2,9 @@
 # Installs the Debian packages Atelier needs, only those missing.
 # Usage: scripts/install-deps.sh [--test] [--bench]
 #   (none)   what the library and the CLI need (`make demo`)
-#   --test   adds GoogleTest, Chromium (HTML report test) and Open MPI (the
-#            2-rank regen test; the CLI uses MPI when it is installed)
+#   --test   adds GoogleTest, Chromium (HTML report test), Open MPI (the
+#            2-rank regen test; the CLI uses MPI when it is installed) and
+#            python3-ezdxf (the pattern tests read the DXF files back)
 #   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann)
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
@@ -11,7 +12,7 @@ pkgs=(build-essential cmake ninja-build pkg-config
       nlohmann-json3-dev libcli11-dev libcgal-dev zlib1g-dev)
 for arg in "$@"; do
   case "$arg" in
-    --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin) ;;
+    --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin python3-ezdxf) ;;
     --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev) ;;
     *) echo "install-deps: unknown option $arg (use --test, --bench)" >&2; exit 2 ;;
   esac

@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "commands.h"
+#include "flatten_cmd.h"
 #include "measure_cmd.h"
 #include "regen_cmd.h"
 #include "render_cmd.h"
@@ -62,6 +63,8 @@ int main(int argc, char** argv) {
   auto* measure_cmd = add_measure_subcommand(app, measure_opt);
   RegenOptions regen_opt;
   auto* regen_cmd = add_regen_subcommand(app, regen_opt);
+  FlattenCmdOptions flatten_opt;
+  auto* flatten_cmd = add_flatten_subcommand(app, flatten_opt);
 
   try {
     app.parse(argc, argv);
@@ -79,6 +82,7 @@ int main(int argc, char** argv) {
     if (*encode_cmd) return run_encode(common, encode_opt, log);
     if (*regen_cmd) return run_regen(common, regen_opt, log);
     if (*measure_cmd) return run_measure(common, measure_opt, log);
+    if (*flatten_cmd) return run_flatten(common, flatten_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();

@@ -9,6 +9,8 @@
 
 #include <atelier/engine/math.h>
 #include <atelier/engine/random.h>
+#include <atelier/storage/builder.h>
+#include <atelier/storage/model.h>
 #include <atelier/storage/polygon_soup.h>
 
 namespace atelier::flatten_shapes {
@@ -139,6 +141,108 @@ inline PolygonSoup bodice(int n) {
     y += bump;
     return Vec3d(x, -y, z);
   });
+}
+
+/// A joint of two chains of nodes given in the same 3D direction (both
+/// members positive): a seam between two pieces.
+inline JointIdx join(Model& m, const std::vector<NodeIdx>& a, const std::vector<NodeIdx>& b) {
+  auto chain = [&](const std::vector<NodeIdx>& n) {
+    std::vector<HalfedgeIdx> hs;
+    for (std::size_t i = 0; i + 1 < n.size(); ++i) hs.push_back(m.find_halfedge(n[i], n[i + 1]));
+    return m.new_mesh_edge(m.nodes.surface[n[0].value], hs);
+  };
+  const MeshEdgeIdx ma = chain(a), mb = chain(b);
+  const JointMember mem[2] = {{ma, true}, {mb, true}};
+  return m.new_joint(mem);
+}
+
+/// A skirt (a cone frustum about +z: radius r_hem at z = 0, r_top at z = h)
+/// in two pieces, "front" (angles 0..pi) and "back" (pi..2 pi), each nu x nv
+/// cells with the front of the faces outside, joined by two side seams:
+/// seam_a at angle 0 (front's i = 0, back's i = nu), seam_b at angle pi.
+struct Skirt {
+  Model model;
+  SurfaceIdx front, back;
+  JointIdx seam_a, seam_b;
+  int nu = 0, nv = 0;
+  double h = 0;
+  [[nodiscard]] NodeIdx node(SurfaceIdx s, int i, int j) const {
+    return NodeIdx{static_cast<std::uint32_t>((s == front ? 0 : (nu + 1) * (nv + 1)) + j * (nu + 1) + i)};
+  }
+};
+
+inline Skirt skirt(double r_top, double r_hem, double h, int nu, int nv) {
+  Skirt k;
+  k.h = h, k.nu = nu, k.nv = nv;
+  for (int half = 0; half < 2; ++half) {
+    PolygonSoup s = grid(nu, nv, [&](int i, int j) {
+      const double a = M_PI * (half + double(i) / nu), t = double(j) / nv, r = r_hem + (r_top - r_hem) * t;
+      return Vec3d(r * std::cos(a), r * std::sin(a), h * t);
+    });
+    auto surf = add_polygon_surface(k.model, half == 0 ? "front" : "back", s);
+    if (!surf) throw Error(surf.status());
+    (half == 0 ? k.front : k.back) = surf->idx;
+  }
+  std::vector<NodeIdx> fa, ba, fb, bb;
+  for (int j = 0; j <= nv; ++j) {
+    fa.push_back(k.node(k.front, 0, j));
+    ba.push_back(k.node(k.back, nu, j));
+    fb.push_back(k.node(k.front, nu, j));
+    bb.push_back(k.node(k.back, 0, j));
+  }
+  k.seam_a = join(k.model, fa, ba);
+  k.seam_b = join(k.model, fb, bb);
+  return k;
+}
+
+/// A spherical cap (spherical_cap) cut along its diameter y = 0 into an
+/// "upper" (y > 0) and a "lower" half joined by one seam, the chain running
+/// from x = -R to x = +R in both.
+struct SplitCap {
+  Model model;
+  SurfaceIdx upper, lower;
+  JointIdx seam;
+  std::vector<NodeIdx> upper_chain, lower_chain;
+};
+
+inline SplitCap split_cap(int rings, double half_angle, double r) {
+  const PolygonSoup cap = spherical_cap(rings, half_angle, r);
+  SplitCap sc;
+  std::vector<std::vector<std::uint32_t>> local(2, std::vector<std::uint32_t>(cap.positions.size(), UINT32_MAX));
+  std::uint32_t base[2] = {0, 0};
+  for (int half = 0; half < 2; ++half) {
+    PolygonSoup s;
+    for (std::size_t f = 0; f < cap.face_count(); ++f) {
+      const auto c = cap.face(f);
+      Vec3d centre = Vec3d::Zero();
+      for (std::uint32_t v : c) centre += cap.positions[v];
+      if ((centre.y() > 0) != (half == 0)) continue;
+      std::uint32_t t[3];
+      for (int i = 0; i < 3; ++i) {
+        if (local[half][c[i]] == UINT32_MAX) {
+          local[half][c[i]] = static_cast<std::uint32_t>(s.positions.size());
+          s.positions.push_back(cap.positions[c[i]]);
+        }
+        t[i] = local[half][c[i]];
+      }
+      s.add_face(t);
+    }
+    base[half] = static_cast<std::uint32_t>(sc.model.nodes.slots.capacity());
+    auto surf = add_polygon_surface(sc.model, half == 0 ? "upper" : "lower", s);
+    if (!surf) throw Error(surf.status());
+    (half == 0 ? sc.upper : sc.lower) = surf->idx;
+  }
+  // Ring k's nodes at angles pi (index 3k) and 0 (index 0).
+  std::vector<std::uint32_t> diameter;
+  for (int k = rings; k >= 1; --k) diameter.push_back(static_cast<std::uint32_t>(1 + 3 * k * (k - 1) + 3 * k));
+  diameter.push_back(0);
+  for (int k = 1; k <= rings; ++k) diameter.push_back(static_cast<std::uint32_t>(1 + 3 * k * (k - 1)));
+  for (std::uint32_t v : diameter) {
+    sc.upper_chain.push_back(NodeIdx{base[0] + local[0][v]});
+    sc.lower_chain.push_back(NodeIdx{base[1] + local[1][v]});
+  }
+  sc.seam = join(sc.model, sc.upper_chain, sc.lower_chain);
+  return sc;
 }
 
 }  // namespace atelier::flatten_shapes

@@ -82,45 +82,8 @@ for p in exp["pieces"]:
 print(json.dumps(out))
 )PY";
 
-JointIdx join(Model& m, const std::vector<NodeIdx>& a, const std::vector<NodeIdx>& b) {
-  auto chain = [&](const std::vector<NodeIdx>& n) {
-    std::vector<HalfedgeIdx> hs;
-    for (std::size_t i = 0; i + 1 < n.size(); ++i) hs.push_back(m.find_halfedge(n[i], n[i + 1]));
-    return m.new_mesh_edge(m.nodes.surface[n[0].value], hs);
-  };
-  const JointMember mem[2] = {{chain(a), true}, {chain(b), true}};
-  return m.new_joint(mem);
-}
-
-/// Two halves of a slightly flared skirt (a cone frustum, so the pieces are
-/// curved arcs), joined by their side seams.
-Model flared_skirt() {
-  Model m;
-  const int nu = 14, nv = 5;
-  for (int half = 0; half < 2; ++half) {
-    PolygonSoup s = flatten_shapes::grid(nu, nv, [&](int i, int j) {
-      const double a = M_PI * (half + double(i) / nu), z = 0.6 * (1 - double(j) / nv);
-      const double r = 0.18 + 0.15 * (0.6 - z);
-      return Vec3d(r * std::cos(a), r * std::sin(a), z);
-    });
-    // Rows run downwards here: flip the triangles so the front faces out.
-    for (std::size_t f = 0; f < s.face_count(); ++f)
-      std::swap(s.face_nodes[s.face_offsets[f] + 1], s.face_nodes[s.face_offsets[f] + 2]);
-    auto surf = add_polygon_surface(m, half == 0 ? "front" : "back", s);
-    if (!surf) throw Error(surf.status());
-  }
-  auto node = [&](int half, int i, int j) {
-    return NodeIdx{static_cast<std::uint32_t>(half * (nu + 1) * (nv + 1) + j * (nu + 1) + i)};
-  };
-  std::vector<NodeIdx> a0, a1, b0, b1;
-  for (int j = 0; j <= nv; ++j) {
-    a0.push_back(node(0, 0, j)), a1.push_back(node(1, nu, j));
-    b0.push_back(node(0, nu, j)), b1.push_back(node(1, 0, j));
-  }
-  (void)join(m, a0, a1);
-  (void)join(m, b0, b1);
-  return m;
-}
+/// A flared skirt in two pieces (curved arcs) joined by its side seams.
+Model flared_skirt() { return std::move(flatten_shapes::skirt(0.18, 0.27, 0.6, 14, 5).model); }
 
 std::string block_name(const std::string& name) {
   std::string o;

@@ -20,56 +20,10 @@
 namespace atelier {
 namespace {
 
-/// A joint of two chains of nodes (same 3D direction, both members positive).
-JointIdx join(Model& m, const std::vector<NodeIdx>& a, const std::vector<NodeIdx>& b) {
-  auto chain = [&](const std::vector<NodeIdx>& n) {
-    std::vector<HalfedgeIdx> hs;
-    for (std::size_t i = 0; i + 1 < n.size(); ++i) hs.push_back(m.find_halfedge(n[i], n[i + 1]));
-    return m.new_mesh_edge(m.nodes.surface[n[0].value], hs);
-  };
-  const MeshEdgeIdx ma = chain(a), mb = chain(b);
-  const JointMember mem[2] = {{ma, true}, {mb, true}};
-  return m.new_joint(mem);
-}
+using flatten_shapes::join;
+using flatten_shapes::Skirt;
 
-/// A straight skirt of radius r and height h in two halves (front: angles
-/// 0..pi, back: pi..2 pi), each nu x nv cells, front = outside, joined by
-/// two side seams: seam_a at angle 0 (front's i = 0, back's i = nu) and
-/// seam_b at angle pi.
-struct Skirt {
-  Model model;
-  SurfaceIdx front, back;
-  JointIdx seam_a, seam_b;
-  int nu = 0, nv = 0;
-  double r = 0, h = 0;
-  [[nodiscard]] NodeIdx node(SurfaceIdx s, int i, int j) const {
-    return NodeIdx{static_cast<std::uint32_t>((s == front ? 0 : (nu + 1) * (nv + 1)) + j * (nu + 1) + i)};
-  }
-};
-
-Skirt skirt(double r = 0.2, double h = 0.5, int nu = 16, int nv = 5) {
-  Skirt k;
-  k.r = r, k.h = h, k.nu = nu, k.nv = nv;
-  for (int half = 0; half < 2; ++half) {
-    PolygonSoup s = flatten_shapes::grid(nu, nv, [&](int i, int j) {
-      const double a = M_PI * (half + double(i) / nu);
-      return Vec3d(r * std::cos(a), r * std::sin(a), h * j / nv);
-    });
-    auto surf = add_polygon_surface(k.model, half == 0 ? "front" : "back", s);
-    if (!surf) throw Error(surf.status());
-    (half == 0 ? k.front : k.back) = surf->idx;
-  }
-  std::vector<NodeIdx> fa, ba, fb, bb;
-  for (int j = 0; j <= nv; ++j) {
-    fa.push_back(k.node(k.front, 0, j));
-    ba.push_back(k.node(k.back, nu, j));
-    fb.push_back(k.node(k.front, nu, j));
-    bb.push_back(k.node(k.back, 0, j));
-  }
-  k.seam_a = join(k.model, fa, ba);
-  k.seam_b = join(k.model, fb, bb);
-  return k;
-}
+Skirt skirt(double r = 0.2, double h = 0.5, int nu = 16, int nv = 5) { return flatten_shapes::skirt(r, r, h, nu, nv); }
 
 const PatternPiece& piece_named(const PatternSet& set, const std::string& name) {
   for (const PatternPiece& p : set.pieces)
@@ -107,7 +61,8 @@ TEST(Pattern, SkirtSeamsAreSewableAndAllowancesAreMitred) {
   // The front is a rectangle W x H (grain along +v): seam a on its left,
   // seam b on its right, hems at the bottom and top.
   const PatternPiece& front = piece_named(*set, "front");
-  const double W = 1000 * k.nu * 2 * k.r * std::sin(M_PI / (2 * k.nu)), H = 1000 * k.h;
+  const double r = 0.2;
+  const double W = 1000 * k.nu * 2 * r * std::sin(M_PI / (2 * k.nu)), H = 1000 * k.h;
   Eigen::AlignedBox2d sew, cut;
   for (const Vec2d& p : front.sew_line[0]) sew.extend(p);
   for (const Vec2d& p : front.cut_line[0]) cut.extend(p);
@@ -208,45 +163,11 @@ TEST(Pattern, MismatchedSeamsAreReportedPerSeam) {
 
 TEST(Pattern, CurvedSeamLengthsAreMeasuredAsStated) {
   // A spherical cap cut along a diameter into two halves joined by one seam.
-  const int rings = 10;
-  const PolygonSoup cap = flatten_shapes::spherical_cap(rings, M_PI / 4, 0.15);
-  Model m;
-  std::vector<SurfaceIdx> halves;
-  std::vector<std::vector<std::uint32_t>> local_of(2);
-  for (int half = 0; half < 2; ++half) {
-    PolygonSoup s;
-    std::vector<std::uint32_t>& local = local_of[half];
-    local.assign(cap.positions.size(), UINT32_MAX);
-    for (std::size_t f = 0; f < cap.face_count(); ++f) {
-      const auto c = cap.face(f);
-      Vec3d centre = Vec3d::Zero();
-      for (std::uint32_t v : c) centre += cap.positions[v];
-      if ((centre.y() > 0) != (half == 0)) continue;
-      std::array<std::uint32_t, 3> t;
-      for (int i = 0; i < 3; ++i) {
-        if (local[c[i]] == UINT32_MAX) local[c[i]] = static_cast<std::uint32_t>(s.positions.size()),
-                                       s.positions.push_back(cap.positions[c[i]]);
-        t[i] = local[c[i]];
-      }
-      s.add_face(t);
-    }
-    auto surf = add_polygon_surface(m, half == 0 ? "upper" : "lower", s);
-    ASSERT_TRUE(surf);
-    halves.push_back(surf->idx);
-  }
-  const std::uint32_t offset = static_cast<std::uint32_t>(
-      std::count_if(local_of[0].begin(), local_of[0].end(), [](std::uint32_t x) { return x != UINT32_MAX; }));
-  // The diameter along y = 0 from x = -R to x = +R: ring k's nodes at angles pi and 0.
-  std::vector<std::uint32_t> diameter;
-  for (int kk = rings; kk >= 1; --kk) diameter.push_back(1 + 3 * kk * (kk - 1) + 3 * kk);
-  diameter.push_back(0);
-  for (int kk = 1; kk <= rings; ++kk) diameter.push_back(1 + 3 * kk * (kk - 1));
-  std::vector<NodeIdx> a, b;
-  for (std::uint32_t v : diameter) {
-    a.push_back(NodeIdx{local_of[0][v]});
-    b.push_back(NodeIdx{offset + local_of[1][v]});
-  }
-  const JointIdx seam = join(m, a, b);
+  flatten_shapes::SplitCap sc = flatten_shapes::split_cap(10, M_PI / 4, 0.15);
+  Model& m = sc.model;
+  const std::vector<SurfaceIdx> halves{sc.upper, sc.lower};
+  const JointIdx seam = sc.seam;
+  const std::vector<NodeIdx>&a = sc.upper_chain, &b = sc.lower_chain;
   ASSERT_TRUE(validate(m)) << validate(m).to_string();
   auto flat = flatten_surfaces(m);
   ASSERT_TRUE(flat) << flat.status().to_string();
