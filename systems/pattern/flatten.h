@@ -82,8 +82,8 @@ struct FlattenOptions {
   bool allow_holes = false;
   SpringStiffness stiffness = SpringStiffness::kInverseLength;
   /// Phase 1: the region relaxed where a loop closes, and its sweeps.
-  int relax_rings = 2;
-  int relax_sweeps = 3;
+  int relax_rings = 1;
+  int relax_sweeps = 1;
   /// Phase 2 stops after this many L-BFGS iterations or when an iteration
   /// lowers E by less than `tolerance` * E.
   int max_iterations = 400;

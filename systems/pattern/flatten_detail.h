@@ -55,8 +55,8 @@ struct RestState {
 };
 
 struct SolverParams {
-  int relax_rings = 2;
-  int relax_sweeps = 3;
+  int relax_rings = 1;
+  int relax_sweeps = 1;
   int max_iterations = 400;
   double tolerance = 1e-9;  // relative energy decrease that ends phase 2
   int memory = 8;           // L-BFGS pairs
@@ -111,7 +111,17 @@ class Phase2Solver {
   void solve(std::span<const Vec2d> b, std::span<Vec2d> x) const;
 };
 
-/// Spring energy and, when `force` is not empty, dE/dQ per vertex.
+/// The flip barrier of phase 2 (flatten_solver.cpp); adds its gradient to
+/// `gradient` when not empty. Infinite when a triangle is flipped.
+[[nodiscard]] double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                                    std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx);
+
+/// The largest s > 0 for which uv + s dir still has every triangle CCW
+/// (infinity when no triangle ever flips along dir).
+[[nodiscard]] double max_feasible_step(const PieceTopology& t, std::span<const Vec2d> uv, std::span<const Vec2d> dir,
+                                       const ExecContext& ctx);
+
+/// Spring energy and, when `gradient` is not empty, dE/dQ per vertex.
 [[nodiscard]] double spring_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
                                    std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx);
 

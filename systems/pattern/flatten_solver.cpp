@@ -45,17 +45,36 @@ using Clock = std::chrono::steady_clock;
   return a + x * u + h * left;
 }
 
-/// Springs of one vertex that belong to a flattened triangle, and the
-/// triangles around it, for the local relaxation of phase 1.
+/// Below this fraction of its rest area a flattened triangle is penalised in
+/// the phase 1 relaxation (so a loop that closes on a flipped triangle can
+/// unfold it), with this weight relative to the spring energy.
+constexpr double kPenaltyRatio = 0.25;
+constexpr double kPenaltyWeight = 4.0;
+/// Phase 2 adds a barrier -(r - r0)^2 ln(r / r0) (times the rest area) for
+/// triangles below this area ratio r: zero elsewhere, infinite as a triangle
+/// collapses, so the minimiser never reaches a flip.
+constexpr double kBarrierRatio = 0.1;
+
+/// d(2D area)/d(corner k) of a triangle: half the edge opposite k turned.
+[[nodiscard]] inline Vec2d area_gradient(const Vec2d& a, const Vec2d& b) noexcept {
+  // For corner k with the other two corners a = c[k+1], b = c[k+2]:
+  // d/dq_k of 1/2 cross(a - q, b - q) = 1/2 (a_y - b_y, b_x - a_x).
+  return 0.5 * Vec2d(a.y() - b.y(), b.x() - a.x());
+}
+
+/// The partial spring-mass system of phase 1: springs and triangles already
+/// flattened, and the local relaxation where a loop closes.
 struct Phase1State {
   const PieceTopology& t;
   const RestState& rest;
   std::vector<Vec2d>& uv;
   std::vector<std::uint8_t> placed, done, active;  // per vertex, triangle, spring
 
-  /// Energy of v's active springs at position x, with gradient and the
-  /// projected (positive semi-definite) Hessian of each spring:
-  /// C (u u^T + max(0, 1 - l / r) (I - u u^T)).
+  /// Energy of v's active springs and flattened triangles at position x,
+  /// with gradient and a positive semi-definite Hessian: per spring the
+  /// projected C (u u^T + max(0, 1 - l / r) (I - u u^T)); per triangle whose
+  /// area ratio r is below kPenaltyRatio the penalty w A (r0 - r)^2 (r is
+  /// linear in one corner, so its Hessian is exact).
   double local(std::uint32_t v, const Vec2d& x, Vec2d* g, Eigen::Matrix2d* H) const {
     double e = 0;
     if (g) g->setZero();
@@ -74,29 +93,47 @@ struct Phase1State {
         *H += c * (uu + std::max(0.0, 1 - l / r) * (Eigen::Matrix2d::Identity() - uu));
       }
     }
+    for (std::uint32_t k = t.vt_off[v]; k < t.vt_off[v + 1]; ++k) {
+      const std::uint32_t f = t.vt_tri[k];
+      if (!done[f]) continue;
+      const auto& c = t.tri[f];
+      const int i = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+      const Vec2d& a = uv[c[(i + 1) % 3]];
+      const Vec2d& b = uv[c[(i + 2) % 3]];
+      const double A = rest.area[f];
+      const double ratio = 0.5 * cross2(a - x, b - x) / A;
+      if (ratio >= kPenaltyRatio) continue;
+      const double w = kPenaltyWeight * A, gap = kPenaltyRatio - ratio;
+      e += w * gap * gap;
+      const Vec2d dr = area_gradient(a, b) / A;
+      if (g) *g -= 2 * w * gap * dr;
+      if (H) *H += 2 * w * dr * dr.transpose();
+    }
     return e;
+  }
+
+  [[nodiscard]] bool bad(std::uint32_t f) const {
+    const auto& c = t.tri[f];
+    return !(signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]) > 0);
   }
 
   /// Flattened triangles around v that are not CCW with v at x.
   [[nodiscard]] int bad_around(std::uint32_t v, const Vec2d& x) const {
-    int bad = 0;
+    int n = 0;
     for (std::uint32_t k = t.vt_off[v]; k < t.vt_off[v + 1]; ++k) {
       const std::uint32_t f = t.vt_tri[k];
       if (!done[f]) continue;
       const auto& c = t.tri[f];
       const Vec2d p0 = c[0] == v ? x : uv[c[0]], p1 = c[1] == v ? x : uv[c[1]], p2 = c[2] == v ? x : uv[c[2]];
-      if (!(signed_area2(p0, p1, p2) > 0)) ++bad;
+      if (!(signed_area2(p0, p1, p2) > 0)) ++n;
     }
-    return bad;
+    return n;
   }
 
-  /// Newton steps on the vertices within `rings` rings of triangle f (over
-  /// flattened springs): the partial system releases its strain ([48]
-  /// section 3.2). A move is kept only when it lowers the local energy and
-  /// does not add a triangle that is not CCW (the flip guard).
-  void relax(std::uint32_t f, int rings, int sweeps, std::vector<std::uint32_t>& region,
-             std::vector<std::uint32_t>& mark, std::uint32_t stamp) {
-    region.assign(t.tri[f].begin(), t.tri[f].end());
+  /// The vertices within `rings` rings (over flattened springs) of `seeds`,
+  /// sorted.
+  void grow(std::vector<std::uint32_t>& region, int rings, std::vector<std::uint32_t>& mark,
+            std::uint32_t stamp) const {
     for (std::uint32_t v : region) mark[v] = stamp;
     std::size_t begin = 0;
     for (int r = 0; r < rings; ++r) {
@@ -114,7 +151,13 @@ struct Phase1State {
       begin = end;
     }
     std::sort(region.begin(), region.end());
-    for (int sweep = 0; sweep < sweeps; ++sweep) {
+  }
+
+  /// Guarded Newton sweeps over `region` ([48] section 3.2: the partial
+  /// system releases its strain). A move is kept only when it lowers the
+  /// local energy and adds no triangle that is not CCW.
+  void sweep(const std::vector<std::uint32_t>& region, int sweeps) {
+    for (int k = 0; k < sweeps; ++k) {
       for (std::uint32_t v : region) {
         Vec2d g;
         Eigen::Matrix2d H;
@@ -132,6 +175,21 @@ struct Phase1State {
           }
         }
       }
+    }
+  }
+
+  /// Where a loop closes on triangle f: relax its neighbourhood; a closing
+  /// triangle that came out flipped gets a wider region and more sweeps
+  /// until it is CCW (four tries).
+  void relax(std::uint32_t f, int rings, int sweeps, std::vector<std::uint32_t>& region,
+             std::vector<std::uint32_t>& mark, std::uint32_t& stamp) {
+    const bool hard = bad(f);
+    int r = hard ? std::max(rings, 2) : rings, n = hard ? std::max(sweeps, 4) : sweeps;
+    for (int attempt = 0; attempt < (hard ? 4 : 1); ++attempt, r += 2) {
+      region.assign(t.tri[f].begin(), t.tri[f].end());
+      grow(region, r, mark, ++stamp);
+      sweep(region, n);
+      if (!bad(f)) break;
     }
   }
 };
@@ -177,7 +235,7 @@ void run_phase1(const PieceTopology& t, const RestState& rest, std::uint32_t see
       // All three corners are placed: a loop of triangles closes here.
       finish(f);
       ++stats.closures;
-      st.relax(f, prm.relax_rings, prm.relax_sweeps, region, mark, ++stamp);
+      st.relax(f, prm.relax_rings, prm.relax_sweeps, region, mark, stamp);
       continue;
     }
     // Side k = (c[k], c[k+1]) is placed (f was queued across it); the new
@@ -187,6 +245,18 @@ void run_phase1(const PieceTopology& t, const RestState& rest, std::uint32_t see
     uv[v] = circle_apex(uv[a], uv[b], length(f, (k + 2) % 3), length(f, (k + 1) % 3));
     st.placed[v] = 1;
     finish(f);
+  }
+  // Triangles still flipped (saddles: a loop that closed on too much angle):
+  // relax around all of them together, wider each round.
+  for (int round = 0; round < 6; ++round) {
+    region.clear();
+    for (std::uint32_t f = 0; f < nt; ++f)
+      if (st.bad(f)) region.insert(region.end(), t.tri[f].begin(), t.tri[f].end());
+    if (region.empty()) break;
+    std::sort(region.begin(), region.end());
+    region.erase(std::unique(region.begin(), region.end()), region.end());
+    st.grow(region, 2 + 2 * round, mark, ++stamp);
+    st.sweep(region, 4);
   }
   stats.phase1_ms = ms_since(t0);
 }
@@ -345,6 +415,69 @@ double spring_energy(const PieceTopology& t, const RestState& rest, std::span<co
   return e;
 }
 
+double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                      std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx) {
+  const bool want = !gradient.empty();
+  if (want) scratch.assign(3 * t.tri.size(), Vec2d::Zero());
+  const double e = par::transform_reduce(
+      ctx, t.tri.size(), 0.0,
+      [&](std::size_t f) {
+        const auto& c = t.tri[f];
+        const double A = rest.area[f];
+        const double r = 0.5 * signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]) / A;
+        if (r >= kBarrierRatio) return 0.0;
+        if (!(r > 0)) return std::numeric_limits<double>::infinity();
+        // phi(r) = -(r - r0)^2 ln(r / r0): zero with its first two
+        // derivatives at r0, infinite at 0.
+        const double d = r - kBarrierRatio, lg = std::log(r / kBarrierRatio);
+        if (want) {
+          const double dphi = -2 * d * lg - d * d / r;  // d phi / d r; dr/dq = (da/dq) / A
+          for (int k = 0; k < 3; ++k)
+            scratch[3 * f + k] = dphi * area_gradient(uv[c[(k + 1) % 3]], uv[c[(k + 2) % 3]]);
+        }
+        return -A * d * d * lg;
+      },
+      [](double a, double b) { return a + b; });
+  if (want && std::isfinite(e)) {
+    par::for_each_n(ctx, t.vertex_count(), [&](std::size_t v) {
+      Vec2d g = Vec2d::Zero();
+      for (std::uint32_t k = t.vt_off[v]; k < t.vt_off[v + 1]; ++k) {
+        const std::uint32_t f = t.vt_tri[k];
+        const auto& c = t.tri[f];
+        g += scratch[3 * f + (c[0] == v ? 0 : c[1] == v ? 1 : 2)];
+      }
+      gradient[v] += g;
+    });
+  }
+  return e;
+}
+
+double max_feasible_step(const PieceTopology& t, std::span<const Vec2d> uv, std::span<const Vec2d> dir,
+                         const ExecContext& ctx) {
+  return par::transform_reduce(
+      ctx, t.tri.size(), std::numeric_limits<double>::infinity(),
+      [&](std::size_t f) {
+        // 2 a(s) = cross(e1 + s f1, e2 + s f2) = alpha + beta s + gamma s^2.
+        const auto& c = t.tri[f];
+        const Vec2d e1 = uv[c[1]] - uv[c[0]], e2 = uv[c[2]] - uv[c[0]];
+        const Vec2d f1 = dir[c[1]] - dir[c[0]], f2 = dir[c[2]] - dir[c[0]];
+        const double alpha = cross2(e1, e2), beta = cross2(e1, f2) + cross2(f1, e2), gamma = cross2(f1, f2);
+        double best = std::numeric_limits<double>::infinity();
+        if (std::abs(gamma) <= 1e-14 * std::abs(beta)) {
+          if (beta < 0) best = -alpha / beta;
+          return best;
+        }
+        const double disc = beta * beta - 4 * alpha * gamma;
+        if (disc < 0) return best;
+        // Stable roots: q = -(beta + sign(beta) sqrt(disc)) / 2; roots q / gamma, alpha / q.
+        const double q = -0.5 * (beta + std::copysign(std::sqrt(disc), beta));
+        for (double root : {q / gamma, q != 0 ? alpha / q : std::numeric_limits<double>::infinity()})
+          if (root > 0) best = std::min(best, root);
+        return best;
+      },
+      [](double a, double b) { return std::min(a, b); });
+}
+
 void Phase2Solver::analyze(const PieceTopology& t) {
   const auto n = static_cast<Eigen::Index>(t.vertex_count());
   std::vector<Eigen::Triplet<double>> trip;
@@ -430,9 +563,15 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
     return Eigen::Map<const Eigen::VectorXd>(reinterpret_cast<const double*>(v.data()), 2 * n);
   };
   auto dot = [&](const Vec& a, const Vec& b) { return cflat(a).dot(cflat(b)); };
-  Vec x(uv), xt(n), g(n), gt(n), q(n), r(n), p(n), scratch;
-  double e = spring_energy(t, rest, x, g, scratch, ctx);
-  stats.energy_phase1 = e;
+  Vec x(uv), xt(n), g(n), gt(n), q(n), r(n), p(n), scratch, tscratch;
+  // The objective: E plus the flip barrier (zero unless a triangle is below
+  // a tenth of its rest area).
+  auto objective = [&](const Vec& at, Vec& grad) {
+    const double es = spring_energy(t, rest, at, grad, scratch, ctx);
+    return es + barrier_energy(t, rest, at, grad, tscratch, ctx);
+  };
+  double e = objective(x, g);
+  stats.energy_phase1 = spring_energy(t, rest, x, {}, scratch, ctx);
   const std::size_t overlaps0 = count_boundary_crossings(t, x);
   // Below this E a length error of 1e-14 relative is reached: nothing is
   // left to release (a developable piece after phase 1).
@@ -442,8 +581,8 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
   const double tiny = 1e-28 * scale;
   std::vector<Vec> S, Y;
   std::vector<double> rho, alpha;
-  int it = 0;
-  for (; it < prm.max_iterations && e > tiny; ++it) {
+  int it = 0, small = 0;
+  for (; it < prm.max_iterations && e > tiny && std::isfinite(e); ++it) {
     if (ctx.cancelled()) break;
     // Two-loop recursion with H0^-1 applied by the Cholesky factor.
     q = g;
@@ -466,18 +605,17 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
       slope = dot(g, p);
       if (!(slope < 0)) break;
     }
-    // Backtracking (Armijo) with the guard: no triangle may flip and the
-    // boundary may not cross itself more than at the start.
-    double step = 1;
+    // Filtered line search: start below the largest step that keeps every
+    // triangle CCW, then backtrack (Armijo). The overlap guard refuses a
+    // step that makes the boundary cross itself more than at the start.
+    const double limit = max_feasible_step(t, x, p, ctx);
+    double step = std::min(1.0, 0.9 * limit);
+    if (step < 1) ++stats.rejected_steps;
     bool accepted = false;
     double et = 0;
     for (int tries = 0; tries < 40; ++tries, step *= 0.5) {
       flat(xt) = cflat(x) + step * cflat(p);
-      if (count_flipped(t, xt, ctx) > 0) {
-        ++stats.rejected_steps;
-        continue;
-      }
-      et = spring_energy(t, rest, xt, gt, scratch, ctx);
+      et = objective(xt, gt);
       if (!(et <= e + 1e-4 * step * slope)) continue;
       if (count_boundary_crossings(t, xt) > overlaps0) {
         ++stats.rejected_steps;
@@ -506,11 +644,15 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
     std::swap(x, xt);
     std::swap(g, gt);
     e = et;
-    if (decrease <= prm.tolerance * e) {
+    // Converged after two iterations in a row that release less than
+    // `tolerance` of E.
+    small = decrease <= prm.tolerance * e ? small + 1 : 0;
+    if (small == 2) {
       ++it;
       break;
     }
   }
+  e = spring_energy(t, rest, x, {}, scratch, ctx);
   uv = x;
   stats.energy = e;
   stats.iterations = it;

@@ -166,6 +166,32 @@ TEST(Flatten, SphericalCapHasNoFlipsAndArapLevelLengthError) {
   ASSERT_EQ(p.stretch.size(), p.triangles);
 }
 
+TEST(Flatten, StronglyCurvedPiecesStayFlipFreeAndBeatArapOnLength) {
+  // A saddle (negative curvature: phase 1's loops close on too much angle)
+  // and a hemisphere (positive, deep): the guard keeps every triangle CCW and
+  // the boundary simple, and the spring energy keeps E_L below ARAP's.
+  const PolygonSoup saddle = flatten_shapes::grid(24, 24, [](int i, int j) {
+    const double x = -1 + i / 12.0, y = -1 + j / 12.0;
+    return Vec3d(x, y, x * x - y * y);
+  });
+  const PolygonSoup hemisphere = flatten_shapes::spherical_cap(12, M_PI / 2, 0.2);
+  for (const PolygonSoup* s : {&saddle, &hemisphere}) {
+    Model m = model_of(*s);
+    auto rep = flatten_surfaces(m);
+    ASSERT_TRUE(rep) << rep.status().to_string();
+    const PieceFlattening& p = rep->pieces[0];
+    EXPECT_EQ(p.distortion.flipped, 0u);
+    EXPECT_EQ(p.distortion.boundary_crossings, 0u);
+    const auto arap = cgal_peer::parameterize(*s, cgal_peer::Method::kArap);
+    ASSERT_TRUE(arap.ok);
+    const double arap_el = cgal_peer::distortion(*s, arap.uv).length_error;
+    EXPECT_LE(p.distortion.length_error, 1.1 * arap_el);
+    EXPECT_GT(p.distortion.length_error, 0.01);  // far from developable
+    RecordProperty(s == &saddle ? "saddle_E_L" : "hemisphere_E_L", std::to_string(p.distortion.length_error));
+    RecordProperty(s == &saddle ? "saddle_E_L_arap" : "hemisphere_E_L_arap", std::to_string(arap_el));
+  }
+}
+
 std::vector<Vec2d> flatten_positions(const PolygonSoup& s, const ExecContext& ctx = {}, PieceFlattening* out = nullptr) {
   Model m = model_of(s);
   auto rep = flatten_surfaces(m, {}, ctx);
