@@ -1,10 +1,10 @@
 #include "flatten_cmd.h"
 
-#include <cstdio>
-#include <nlohmann/json.hpp>
-
 #include <atelier/io/atomic_file.h>
 #include <atelier/systems/pattern/pattern_files.h>
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
 
 namespace atelier::cli {
 
@@ -18,28 +18,28 @@ SurfaceIdx surface_named(const Model& m, const std::string& name, const std::fil
 
 nlohmann::json piece_json(const PieceFlattening& p, const PatternSet& set) {
   const auto& d = p.distortion;
-  nlohmann::json j = {{"name", p.name},
-                      {"surface", p.surface.value},
-                      {"nodes", p.nodes},
-                      {"triangles", p.triangles},
-                      {"boundary_loops", p.boundary_loops},
-                      {"distortion",
-                       {{"area_error", d.area_error},
-                        {"length_error", d.length_error},
-                        {"max_edge_strain", d.max_edge_strain},
-                        {"min_stretch", d.min_stretch},
-                        {"max_stretch", d.max_stretch},
-                        {"flipped", d.flipped},
-                        {"boundary_crossings", d.boundary_crossings}}},
-                      {"solver",
-                       {{"energy_phase1", p.energy_phase1},
-                        {"energy", p.energy},
-                        {"closures", p.closures},
-                        {"iterations", p.iterations},
-                        {"rejected_steps", p.rejected_steps},
-                        {"tutte_fallback", p.tutte_fallback},
-                        {"ms", {{"phase1", p.phase1_ms}, {"factor", p.factor_ms}, {"phase2", p.phase2_ms},
-                                {"total", p.total_ms}}}}}};
+  nlohmann::json j = {
+      {"name", p.name},
+      {"surface", p.surface.value},
+      {"nodes", p.nodes},
+      {"triangles", p.triangles},
+      {"boundary_loops", p.boundary_loops},
+      {"distortion",
+       {{"area_error", d.area_error},
+        {"length_error", d.length_error},
+        {"max_edge_strain", d.max_edge_strain},
+        {"min_stretch", d.min_stretch},
+        {"max_stretch", d.max_stretch},
+        {"flipped", d.flipped},
+        {"boundary_crossings", d.boundary_crossings}}},
+      {"solver",
+       {{"energy_phase1", p.energy_phase1},
+        {"energy", p.energy},
+        {"closures", p.closures},
+        {"iterations", p.iterations},
+        {"rejected_steps", p.rejected_steps},
+        {"tutte_fallback", p.tutte_fallback},
+        {"ms", {{"phase1", p.phase1_ms}, {"factor", p.factor_ms}, {"phase2", p.phase2_ms}, {"total", p.total_ms}}}}}};
   for (const PatternPiece& pc : set.pieces)
     if (pc.surface == p.surface && !pc.mirrored) {
       j["area_mm2"] = pc.area_mm2;
@@ -62,8 +62,7 @@ CLI::App* add_flatten_subcommand(CLI::App& app, FlattenCmdOptions& opt) {
   c->add_option("--scale", opt.scale, "file units to metres (0.001 for a model in mm)")->check(CLI::PositiveNumber);
   c->add_option("--surface", opt.surfaces, "flatten only this surface (repeatable)");
   c->add_option("--mirror", opt.mirror, "also write this piece mirrored, for a left/right pair (repeatable)");
-  c->add_option("--grain", opt.grain, "3D grain direction x y z (default: each pattern's principal axis)")
-      ->expected(3);
+  c->add_option("--grain", opt.grain, "3D grain direction x y z (default: each pattern's principal axis)")->expected(3);
   c->add_flag("--dxf", opt.dxf, "also write pattern.dxf (ASTM D6673 / AAMA layers)");
   c->add_flag("--allow-holes", opt.allow_holes, "accept pieces with interior holes (more than one boundary loop)");
   c->add_flag("--no-strain-maps", opt.no_strain_maps, "do not write the strain-map PNGs");

@@ -21,9 +21,9 @@ namespace atelier::cli {
 struct FlattenCmdOptions {
   std::filesystem::path mesh, out, json;
   double seam_allowance_mm = 10;
-  double hem_allowance_mm = -1;   // negative: the seam allowance
+  double hem_allowance_mm = -1;  // negative: the seam allowance
   double notch_spacing_mm = 0;
-  double scale = 1.0;             // file units to metres
+  double scale = 1.0;  // file units to metres
   bool dxf = false;
   bool allow_holes = false;
   bool no_strain_maps = false;

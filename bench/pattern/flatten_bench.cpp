@@ -8,12 +8,11 @@
 // the phase 2 iterations. Ours includes build() (topology, checks, the
 // symbolic analysis); a warm start from another body's pattern is the
 // made-to-measure case (BM_Flatten_AtelierWarm).
+#include <atelier/storage/builder.h>
+#include <atelier/systems/pattern/flatten.h>
 #include <benchmark/benchmark.h>
 
 #include <map>
-
-#include <atelier/storage/builder.h>
-#include <atelier/systems/pattern/flatten.h>
 
 #include "tests/support/cgal_parameterize.h"
 #include "tests/support/flatten_shapes.h"
@@ -34,7 +33,9 @@ const PolygonSoup& piece(int shape, int size) {
   return cache.emplace(key, std::move(s)).first->second;
 }
 
-const char* shape_name(int shape) { return shape == 0 ? "bodice" : "cap45"; }
+const char* shape_name(int shape) {
+  return shape == 0 ? "bodice" : "cap45";
+}
 
 void label(benchmark::State& st, const PolygonSoup& s, const std::string& who) {
   st.SetLabel(who + ", " + shape_name(static_cast<int>(st.range(0))) + " " + std::to_string(s.positions.size()) +
@@ -131,14 +132,18 @@ void run_cgal(benchmark::State& st, cgal_peer::Method method) {
   label(st, s, method == cgal_peer::Method::kArap ? "CGAL ARAP (defaults), 1 thread" : "CGAL LSCM, 1 thread");
 }
 
-void BM_Flatten_CgalArap(benchmark::State& st) { run_cgal(st, cgal_peer::Method::kArap); }
+void BM_Flatten_CgalArap(benchmark::State& st) {
+  run_cgal(st, cgal_peer::Method::kArap);
+}
 BENCHMARK(BM_Flatten_CgalArap)
     ->ArgsProduct({{0, 1}, {0, 1, 2}})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-void BM_Flatten_CgalLscm(benchmark::State& st) { run_cgal(st, cgal_peer::Method::kLscm); }
+void BM_Flatten_CgalLscm(benchmark::State& st) {
+  run_cgal(st, cgal_peer::Method::kLscm);
+}
 BENCHMARK(BM_Flatten_CgalLscm)->ArgsProduct({{0, 1}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace

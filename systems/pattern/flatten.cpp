@@ -3,13 +3,13 @@
 // (flatten.h). The numerics are in flatten_solver.cpp.
 #include "atelier/systems/pattern/flatten.h"
 
+#include <atelier/engine/parallel.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numeric>
-
-#include <atelier/engine/parallel.h>
 
 #include "flatten_detail.h"
 
@@ -74,9 +74,8 @@ Expected<PieceTopology> pattern_detail::build_topology(const Model& m, SurfaceId
       }
     }
   }
-  std::sort(sides.begin(), sides.end(), [](const Side& x, const Side& y) {
-    return x.key != y.key ? x.key < y.key : x.slot < y.slot;
-  });
+  std::sort(sides.begin(), sides.end(),
+            [](const Side& x, const Side& y) { return x.key != y.key ? x.key < y.key : x.slot < y.slot; });
   t.tri_adj.assign(t.tri.size(), {kNone, kNone, kNone});
   t.tri_spring.resize(t.tri.size());
   for (std::size_t i = 0; i < sides.size();) {
@@ -169,9 +168,9 @@ Expected<PieceTopology> pattern_detail::build_topology(const Model& m, SurfaceId
         h = m.next(back);
       } while (h != start && reached <= corners);
       if (reached != corners)
-        return topo_error(ErrorCode::kNonManifold, m, s,
-                          "has a non-manifold vertex: node " + std::to_string(v.value) +
-                              " joins several fans of faces at one point");
+        return topo_error(
+            ErrorCode::kNonManifold, m, s,
+            "has a non-manifold vertex: node " + std::to_string(v.value) + " joins several fans of faces at one point");
     }
     std::vector<std::uint32_t> comp(t.tri.size(), kNone), stack;
     std::size_t components = 0;
@@ -242,8 +241,7 @@ Expected<RestState> rest_state(const std::string& label, const PieceTopology& t,
   auto fail = [&](const std::string& what) { return Status(ErrorCode::kDegenerate, label + " " + what); };
   RestState r;
   for (NodeIdx v : t.node)
-    if (!pos[v.value].allFinite())
-      return fail("has a non-finite position at node " + std::to_string(v.value));
+    if (!pos[v.value].allFinite()) return fail("has a non-finite position at node " + std::to_string(v.value));
   r.length.resize(t.spring.size());
   double sum = 0, sum2 = 0;
   for (std::size_t i = 0; i < t.spring.size(); ++i) {
@@ -251,7 +249,7 @@ Expected<RestState> rest_state(const std::string& label, const PieceTopology& t,
     const double l = (pos[a.value] - pos[b.value]).norm();
     if (!(l > 0) || !std::isfinite(l))
       return fail("has a zero-length edge between nodes " + std::to_string(a.value) + " and " +
-                            std::to_string(b.value));
+                  std::to_string(b.value));
     r.length[i] = l;
     sum += l;
     sum2 += l * l;
@@ -268,8 +266,8 @@ Expected<RestState> rest_state(const std::string& label, const PieceTopology& t,
     r.area[f] = 0.5 * (p1 - p0).cross(p2 - p0).norm();
     if (!(r.area[f] > floor))
       return fail("has a degenerate face " + std::to_string(t.tri_face[f].value) + " (triangle of nodes " +
-                            std::to_string(t.node[c[0]].value) + ", " + std::to_string(t.node[c[1]].value) + ", " +
-                            std::to_string(t.node[c[2]].value) + " has area " + std::to_string(r.area[f]) + ")");
+                  std::to_string(t.node[c[0]].value) + ", " + std::to_string(t.node[c[1]].value) + ", " +
+                  std::to_string(t.node[c[2]].value) + " has area " + std::to_string(r.area[f]) + ")");
   }
   return r;
 }
@@ -403,8 +401,12 @@ Flattener::~Flattener() = default;
 Flattener::Flattener(Flattener&&) noexcept = default;
 Flattener& Flattener::operator=(Flattener&&) noexcept = default;
 
-bool Flattener::built() const noexcept { return impl_ != nullptr; }
-SurfaceIdx Flattener::surface() const noexcept { return impl_ ? impl_->surface : SurfaceIdx{}; }
+bool Flattener::built() const noexcept {
+  return impl_ != nullptr;
+}
+SurfaceIdx Flattener::surface() const noexcept {
+  return impl_ ? impl_->surface : SurfaceIdx{};
+}
 
 Status Flattener::build(const Model& m, SurfaceIdx s, const FlattenOptions& opt) {
   impl_.reset();
@@ -473,7 +475,7 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
       stats.tutte_fallback = true;
     }
   }
-  if (!I.solver.run(t, *rest, prm, q, stats, ctx))
+  if (!I.solver.run(t, *rest, prm, q, stats, ctx, warm))
     return Status(ErrorCode::kInternal, "flatten: " + I.label + ": the spring Laplacian could not be factored");
   place(t, positions, q, I.opt.grain);
   out.distortion = distortion(t, positions, q, &out.stretch, ctx);
@@ -499,6 +501,7 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
   out.rejected_steps = stats.rejected_steps;
   out.warm_started = warm;
   out.tutte_fallback = stats.tutte_fallback;
+  out.reused_factor = stats.reused_factor;
   out.phase1_ms = stats.phase1_ms;
   out.factor_ms = stats.factor_ms;
   out.phase2_ms = stats.phase2_ms;

@@ -2,17 +2,18 @@
 // its reference [48] (Wang, Smith, Yuen, "Surface flattening based on energy
 // model", Computer-Aided Design 34(11), 2002). One piece per surface.
 //
-// The spring-mass model: every edge of the piece's triangles is a spring of
-// rest length l_ij (its 3D length) and stiffness C_ij; a pattern Q has the
-// energy ([48] eq. 2)
+// (The paper itself is not in /work/shared/seeds; what it prescribes is taken
+// from seed 001 section 7 and issue 22.) The spring-mass model: every edge of
+// the piece's triangles is a spring of rest length l_ij (its 3D length) and
+// stiffness C_ij; a pattern Q has the energy
 //     E = sum over springs 1/2 C_ij (|Q_i Q_j| - l_ij)^2 .
 // Stiffness (FlattenOptions::stiffness): C_ij = lbar / l_ij by default, the
 // stiffness EA / l of a bar of one material and cross-section, so E is the
 // integral of l * strain^2 and does not depend on how finely a region is
 // meshed (lbar, the mean rest length, only keeps E in length^2 units).
-// Uniform C_ij = 1 is the other choice ([48] uses one constant).
+// Uniform C_ij = 1 is the other choice (one constant for every spring).
 //
-//  Phase 1, triangle flattening ([48] section 3): breadth-first over the
+//  Phase 1, triangle flattening: breadth-first over the
 //  triangles from a seed (the largest, or the caller's); each new corner goes
 //  to the intersection of the two circles of its 3D edge lengths about the
 //  placed side, on the side that keeps the triangle counter-clockwise; where
@@ -20,15 +21,19 @@
 //  vertices within `relax_rings` rings of it take `relax_sweeps` guarded
 //  Newton steps on the partial spring system (the partial system releases
 //  its strain).
-//  Phase 2, planar mesh deformation ([48] section 4): E is minimised by
+//  Phase 2, planar mesh deformation: E is minimised by
 //  L-BFGS with the spring Laplacian as initial Hessian (prefactored by
-//  sparse Cholesky), a quasi-Newton method that replaces [48]'s explicit
-//  force-driven node moves (see docs/glossary.md). The line search is the
-//  guard: a step that flips a triangle or adds a boundary crossing
-//  (overlap) is halved until it does neither. If phase 1 leaves a flipped
-//  triangle (strongly saddle-shaped pieces), phase 2 starts instead from
-//  Tutte's embedding with the longest boundary loop on a circle, which has
-//  none.
+//  sparse Cholesky; Liu, Bouaziz, Kavan, ACM TOG 36(3) 2017), a
+//  quasi-Newton method in place of moving nodes along their spring forces (see
+//  docs/glossary.md). The guard against flips and overlaps: a barrier
+//  -A (r - r0)^2 ln(r / r0) on triangles whose area ratio r = A'/A falls
+//  below r0 = 0.1 (zero above, so E is untouched on any reasonable piece,
+//  infinite at a flip), a line search that starts below the largest step
+//  keeping every triangle counter-clockwise, and the refusal of any step
+//  that makes the boundary cross itself (overlap). If phase 1 leaves a
+//  flipped triangle or a crossing boundary (strongly saddle-shaped pieces),
+//  phase 2 starts instead from Tutte's embedding with the longest boundary
+//  loop on a circle, which has neither.
 // Placement: the pattern is turned so its grain line (the 3D grain
 // direction's image, or the pattern's principal axis) runs along +v, and
 // moved so its bounding box starts at (0, 0). The pattern is seen from the
@@ -54,16 +59,16 @@
 // written).
 #pragma once
 
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
+
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
-
-#include <atelier/engine/exec_context.h>
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
-#include <atelier/storage/model.h>
 
 namespace atelier {
 
@@ -84,10 +89,10 @@ struct FlattenOptions {
   /// Phase 1: the region relaxed where a loop closes, and its sweeps.
   int relax_rings = 1;
   int relax_sweeps = 1;
-  /// Phase 2 stops after this many L-BFGS iterations or when an iteration
-  /// lowers E by less than `tolerance` * E.
+  /// Phase 2 stops after this many L-BFGS iterations or when two iterations
+  /// in a row lower E by less than `tolerance` * E.
   int max_iterations = 400;
-  double tolerance = 1e-9;
+  double tolerance = 1e-7;
   int lbfgs_memory = 8;
   /// 3D grain direction (zero: the pattern's principal axis is the grain).
   Vec3d grain = Vec3d::Zero();
@@ -123,9 +128,10 @@ struct PieceFlattening {
   double energy_phase1 = 0, energy = 0;
   std::size_t closures = 0;  // phase 1 triangles that closed a loop
   int iterations = 0;        // phase 2 iterations
-  int rejected_steps = 0;    // steps halved by the flip / overlap guard
+  int rejected_steps = 0;    // steps cut short by the flip or overlap guard
   bool warm_started = false;
   bool tutte_fallback = false;
+  bool reused_factor = false;  // a warm start kept the previous body's factor
   double phase1_ms = 0, factor_ms = 0, phase2_ms = 0, total_ms = 0;
 };
 
@@ -137,7 +143,10 @@ struct FlattenReport {
 /// per topology (checks, triangles, springs, the symbolic Cholesky
 /// analysis), then flatten() for each set of positions, e.g. each
 /// regenerated body's garment. With `warm_start`, a flip-free pattern already
-/// in `uv` (the previous body's) replaces phase 1.
+/// in `uv` (the previous body's) replaces phase 1, and phase 2 keeps the
+/// previous body's Cholesky factor as its preconditioner when no stiffness
+/// moved by more than 25% (the minimiser is the same; only the path to it
+/// differs).
 class Flattener {
  public:
   Flattener();
@@ -174,7 +183,7 @@ class Flattener {
 /// The distortion of the pattern in `uv` for surface s (fanned as above)
 /// against `positions`, without flattening: for patterns from elsewhere.
 [[nodiscard]] Expected<PatternDistortion> measure_pattern(const Model& m, SurfaceIdx s,
-                                                          std::span<const Vec3d> positions,
-                                                          std::span<const Vec2d> uv, const ExecContext& ctx = {});
+                                                          std::span<const Vec3d> positions, std::span<const Vec2d> uv,
+                                                          const ExecContext& ctx = {});
 
 }  // namespace atelier

@@ -1,32 +1,53 @@
 // Private to systems/pattern: a piece's topology in local numbering and the
 // two phases of the energy-based flattening (Wang, Smith, Yuen 2002) that
-// run on it. Shared by flatten.cpp (the Model side: checks, API, distortion)
-// and flatten_solver.cpp (the numerics).
+// run on it. Shared by flatten.cpp (the Model side: checks, API, distortion),
+// flatten_phase1.cpp, flatten_solver.cpp (phase 2) and pattern.cpp.
 #pragma once
-
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
-#include <array>
-#include <cstdint>
-#include <span>
-#include <vector>
 
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <span>
+#include <vector>
+
 namespace atelier::pattern_detail {
 
 inline constexpr std::uint32_t kNone = 0xffffffffu;
+
+using Clock = std::chrono::steady_clock;
+[[nodiscard]] inline double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+/// Twice the signed area of (a, b, c): positive when counter-clockwise.
+[[nodiscard]] inline double signed_area2(const Vec2d& a, const Vec2d& b, const Vec2d& c) noexcept {
+  return cross2(b - a, c - a);
+}
+
+/// d(2D area)/d(corner q) of a triangle (q, a, b) in CCW order: half the
+/// opposite edge turned, 1/2 (a_y - b_y, b_x - a_x).
+[[nodiscard]] inline Vec2d area_gradient(const Vec2d& a, const Vec2d& b) noexcept {
+  return 0.5 * Vec2d(a.y() - b.y(), b.x() - a.x());
+}
 
 /// One piece (a surface) in dense local numbering. Polygons are fanned from
 /// their first corner into triangles (CCW seen from the front, as the faces);
 /// every triangle side is a spring, fan diagonals included.
 struct PieceTopology {
-  std::vector<NodeIdx> node;                        // local vertex -> model node (increasing)
-  std::vector<std::array<std::uint32_t, 3>> tri;    // local vertices, CCW
-  std::vector<FaceIdx> tri_face;                    // the face each triangle fans
+  std::vector<NodeIdx> node;                             // local vertex -> model node (increasing)
+  std::vector<std::array<std::uint32_t, 3>> tri;         // local vertices, CCW
+  std::vector<FaceIdx> tri_face;                         // the face each triangle fans
   std::vector<std::array<std::uint32_t, 3>> tri_adj;     // triangle across side k = (tri[k], tri[k+1]), or kNone
   std::vector<std::array<std::uint32_t, 3>> tri_spring;  // spring of side k
   std::vector<std::array<std::uint32_t, 2>> spring;      // (a, b), a < b
@@ -58,21 +79,22 @@ struct SolverParams {
   int relax_rings = 1;
   int relax_sweeps = 1;
   int max_iterations = 400;
-  double tolerance = 1e-9;  // relative energy decrease that ends phase 2
+  double tolerance = 1e-7;  // relative energy decrease that ends phase 2
   int memory = 8;           // L-BFGS pairs
 };
 
 struct SolverStats {
-  std::size_t closures = 0;       // phase 1: triangles that closed a loop
-  double energy_phase1 = 0;       // E after phase 1 (or of the warm start)
-  double energy = 0;              // E after phase 2
-  int iterations = 0;             // phase 2 iterations
-  int rejected_steps = 0;         // line-search halvings refused by the flip / overlap guard
-  bool tutte_fallback = false;    // phase 1 left flips: phase 2 started from a Tutte embedding
+  std::size_t closures = 0;     // phase 1: triangles that closed a loop
+  double energy_phase1 = 0;     // E after phase 1 (or of the warm start)
+  double energy = 0;            // E after phase 2
+  int iterations = 0;           // phase 2 iterations
+  int rejected_steps = 0;       // line-search halvings refused by the flip / overlap guard
+  bool tutte_fallback = false;  // phase 1 left flips: phase 2 started from a Tutte embedding
+  bool reused_factor = false;   // phase 2 kept the previous body's factor
   double phase1_ms = 0, phase2_ms = 0, factor_ms = 0;
 };
 
-/// Phase 1 (triangle flattening, [48] section 3): BFS from `seed`, circle
+/// Phase 1 (triangle flattening): BFS from `seed`, circle
 /// intersections, local relaxation where loops close. Writes uv (local).
 void run_phase1(const PieceTopology& t, const RestState& rest, std::uint32_t seed, const SolverParams& prm,
                 std::vector<Vec2d>& uv, SolverStats& stats);
@@ -95,9 +117,11 @@ class Phase2Solver {
  public:
   /// Symbolic analysis of the Laplacian's pattern (once per topology).
   void analyze(const PieceTopology& t);
-  /// Minimises from uv (flip-free) in place. False when the factorization fails.
+  /// Minimises from uv (flip-free) in place. With `reuse`, the previous
+  /// factor stays when the stiffnesses are within 25% of its own. False when
+  /// the factorization fails.
   [[nodiscard]] bool run(const PieceTopology& t, const RestState& rest, const SolverParams& prm, std::vector<Vec2d>& uv,
-                         SolverStats& stats, const ExecContext& ctx);
+                         SolverStats& stats, const ExecContext& ctx, bool reuse = false);
 
  private:
   using SpMat = Eigen::SparseMatrix<double>;
@@ -106,6 +130,10 @@ class Phase2Solver {
   std::vector<std::uint32_t> value_of_diag_;
   Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> llt_;
   mutable std::vector<Vec2d> work_;
+  std::vector<float> factor_values_;        // L's values as floats, for the solves
+  std::vector<double> inverse_diagonal_;    // 1 / L_jj
+  std::vector<double> factored_stiffness_;  // the C_ij of the current factor
+  bool factored_ = false;
   bool analyzed_ = false;
   /// x = H0^-1 b for the u and v columns at once.
   void solve(std::span<const Vec2d> b, std::span<Vec2d> x) const;

@@ -19,8 +19,12 @@ std::size_t PatternSet::failed_seams() const noexcept {
 
 namespace {
 
-[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept { return a.x() * b.y() - a.y() * b.x(); }
-[[nodiscard]] inline Vec2d left_normal(const Vec2d& d) noexcept { return Vec2d(-d.y(), d.x()); }
+[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept {
+  return a.x() * b.y() - a.y() * b.x();
+}
+[[nodiscard]] inline Vec2d left_normal(const Vec2d& d) noexcept {
+  return Vec2d(-d.y(), d.x());
+}
 
 [[nodiscard]] double signed_area(const std::vector<Vec2d>& p) {
   double a = 0;
@@ -108,8 +112,8 @@ Expected<PatternSet> make_pattern(const Model& m, std::span<const SurfaceIdx> pi
   std::map<std::uint32_t, double> override_mm;
   for (const SeamAllowance& a : opt.seam_allowances) {
     if (!a.seam.valid() || !m.alive(a.seam))
-      return Status(ErrorCode::kInvalidArgument,
-                    "make_pattern: a seam allowance names joint " + std::to_string(a.seam.value) + ", not a live joint");
+      return Status(ErrorCode::kInvalidArgument, "make_pattern: a seam allowance names joint " +
+                                                     std::to_string(a.seam.value) + ", not a live joint");
     if (!(a.mm >= 0) || !std::isfinite(a.mm))
       return Status(ErrorCode::kInvalidArgument,
                     "make_pattern: the allowance of seam " + std::to_string(a.seam.value) + " is out of range");
@@ -299,7 +303,8 @@ Expected<PatternSet> make_pattern(const Model& m, std::span<const SurfaceIdx> pi
     for (std::size_t a = 0; a < chk.members.size(); ++a) {
       const SeamMemberLength& x = chk.members[a];
       if (x.length_3d_mm > 0)
-        chk.max_deviation_3d = std::max(chk.max_deviation_3d, std::abs(x.length_2d_mm - x.length_3d_mm) / x.length_3d_mm);
+        chk.max_deviation_3d =
+            std::max(chk.max_deviation_3d, std::abs(x.length_2d_mm - x.length_3d_mm) / x.length_3d_mm);
       for (std::size_t b = a + 1; b < chk.members.size(); ++b)
         chk.max_difference_mm = std::max(chk.max_difference_mm, std::abs(x.length_2d_mm - chk.members[b].length_2d_mm));
     }
@@ -309,9 +314,9 @@ Expected<PatternSet> make_pattern(const Model& m, std::span<const SurfaceIdx> pi
     if (opt.notch_spacing_mm > 0 && L3 > 0)
       for (double s = opt.notch_spacing_mm; s < L3 - 1e-9; s += opt.notch_spacing_mm) fractions.push_back(s / L3);
     std::sort(fractions.begin(), fractions.end());
-    fractions.erase(std::unique(fractions.begin(), fractions.end(),
-                                [](double x, double y) { return std::abs(x - y) < 1e-9; }),
-                    fractions.end());
+    fractions.erase(
+        std::unique(fractions.begin(), fractions.end(), [](double x, double y) { return std::abs(x - y) < 1e-9; }),
+        fractions.end());
     for (std::size_t q = 0; q < on.size(); ++q) {
       if (!chk.members[q].boundary) continue;
       const JointMember& mem = on[q];

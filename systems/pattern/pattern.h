@@ -41,15 +41,15 @@
 // edges, joints, attribute nodes. Writes: nothing but the result.
 #pragma once
 
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
+
 #include <array>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
-
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
-#include <atelier/storage/model.h>
 
 namespace atelier {
 
@@ -80,8 +80,8 @@ struct PatternOptions {
 };
 
 struct PatternNotch {
-  Vec2d at;        // on the sew line (mm)
-  Vec2d outward;   // unit normal of the sew line there, towards the cut line
+  Vec2d at;          // on the sew line (mm)
+  Vec2d outward;     // unit normal of the sew line there, towards the cut line
   double depth = 0;  // slit length: the allowance there
   JointIdx seam;
   double fraction = 0;  // position along the seam (3D arc length / 3D length)
@@ -89,8 +89,8 @@ struct PatternNotch {
 
 /// One run of boundary edges with one allowance: a seam member or a hem.
 struct AllowanceRun {
-  JointIdx seam;            // invalid for a hem
-  std::size_t loop = 0;     // index into sew_line
+  JointIdx seam;         // invalid for a hem
+  std::size_t loop = 0;  // index into sew_line
   double width_mm = 0;
   std::vector<Vec2d> edge;  // the run's offset polyline (on the cut line)
 };

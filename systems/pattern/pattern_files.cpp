@@ -4,14 +4,14 @@
 // systems/) cannot see; the bytes still go through io/atomic_file.h.
 #include "atelier/systems/pattern/pattern_files.h"
 
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/native.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <set>
-
-#include <atelier/io/atomic_file.h>
-#include <atelier/io/native.h>
 
 namespace atelier {
 
@@ -29,11 +29,20 @@ void num(std::string& out, double v) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
     }
   }
   return o;
@@ -215,8 +224,9 @@ std::string pattern_svg(const PatternPiece& p) {
 
 std::string pattern_dxf(const PatternSet& set) {
   std::string o;
-  dxf(o, 999, "Atelier pattern (ASTM D6673 / AAMA layers: 1 boundary, 4 notches, 7 grain line, 14 sew line, "
-              "15 piece label; SEAM_ALLOWANCE per-seam allowance edges); units: millimetres");
+  dxf(o, 999,
+      "Atelier pattern (ASTM D6673 / AAMA layers: 1 boundary, 4 notches, 7 grain line, 14 sew line, "
+      "15 piece label; SEAM_ALLOWANCE per-seam allowance edges); units: millimetres");
   dxf(o, 0, "SECTION");
   dxf(o, 2, "HEADER");
   dxf(o, 9, "$ACADVER");
@@ -320,8 +330,7 @@ void write_pattern_dxf(const PatternSet& set, const std::filesystem::path& path)
   write_atomically(path, [&](AtomicFile& f) { f.write(s); });
 }
 
-RgbImage strain_map(const Model& m, const PieceFlattening& piece, double units_to_mm, double px_per_mm,
-                    double range) {
+RgbImage strain_map(const Model& m, const PieceFlattening& piece, double units_to_mm, double px_per_mm, double range) {
   if (!(px_per_mm > 0) || !(range > 0) || !(units_to_mm > 0))
     throw Error(Status(ErrorCode::kInvalidArgument, "strain_map: resolution, range and units must be positive"));
   Bounds b;

@@ -29,17 +29,17 @@
 // +-`strain_map_range`; the sew line in black, on white.
 #pragma once
 
-#include <filesystem>
-#include <span>
-#include <string>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/status.h>
 #include <atelier/io/png.h>
 #include <atelier/storage/model.h>
 #include <atelier/systems/pattern/flatten.h>
 #include <atelier/systems/pattern/pattern.h>
+
+#include <filesystem>
+#include <span>
+#include <string>
+#include <vector>
 
 namespace atelier {
 

@@ -2,14 +2,13 @@
 // its side seams (exit 0, files, JSON figures equal to the library's), a
 // cap cut in two whose curved seam fails the 0.5% rule (exit 1), and pieces
 // that cannot be flattened (exit 3, named).
+#include <atelier/io/native.h>
+#include <atelier/io/obj.h>
+#include <atelier/systems/pattern/flatten.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
-
-#include <atelier/io/native.h>
-#include <atelier/io/obj.h>
-#include <atelier/systems/pattern/flatten.h>
 
 #include "tests/support/flatten_shapes.h"
 #include "tests/support/run_command.h"
@@ -96,8 +95,7 @@ TEST(FlattenCli, PiecesThatCannotBeFlattenedAreNamed) {
   EXPECT_NE(r.out.find("surface 'body'"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("closed"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(d / "out" / "body.svg"));
-  r = run_cli("flatten --mesh " + (d / "closed.obj").string() + " --out " + (d / "out").string() +
-              " --surface sleeve");
+  r = run_cli("flatten --mesh " + (d / "closed.obj").string() + " --out " + (d / "out").string() + " --surface sleeve");
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("no surface named 'sleeve'"), std::string::npos) << r.out;
   r = run_cli("flatten --out " + (d / "out").string());

@@ -10,11 +10,10 @@
 #include <CGAL/Surface_mesh_parameterization/ARAP_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/LSCM_parameterizer_3.h>
 #include <CGAL/Surface_mesh_parameterization/parameterize.h>
-
-#include <vector>
-
 #include <atelier/engine/math.h>
 #include <atelier/storage/polygon_soup.h>
+
+#include <vector>
 
 namespace atelier::cgal_peer {
 

@@ -3,15 +3,15 @@
 // doubly curved panel. Shared by tests/systems/pattern and bench/pattern.
 #pragma once
 
-#include <cmath>
-#include <cstdint>
-#include <vector>
-
 #include <atelier/engine/math.h>
 #include <atelier/engine/random.h>
 #include <atelier/storage/builder.h>
 #include <atelier/storage/model.h>
 #include <atelier/storage/polygon_soup.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
 
 namespace atelier::flatten_shapes {
 

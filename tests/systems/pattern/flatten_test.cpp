@@ -1,14 +1,13 @@
 // Energy-based flattening (issue 22, seed 001 section 7 / [48]): developable
 // pieces map exactly, the spherical cap against CGAL's ARAP and LSCM,
 // invariance, determinism, warm starts, and the errors of bad pieces.
+#include <atelier/storage/builder.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/pattern/flatten.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
-
-#include <atelier/storage/builder.h>
-#include <atelier/storage/validate.h>
-#include <atelier/systems/pattern/flatten.h>
 
 #include "tests/support/cgal_parameterize.h"
 #include "tests/support/flatten_shapes.h"
@@ -39,8 +38,7 @@ double rigid_residual(std::span<const Vec2d> p, std::span<const Vec2d> q, double
   const double th = std::atan2(s, c);
   const Eigen::Matrix2d R = Eigen::Rotation2Dd(th).toRotationMatrix();
   double worst = 0;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    worst = std::max(worst, (R * (scale * q[i] - cq) + cp - p[i]).norm());
+  for (std::size_t i = 0; i < p.size(); ++i) worst = std::max(worst, (R * (scale * q[i] - cq) + cp - p[i]).norm());
   return worst;
 }
 
@@ -192,7 +190,8 @@ TEST(Flatten, StronglyCurvedPiecesStayFlipFreeAndBeatArapOnLength) {
   }
 }
 
-std::vector<Vec2d> flatten_positions(const PolygonSoup& s, const ExecContext& ctx = {}, PieceFlattening* out = nullptr) {
+std::vector<Vec2d> flatten_positions(const PolygonSoup& s, const ExecContext& ctx = {},
+                                     PieceFlattening* out = nullptr) {
   Model m = model_of(s);
   auto rep = flatten_surfaces(m, {}, ctx);
   if (!rep) throw Error(rep.status());

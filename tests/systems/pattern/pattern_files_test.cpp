@@ -1,15 +1,14 @@
 // Pattern files (issue 22): the SVG and DXF of a two-piece skirt read back by
 // independent readers (Python's ElementTree and ezdxf, Debian python3-ezdxf)
 // to 1e-6 mm with the documented layers and units; the strain maps.
+#include <atelier/io/png.h>
+#include <atelier/storage/builder.h>
+#include <atelier/systems/pattern/pattern_files.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
-
-#include <atelier/io/png.h>
-#include <atelier/storage/builder.h>
-#include <atelier/systems/pattern/pattern_files.h>
 
 #include "tests/support/flatten_shapes.h"
 #include "tests/support/run_command.h"
@@ -83,7 +82,9 @@ print(json.dumps(out))
 )PY";
 
 /// A flared skirt in two pieces (curved arcs) joined by its side seams.
-Model flared_skirt() { return std::move(flatten_shapes::skirt(0.18, 0.27, 0.6, 14, 5).model); }
+Model flared_skirt() {
+  return std::move(flatten_shapes::skirt(0.18, 0.27, 0.6, 14, 5).model);
+}
 
 std::string block_name(const std::string& name) {
   std::string o;
@@ -115,7 +116,8 @@ TEST(PatternFiles, SvgAndDxfReadBackWithLayersAndUnits) {
     nlohmann::json j;
     j["name"] = p.name;
     j["block"] = block_name(p.name);
-    j["svg"] = (dir / (block_name(m.surfaces.name[p.surface.value]) + (p.mirrored ? "_mirrored" : "") + ".svg")).string();
+    j["svg"] =
+        (dir / (block_name(m.surfaces.name[p.surface.value]) + (p.mirrored ? "_mirrored" : "") + ".svg")).string();
     for (const auto& l : p.cut_line) j["cut"].push_back(pts(l));
     for (const auto& l : p.sew_line) j["sew"].push_back(pts(l));
     for (const AllowanceRun& r : p.allowances) j["allowance"].push_back(pts(r.edge));
@@ -155,8 +157,10 @@ TEST(PatternFiles, StrainMapsShowStretchOnlyWhereThereIsSome) {
     for (std::uint32_t x = 0; x < img.width; ++x) {
       const std::uint8_t* p = img.at(x, y);
       const bool white = p[0] == 255 && p[1] == 255 && p[2] == 255, black = p[0] == 0 && p[1] == 0 && p[2] == 0;
-      if (p[0] == 221 && p[1] == 221 && p[2] == 221) ++grey;
-      else if (!white && !black) ++other;
+      if (p[0] == 221 && p[1] == 221 && p[2] == 221)
+        ++grey;
+      else if (!white && !black)
+        ++other;
     }
   EXPECT_GT(grey, std::size_t(0.8 * 4 * W * H));
   EXPECT_EQ(other, 0u);

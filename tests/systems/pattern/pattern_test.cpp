@@ -1,18 +1,17 @@
 // Pattern pieces (issue 22): seam allowances with mitred corners, notches
 // matched by arc length, the sewability check of partner seams, mirrored
 // pieces, and the SVG / DXF / PNG files read back (DXF by ezdxf).
-#include <gtest/gtest.h>
-
-#include <cmath>
-#include <fstream>
-#include <nlohmann/json.hpp>
-
 #include <atelier/io/png.h>
 #include <atelier/storage/builder.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/pattern/flatten.h>
 #include <atelier/systems/pattern/pattern.h>
 #include <atelier/systems/pattern/pattern_files.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "tests/support/flatten_shapes.h"
 #include "tests/support/run_command.h"
@@ -23,7 +22,9 @@ namespace {
 using flatten_shapes::join;
 using flatten_shapes::Skirt;
 
-Skirt skirt(double r = 0.2, double h = 0.5, int nu = 16, int nv = 5) { return flatten_shapes::skirt(r, r, h, nu, nv); }
+Skirt skirt(double r = 0.2, double h = 0.5, int nu = 16, int nv = 5) {
+  return flatten_shapes::skirt(r, r, h, nu, nv);
+}
 
 const PatternPiece& piece_named(const PatternSet& set, const std::string& name) {
   for (const PatternPiece& p : set.pieces)
@@ -83,8 +84,8 @@ TEST(Pattern, SkirtSeamsAreSewableAndAllowancesAreMitred) {
     EXPECT_LT(best, 1e-6) << "corner " << c.transpose();
   }
   for (const Vec2d& p : front.cut_line[0]) {
-    const double d = std::min({std::abs(p.x() + 10), std::abs(p.x() - W - 15), std::abs(p.y() + 30),
-                               std::abs(p.y() - H - 30)});
+    const double d =
+        std::min({std::abs(p.x() + 10), std::abs(p.x() - W - 15), std::abs(p.y() + 30), std::abs(p.y() - H - 30)});
     EXPECT_LT(d, 1e-6) << p.transpose();
   }
   // Outer sew line counter-clockwise; area W x H.
