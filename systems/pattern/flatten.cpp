@@ -1,9 +1,8 @@
 // The Model side of the flattening: a surface's checks and local topology,
 // the rest state, distortion, placement, Flattener and flatten_surfaces
 // (flatten.h). The numerics are in flatten_solver.cpp.
-#include "atelier/systems/pattern/flatten.h"
-
 #include <atelier/engine/parallel.h>
+#include <atelier/systems/pattern/flatten.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -1,7 +1,7 @@
 // Pattern pieces from flattened surfaces: sew and cut lines, allowances,
 // notches, grain lines, mirrored pieces, and the seams' sewability check
 // (pattern.h).
-#include "atelier/systems/pattern/pattern.h"
+#include <atelier/systems/pattern/pattern.h>
 
 #include <algorithm>
 #include <cmath>

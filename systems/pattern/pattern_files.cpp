@@ -2,10 +2,9 @@
 // They live in systems/pattern, not io/: they serialise this family's own
 // types (pieces with allowances, notches, grain lines), which io/ (below
 // systems/) cannot see; the bytes still go through io/atomic_file.h.
-#include "atelier/systems/pattern/pattern_files.h"
-
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/native.h>
+#include <atelier/systems/pattern/pattern_files.h>
 
 #include <algorithm>
 #include <cctype>
