@@ -508,28 +508,60 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
   return out;
 }
 
-Expected<FlattenReport> flatten_surfaces(Model& m, const FlattenOptions& opt, const ExecContext& ctx) {
-  std::vector<SurfaceIdx> surfaces = opt.surfaces;
-  if (surfaces.empty()) {
+// ------------------------------------------------------------- ModelFlattener
+
+Status ModelFlattener::build(const Model& m, const FlattenOptions& opt) {
+  pieces_.clear();
+  surfaces_ = opt.surfaces;
+  if (surfaces_.empty()) {
     std::vector<std::uint8_t> has(m.surfaces.slots.capacity(), 0);
     for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
       if (m.alive(FaceIdx{f})) has[m.faces.surface[f].value] = 1;
     for (std::uint32_t s = 0; s < has.size(); ++s)
-      if (has[s] && m.alive(SurfaceIdx{s})) surfaces.push_back(SurfaceIdx{s});
+      if (has[s] && m.alive(SurfaceIdx{s})) surfaces_.push_back(SurfaceIdx{s});
   }
-  if (surfaces.empty()) return Status(ErrorCode::kTopology, "flatten: the model has no surface with faces");
+  if (surfaces_.empty()) return {ErrorCode::kTopology, "flatten: the model has no surface with faces"};
+  pieces_.resize(surfaces_.size());
+  for (std::size_t i = 0; i < surfaces_.size(); ++i)
+    if (Status st = pieces_[i].build(m, surfaces_[i], opt); !st) {
+      pieces_.clear();
+      return st;
+    }
+  node_slots_ = m.nodes.slots.capacity();
+  return {};
+}
+
+Expected<FlattenReport> ModelFlattener::flatten(std::span<const Vec3d> positions, std::span<Vec2d> uv, bool warm_start,
+                                                const ExecContext& ctx) {
+  if (pieces_.empty()) return Status(ErrorCode::kInvalidArgument, "ModelFlattener::flatten: build() was not called");
+  if (uv.size() < node_slots_)
+    return Status(ErrorCode::kInvalidArgument, "ModelFlattener::flatten: uv needs one entry per node slot");
+  // Pieces in parallel, one task each (their nodes are disjoint); into a
+  // copy, committed when every piece succeeded.
+  std::vector<Vec2d> out(uv.begin(), uv.begin() + static_cast<std::ptrdiff_t>(node_slots_));
+  std::vector<Expected<PieceFlattening>> done(pieces_.size(), Status(ErrorCode::kCancelled, "flatten: cancelled"));
+  ExecContext outer = ctx;
+  outer.sequential_threshold = 2;
+  outer.grain = 1;
+  par::for_each_n(outer, pieces_.size(), [&](std::size_t i) {
+    if (!ctx.cancelled()) done[i] = pieces_[i].flatten(positions, out, warm_start, ctx);
+  });
+  FlattenReport rep;
+  for (auto& d : done) {
+    if (!d) return d.status();
+    rep.pieces.push_back(std::move(*d));
+  }
+  std::copy(out.begin(), out.end(), uv.begin());
+  return rep;
+}
+
+Expected<FlattenReport> flatten_surfaces(Model& m, const FlattenOptions& opt, const ExecContext& ctx) {
+  ModelFlattener fl;
+  if (Status st = fl.build(m, opt); !st) return st;
   std::vector<Vec2d> uv = m.nodes.uv;
   uv.resize(m.nodes.slots.capacity(), Vec2d::Zero());
-  FlattenReport rep;
-  for (SurfaceIdx s : surfaces) {
-    if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "flatten: cancelled");
-    Flattener fl;
-    if (Status st = fl.build(m, s, opt); !st) return st;
-    auto piece = fl.flatten(m.nodes.position, uv, false, ctx);
-    if (!piece) return piece.status();
-    rep.pieces.push_back(std::move(*piece));
-  }
-  m.nodes.uv = std::move(uv);
+  auto rep = fl.flatten(m.nodes.position, uv, false, ctx);
+  if (rep) m.nodes.uv = std::move(uv);
   return rep;
 }
 

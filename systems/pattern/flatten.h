@@ -175,8 +175,32 @@ class Flattener {
   std::unique_ptr<Impl> impl_;
 };
 
-/// Flattens every piece (see above) and writes nodes.uv. Stops at the first
-/// bad piece, with its error and nothing written.
+/// Reusable flattening of every piece of a model: one Flattener per piece,
+/// built once for a topology (a garment regenerated on many bodies keeps
+/// its topology), then flatten() per set of positions. Pieces run in
+/// parallel, one task each; results do not depend on the thread count.
+class ModelFlattener {
+ public:
+  /// The pieces: FlattenOptions::surfaces, or every live surface with faces.
+  /// Errors: kTopology (no such surface) and those of Flattener::build (the
+  /// first bad piece, in surface order).
+  [[nodiscard]] Status build(const Model& m, const FlattenOptions& opt = {});
+  /// Flattens every piece with `positions` (indexed by node) into `uv`
+  /// (indexed by node; with `warm_start`, the previous pattern there is the
+  /// start). On error (the first failing piece's, in piece order) `uv` is
+  /// unchanged.
+  [[nodiscard]] Expected<FlattenReport> flatten(std::span<const Vec3d> positions, std::span<Vec2d> uv,
+                                                bool warm_start = false, const ExecContext& ctx = {});
+  [[nodiscard]] std::span<const SurfaceIdx> surfaces() const noexcept { return surfaces_; }
+
+ private:
+  std::vector<SurfaceIdx> surfaces_;
+  std::vector<Flattener> pieces_;
+  std::size_t node_slots_ = 0;
+};
+
+/// Flattens every piece (see above) and writes nodes.uv: ModelFlattener once.
+/// Stops at the first bad piece, with its error and nothing written.
 [[nodiscard]] Expected<FlattenReport> flatten_surfaces(Model& m, const FlattenOptions& opt = {},
                                                        const ExecContext& ctx = {});
 
