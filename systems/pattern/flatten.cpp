@@ -340,6 +340,7 @@ PatternDistortion distortion(const PieceTopology& t, std::span<const Vec3d> pos,
 void place(const PieceTopology& t, std::span<const Vec3d> pos, std::vector<Vec2d>& uv, const Vec3d& grain) {
   const std::size_t n = uv.size();
   Vec2d dir = Vec2d::Zero();
+  double area = 0;
   if (grain.squaredNorm() > 0) {
     // The grain's image, area-weighted over the triangles: J (g projected on
     // the triangle's plane) in the triangle's own 2D frame.
@@ -351,12 +352,14 @@ void place(const PieceTopology& t, std::span<const Vec3d> pos, std::vector<Vec2d
       const double area2 = nrm.norm();
       const Vec3d y = nrm.normalized().cross(x);
       dir += 0.5 * area2 * triangle_map(t, pos, uv, f) * Vec2d(g.dot(x), g.dot(y));
+      area += 0.5 * area2;
     }
   }
   Vec2d centroid = Vec2d::Zero();
   for (const Vec2d& q : uv) centroid += q;
   centroid /= static_cast<double>(n);
-  if (!(dir.norm() > 1e-9 * std::sqrt(std::max(1e-300, static_cast<double>(n))))) {
+  // A grain (nearly) normal to the whole piece has no usable image.
+  if (!(dir.norm() > 1e-6 * area)) {
     // Principal axis of the vertices; its sign from the third moment, then
     // from the first vertex, so it does not depend on how the piece lies in 3D.
     Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
