@@ -6,6 +6,10 @@
 #            2-rank regen test; the CLI uses MPI when it is installed)
 #   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann;
 #            Node.js and npm for manifold-3d, installed into bench/net/manifold)
+#   --test   adds GoogleTest, Chromium (HTML report test), Open MPI (the
+#            2-rank regen test; the CLI uses MPI when it is installed) and
+#            python3-ezdxf (the pattern tests read the DXF files back)
+#   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann)
 set -euo pipefail
 bench=0
 pkgs=(build-essential cmake ninja-build pkg-config
@@ -15,6 +19,8 @@ for arg in "$@"; do
   case "$arg" in
     --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin) ;;
     --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev nodejs npm); bench=1 ;;
+    --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin python3-ezdxf) ;;
+    --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev) ;;
     *) echo "install-deps: unknown option $arg (use --test, --bench)" >&2; exit 2 ;;
   esac
 done

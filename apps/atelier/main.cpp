@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "commands.h"
+#include "flatten_cmd.h"
 #include "measure_cmd.h"
 #include "net_cmd.h"
 #include "regen_cmd.h"
@@ -72,6 +73,8 @@ int main(int argc, char** argv) {
   auto* round_cmd = add_round_subcommand(app, round_opt);
   SketchOptions sketch_opt;
   auto* sketch_cmd = add_sketch_subcommand(app, sketch_opt);
+  FlattenCmdOptions flatten_opt;
+  auto* flatten_cmd = add_flatten_subcommand(app, flatten_opt);
 
   try {
     app.parse(argc, argv);
@@ -93,6 +96,7 @@ int main(int argc, char** argv) {
     if (*trim_cmd) return run_trim(common, trim_opt, log);
     if (*round_cmd) return run_round(common, round_opt, log);
     if (*sketch_cmd) return run_sketch(common, sketch_opt, log);
+    if (*flatten_cmd) return run_flatten(common, flatten_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();

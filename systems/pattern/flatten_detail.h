@@ -1,0 +1,156 @@
+// Private to systems/pattern: a piece's topology in local numbering and the
+// two phases of the energy-based flattening (Wang, Smith, Yuen 2002) that
+// run on it. Shared by flatten.cpp (the Model side: checks, API, distortion),
+// flatten_phase1.cpp, flatten_solver.cpp (phase 2) and pattern.cpp.
+#pragma once
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace atelier::pattern_detail {
+
+inline constexpr std::uint32_t kNone = 0xffffffffu;
+
+using Clock = std::chrono::steady_clock;
+[[nodiscard]] inline double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+/// Twice the signed area of (a, b, c): positive when counter-clockwise.
+[[nodiscard]] inline double signed_area2(const Vec2d& a, const Vec2d& b, const Vec2d& c) noexcept {
+  return cross2(b - a, c - a);
+}
+
+/// d(2D area)/d(corner q) of a triangle (q, a, b) in CCW order: half the
+/// opposite edge turned, 1/2 (a_y - b_y, b_x - a_x).
+[[nodiscard]] inline Vec2d area_gradient(const Vec2d& a, const Vec2d& b) noexcept {
+  return 0.5 * Vec2d(a.y() - b.y(), b.x() - a.x());
+}
+
+/// One piece (a surface) in dense local numbering. Polygons are fanned from
+/// their first corner into triangles (CCW seen from the front, as the faces);
+/// every triangle side is a spring, fan diagonals included.
+struct PieceTopology {
+  std::vector<NodeIdx> node;                             // local vertex -> model node (increasing)
+  std::vector<std::array<std::uint32_t, 3>> tri;         // local vertices, CCW
+  std::vector<FaceIdx> tri_face;                         // the face each triangle fans
+  std::vector<std::array<std::uint32_t, 3>> tri_adj;     // triangle across side k = (tri[k], tri[k+1]), or kNone
+  std::vector<std::array<std::uint32_t, 3>> tri_spring;  // spring of side k
+  std::vector<std::array<std::uint32_t, 2>> spring;      // (a, b), a < b
+  std::vector<std::uint8_t> spring_is_edge;              // a model edge (not a fan diagonal)
+  // Vertex -> springs (and the other end), vertex -> triangles, in CSR form.
+  std::vector<std::uint32_t> vs_off, vs_spring, vs_other;
+  std::vector<std::uint32_t> vt_off, vt_tri;
+  /// Boundary loops as local vertex sequences (faceless halfedges in chain
+  /// order: the front of the piece lies to their right).
+  std::vector<std::vector<std::uint32_t>> loops;
+  std::vector<std::vector<HalfedgeIdx>> loop_halfedges;  // the model's faceless halfedges, same order
+
+  [[nodiscard]] std::size_t vertex_count() const noexcept { return node.size(); }
+};
+
+/// The piece's triangles, springs, adjacency and boundary loops; with
+/// `check`, also the conditions of a flattenable piece (flatten.h), as
+/// errors naming the surface. Implemented in flatten.cpp.
+[[nodiscard]] Expected<PieceTopology> build_topology(const Model& m, SurfaceIdx s, bool allow_holes, bool check);
+
+/// Rest state of the spring-mass system for one set of 3D positions.
+struct RestState {
+  std::vector<double> length;     // l_ij per spring (3D)
+  std::vector<double> stiffness;  // C_ij per spring
+  std::vector<double> area;       // 3D area per triangle
+};
+
+struct SolverParams {
+  int relax_rings = 1;
+  int relax_sweeps = 1;
+  int max_iterations = 400;
+  double tolerance = 1e-7;  // relative energy decrease that ends phase 2
+  int memory = 8;           // L-BFGS pairs
+};
+
+struct SolverStats {
+  std::size_t closures = 0;     // phase 1: triangles that closed a loop
+  double energy_phase1 = 0;     // E after phase 1 (or of the warm start)
+  double energy = 0;            // E after phase 2
+  int iterations = 0;           // phase 2 iterations
+  int rejected_steps = 0;       // line-search halvings refused by the flip / overlap guard
+  bool tutte_fallback = false;  // phase 1 left flips: phase 2 started from a Tutte embedding
+  bool reused_factor = false;   // phase 2 kept the previous body's factor
+  double phase1_ms = 0, phase2_ms = 0, factor_ms = 0;
+};
+
+/// Phase 1 (triangle flattening): BFS from `seed`, circle
+/// intersections, local relaxation where loops close. Writes uv (local).
+void run_phase1(const PieceTopology& t, const RestState& rest, std::uint32_t seed, const SolverParams& prm,
+                std::vector<Vec2d>& uv, SolverStats& stats);
+
+/// Tutte's barycentric embedding with the boundary loop on a circle (arc
+/// length spacing): flip-free by Tutte's theorem. The fallback start of
+/// phase 2 when phase 1 leaves flipped triangles.
+void tutte_embedding(const PieceTopology& t, const RestState& rest, std::vector<Vec2d>& uv);
+
+/// Signed areas of the 2D triangles (positive when CCW).
+[[nodiscard]] std::size_t count_flipped(const PieceTopology& t, std::span<const Vec2d> uv, const ExecContext& ctx);
+
+/// Pairs of non-adjacent boundary segments that intersect (uniform grid).
+[[nodiscard]] std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec2d> uv);
+
+/// Phase 2 (planar mesh deformation): L-BFGS on E = sum 1/2 C (|Q_i Q_j| - l)^2
+/// with the spring Laplacian as initial Hessian; owns the factorization so
+/// a Flattener keeps its symbolic analysis across bodies.
+class Phase2Solver {
+ public:
+  /// Symbolic analysis of the Laplacian's pattern (once per topology).
+  void analyze(const PieceTopology& t);
+  /// Minimises from uv (flip-free) in place. With `reuse`, the previous
+  /// factor stays when the stiffnesses are within 25% of its own. False when
+  /// the factorization fails.
+  [[nodiscard]] bool run(const PieceTopology& t, const RestState& rest, const SolverParams& prm, std::vector<Vec2d>& uv,
+                         SolverStats& stats, const ExecContext& ctx, bool reuse = false);
+
+ private:
+  using SpMat = Eigen::SparseMatrix<double>;
+  SpMat laplacian_;
+  std::vector<std::uint32_t> value_of_spring_[2];  // nonzero slots of each spring's (a,b) and (b,a) entries
+  std::vector<std::uint32_t> value_of_diag_;
+  Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> llt_;
+  mutable std::vector<Vec2d> work_;
+  std::vector<float> factor_values_;        // L's values as floats, for the solves
+  std::vector<double> inverse_diagonal_;    // 1 / L_jj
+  std::vector<double> factored_stiffness_;  // the C_ij of the current factor
+  bool factored_ = false;
+  bool analyzed_ = false;
+  /// x = H0^-1 b for the u and v columns at once.
+  void solve(std::span<const Vec2d> b, std::span<Vec2d> x) const;
+};
+
+/// The flip barrier of phase 2 (flatten_solver.cpp); adds its gradient to
+/// `gradient` when not empty. Infinite when a triangle is flipped.
+[[nodiscard]] double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                                    std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx);
+
+/// The largest s > 0 for which uv + s dir still has every triangle CCW
+/// (infinity when no triangle ever flips along dir).
+[[nodiscard]] double max_feasible_step(const PieceTopology& t, std::span<const Vec2d> uv, std::span<const Vec2d> dir,
+                                       const ExecContext& ctx);
+
+/// Spring energy and, when `gradient` is not empty, dE/dQ per vertex.
+[[nodiscard]] double spring_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                                   std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx);
+
+}  // namespace atelier::pattern_detail

@@ -1,0 +1,385 @@
+// Phase 2 of the energy-based flattening (Wang, Smith, Yuen 2002, the
+// reference [48] of seed 001 section 7), the planar mesh deformation: L-BFGS
+// on the spring energy with the spring Laplacian as its initial Hessian
+// (after Liu, Bouaziz, Kavan, "Quasi-Newton methods for real-time simulation
+// of hyperelastic materials", ACM TOG 36(3), 2017), the flip barrier and the
+// filtered line search, and the flip and overlap counts.
+#include <atelier/engine/parallel.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "flatten_detail.h"
+
+namespace atelier::pattern_detail {
+
+namespace {
+
+/// Phase 2 adds a barrier -(r - r0)^2 ln(r / r0) (times the rest area) for
+/// triangles below this area ratio r: zero elsewhere, infinite as a triangle
+/// collapses, so the minimiser never reaches a flip.
+constexpr double kBarrierRatio = 0.1;
+
+}  // namespace
+
+std::size_t count_flipped(const PieceTopology& t, std::span<const Vec2d> uv, const ExecContext& ctx) {
+  return par::transform_reduce(
+      ctx, t.tri.size(), std::size_t{0},
+      [&](std::size_t f) -> std::size_t {
+        const auto& c = t.tri[f];
+        return signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]) > 0 ? 0 : 1;
+      },
+      [](std::size_t a, std::size_t b) { return a + b; });
+}
+
+std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec2d> uv) {
+  struct Seg {
+    std::uint32_t a, b;
+  };
+  std::vector<Seg> seg;
+  for (const auto& lp : t.loops)
+    for (std::size_t i = 0; i < lp.size(); ++i) seg.push_back({lp[i], lp[(i + 1) % lp.size()]});
+  if (seg.size() < 4) return 0;
+  Eigen::AlignedBox2d box;
+  double mean = 0;
+  for (const Seg& s : seg) {
+    box.extend(uv[s.a]);
+    mean += (uv[s.b] - uv[s.a]).norm();
+  }
+  mean /= static_cast<double>(seg.size());
+  const double cell = std::max(2 * mean, 1e-300);
+  const Vec2d size = box.sizes();
+  const auto nx = static_cast<std::int64_t>(std::min(4096.0, std::floor(size.x() / cell) + 1));
+  const auto ny = static_cast<std::int64_t>(std::min(4096.0, std::floor(size.y() / cell) + 1));
+  const double cx = std::max(size.x() / static_cast<double>(nx), 1e-300);
+  const double cy = std::max(size.y() / static_cast<double>(ny), 1e-300);
+  auto cell_of = [&](const Vec2d& p, std::int64_t& i, std::int64_t& j) {
+    i = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.x() - box.min().x()) / cx), 0, nx - 1);
+    j = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.y() - box.min().y()) / cy), 0, ny - 1);
+  };
+  std::vector<std::pair<std::int64_t, std::uint32_t>> entries;  // (cell, segment)
+  for (std::uint32_t s = 0; s < seg.size(); ++s) {
+    std::int64_t i0, j0, i1, j1;
+    cell_of(uv[seg[s].a], i0, j0);
+    cell_of(uv[seg[s].b], i1, j1);
+    for (std::int64_t i = std::min(i0, i1); i <= std::max(i0, i1); ++i)
+      for (std::int64_t j = std::min(j0, j1); j <= std::max(j0, j1); ++j) entries.emplace_back(j * nx + i, s);
+  }
+  std::sort(entries.begin(), entries.end());
+  auto crosses = [&](const Seg& p, const Seg& q) {
+    if (p.a == q.a || p.a == q.b || p.b == q.a || p.b == q.b) return false;
+    const Vec2d &a = uv[p.a], &b = uv[p.b], &c = uv[q.a], &d = uv[q.b];
+    const double d1 = signed_area2(a, b, c), d2 = signed_area2(a, b, d);
+    const double d3 = signed_area2(c, d, a), d4 = signed_area2(c, d, b);
+    return ((d1 > 0) != (d2 > 0) || d1 == 0 || d2 == 0) && ((d3 > 0) != (d4 > 0) || d3 == 0 || d4 == 0) &&
+           !(d1 == 0 && d2 == 0);  // collinear overlaps are not crossings of distinct segments here
+  };
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> hits;
+  for (std::size_t i = 0; i < entries.size();) {
+    std::size_t j = i;
+    while (j < entries.size() && entries[j].first == entries[i].first) ++j;
+    for (std::size_t x = i; x < j; ++x)
+      for (std::size_t y = x + 1; y < j; ++y)
+        if (crosses(seg[entries[x].second], seg[entries[y].second]))
+          hits.emplace_back(std::min(entries[x].second, entries[y].second),
+                            std::max(entries[x].second, entries[y].second));
+    i = j;
+  }
+  std::sort(hits.begin(), hits.end());
+  return static_cast<std::size_t>(std::unique(hits.begin(), hits.end()) - hits.begin());
+}
+
+double spring_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                     std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx) {
+  const bool want = !gradient.empty();
+  if (want) scratch.resize(t.spring.size());
+  const double e = par::transform_reduce(
+      ctx, t.spring.size(), 0.0,
+      [&](std::size_t s) {
+        const auto& sp = t.spring[s];
+        const Vec2d d = uv[sp[0]] - uv[sp[1]];
+        const double r = d.norm(), l = rest.length[s], c = rest.stiffness[s];
+        if (want) scratch[s] = r > 0 ? Vec2d(c * (r - l) / r * d) : Vec2d::Zero();
+        return 0.5 * c * (r - l) * (r - l);
+      },
+      [](double a, double b) { return a + b; });
+  if (want) {
+    par::for_each_n(ctx, t.vertex_count(), [&](std::size_t v) {
+      Vec2d g = Vec2d::Zero();
+      for (std::uint32_t k = t.vs_off[v]; k < t.vs_off[v + 1]; ++k) {
+        const std::uint32_t s = t.vs_spring[k];
+        if (t.spring[s][0] == v)
+          g += scratch[s];
+        else
+          g -= scratch[s];
+      }
+      gradient[v] = g;
+    });
+  }
+  return e;
+}
+
+double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
+                      std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx) {
+  const bool want = !gradient.empty();
+  if (want) scratch.assign(3 * t.tri.size(), Vec2d::Zero());
+  const double e = par::transform_reduce(
+      ctx, t.tri.size(), 0.0,
+      [&](std::size_t f) {
+        const auto& c = t.tri[f];
+        const double A = rest.area[f];
+        const double r = 0.5 * signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]) / A;
+        if (r >= kBarrierRatio) return 0.0;
+        if (!(r > 0)) return std::numeric_limits<double>::infinity();
+        // phi(r) = -(r - r0)^2 ln(r / r0): zero with its first two
+        // derivatives at r0, infinite at 0.
+        const double d = r - kBarrierRatio, lg = std::log(r / kBarrierRatio);
+        if (want) {
+          const double dphi = -2 * d * lg - d * d / r;  // d phi / d r; dr/dq = (da/dq) / A
+          for (int k = 0; k < 3; ++k) scratch[3 * f + k] = dphi * area_gradient(uv[c[(k + 1) % 3]], uv[c[(k + 2) % 3]]);
+        }
+        return -A * d * d * lg;
+      },
+      [](double a, double b) { return a + b; });
+  if (want && std::isfinite(e)) {
+    par::for_each_n(ctx, t.vertex_count(), [&](std::size_t v) {
+      Vec2d g = Vec2d::Zero();
+      for (std::uint32_t k = t.vt_off[v]; k < t.vt_off[v + 1]; ++k) {
+        const std::uint32_t f = t.vt_tri[k];
+        const auto& c = t.tri[f];
+        g += scratch[3 * f + (c[0] == v ? 0 : c[1] == v ? 1 : 2)];
+      }
+      gradient[v] += g;
+    });
+  }
+  return e;
+}
+
+double max_feasible_step(const PieceTopology& t, std::span<const Vec2d> uv, std::span<const Vec2d> dir,
+                         const ExecContext& ctx) {
+  return par::transform_reduce(
+      ctx, t.tri.size(), std::numeric_limits<double>::infinity(),
+      [&](std::size_t f) {
+        // 2 a(s) = cross(e1 + s f1, e2 + s f2) = alpha + beta s + gamma s^2.
+        const auto& c = t.tri[f];
+        const Vec2d e1 = uv[c[1]] - uv[c[0]], e2 = uv[c[2]] - uv[c[0]];
+        const Vec2d f1 = dir[c[1]] - dir[c[0]], f2 = dir[c[2]] - dir[c[0]];
+        const double alpha = cross2(e1, e2), beta = cross2(e1, f2) + cross2(f1, e2), gamma = cross2(f1, f2);
+        double best = std::numeric_limits<double>::infinity();
+        if (std::abs(gamma) <= 1e-14 * std::abs(beta)) {
+          if (beta < 0) best = -alpha / beta;
+          return best;
+        }
+        const double disc = beta * beta - 4 * alpha * gamma;
+        if (disc < 0) return best;
+        // Stable roots: q = -(beta + sign(beta) sqrt(disc)) / 2; roots q / gamma, alpha / q.
+        const double q = -0.5 * (beta + std::copysign(std::sqrt(disc), beta));
+        for (double root : {q / gamma, q != 0 ? alpha / q : std::numeric_limits<double>::infinity()})
+          if (root > 0) best = std::min(best, root);
+        return best;
+      },
+      [](double a, double b) { return std::min(a, b); });
+}
+
+void Phase2Solver::analyze(const PieceTopology& t) {
+  const auto n = static_cast<Eigen::Index>(t.vertex_count());
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(n + 2 * t.spring.size());
+  for (Eigen::Index v = 0; v < n; ++v) trip.emplace_back(v, v, 1.0);
+  for (const auto& s : t.spring) {
+    trip.emplace_back(s[0], s[1], -1.0);
+    trip.emplace_back(s[1], s[0], -1.0);
+  }
+  laplacian_.resize(n, n);
+  laplacian_.setFromTriplets(trip.begin(), trip.end());
+  laplacian_.makeCompressed();
+  auto slot = [&](std::uint32_t row, std::uint32_t col) {
+    const int* inner = laplacian_.innerIndexPtr();
+    const int* outer = laplacian_.outerIndexPtr();
+    const int* it = std::lower_bound(inner + outer[col], inner + outer[col + 1], static_cast<int>(row));
+    return static_cast<std::uint32_t>(it - inner);
+  };
+  for (auto& x : value_of_spring_) x.resize(t.spring.size());
+  for (std::size_t s = 0; s < t.spring.size(); ++s) {
+    value_of_spring_[0][s] = slot(t.spring[s][0], t.spring[s][1]);
+    value_of_spring_[1][s] = slot(t.spring[s][1], t.spring[s][0]);
+  }
+  value_of_diag_.resize(t.vertex_count());
+  for (std::uint32_t v = 0; v < t.vertex_count(); ++v) value_of_diag_[v] = slot(v, v);
+  llt_.analyzePattern(laplacian_);
+  analyzed_ = true;
+  factored_ = false;
+}
+
+void Phase2Solver::solve(std::span<const Vec2d> b, std::span<Vec2d> x) const {
+  // P^T L L^T P x = b with both columns (u and v) in one pass over the
+  // factor (Eigen's solve streams L once per right-hand side), its values
+  // read as floats (H0 only preconditions L-BFGS: its precision sets the
+  // speed of convergence, not the minimiser), sums in double.
+  const auto& L = llt_.matrixL().nestedExpression();
+  const int* outer = L.outerIndexPtr();
+  const int* inner = L.innerIndexPtr();
+  const float* val = factor_values_.data();
+  const double* inv = inverse_diagonal_.data();
+  const int* perm = llt_.permutationP().indices().data();
+  const auto n = static_cast<std::size_t>(L.cols());
+  Vec2d* y = work_.data();
+  for (std::size_t i = 0; i < n; ++i) y[perm[i]] = b[i];
+  for (std::size_t j = 0; j < n; ++j) {  // L y = b (the diagonal leads each column)
+    const Vec2d yj = y[j] * inv[j];
+    y[j] = yj;
+    for (int p = outer[j] + 1; p < outer[j + 1]; ++p) y[inner[p]] -= double(val[p]) * yj;
+  }
+  for (std::size_t j = n; j-- > 0;) {  // L^T x = y
+    Vec2d acc = y[j];
+    for (int p = outer[j] + 1; p < outer[j + 1]; ++p) acc -= double(val[p]) * y[inner[p]];
+    y[j] = acc * inv[j];
+  }
+  for (std::size_t i = 0; i < n; ++i) x[i] = y[perm[i]];
+}
+
+bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const SolverParams& prm, std::vector<Vec2d>& uv,
+                       SolverStats& stats, const ExecContext& ctx, bool reuse) {
+  if (!analyzed_) analyze(t);
+  const auto t0 = Clock::now();
+  const std::size_t n = t.vertex_count();
+  // H0 = the spring Laplacian sum C_ij (e_i - e_j)(e_i - e_j)^T for x and y
+  // alike (the Hessian of E at rest with the transverse terms made equal to
+  // the axial ones), made definite by anchoring vertex 0 with its own
+  // diagonal (translations are the only null space). A factor of nearly the
+  // same stiffnesses (another body of the same piece) preconditions as well:
+  // it is kept when `reuse` and no stiffness moved by more than 25%.
+  bool keep = reuse && factored_ && factored_stiffness_.size() == rest.stiffness.size();
+  for (std::size_t s = 0; keep && s < rest.stiffness.size(); ++s)
+    keep = std::abs(rest.stiffness[s] / factored_stiffness_[s] - 1) <= 0.25;
+  stats.reused_factor = keep;
+  if (!keep) {
+    factored_ = false;
+    double* val = laplacian_.valuePtr();
+    std::fill(val, val + laplacian_.nonZeros(), 0.0);
+    for (std::size_t s = 0; s < t.spring.size(); ++s) {
+      const double c = rest.stiffness[s];
+      val[value_of_spring_[0][s]] = -c;
+      val[value_of_spring_[1][s]] = -c;
+      val[value_of_diag_[t.spring[s][0]]] += c;
+      val[value_of_diag_[t.spring[s][1]]] += c;
+    }
+    val[value_of_diag_[0]] *= 2;
+    llt_.factorize(laplacian_);
+    if (llt_.info() != Eigen::Success) return false;
+    const auto& L = llt_.matrixL().nestedExpression();
+    factor_values_.assign(L.valuePtr(), L.valuePtr() + L.nonZeros());
+    inverse_diagonal_.resize(n);
+    for (std::size_t j = 0; j < n; ++j) inverse_diagonal_[j] = 1 / L.valuePtr()[L.outerIndexPtr()[j]];
+    factored_stiffness_ = rest.stiffness;
+    factored_ = true;
+  }
+  stats.factor_ms = ms_since(t0);
+  work_.resize(n);
+
+  // Vectors of R^2n as arrays of Vec2d (u, v interleaved); dot products and
+  // updates through Eigen maps, in a fixed order (thread-independent).
+  using Vec = std::vector<Vec2d>;
+  auto flat = [n](Vec& v) { return Eigen::Map<Eigen::VectorXd>(reinterpret_cast<double*>(v.data()), 2 * n); };
+  auto cflat = [n](const Vec& v) {
+    return Eigen::Map<const Eigen::VectorXd>(reinterpret_cast<const double*>(v.data()), 2 * n);
+  };
+  auto dot = [&](const Vec& a, const Vec& b) { return cflat(a).dot(cflat(b)); };
+  Vec x(uv), xt(n), g(n), gt(n), q(n), r(n), p(n), scratch, tscratch;
+  // The objective: E plus the flip barrier (zero unless a triangle is below
+  // a tenth of its rest area).
+  auto objective = [&](const Vec& at, Vec& grad) {
+    const double es = spring_energy(t, rest, at, grad, scratch, ctx);
+    return es + barrier_energy(t, rest, at, grad, tscratch, ctx);
+  };
+  double e = objective(x, g);
+  stats.energy_phase1 = spring_energy(t, rest, x, {}, scratch, ctx);
+  const std::size_t overlaps0 = count_boundary_crossings(t, x);
+  // Below this E a length error of 1e-14 relative is reached: nothing is
+  // left to release (a developable piece after phase 1).
+  double scale = 0;
+  for (std::size_t s = 0; s < t.spring.size(); ++s) scale += 0.5 * rest.stiffness[s] * rest.length[s] * rest.length[s];
+  const double tiny = 1e-28 * scale;
+  std::vector<Vec> S, Y;
+  std::vector<double> rho, alpha;
+  int it = 0, small = 0;
+  for (; it < prm.max_iterations && e > tiny && std::isfinite(e); ++it) {
+    if (ctx.cancelled()) break;
+    // Two-loop recursion with H0^-1 applied by the Cholesky factor.
+    q = g;
+    alpha.assign(S.size(), 0);
+    for (std::size_t i = S.size(); i-- > 0;) {
+      alpha[i] = rho[i] * dot(S[i], q);
+      flat(q) -= alpha[i] * cflat(Y[i]);
+    }
+    solve(q, r);
+    for (std::size_t i = 0; i < S.size(); ++i) {
+      const double beta = rho[i] * dot(Y[i], r);
+      flat(r) += (alpha[i] - beta) * cflat(S[i]);
+    }
+    flat(p) = -cflat(r);
+    double slope = dot(g, p);
+    if (!(slope < 0)) {
+      S.clear(), Y.clear(), rho.clear();
+      solve(g, p);
+      flat(p) = -cflat(p);
+      slope = dot(g, p);
+      if (!(slope < 0)) break;
+    }
+    // Filtered line search: start below the largest step that keeps every
+    // triangle CCW, then backtrack (Armijo). The overlap guard refuses a
+    // step that makes the boundary cross itself more than at the start.
+    const double limit = max_feasible_step(t, x, p, ctx);
+    double step = std::min(1.0, 0.9 * limit);
+    if (step < 1) ++stats.rejected_steps;
+    bool accepted = false;
+    double et = 0;
+    for (int tries = 0; tries < 40; ++tries, step *= 0.5) {
+      flat(xt) = cflat(x) + step * cflat(p);
+      et = objective(xt, gt);
+      if (!(et <= e + 1e-4 * step * slope)) continue;
+      if (count_boundary_crossings(t, xt) > overlaps0) {
+        ++stats.rejected_steps;
+        continue;
+      }
+      accepted = true;
+      break;
+    }
+    if (!accepted) {
+      if (S.empty()) break;
+      S.clear(), Y.clear(), rho.clear();
+      continue;
+    }
+    // Curvature pair (s, y); the oldest pair's storage is reused.
+    Vec sk, yk;
+    if (static_cast<int>(S.size()) == prm.memory) {
+      sk = std::move(S.front()), yk = std::move(Y.front());
+      S.erase(S.begin()), Y.erase(Y.begin()), rho.erase(rho.begin());
+    }
+    sk.resize(n), yk.resize(n);
+    flat(sk) = cflat(xt) - cflat(x);
+    flat(yk) = cflat(gt) - cflat(g);
+    const double sy = dot(sk, yk);
+    if (sy > 1e-300) S.push_back(std::move(sk)), Y.push_back(std::move(yk)), rho.push_back(1 / sy);
+    const double decrease = e - et;
+    std::swap(x, xt);
+    std::swap(g, gt);
+    e = et;
+    // Converged after two iterations in a row that release less than
+    // `tolerance` of E.
+    small = decrease <= prm.tolerance * e ? small + 1 : 0;
+    if (small == 2) {
+      ++it;
+      break;
+    }
+  }
+  e = spring_energy(t, rest, x, {}, scratch, ctx);
+  uv = x;
+  stats.energy = e;
+  stats.iterations = it;
+  stats.phase2_ms = ms_since(t0);
+  return true;
+}
+}  // namespace atelier::pattern_detail
