@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <numeric>
 #include <set>
@@ -107,8 +108,8 @@ void count_usage(const CurveGraph& g, FaceCycles& fc) {
 }
 
 /// Faces by the rotation system; cycles with negative orientation (the
-/// outer boundary) and uncovered ones (holes) are set aside.
-FaceCycles angular_faces(const CurveGraph& g, std::span<const Vec3d> normals, const FaceCycleOptions& opt) {
+/// outer boundary) are set aside.
+FaceCycles angular_faces(const CurveGraph& g, std::span<const Vec3d> normals) {
   const Incidence inc = incidence(g);
   const std::size_t nd = 2 * g.segment_count();
   std::vector<std::uint32_t> rot(nd), pos(nd);  // darts sorted counter-clockwise about each node's normal
@@ -146,13 +147,7 @@ FaceCycles angular_faces(const CurveGraph& g, std::span<const Vec3d> normals, co
       seen[d] = 1;
       cyc.push_back(d);
     }
-    bool set_aside = orientation(g, cyc, normals) < 0;
-    if (!set_aside && opt.distance_to_traced) {
-      Vec3d c;
-      double r = 0;
-      (void)vector_area(g, cyc, &c, &r);
-      set_aside = opt.distance_to_traced(c) > opt.hole_ratio * r;
-    }
+    const bool set_aside = orientation(g, cyc, normals) < 0;
     auto& off = set_aside ? fc.outer_offsets : fc.offsets;
     auto& dst = set_aside ? fc.outer_darts : fc.darts;
     dst.insert(dst.end(), cyc.begin(), cyc.end());
@@ -359,7 +354,7 @@ Expected<FaceCycles> find_face_cycles(const CurveGraph& g, const FaceCycleOption
     if (!normals[v].allFinite() || !(normals[v].norm() > 0))
       return Status(ErrorCode::kInvalidArgument, "find_face_cycles: the normal of node " + std::to_string(v) +
                                                      " is zero or not finite");
-  FaceCycles fc = opt.method == FaceCycleMethod::kAngular ? angular_faces(g, normals, opt)
+  FaceCycles fc = opt.method == FaceCycleMethod::kAngular ? angular_faces(g, normals)
                                                           : paper_faces(g, normals, opt, ctx);
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "find_face_cycles: cancelled");
   count_usage(g, fc);

@@ -9,8 +9,8 @@
 // gets one extra cycle running around its outer boundary clockwise about
 // the normals; it is recognised by its orientation (the mean cosine between
 // its vector area and its nodes' normals is negative) and reported once as
-// `outer`, not as a face. With a traced mesh, cycles whose inside the mesh
-// does not cover (holes) are set aside the same way.
+// `outer`, not as a face. (Holes of a traced mesh are not recognised: a
+// cycle around one becomes a face, as in the paper, section 7.)
 //
 // kPaperSearch, the paper's method as printed (5.1-5.3) made deterministic:
 // starting from the smallest free edge (used by fewer than two validated
@@ -23,11 +23,10 @@
 // triangles scores below a pentagon face) and on open networks its stop rule
 // (every edge in two cycles) is never met (report: stop_rule_met = false).
 //
-// Reads: the graph (and the optional normals / distance). Writes: nothing.
+// Reads: the graph (and the optional normals). Writes: nothing.
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <map>
 #include <span>
 #include <vector>
@@ -46,11 +45,6 @@ struct FaceCycleOptions {
   /// One unit normal per node (e.g. from the traced mesh); empty: from the
   /// curves (curve_node_normals).
   std::span<const Vec3d> node_normals;
-  /// Distance from a point to the traced mesh (optional): a cycle whose
-  /// vertex-average lies farther from the mesh than `hole_ratio` times its
-  /// mean distance to its own points is a hole, not a face.
-  std::function<double(const Vec3d&)> distance_to_traced;
-  double hole_ratio = 0.35;
   /// kPaperSearch: longest cycle enumerated, in segments.
   std::size_t max_cycle_length = 8;
 };
