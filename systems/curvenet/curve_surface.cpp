@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include <atelier/engine/parallel.h>
 #include <atelier/storage/builder.h>
 #include <atelier/systems/spatial/body_bvh.h>
 
@@ -77,18 +78,94 @@ Vec3d closest_on_curves(const PolylineSet& c, const Vec3d& p, double* dist) {
   return q;
 }
 
-CurveDistance summarize(const std::vector<ClosestHit>& hits, double diag) {
-  CurveDistance d;
-  d.samples = hits.size();
-  double sum = 0, sq = 0;
-  for (const ClosestHit& h : hits) {
-    d.max = std::max(d.max, h.distance);
-    sum += h.distance;
-    sq += h.distance * h.distance;
+/// A uniform grid of triangles for closest-point queries near the surface
+/// (the curve samples lie within a fraction of a face of it): much cheaper
+/// to build than a BVH for a one-off batch of nearby queries.
+class TriangleGrid {
+ public:
+  TriangleGrid(std::span<const Vec3d> p, std::span<const Triangle> t) : p_(p), t_(t) {
+    Box3d box;
+    for (const Triangle& x : t)
+      for (std::uint32_t v : x) box.extend(p[v]);
+    lo_ = box.lo;
+    const Vec3d ext = (box.hi - box.lo).cwiseMax(Vec3d::Constant(1e-12));
+    // About one triangle per cell on a surface: cells of the mean triangle size.
+    double mean = 0;
+    for (const Triangle& x : t) mean += (p[x[1]] - p[x[0]]).norm() + (p[x[2]] - p[x[1]]).norm();
+    mean /= std::max<double>(1.0, 2.0 * static_cast<double>(t.size()));
+    cell_ = std::max({mean * 2.0, ext.maxCoeff() / 1024.0, 1e-12});
+    // At most about 4 cells per triangle (a thin surface in a large box).
+    for (;;) {
+      for (int k = 0; k < 3; ++k) dims_[static_cast<std::size_t>(k)] = std::max(1, static_cast<int>(std::ceil(ext[k] / cell_)));
+      if (static_cast<double>(dims_[0]) * dims_[1] * dims_[2] <= 4.0 * static_cast<double>(t.size()) + 64.0) break;
+      cell_ *= 1.25;
+    }
+    const std::size_t n = static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2];
+    offsets_.assign(n + 1, 0);
+    auto cells_of = [&](const Triangle& x, auto&& f) {
+      Box3d b;
+      for (std::uint32_t v : x) b.extend(p[v]);
+      const auto lo = index(b.lo), hi = index(b.hi);
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i) f(flat(i, j, k));
+    };
+    for (const Triangle& x : t) cells_of(x, [&](std::size_t c) { ++offsets_[c + 1]; });
+    for (std::size_t c = 0; c < n; ++c) offsets_[c + 1] += offsets_[c];
+    items_.resize(offsets_[n]);
+    std::vector<std::uint32_t> fill(offsets_.begin(), offsets_.end() - 1);
+    for (std::uint32_t i = 0; i < t.size(); ++i) cells_of(t[i], [&](std::size_t c) { items_[fill[c]++] = i; });
   }
-  if (!hits.empty()) {
-    d.mean = sum / static_cast<double>(hits.size());
-    d.rms = std::sqrt(sq / static_cast<double>(hits.size()));
+  /// Distance from q to the nearest triangle (searched in growing boxes).
+  [[nodiscard]] double distance(const Vec3d& q) const {
+    double best = std::numeric_limits<double>::infinity();
+    for (double r = cell_;; r *= 2) {
+      const auto lo = index(q - Vec3d::Constant(r)), hi = index(q + Vec3d::Constant(r));
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i) {
+            const std::size_t c = flat(i, j, k);
+            for (std::uint32_t e = offsets_[c]; e < offsets_[c + 1]; ++e) {
+              const Triangle& x = t_[items_[e]];
+              best = std::min(best, (closest_point_on_triangle(q, p_[x[0]], p_[x[1]], p_[x[2]]).point - q).norm());
+            }
+          }
+      const bool all = lo == std::array<int, 3>{0, 0, 0} && hi == std::array<int, 3>{dims_[0] - 1, dims_[1] - 1, dims_[2] - 1};
+      if (best <= r || all) return best;
+    }
+  }
+
+ private:
+  [[nodiscard]] std::array<int, 3> index(const Vec3d& x) const {
+    std::array<int, 3> i{};
+    for (int k = 0; k < 3; ++k)
+      i[static_cast<std::size_t>(k)] = std::clamp(static_cast<int>(std::floor((x[k] - lo_[k]) / cell_)), 0, dims_[static_cast<std::size_t>(k)] - 1);
+    return i;
+  }
+  [[nodiscard]] std::size_t flat(int i, int j, int k) const {
+    return (static_cast<std::size_t>(k) * static_cast<std::size_t>(dims_[1]) + static_cast<std::size_t>(j)) *
+               static_cast<std::size_t>(dims_[0]) + static_cast<std::size_t>(i);
+  }
+  std::span<const Vec3d> p_;
+  std::span<const Triangle> t_;
+  Vec3d lo_;
+  double cell_ = 1;
+  std::array<int, 3> dims_{1, 1, 1};
+  std::vector<std::uint32_t> offsets_, items_;
+};
+
+CurveDistance summarize(const std::vector<double>& dist, double diag) {
+  CurveDistance d;
+  d.samples = dist.size();
+  double sum = 0, sq = 0;
+  for (const double x : dist) {
+    d.max = std::max(d.max, x);
+    sum += x;
+    sq += x * x;
+  }
+  if (!dist.empty()) {
+    d.mean = sum / static_cast<double>(dist.size());
+    d.rms = std::sqrt(sq / static_cast<double>(dist.size()));
   }
   d.relative_max = diag > 0 ? d.max / diag : 0;
   return d;
@@ -301,16 +378,17 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
   // ---- distances.
   t0 = Clock::now();
   {
-    BodyBvh surf;
     const auto tris = fan(out.refined.mesh);
-    if (Status s = surf.build(out.refined.mesh.positions, tris, {}, ctx); !s) return s;
-    std::vector<ClosestHit> hits(out.graph.points.size());
-    if (Status s = surf.closest_points(out.graph.points, hits, ctx); !s) return s;
-    rep.to_curves = summarize(hits, rep.treatment.diagonal);
+    const TriangleGrid grid(out.refined.mesh.positions, tris);
+    std::vector<double> d(out.graph.points.size());
+    par::for_each_n(ctx, d.size(), [&](std::size_t i) { d[i] = grid.distance(out.graph.points[i]); });
+    rep.to_curves = summarize(d, rep.treatment.diagonal);
     if (has_traced) {
       std::vector<ClosestHit> th(out.refined.mesh.positions.size());
       if (Status s = traced_bvh.closest_points(out.refined.mesh.positions, th, ctx); !s) return s;
-      rep.to_traced = summarize(th, rep.treatment.diagonal);
+      std::vector<double> dt(th.size());
+      for (std::size_t i = 0; i < th.size(); ++i) dt[i] = th[i].distance;
+      rep.to_traced = summarize(dt, rep.treatment.diagonal);
     }
   }
   rep.seconds["distances"] = seconds_since(t0);

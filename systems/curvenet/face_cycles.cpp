@@ -147,7 +147,9 @@ FaceCycles angular_faces(const CurveGraph& g, std::span<const Vec3d> normals) {
       seen[d] = 1;
       cyc.push_back(d);
     }
-    const bool set_aside = orientation(g, cyc, normals) < 0;
+    // Set aside: the outer boundary (clockwise about the normals) and walks
+    // that enclose nothing (zero vector area, e.g. along a lone segment).
+    const bool set_aside = orientation(g, cyc, normals) <= 0;
     auto& off = set_aside ? fc.outer_offsets : fc.offsets;
     auto& dst = set_aside ? fc.outer_darts : fc.darts;
     dst.insert(dst.end(), cyc.begin(), cyc.end());
@@ -305,10 +307,20 @@ std::vector<Vec3d> curve_node_normals(const CurveGraph& g) {
     // A plane needs two independent tangents: the middle eigenvalue.
     if (es.eigenvalues()(1) < 1e-6 * es.eigenvalues()(2)) continue;
     n[v] = es.eigenvectors().col(0).normalized();
+    // Tangents far from any plane (a cube's corner) all leave on the inside
+    // of the surface: the normal is the opposite of their mean.
+    Vec3d mean = Vec3d::Zero();
+    for (const Vec3d& t : ts) mean += t;
+    mean /= static_cast<double>(ts.size());
+    if (es.eigenvalues()(0) > 0.25 * es.eigenvalues()(1) && mean.norm() > 0.25) n[v] = -mean.normalized();
     known[v] = 1;
   }
   // Consistent signs (and missing normals) by breadth-first search along
-  // segments from the lowest-numbered known node of each component.
+  // segments from the lowest-numbered known node of each component. The
+  // test compares the directions across the segment in the two tangent
+  // planes (n x t at one end, n x the continued t at the other), which stay
+  // close along a curve on a smooth surface even where the normals turn by
+  // 90 degrees or more between two nodes (a coarse torus grid).
   std::vector<std::uint8_t> done(nv, 0);
   for (std::uint32_t s0 = 0; s0 < nv; ++s0) {
     if (done[s0] || !known[s0]) continue;
@@ -317,10 +329,17 @@ std::vector<Vec3d> curve_node_normals(const CurveGraph& g) {
     for (std::size_t q = 0; q < queue.size(); ++q) {
       const std::uint32_t v = queue[q];
       for (std::uint32_t k = inc.offset[v]; k < inc.offset[v + 1]; ++k) {
-        const std::uint32_t w = target(g, inc.dart[k]);
+        const std::uint32_t d = inc.dart[k];
+        const std::uint32_t w = target(g, d);
         if (done[w]) continue;
-        if (!known[w]) n[w] = n[v];
-        else if (n[w].dot(n[v]) < 0) n[w] = -n[w];
+        if (!known[w]) {
+          n[w] = n[v];
+        } else {
+          const Vec3d bv = n[v].cross(leaving(g, d)), bw = n[w].cross(-leaving(g, d ^ 1u));
+          const double across = bv.dot(bw);
+          const bool flip = std::abs(across) > 1e-3 * bv.norm() * bw.norm() ? across < 0 : n[w].dot(n[v]) < 0;
+          if (flip) n[w] = -n[w];
+        }
         done[w] = 1;
         queue.push_back(w);
       }

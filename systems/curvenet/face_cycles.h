@@ -85,7 +85,8 @@ struct FaceCycles {
 };
 
 /// Unit normals at the nodes from the curves alone: the normal of the plane
-/// best fitting the tangents leaving the node (smallest eigenvector), signs
+/// best fitting the tangents leaving the node (smallest eigenvector), or,
+/// when they fit no plane (a cube's corner), the opposite of their mean; signs
 /// made consistent along segments (breadth-first), the whole set turned so
 /// that it points away from the network's centroid on average.
 [[nodiscard]] std::vector<Vec3d> curve_node_normals(const CurveGraph& g);
