@@ -2,17 +2,19 @@
 # Installs the Debian packages Atelier needs, only those missing.
 # Usage: scripts/install-deps.sh [--test] [--bench]
 #   (none)   what the library and the CLI need (`make demo`)
-#   --test   adds GoogleTest, Chromium (HTML report test) and Open MPI (the
-#            2-rank regen test; the CLI uses MPI when it is installed)
-#   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann)
+#   --test   adds GoogleTest, Chromium (HTML report test), Open MPI (the
+#            2-rank regen test; the CLI uses MPI when it is installed) and
+#            OpenSubdiv (oracle of the Catmull-Clark tests)
+#   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann,
+#            OpenSubdiv)
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
       libtbb-dev libeigen3-dev libembree-dev libopenvdb-dev libboost-iostreams-dev
       nlohmann-json3-dev libcli11-dev libcgal-dev zlib1g-dev)
 for arg in "$@"; do
   case "$arg" in
-    --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin) ;;
-    --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev) ;;
+    --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin libosd-dev) ;;
+    --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev libosd-dev) ;;
     *) echo "install-deps: unknown option $arg (use --test, --bench)" >&2; exit 2 ;;
   esac
 done
