@@ -7,6 +7,7 @@
 #include "measure_cmd.h"
 #include "regen_cmd.h"
 #include "render_cmd.h"
+#include "surface_cmd.h"
 #include <atelier/engine/memory.h>
 #include <atelier/engine/status.h>
 
@@ -62,6 +63,8 @@ int main(int argc, char** argv) {
   auto* measure_cmd = add_measure_subcommand(app, measure_opt);
   RegenOptions regen_opt;
   auto* regen_cmd = add_regen_subcommand(app, regen_opt);
+  SurfaceOptions surface_opt;
+  auto* surface_cmd = add_surface_subcommand(app, surface_opt);
 
   try {
     app.parse(argc, argv);
@@ -79,6 +82,7 @@ int main(int argc, char** argv) {
     if (*encode_cmd) return run_encode(common, encode_opt, log);
     if (*regen_cmd) return run_regen(common, regen_opt, log);
     if (*measure_cmd) return run_measure(common, measure_opt, log);
+    if (*surface_cmd) return run_surface(common, surface_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();

@@ -235,6 +235,18 @@ Expected<ControlMesh> build_control_mesh(const CurveGraph& g, const FaceCycles& 
     out.fairing_energy_before = r->energy_before;
     out.fairing_energy_after = r->energy_after;
   }
+  auto newell = [&](auto&& at, std::size_t n) {
+    Vec3d a = Vec3d::Zero();
+    for (std::size_t i = 0; i < n; ++i) a += at(i).cross(at((i + 1) % n));
+    return a;
+  };
+  for (std::size_t f = 0; f < nf; ++f) {
+    const Vec3d af = newell([&](std::size_t i) { return mesh.positions[loops[f][i]]; }, loops[f].size());
+    for (std::uint32_t q = out.face_quads[f]; q < out.face_quads[f + 1]; ++q) {
+      const auto c = mesh.face(q);
+      if (newell([&](std::size_t i) { return mesh.positions[c[i]]; }, c.size()).dot(af) < 0) ++out.inverted_quads;
+    }
+  }
   return out;
 }
 

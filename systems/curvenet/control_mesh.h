@@ -81,6 +81,10 @@ struct ControlMesh {
   std::size_t raised_segments = 0;   // segments given more points than eq. (1) by fit_tolerance
   double max_fit_error = 0;          // largest crease_fit_error over the segments
   std::size_t odd_faces = 0;         // before the knots
+  /// Quads whose normal points against their face cycle's (Newell) normal:
+  /// folds, which the linear fairing cannot undo in strongly concave
+  /// cycles (cusps).
+  std::size_t inverted_quads = 0;
   QuadFairingReport fairing;
   double fairing_energy_before = 0, fairing_energy_after = 0;
 };

@@ -336,10 +336,14 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
   rep.knots_inserted = cm.knots_inserted;
   rep.odd_faces = cm.odd_faces;
   rep.shortest_segment = cm.shortest_segment;
+  rep.density_C = cm.C;
   rep.raised_segments = cm.raised_segments;
   rep.max_fit_error = cm.max_fit_error;
   rep.fairing_energy_before = cm.fairing_energy_before;
   rep.fairing_energy_after = cm.fairing_energy_after;
+  rep.inverted_quads = cm.inverted_quads;
+  if (cm.inverted_quads > 0)
+    rep.warnings.push_back(std::to_string(cm.inverted_quads) + " control quad(s) fold against their face cycle (strongly concave cycles)");
   rep.seconds["control mesh"] = seconds_since(t0);
 
   // ---- 5. Catmull-Clark with creases.

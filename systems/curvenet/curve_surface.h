@@ -67,9 +67,11 @@ struct CurveSurfaceReport {
   bool stop_rule_met = true;
   std::size_t control_vertices = 0, network_vertices = 0, control_quads = 0, knots_inserted = 0, odd_faces = 0;
   double shortest_segment = 0;
+  double density_C = 0;  // the constant of eq. (1) used
   std::size_t raised_segments = 0;
   double max_fit_error = 0;  // largest distance between a curve and its control polygon's B-spline (parametric)
   double fairing_energy_before = 0, fairing_energy_after = 0;
+  std::size_t inverted_quads = 0;  // control quads folded against their face cycle
   struct Level {
     std::size_t vertices = 0, edges = 0, faces = 0;
   };
