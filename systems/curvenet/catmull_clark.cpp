@@ -25,6 +25,7 @@ struct AnyCorners {
 };
 
 bool all_quads(const CornerMesh& m) {
+  if (m.quads) return true;
   for (std::size_t f = 0; f < m.face_count(); ++f)
     if (m.face_offsets[f + 1] - m.face_offsets[f] != 4) return false;
   return true;
@@ -41,7 +42,7 @@ CornerMesh child_topology(const CornerMesh& p, bool full, const ExecContext& ctx
   c.vertex_count = V + E + F;
   c.face_offsets.resize(std::size_t{NC} + 1);
   c.face_verts.resize(4 * std::size_t{NC});
-  c.corner_face.resize(4 * std::size_t{NC});
+  c.quads = true;  // corner arithmetic: no corner_face column
   par::for_each_n(ctx, NC + 1, [&](std::size_t i) { c.face_offsets[i] = static_cast<std::uint32_t>(4 * i); });
   par::for_each_n(ctx, NC, [&](std::size_t ci) {
     const auto k = static_cast<std::uint32_t>(ci);
@@ -51,8 +52,6 @@ CornerMesh child_topology(const CornerMesh& p, bool full, const ExecContext& ctx
     fv[1] = V + p.corner_edge[k];
     fv[2] = V + E + C::face(p, k);
     fv[3] = V + p.corner_edge[pc];
-    std::uint32_t* cf = c.corner_face.data() + 4 * ci;
-    cf[0] = cf[1] = cf[2] = cf[3] = k;
   });
   if (!full) return c;
 
@@ -110,70 +109,96 @@ CornerMesh child_topology(const CornerMesh& p, bool full, const ExecContext& ctx
   return c;
 }
 
-/// Positions of level l + 1 (vertex points, edge points, face points).
+/// The rule of each vertex point, decided once per level (topology only):
+/// kSmooth (interior, or a dart), kCrease with its two crease neighbours,
+/// kFixed (corner, 3+ creases, non-manifold, isolated).
+enum VertexRule : std::uint8_t { kSmooth = 0, kCrease = 1, kFixed = 2 };
+
 template <class C>
-void refine_positions(const CornerMesh& p, std::span<const std::uint8_t> sharp, std::span<const std::uint8_t> corner,
-                      const Vec3d* in, Vec3d* out, const ExecContext& ctx) {
+void vertex_rules(const CornerMesh& p, std::span<const std::uint8_t> sharp, std::span<const std::uint8_t> corner,
+                  std::vector<std::uint8_t>& rule, std::vector<std::array<std::uint32_t, 2>>& crease_nb,
+                  const ExecContext& ctx) {
+  rule.assign(p.vertex_count, kSmooth);
+  crease_nb.assign(p.vertex_count, {0, 0});
+  par::for_each_n(ctx, p.vertex_count, [&](std::size_t vi) {
+    const auto v = static_cast<std::uint32_t>(vi);
+    const std::uint32_t b = p.vert_offsets[v], e = p.vert_offsets[v + 1];
+    if (b == e || corner[v]) {
+      rule[v] = kFixed;
+      return;
+    }
+    std::uint32_t creases = 0;
+    std::array<std::uint32_t, 2> nb{0, 0};
+    for (std::uint32_t k = b; k < e; ++k) {
+      const std::uint32_t c = p.vert_corners[k];
+      const std::uint32_t eo = p.corner_edge[c];
+      if (sharp[eo]) {  // sharp includes the boundary
+        if (creases < 2) nb[creases] = p.face_verts[C::next(p, c)];
+        ++creases;
+      }
+      const std::uint32_t pc = C::prev(p, c);
+      if (p.edge_corners[p.corner_edge[pc]][1] == kNoCorner) {  // a boundary edge reaching v: no corner starts it at v
+        if (creases < 2) nb[creases] = p.face_verts[pc];
+        ++creases;
+      }
+    }
+    if (creases > 2) rule[v] = kFixed;
+    else if (creases == 2) {
+      rule[v] = kCrease;
+      crease_nb[v] = nb;
+    }
+  });
+}
+
+/// Positions of level l + 1 (vertex points, edge points, face points).
+/// Smooth vertices are interior (the boundary is sharp), so their edges
+/// are exactly the outgoing edges of their corners.
+template <class C>
+void refine_positions(const CornerMesh& p, std::span<const std::uint8_t> sharp, std::span<const std::uint8_t> rule,
+                      std::span<const std::array<std::uint32_t, 2>> crease_nb, const Vec3d* in, Vec3d* out,
+                      const ExecContext& ctx) {
   const std::uint32_t V = p.vertex_count;
   const auto E = static_cast<std::uint32_t>(p.edge_count());
   const auto F = static_cast<std::uint32_t>(p.face_count());
   Vec3d* vp = out;
   Vec3d* ep = out + V;
   Vec3d* fp = out + V + E;
+  const std::uint32_t* fv = p.face_verts.data();
   par::for_each_n(ctx, F, [&](std::size_t f) {
     const std::uint32_t b = p.face_offsets[f], e = p.face_offsets[f + 1];
-    Vec3d s = in[p.face_verts[b]];
-    for (std::uint32_t k = b + 1; k < e; ++k) s += in[p.face_verts[k]];
+    Vec3d s = in[fv[b]];
+    for (std::uint32_t k = b + 1; k < e; ++k) s += in[fv[k]];
     fp[f] = s / static_cast<double>(e - b);
   });
   par::for_each_n(ctx, E, [&](std::size_t e) {
     const auto [a, b] = p.edge_verts[e];
-    const auto [c0, c1] = p.edge_corners[e];
-    if (sharp[e] || c1 == kNoCorner) {
+    if (sharp[e]) {
       ep[e] = 0.5 * (in[a] + in[b]);
     } else {
-      ep[e] = 0.25 * (in[a] + in[b] + fp[C::face(p, c0)] + fp[C::face(p, c1)]);
+      const auto [c0, c1] = p.edge_corners[e];
+      ep[e] = 0.25 * ((in[a] + in[b]) + (fp[C::face(p, c0)] + fp[C::face(p, c1)]));
     }
   });
   par::for_each_n(ctx, V, [&](std::size_t vi) {
     const auto v = static_cast<std::uint32_t>(vi);
-    const std::uint32_t b = p.vert_offsets[v], e = p.vert_offsets[v + 1];
-    if (b == e || corner[v]) {
-      vp[v] = in[v];
-      return;
+    switch (rule[v]) {
+      case kFixed:
+        vp[v] = in[v];
+        return;
+      case kCrease:
+        vp[v] = 0.125 * (in[crease_nb[v][0]] + 6.0 * in[v] + in[crease_nb[v][1]]);
+        return;
+      default:
+        break;
     }
-    Vec3d nsum = Vec3d::Zero(), fsum = Vec3d::Zero();
-    std::uint32_t edges = 0, creases = 0;
-    std::uint32_t crease_nb[2] = {0, 0};
+    const std::uint32_t b = p.vert_offsets[v], e = p.vert_offsets[v + 1];
+    Vec3d sum = Vec3d::Zero();
     for (std::uint32_t k = b; k < e; ++k) {
       const std::uint32_t c = p.vert_corners[k];
-      fsum += fp[C::face(p, c)];
-      const std::uint32_t eo = p.corner_edge[c];
-      const std::uint32_t no = p.face_verts[C::next(p, c)];
-      nsum += in[no];
-      ++edges;
-      if (sharp[eo] || p.edge_corners[eo][1] == kNoCorner) {
-        if (creases < 2) crease_nb[creases] = no;
-        ++creases;
-      }
-      const std::uint32_t pc = C::prev(p, c);
-      const std::uint32_t ei = p.corner_edge[pc];
-      if (p.edge_corners[ei][1] == kNoCorner) {  // boundary edge reaching v: seen from no other corner
-        const std::uint32_t ni = p.face_verts[pc];
-        nsum += in[ni];
-        ++edges;
-        if (creases < 2) crease_nb[creases] = ni;
-        ++creases;
-      }
+      sum += fp[C::face(p, c)] + in[fv[C::next(p, c)]];
     }
-    if (creases > 2) {
-      vp[v] = in[v];
-    } else if (creases == 2) {
-      vp[v] = 0.125 * (in[crease_nb[0]] + 6.0 * in[v] + in[crease_nb[1]]);
-    } else {
-      const double n = edges;
-      vp[v] = ((n - 2.0) / n) * in[v] + (1.0 / (n * n)) * (nsum + fsum);
-    }
+    const double n = e - b;
+    vp[v] = ((n - 2.0) / n) * in[v] + (1.0 / (n * n)) * sum;
   });
 }
 
@@ -230,10 +255,16 @@ Expected<CatmullClarkRefiner> CatmullClarkRefiner::create(const PolygonSoupView&
   r.sharp_.push_back(std::move(sharp));
   r.corner_.push_back(std::move(corner));
   r.creases_.push_back(std::move(crease_pairs));
+  r.rules_.emplace_back();
+  r.crease_nb_.emplace_back();
   std::vector<std::uint32_t> level_creases = crease_ids;
   for (int l = 0; l < opt.levels; ++l) {
     if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "Catmull-Clark: cancelled");
     const CornerMesh& p = r.levels_.back();
+    if (l > 0 || all_quads(p))
+      vertex_rules<QuadCorners>(p, r.sharp_.back(), r.corner_.back(), r.rules_.back(), r.crease_nb_.back(), ctx);
+    else
+      vertex_rules<AnyCorners>(p, r.sharp_.back(), r.corner_.back(), r.rules_.back(), r.crease_nb_.back(), ctx);
     const std::size_t child_vertices = std::size_t{p.vertex_count} + p.edge_count() + p.face_count();
     if (child_vertices >= kNoCorner || 4 * p.corner_count() >= kNoCorner)
       return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: level " + std::to_string(l + 1) +
@@ -264,6 +295,8 @@ Expected<CatmullClarkRefiner> CatmullClarkRefiner::create(const PolygonSoupView&
     r.sharp_.push_back(std::move(cs));
     r.corner_.push_back(std::move(cc));
     r.creases_.push_back(std::move(pairs));
+    r.rules_.emplace_back();
+    r.crease_nb_.emplace_back();
   }
   return r;
 }
@@ -273,18 +306,40 @@ std::vector<std::array<std::uint32_t, 2>> CatmullClarkRefiner::last_level_crease
 Status CatmullClarkRefiner::refine_level(int l, std::span<const Vec3d> in, std::span<Vec3d> out,
                                          const ExecContext& ctx) const {
   if (l < 0 || l >= levels()) return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: no level " + std::to_string(l + 1));
-  const CornerMesh& p = levels_[static_cast<std::size_t>(l)];
-  if (in.size() != p.vertex_count || out.size() != levels_[static_cast<std::size_t>(l) + 1].vertex_count)
+  const auto li = static_cast<std::size_t>(l);
+  const CornerMesh& p = levels_[li];
+  if (in.size() != p.vertex_count || out.size() != levels_[li + 1].vertex_count)
     return Status(ErrorCode::kMismatch, "Catmull-Clark: level " + std::to_string(l) + " has " +
                                             std::to_string(p.vertex_count) + " vertices, got " +
                                             std::to_string(in.size()) + " positions");
-  if (l > 0)
-    refine_positions<QuadCorners>(p, sharp_[static_cast<std::size_t>(l)], corner_[static_cast<std::size_t>(l)],
-                                  in.data(), out.data(), ctx);
-  else if (all_quads(p))
-    refine_positions<QuadCorners>(p, sharp_[0], corner_[0], in.data(), out.data(), ctx);
+  if (l > 0 || all_quads(p))
+    refine_positions<QuadCorners>(p, sharp_[li], rules_[li], crease_nb_[li], in.data(), out.data(), ctx);
   else
-    refine_positions<AnyCorners>(p, sharp_[0], corner_[0], in.data(), out.data(), ctx);
+    refine_positions<AnyCorners>(p, sharp_[li], rules_[li], crease_nb_[li], in.data(), out.data(), ctx);
+  return {};
+}
+
+std::size_t CatmullClarkRefiner::total_vertex_count() const noexcept {
+  std::size_t n = 0;
+  for (const CornerMesh& m : levels_) n += m.vertex_count;
+  return n;
+}
+
+Status CatmullClarkRefiner::refine_all(std::span<Vec3d> all, const ExecContext& ctx) const {
+  if (all.size() != total_vertex_count())
+    return Status(ErrorCode::kMismatch, "Catmull-Clark: a buffer of " + std::to_string(all.size()) +
+                                            " positions for " + std::to_string(total_vertex_count()) + " vertices");
+  for (std::size_t v = 0; v < levels_[0].vertex_count; ++v)
+    if (!all[v].allFinite())
+      return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: control vertex " + std::to_string(v) + " is not finite");
+  std::size_t at = 0;
+  for (int l = 0; l < levels(); ++l) {
+    if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "Catmull-Clark: cancelled");
+    const std::size_t n = levels_[static_cast<std::size_t>(l)].vertex_count;
+    const std::size_t m = levels_[static_cast<std::size_t>(l) + 1].vertex_count;
+    if (Status s = refine_level(l, all.subspan(at, n), all.subspan(at + n, m), ctx); !s) return s;
+    at += n;
+  }
   return {};
 }
 
@@ -300,14 +355,20 @@ Status CatmullClarkRefiner::refine(std::span<const Vec3d> control, std::vector<V
     out.assign(control.begin(), control.end());
     return {};
   }
-  std::vector<Vec3d> a, b;
+  // Intermediate levels in one scratch buffer, the last straight into `out`.
+  std::size_t inner = 0;
+  for (int l = 1; l < levels(); ++l) inner += levels_[static_cast<std::size_t>(l)].vertex_count;
+  std::vector<Vec3d> scratch(inner);
+  out.resize(levels_.back().vertex_count);
   std::span<const Vec3d> cur = control;
+  std::size_t at = 0;
   for (int l = 0; l < levels(); ++l) {
     if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "Catmull-Clark: cancelled");
-    std::vector<Vec3d>& dst = (l + 1 == levels()) ? out : (l % 2 == 0 ? a : b);
-    dst.resize(levels_[static_cast<std::size_t>(l) + 1].vertex_count);
+    const std::size_t m = levels_[static_cast<std::size_t>(l) + 1].vertex_count;
+    const std::span<Vec3d> dst = l + 1 == levels() ? std::span<Vec3d>(out) : std::span<Vec3d>(scratch).subspan(at, m);
     if (Status s = refine_level(l, cur, dst, ctx); !s) return s;
     cur = dst;
+    at += l + 1 == levels() ? 0 : m;
   }
   return {};
 }

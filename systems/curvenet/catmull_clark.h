@@ -85,12 +85,20 @@ class CatmullClarkRefiner {
   /// One level: positions of level l + 1 from positions of level l.
   [[nodiscard]] Status refine_level(int l, std::span<const Vec3d> in, std::span<Vec3d> out,
                                     const ExecContext& ctx = {}) const;
+  /// Vertices of all levels together (the size of refine_all's buffer).
+  [[nodiscard]] std::size_t total_vertex_count() const noexcept;
+  /// Every level in one caller buffer (OpenSubdiv's PrimvarRefiner layout):
+  /// `all` starts with the control positions, level l + 1 follows level l.
+  /// No allocation, so repeated calls reuse warm memory.
+  [[nodiscard]] Status refine_all(std::span<Vec3d> all, const ExecContext& ctx = {}) const;
 
  private:
   std::vector<CornerMesh> levels_;
   std::vector<std::vector<std::uint8_t>> sharp_;   // per level, per edge
   std::vector<std::vector<std::uint8_t>> corner_;  // per level, per vertex
   std::vector<std::vector<std::array<std::uint32_t, 2>>> creases_;  // per level
+  std::vector<std::vector<std::uint8_t>> rules_;                   // per level but the last, per vertex
+  std::vector<std::vector<std::array<std::uint32_t, 2>>> crease_nb_;  // crease neighbours of crease vertices
 };
 
 struct SubdividedMesh {

@@ -113,8 +113,8 @@ Expected<CornerMesh> build_corner_mesh(const PolygonSoupView& soup, std::size_t 
   });
   for (std::uint32_t c = 0; c < nc; ++c)
     if (bad[c] != kNoCorner)
-      return Status(ErrorCode::kNonManifold, "corner mesh: faces " + std::to_string(m.corner_face[c]) + " and " +
-                                                 std::to_string(m.corner_face[bad[c]]) + " share edge (" +
+      return Status(ErrorCode::kNonManifold, "corner mesh: faces " + std::to_string(m.face_of(c)) + " and " +
+                                                 std::to_string(m.face_of(bad[c])) + " share edge (" +
                                                  std::to_string(m.face_verts[c]) + ", " +
                                                  std::to_string(m.face_verts[m.next_corner(c)]) +
                                                  ") in the same direction or with a third face");

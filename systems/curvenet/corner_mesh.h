@@ -25,7 +25,10 @@ struct CornerMesh {
   std::uint32_t vertex_count = 0;
   std::vector<std::uint32_t> face_offsets{0};  // F + 1
   std::vector<std::uint32_t> face_verts;       // one per corner
-  std::vector<std::uint32_t> corner_face;      // one per corner
+  std::vector<std::uint32_t> corner_face;      // one per corner; empty when `quads`
+  /// Every face has 4 corners and face f owns corners 4f .. 4f+3: corner
+  /// arithmetic replaces corner_face (Catmull-Clark levels after the first).
+  bool quads = false;
   std::vector<std::uint32_t> corner_edge;      // edge from this corner to the next one of its face
   std::vector<std::array<std::uint32_t, 2>> edge_verts;    // (tail, head) of the first corner's direction
   std::vector<std::array<std::uint32_t, 2>> edge_corners;  // [1] = kNoCorner on the boundary
@@ -35,11 +38,14 @@ struct CornerMesh {
   [[nodiscard]] std::size_t face_count() const noexcept { return face_offsets.size() - 1; }
   [[nodiscard]] std::size_t edge_count() const noexcept { return edge_verts.size(); }
   [[nodiscard]] std::size_t corner_count() const noexcept { return face_verts.size(); }
+  [[nodiscard]] std::uint32_t face_of(std::uint32_t c) const noexcept { return quads ? c >> 2 : corner_face[c]; }
   [[nodiscard]] std::uint32_t next_corner(std::uint32_t c) const noexcept {
+    if (quads) return (c & ~3u) | ((c + 1) & 3u);
     const std::uint32_t f = corner_face[c];
     return c + 1 == face_offsets[f + 1] ? face_offsets[f] : c + 1;
   }
   [[nodiscard]] std::uint32_t prev_corner(std::uint32_t c) const noexcept {
+    if (quads) return (c & ~3u) | ((c + 3) & 3u);
     const std::uint32_t f = corner_face[c];
     return c == face_offsets[f] ? face_offsets[f + 1] - 1 : c - 1;
   }
