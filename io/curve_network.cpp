@@ -23,9 +23,12 @@ void PolylineSet::add(std::int64_t id, std::span<const Vec3d> pts, std::uint64_t
 std::string PolylineSet::describe(std::size_t c) const {
   std::string s = "CURVE " + std::to_string(c < ids.size() ? ids[c] : static_cast<std::int64_t>(c));
   const std::uint64_t line = c < lines.size() ? lines[c] : 0;
-  if (!source.empty() && line > 0) s += " (" + source + ": line " + std::to_string(line) + ")";
-  else if (!source.empty()) s += " (" + source + ")";
-  else if (line > 0) s += " (line " + std::to_string(line) + ")";
+  if (!source.empty() && line > 0)
+    s += " (" + source + ": line " + std::to_string(line) + ")";
+  else if (!source.empty())
+    s += " (" + source + ")";
+  else if (line > 0)
+    s += " (line " + std::to_string(line) + ")";
   return s;
 }
 
@@ -48,8 +51,8 @@ Expected<PolylineSet> parse_curve_network(std::string_view text, std::string_vie
     if (!open) return {};
     const std::size_t c = out.size() - 1;
     if (out.curve(c).size() < 2)
-      return Status(ErrorCode::kParse, out.describe(c) + " has " + std::to_string(out.curve(c).size()) +
-                                           " point" + (out.curve(c).size() == 1 ? "" : "s") + " (at least 2 needed)");
+      return Status(ErrorCode::kParse, out.describe(c) + " has " + std::to_string(out.curve(c).size()) + " point" +
+                                           (out.curve(c).size() == 1 ? "" : "s") + " (at least 2 needed)");
     return {};
   };
   while (pos < text.size()) {
@@ -103,7 +106,8 @@ Expected<PolylineSet> parse_curve_network(std::string_view text, std::string_vie
 
 PolylineSet read_curve_network(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".obj") return read_obj_polylines(path);
   const std::string bytes = read_file_bytes(path);
   auto r = parse_curve_network(bytes, path.string());
@@ -114,12 +118,12 @@ PolylineSet read_curve_network(const std::filesystem::path& path) {
 void write_curve_network(const PolylineSet& curves, const std::filesystem::path& path) {
   for (std::size_t c = 0; c < curves.size(); ++c) {
     if (curves.curve(c).size() < 2)
-      throw Error(Status(ErrorCode::kInvalidArgument,
-                         path.string() + ": " + curves.describe(c) + " has fewer than 2 points"));
+      throw Error(
+          Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has fewer than 2 points"));
     for (const Vec3d& p : curves.curve(c))
       if (!p.allFinite())
-        throw Error(Status(ErrorCode::kInvalidArgument,
-                           path.string() + ": " + curves.describe(c) + " has a non-finite point"));
+        throw Error(
+            Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has a non-finite point"));
   }
   write_atomically(path, [&](AtomicFile& out) {
     std::string s;

@@ -308,10 +308,12 @@ PolylineSet read_obj_polylines(const std::filesystem::path& path) {
 void write_obj_polylines(const PolylineSet& curves, const std::filesystem::path& path) {
   for (std::size_t c = 0; c < curves.size(); ++c) {
     if (curves.curve(c).size() < 2)
-      throw Error(Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has fewer than 2 points"));
+      throw Error(
+          Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has fewer than 2 points"));
     for (const Vec3d& p : curves.curve(c))
       if (!p.allFinite())
-        throw Error(Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has a non-finite point"));
+        throw Error(
+            Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has a non-finite point"));
   }
   write_atomically(path, [&](AtomicFile& out) {
     std::string s = "# written by Atelier\n";

@@ -1,9 +1,10 @@
 #include "surface_cmd.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
-#include <nlohmann/json.hpp>
 
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/curve_network.h>
@@ -86,7 +87,8 @@ int run_surface(const Common& common, const SurfaceOptions& opt, Log& log) {
   }
   const CurveSurfaceReport& rep = r->report;
   for (const std::string& w : rep.warnings) log.warn(w);
-  if (Status s = validate(r->model); !s) throw Error(Status(ErrorCode::kInternal, "surface: the result fails validate(): " + s.message()));
+  if (Status s = validate(r->model); !s)
+    throw Error(Status(ErrorCode::kInternal, "surface: the result fails validate(): " + s.message()));
   write_obj(r->model, opt.out);
   log.info("wrote " + opt.out.string());
   if (!opt.control.empty()) {
@@ -102,16 +104,18 @@ int run_surface(const Common& common, const SurfaceOptions& opt, Log& log) {
   std::printf("  control mesh: %zu vertices, %zu quads, %zu knots inserted; fairing energy %.6g -> %.6g\n",
               rep.control_vertices, rep.control_quads, rep.knots_inserted, rep.fairing_energy_before,
               rep.fairing_energy_after);
-  std::printf("  surface: %zu levels, %zu vertices, %zu quads; distance to the curves max %.4g (%.2e of the size), mean %.4g\n",
-              rep.levels.size() - 1, rep.levels.back().vertices, rep.levels.back().faces, rep.to_curves.max,
-              rep.to_curves.relative_max, rep.to_curves.mean);
+  std::printf(
+      "  surface: %zu levels, %zu vertices, %zu quads; distance to the curves max %.4g (%.2e of the size), mean %.4g\n",
+      rep.levels.size() - 1, rep.levels.back().vertices, rep.levels.back().faces, rep.to_curves.max,
+      rep.to_curves.relative_max, rep.to_curves.mean);
   if (rep.has_traced)
     std::printf("  distance to the traced mesh: max %.4g, mean %.4g\n", rep.to_traced.max, rep.to_traced.mean);
   if (!opt.json.empty()) {
     nlohmann::json by_size = nlohmann::json::object();
     for (const auto& [n, count] : rep.faces_by_size) by_size[std::to_string(n)] = count;
     nlohmann::json levels = nlohmann::json::array();
-    for (const auto& l : rep.levels) levels.push_back({{"vertices", l.vertices}, {"edges", l.edges}, {"faces", l.faces}});
+    for (const auto& l : rep.levels)
+      levels.push_back({{"vertices", l.vertices}, {"edges", l.edges}, {"faces", l.faces}});
     const CurveTreatmentReport& t = rep.treatment;
     nlohmann::json j = {
         {"curves_file", opt.curves.string()},

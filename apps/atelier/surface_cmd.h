@@ -9,6 +9,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+
 #include <filesystem>
 #include <string>
 
@@ -25,8 +26,8 @@ struct SurfaceOptions {
   int levels = 2;
   std::string cycles = "angular";  // angular | paper
   std::size_t n0 = 3;
-  double density_c = 0;            // 0: automatic
-  double tolerance = 1e-6;         // intersection tolerance, relative to the network's size
+  double density_c = 0;     // 0: automatic
+  double tolerance = 1e-6;  // intersection tolerance, relative to the network's size
   bool no_fairing = false;
 };
 

@@ -291,13 +291,26 @@ void BM_SurfaceFromCurves(benchmark::State& state, const char* name, const char*
   state.counters["curves"] = static_cast<double>(curves.size());
   state.counters["faces_out"] = static_cast<double>(faces);
 }
-BENCHMARK_CAPTURE(BM_SurfaceFromCurves, shell_100, "shell_100", "")->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_SurfaceFromCurves, shell_100, "shell_100", "")
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(BM_SurfaceFromCurves, roof_75, "roof_75", "")->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_SurfaceFromCurves, kagome_114_regular, "kagome_114_regular", "")
-    ->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_SurfaceFromCurves, hill_3_traced, "hill_3", "hill")->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_SurfaceFromCurves, shell_3_traced, "shell_3", "shell")->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_SurfaceFromCurves, hill_3_traced, "hill_3", "hill")
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_SurfaceFromCurves, shell_3_traced, "shell_3", "shell")
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(BM_SurfaceFromCurves, tent_3_regular_curves, "tent_3_regular_curves", "")
-    ->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace

@@ -33,7 +33,7 @@ void weights_at(double t, std::size_t m, std::vector<std::pair<std::size_t, doub
   const auto b = cubic_basis(u);
   for (int k = 0; k < 4; ++k) {
     const std::ptrdiff_t i = static_cast<std::ptrdiff_t>(j) - 1 + k;  // P_{j-1} .. P_{j+2}
-    if (i < 0) {  // P_{-1} = 2 P_0 - P_1
+    if (i < 0) {                                                      // P_{-1} = 2 P_0 - P_1
       out.emplace_back(0, 2 * b[static_cast<std::size_t>(k)]);
       out.emplace_back(1, -b[static_cast<std::size_t>(k)]);
     } else if (i > static_cast<std::ptrdiff_t>(m)) {  // P_{m+1} = 2 P_m - P_{m-1}
@@ -59,7 +59,8 @@ Expected<std::vector<Vec3d>> sample_bspline(const BSplineCurve& c, int samples_p
                                                    std::to_string(n) + " control points of degree " +
                                                    std::to_string(p) + " (" + std::to_string(n + p + 1) + " needed)");
   for (std::size_t i = 0; i < c.knots.size(); ++i) {
-    if (!std::isfinite(c.knots[i])) return Status(ErrorCode::kInvalidArgument, "B-spline: knot " + std::to_string(i) + " is not finite");
+    if (!std::isfinite(c.knots[i]))
+      return Status(ErrorCode::kInvalidArgument, "B-spline: knot " + std::to_string(i) + " is not finite");
     if (i > 0 && c.knots[i] < c.knots[i - 1])
       return Status(ErrorCode::kInvalidArgument, "B-spline: knot " + std::to_string(i) + " decreases");
   }

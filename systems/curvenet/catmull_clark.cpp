@@ -142,7 +142,8 @@ void vertex_rules(const CornerMesh& p, std::span<const std::uint8_t> sharp, std:
         ++creases;
       }
     }
-    if (creases > 2) rule[v] = kFixed;
+    if (creases > 2)
+      rule[v] = kFixed;
     else if (creases == 2) {
       rule[v] = kCrease;
       crease_nb[v] = nb;
@@ -221,7 +222,8 @@ Expected<CatmullClarkRefiner> CatmullClarkRefiner::create(const PolygonSoupView&
                                                           std::span<const std::uint32_t> corners,
                                                           const CatmullClarkOptions& opt, const ExecContext& ctx) {
   if (opt.levels < 0 || opt.levels > 8)
-    return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: levels must be in [0, 8], got " + std::to_string(opt.levels));
+    return Status(ErrorCode::kInvalidArgument,
+                  "Catmull-Clark: levels must be in [0, 8], got " + std::to_string(opt.levels));
   auto base = build_corner_mesh(control, vertex_count, ctx);
   if (!base) return base.status();
   CatmullClarkRefiner r;
@@ -267,8 +269,8 @@ Expected<CatmullClarkRefiner> CatmullClarkRefiner::create(const PolygonSoupView&
       vertex_rules<AnyCorners>(p, r.sharp_.back(), r.corner_.back(), r.rules_.back(), r.crease_nb_.back(), ctx);
     const std::size_t child_vertices = std::size_t{p.vertex_count} + p.edge_count() + p.face_count();
     if (child_vertices >= kNoCorner || 4 * p.corner_count() >= kNoCorner)
-      return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: level " + std::to_string(l + 1) +
-                                                     " would exceed 2^32 - 2 vertices or corners");
+      return Status(ErrorCode::kInvalidArgument,
+                    "Catmull-Clark: level " + std::to_string(l + 1) + " would exceed 2^32 - 2 vertices or corners");
     const bool full = l + 1 < opt.levels || opt.full_topology_in_last_level;
     CornerMesh c = all_quads(p) ? child_topology<QuadCorners>(p, full, ctx) : child_topology<AnyCorners>(p, full, ctx);
     const auto E = static_cast<std::uint32_t>(p.edge_count());
@@ -301,11 +303,14 @@ Expected<CatmullClarkRefiner> CatmullClarkRefiner::create(const PolygonSoupView&
   return r;
 }
 
-std::vector<std::array<std::uint32_t, 2>> CatmullClarkRefiner::last_level_creases() const { return creases_.back(); }
+std::vector<std::array<std::uint32_t, 2>> CatmullClarkRefiner::last_level_creases() const {
+  return creases_.back();
+}
 
 Status CatmullClarkRefiner::refine_level(int l, std::span<const Vec3d> in, std::span<Vec3d> out,
                                          const ExecContext& ctx) const {
-  if (l < 0 || l >= levels()) return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: no level " + std::to_string(l + 1));
+  if (l < 0 || l >= levels())
+    return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: no level " + std::to_string(l + 1));
   const auto li = static_cast<std::size_t>(l);
   const CornerMesh& p = levels_[li];
   if (in.size() != p.vertex_count || out.size() != levels_[li + 1].vertex_count)
@@ -327,11 +332,12 @@ std::size_t CatmullClarkRefiner::total_vertex_count() const noexcept {
 
 Status CatmullClarkRefiner::refine_all(std::span<Vec3d> all, const ExecContext& ctx) const {
   if (all.size() != total_vertex_count())
-    return Status(ErrorCode::kMismatch, "Catmull-Clark: a buffer of " + std::to_string(all.size()) +
-                                            " positions for " + std::to_string(total_vertex_count()) + " vertices");
+    return Status(ErrorCode::kMismatch, "Catmull-Clark: a buffer of " + std::to_string(all.size()) + " positions for " +
+                                            std::to_string(total_vertex_count()) + " vertices");
   for (std::size_t v = 0; v < levels_[0].vertex_count; ++v)
     if (!all[v].allFinite())
-      return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: control vertex " + std::to_string(v) + " is not finite");
+      return Status(ErrorCode::kInvalidArgument,
+                    "Catmull-Clark: control vertex " + std::to_string(v) + " is not finite");
   std::size_t at = 0;
   for (int l = 0; l < levels(); ++l) {
     if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "Catmull-Clark: cancelled");
@@ -350,7 +356,8 @@ Status CatmullClarkRefiner::refine(std::span<const Vec3d> control, std::vector<V
                                             std::to_string(levels_[0].vertex_count) + " vertices");
   for (std::size_t v = 0; v < control.size(); ++v)
     if (!control[v].allFinite())
-      return Status(ErrorCode::kInvalidArgument, "Catmull-Clark: control vertex " + std::to_string(v) + " is not finite");
+      return Status(ErrorCode::kInvalidArgument,
+                    "Catmull-Clark: control vertex " + std::to_string(v) + " is not finite");
   if (levels() == 0) {
     out.assign(control.begin(), control.end());
     return {};
@@ -405,8 +412,10 @@ std::vector<Vec3d> crease_limit_positions(std::span<const Vec3d> positions,
   }
   for (std::size_t v = 0; v < positions.size(); ++v) {
     if (count[v] == 0) continue;
-    if ((v < corners.size() && corners[v]) || count[v] > 2) out[v] = positions[v];
-    else if (count[v] == 2) out[v] = (sum[v] + 4.0 * positions[v]) / 6.0;
+    if ((v < corners.size() && corners[v]) || count[v] > 2)
+      out[v] = positions[v];
+    else if (count[v] == 2)
+      out[v] = (sum[v] + 4.0 * positions[v]) / 6.0;
   }
   return out;
 }

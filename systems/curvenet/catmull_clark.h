@@ -68,7 +68,9 @@ class CatmullClarkRefiner {
   [[nodiscard]] const CornerMesh& level(int l) const noexcept { return levels_[static_cast<std::size_t>(l)]; }
   /// Crease flags of level l's edges (boundary edges included), l < levels()
   /// or with full topology.
-  [[nodiscard]] std::span<const std::uint8_t> sharp_edges(int l) const noexcept { return sharp_[static_cast<std::size_t>(l)]; }
+  [[nodiscard]] std::span<const std::uint8_t> sharp_edges(int l) const noexcept {
+    return sharp_[static_cast<std::size_t>(l)];
+  }
   /// Corner flags of level l's vertices.
   [[nodiscard]] std::span<const std::uint8_t> corner_vertices(int l) const noexcept {
     return corner_[static_cast<std::size_t>(l)];
@@ -77,11 +79,14 @@ class CatmullClarkRefiner {
   /// crease edges of the level before, in order).
   [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> last_level_creases() const;
   /// Vertex count of level l.
-  [[nodiscard]] std::size_t vertex_count(int l) const noexcept { return levels_[static_cast<std::size_t>(l)].vertex_count; }
+  [[nodiscard]] std::size_t vertex_count(int l) const noexcept {
+    return levels_[static_cast<std::size_t>(l)].vertex_count;
+  }
 
   /// Positions of the last level from the control positions (one per
   /// control vertex). Errors: wrong count, kCancelled.
-  [[nodiscard]] Status refine(std::span<const Vec3d> control, std::vector<Vec3d>& out, const ExecContext& ctx = {}) const;
+  [[nodiscard]] Status refine(std::span<const Vec3d> control, std::vector<Vec3d>& out,
+                              const ExecContext& ctx = {}) const;
   /// One level: positions of level l + 1 from positions of level l.
   [[nodiscard]] Status refine_level(int l, std::span<const Vec3d> in, std::span<Vec3d> out,
                                     const ExecContext& ctx = {}) const;
@@ -94,15 +99,15 @@ class CatmullClarkRefiner {
 
  private:
   std::vector<CornerMesh> levels_;
-  std::vector<std::vector<std::uint8_t>> sharp_;   // per level, per edge
-  std::vector<std::vector<std::uint8_t>> corner_;  // per level, per vertex
-  std::vector<std::vector<std::array<std::uint32_t, 2>>> creases_;  // per level
-  std::vector<std::vector<std::uint8_t>> rules_;                   // per level but the last, per vertex
+  std::vector<std::vector<std::uint8_t>> sharp_;                      // per level, per edge
+  std::vector<std::vector<std::uint8_t>> corner_;                     // per level, per vertex
+  std::vector<std::vector<std::array<std::uint32_t, 2>>> creases_;    // per level
+  std::vector<std::vector<std::uint8_t>> rules_;                      // per level but the last, per vertex
   std::vector<std::vector<std::array<std::uint32_t, 2>>> crease_nb_;  // crease neighbours of crease vertices
 };
 
 struct SubdividedMesh {
-  PolygonSoup mesh;  // positions and quads of the last level
+  PolygonSoup mesh;                                   // positions and quads of the last level
   std::vector<std::array<std::uint32_t, 2>> creases;  // crease edges of the last level
   std::vector<std::uint8_t> corners;                  // per vertex of the last level
 };

@@ -40,7 +40,8 @@ std::vector<std::uint8_t> parity_knots(const CurveGraph& g, const FaceCycles& fc
   std::iota(order.begin(), order.end(), 0u);
   std::vector<double> edge_len(ns);
   for (std::uint32_t s = 0; s < ns; ++s) edge_len[s] = g.length(s) / static_cast<double>(count[s] - 1);
-  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return edge_len[a] > edge_len[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return edge_len[a] > edge_len[b]; });
   for (std::uint32_t s : order) {  // two odd faces side by side
     const std::uint32_t a = dart_face[2 * s], b = dart_face[2 * s + 1];
     if (a != kRoot && b != kRoot && a != b && odd[a] && odd[b]) flip(s);
@@ -81,7 +82,8 @@ std::vector<std::uint8_t> parity_knots(const CurveGraph& g, const FaceCycles& fc
   }
   for (std::uint32_t f = 0; f < nf; ++f)
     if (odd[f]) {
-      *error = "face cycle " + std::to_string(f) + " keeps an odd number of polygon edges (no segment to insert a knot on)";
+      *error =
+          "face cycle " + std::to_string(f) + " keeps an odd number of polygon edges (no segment to insert a knot on)";
       break;
     }
   return knot;
@@ -205,8 +207,10 @@ Expected<ControlMesh> build_control_mesh(const CurveGraph& g, const FaceCycles& 
       return false;
     };
     auto p = quadrangulate_cycle(b, opt.quadrangulate, shared);
-    if (p) patches[f] = std::move(p).value();
-    else errors[f] = Status(p.status().code(), "face cycle " + std::to_string(f) + ": " + p.status().message());
+    if (p)
+      patches[f] = std::move(p).value();
+    else
+      errors[f] = Status(p.status().code(), "face cycle " + std::to_string(f) + ": " + p.status().message());
   });
   for (const Status& s : errors)
     if (!s) return s;
@@ -219,7 +223,10 @@ Expected<ControlMesh> build_control_mesh(const CurveGraph& g, const FaceCycles& 
     out.fixed.resize(mesh.positions.size(), 0);
     for (const auto& q : p.quads) {
       std::array<std::uint32_t, 4> gq{};
-      for (int k = 0; k < 4; ++k) gq[static_cast<std::size_t>(k)] = q[static_cast<std::size_t>(k)] < b ? loops[f][q[static_cast<std::size_t>(k)]] : base + (q[static_cast<std::size_t>(k)] - b);
+      for (int k = 0; k < 4; ++k)
+        gq[static_cast<std::size_t>(k)] = q[static_cast<std::size_t>(k)] < b
+                                              ? loops[f][q[static_cast<std::size_t>(k)]]
+                                              : base + (q[static_cast<std::size_t>(k)] - b);
       mesh.add_face(gq);
     }
     out.face_quads.push_back(static_cast<std::uint32_t>(mesh.face_count()));

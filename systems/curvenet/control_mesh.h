@@ -44,7 +44,7 @@
 namespace atelier {
 
 struct ControlMeshOptions {
-  std::size_t n0 = 3;           // control points of the shortest segment (eq. 1), >= 2
+  std::size_t n0 = 3;  // control points of the shortest segment (eq. 1), >= 2
   /// The model constant of eq. (1); 0 (the default) means L_0 / (2 L_m),
   /// L_m the median segment length: segments up to twice the median get n0
   /// points, longer ones proportionally more, whatever the shortest is.
@@ -78,9 +78,9 @@ struct ControlMesh {
   double C = 0;                      // the constant of eq. (1) used
   std::size_t network_vertices = 0;  // nodes + segment interior control points
   std::size_t knots_inserted = 0;
-  std::size_t raised_segments = 0;   // segments given more points than eq. (1) by fit_tolerance
-  double max_fit_error = 0;          // largest crease_fit_error over the segments
-  std::size_t odd_faces = 0;         // before the knots
+  std::size_t raised_segments = 0;  // segments given more points than eq. (1) by fit_tolerance
+  double max_fit_error = 0;         // largest crease_fit_error over the segments
+  std::size_t odd_faces = 0;        // before the knots
   /// Quads whose normal points against their face cycle's (Newell) normal:
   /// folds, which the linear fairing cannot undo in strongly concave
   /// cycles (cusps).

@@ -58,7 +58,8 @@ Expected<CornerMesh> build_corner_mesh(const PolygonSoupView& soup, std::size_t 
   CornerMesh m;
   const std::size_t nf = soup.face_count();
   if (soup.face_offsets.empty() || soup.face_offsets[0] != 0 || soup.face_offsets.back() != soup.face_nodes.size())
-    return Status(ErrorCode::kInvalidArgument, "corner mesh: face offsets do not start at 0 and end at the corner count");
+    return Status(ErrorCode::kInvalidArgument,
+                  "corner mesh: face offsets do not start at 0 and end at the corner count");
   if (vertex_count >= kNoCorner || soup.face_nodes.size() >= kNoCorner)
     return Status(ErrorCode::kInvalidArgument, "corner mesh: more than 2^32 - 2 vertices or corners");
   m.vertex_count = static_cast<std::uint32_t>(vertex_count);
@@ -68,7 +69,9 @@ Expected<CornerMesh> build_corner_mesh(const PolygonSoupView& soup, std::size_t 
   m.corner_face.resize(nc);
   for (std::uint32_t f = 0; f < nf; ++f) {
     const std::uint32_t b = m.face_offsets[f], e = m.face_offsets[f + 1];
-    if (e < b + 3) return Status(ErrorCode::kInvalidArgument, "corner mesh: face " + std::to_string(f) + " has fewer than 3 corners");
+    if (e < b + 3)
+      return Status(ErrorCode::kInvalidArgument,
+                    "corner mesh: face " + std::to_string(f) + " has fewer than 3 corners");
     for (std::uint32_t c = b; c < e; ++c) {
       if (m.face_verts[c] >= vertex_count)
         return Status(ErrorCode::kInvalidArgument, "corner mesh: face " + std::to_string(f) + " uses vertex " +

@@ -29,11 +29,11 @@ struct CornerMesh {
   /// Every face has 4 corners and face f owns corners 4f .. 4f+3: corner
   /// arithmetic replaces corner_face (Catmull-Clark levels after the first).
   bool quads = false;
-  std::vector<std::uint32_t> corner_edge;      // edge from this corner to the next one of its face
+  std::vector<std::uint32_t> corner_edge;                  // edge from this corner to the next one of its face
   std::vector<std::array<std::uint32_t, 2>> edge_verts;    // (tail, head) of the first corner's direction
   std::vector<std::array<std::uint32_t, 2>> edge_corners;  // [1] = kNoCorner on the boundary
-  std::vector<std::uint32_t> vert_offsets;     // V + 1
-  std::vector<std::uint32_t> vert_corners;     // corners at each vertex
+  std::vector<std::uint32_t> vert_offsets;                 // V + 1
+  std::vector<std::uint32_t> vert_corners;                 // corners at each vertex
 
   [[nodiscard]] std::size_t face_count() const noexcept { return face_offsets.size() - 1; }
   [[nodiscard]] std::size_t edge_count() const noexcept { return edge_verts.size(); }

@@ -204,9 +204,8 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
       s.b.hi.array() += tol;
       segs.push_back(s);
     }
-  std::sort(segs.begin(), segs.end(), [](const Seg& a, const Seg& b) {
-    return std::tie(a.b.lo.x(), a.c, a.i) < std::tie(b.b.lo.x(), b.c, b.i);
-  });
+  std::sort(segs.begin(), segs.end(),
+            [](const Seg& a, const Seg& b) { return std::tie(a.b.lo.x(), a.c, a.i) < std::tie(b.b.lo.x(), b.c, b.i); });
   std::vector<Hit> hits;
   std::vector<std::uint32_t> active;
   for (std::uint32_t k = 0; k < segs.size(); ++k) {
@@ -238,9 +237,9 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
         for (std::size_t u = 0; u < along.size(); ++u)
           for (std::size_t v = u + 1; v < along.size(); ++v)
             if ((along[u] - along[v]).norm() > 100 * cluster)
-              return Status(ErrorCode::kInvalidArgument,
-                            in.describe(x->c) + " and " + in.describe(y->c) + " run on top of each other near " +
-                                at(sp.p) + " (duplicate curves)");
+              return Status(ErrorCode::kInvalidArgument, in.describe(x->c) + " and " + in.describe(y->c) +
+                                                             " run on top of each other near " + at(sp.p) +
+                                                             " (duplicate curves)");
       }
       hits.push_back({x->c, y->c, ta, tb, sp.dist, 0.5 * (sp.p + sp.q)});
     }
@@ -289,9 +288,8 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
   {
     std::vector<std::uint32_t> order(cand.size());
     std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-      return std::tie(cand[a].x(), a) < std::tie(cand[b].x(), b);
-    });
+    std::sort(order.begin(), order.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return std::tie(cand[a].x(), a) < std::tie(cand[b].x(), b); });
     for (std::size_t i = 0; i < order.size(); ++i)
       for (std::size_t j = i + 1; j < order.size() && cand[order[j]].x() - cand[order[i]].x() <= tol; ++j)
         if ((cand[order[i]] - cand[order[j]]).norm() <= tol) uf.unite(order[i], order[j]);
@@ -330,7 +328,8 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
   for (std::uint32_t c = 0; c < curves.size(); ++c) {
     auto& cs = cuts[c];
     for (Cut& x : cs) x.node = node_of[x.node];
-    std::sort(cs.begin(), cs.end(), [](const Cut& a, const Cut& b) { return std::tie(a.t, a.node) < std::tie(b.t, b.node); });
+    std::sort(cs.begin(), cs.end(),
+              [](const Cut& a, const Cut& b) { return std::tie(a.t, a.node) < std::tie(b.t, b.node); });
     const Curve& cu = curves[c];
     // Repeated cuts at one node close together along the curve are one.
     std::vector<Cut> kept;
@@ -389,14 +388,16 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
         // Thresholds 2 and 3 as well: the two ends must continue each other
         // (else they are two dangling ends that happen to be close).
         const auto pa = away_from(free_nodes[i]), pb = away_from(free_nodes[j]);
-        const double step = 0.1 * std::min(g.length(free_segment[free_nodes[i]]), g.length(free_segment[free_nodes[j]]));
+        const double step =
+            0.1 * std::min(g.length(free_segment[free_nodes[i]]), g.length(free_segment[free_nodes[j]]));
         const EndShape ea = end_shape(pa, step), eb = end_shape(pb, step);
         const double kmax = std::max({ea.curvature, eb.curvature, 1.0 / diag});
         if (-ea.tangent.dot(eb.tangent) < cos_max || std::abs(ea.curvature - eb.curvature) > opt.merge_curvature * kmax)
           continue;
         pairs.push_back({d, free_nodes[i], free_nodes[j]});
       }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return std::tie(x.d, x.a, x.b) < std::tie(y.d, y.a, y.b); });
+    std::sort(pairs.begin(), pairs.end(),
+              [](const Pair& x, const Pair& y) { return std::tie(x.d, x.a, x.b) < std::tie(y.d, y.a, y.b); });
     std::vector<std::uint32_t> joined_to(g.node_count(), kNoCurveNode);
     for (const Pair& p : pairs) {
       if (joined_to[p.a] != kNoCurveNode || joined_to[p.b] != kNoCurveNode) continue;
@@ -528,7 +529,8 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
       }
       if (!changed) break;
       for (std::uint32_t s = 0; s < h.segment_count(); ++s)
-        if (!merged_seg[s]) next.add_segment(h.segment_nodes[s][0], h.segment_nodes[s][1], h.polyline(s), h.segment_curve[s]);
+        if (!merged_seg[s])
+          next.add_segment(h.segment_nodes[s][0], h.segment_nodes[s][1], h.polyline(s), h.segment_curve[s]);
       // Renumber nodes (drop removed ones), segments sorted by source curve
       // then first point so the order does not depend on the merge rounds.
       std::vector<std::uint32_t> remap(h.node_count(), kNoCurveNode);
@@ -560,7 +562,8 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
     std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
     CurveGraph r;
     r.nodes = h.nodes;
-    for (std::uint32_t s : order) r.add_segment(h.segment_nodes[s][0], h.segment_nodes[s][1], h.polyline(s), h.segment_curve[s]);
+    for (std::uint32_t s : order)
+      r.add_segment(h.segment_nodes[s][0], h.segment_nodes[s][1], h.polyline(s), h.segment_curve[s]);
     h = std::move(r);
   }
   out.graph = std::move(h);

@@ -87,14 +87,14 @@ struct CurveTreatmentOptions {
 struct CurveTreatmentReport {
   std::size_t input_curves = 0;
   std::size_t input_points = 0;
-  double diagonal = 0;             // bounding-box diagonal of the input
-  double tolerance = 0;            // absolute intersection tolerance used
-  std::size_t intersections = 0;   // crossing points found (after clustering)
-  double max_intersection_gap = 0; // largest closest-approach distance snapped into a node
-  std::size_t splits = 0;          // pieces created beyond one per curve
-  std::size_t joined_ends = 0;     // free ends joined by merge threshold 1
-  std::size_t merges = 0;          // degree-2 nodes removed (knot removals)
-  std::size_t kinks = 0;           // degree-2 nodes kept: tangent or curvature threshold refused
+  double diagonal = 0;              // bounding-box diagonal of the input
+  double tolerance = 0;             // absolute intersection tolerance used
+  std::size_t intersections = 0;    // crossing points found (after clustering)
+  double max_intersection_gap = 0;  // largest closest-approach distance snapped into a node
+  std::size_t splits = 0;           // pieces created beyond one per curve
+  std::size_t joined_ends = 0;      // free ends joined by merge threshold 1
+  std::size_t merges = 0;           // degree-2 nodes removed (knot removals)
+  std::size_t kinks = 0;            // degree-2 nodes kept: tangent or curvature threshold refused
   std::size_t pruned_segments = 0;
   double pruned_length = 0;
   std::vector<std::int64_t> pruned_curve_ids;  // sorted, unique

@@ -15,7 +15,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 std::vector<Triangle> fan(const PolygonSoupView& s) {
   std::vector<Triangle> t;
@@ -96,7 +98,8 @@ class TriangleGrid {
     cell_ = std::max({mean * 2.0, ext.maxCoeff() / 1024.0, 1e-12});
     // At most about 4 cells per triangle (a thin surface in a large box).
     for (;;) {
-      for (int k = 0; k < 3; ++k) dims_[static_cast<std::size_t>(k)] = std::max(1, static_cast<int>(std::ceil(ext[k] / cell_)));
+      for (int k = 0; k < 3; ++k)
+        dims_[static_cast<std::size_t>(k)] = std::max(1, static_cast<int>(std::ceil(ext[k] / cell_)));
       if (static_cast<double>(dims_[0]) * dims_[1] * dims_[2] <= 4.0 * static_cast<double>(t.size()) + 64.0) break;
       cell_ *= 1.25;
     }
@@ -130,7 +133,8 @@ class TriangleGrid {
               best = std::min(best, (closest_point_on_triangle(q, p_[x[0]], p_[x[1]], p_[x[2]]).point - q).norm());
             }
           }
-      const bool all = lo == std::array<int, 3>{0, 0, 0} && hi == std::array<int, 3>{dims_[0] - 1, dims_[1] - 1, dims_[2] - 1};
+      const bool all =
+          lo == std::array<int, 3>{0, 0, 0} && hi == std::array<int, 3>{dims_[0] - 1, dims_[1] - 1, dims_[2] - 1};
       if (best <= r || all) return best;
     }
   }
@@ -139,12 +143,14 @@ class TriangleGrid {
   [[nodiscard]] std::array<int, 3> index(const Vec3d& x) const {
     std::array<int, 3> i{};
     for (int k = 0; k < 3; ++k)
-      i[static_cast<std::size_t>(k)] = std::clamp(static_cast<int>(std::floor((x[k] - lo_[k]) / cell_)), 0, dims_[static_cast<std::size_t>(k)] - 1);
+      i[static_cast<std::size_t>(k)] =
+          std::clamp(static_cast<int>(std::floor((x[k] - lo_[k]) / cell_)), 0, dims_[static_cast<std::size_t>(k)] - 1);
     return i;
   }
   [[nodiscard]] std::size_t flat(int i, int j, int k) const {
     return (static_cast<std::size_t>(k) * static_cast<std::size_t>(dims_[1]) + static_cast<std::size_t>(j)) *
-               static_cast<std::size_t>(dims_[0]) + static_cast<std::size_t>(i);
+               static_cast<std::size_t>(dims_[0]) +
+           static_cast<std::size_t>(i);
   }
   std::span<const Vec3d> p_;
   std::span<const Triangle> t_;
@@ -305,7 +311,8 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
     for (std::size_t v = 0; v < normals.size(); ++v) {
       const ClosestHit h = traced_bvh.closest_point(out.graph.nodes[v]);
       const Triangle& t = traced_tris[h.triangle];
-      const Vec3d n = (traced.positions[t[1]] - traced.positions[t[0]]).cross(traced.positions[t[2]] - traced.positions[t[0]]);
+      const Vec3d n =
+          (traced.positions[t[1]] - traced.positions[t[0]]).cross(traced.positions[t[2]] - traced.positions[t[0]]);
       if (n.dot(normals[v]) < 0) normals[v] = -normals[v];
     }
     fo.node_normals = normals;
@@ -343,7 +350,8 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
   rep.fairing_energy_after = cm.fairing_energy_after;
   rep.inverted_quads = cm.inverted_quads;
   if (cm.inverted_quads > 0)
-    rep.warnings.push_back(std::to_string(cm.inverted_quads) + " control quad(s) fold against their face cycle (strongly concave cycles)");
+    rep.warnings.push_back(std::to_string(cm.inverted_quads) +
+                           " control quad(s) fold against their face cycle (strongly concave cycles)");
   rep.seconds["control mesh"] = seconds_since(t0);
 
   // ---- 5. Catmull-Clark with creases.
@@ -375,7 +383,9 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
   t0 = Clock::now();
   if (opt.build_model) {
     auto s = add_polygon_surface(out.model, "curve_surface", out.refined.mesh, ctx);
-    if (!s) return Status(ErrorCode::kInternal, "surface: the subdivided mesh was refused as a surface: " + s.status().message());
+    if (!s)
+      return Status(ErrorCode::kInternal,
+                    "surface: the subdivided mesh was refused as a surface: " + s.status().message());
   }
   rep.seconds["model"] = seconds_since(t0);
 

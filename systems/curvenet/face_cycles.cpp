@@ -3,8 +3,8 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <tuple>
@@ -99,9 +99,12 @@ void count_usage(const CurveGraph& g, FaceCycles& fc) {
   for (std::size_t f = 0; f < fc.face_count(); ++f) ++fc.faces_by_size[fc.face(f).size()];
   fc.segments_in_two_faces = fc.segments_in_one_face = fc.segments_in_no_face = 0;
   for (std::uint32_t u : use) {
-    if (u >= 2) ++fc.segments_in_two_faces;
-    else if (u == 1) ++fc.segments_in_one_face;
-    else ++fc.segments_in_no_face;
+    if (u >= 2)
+      ++fc.segments_in_two_faces;
+    else if (u == 1)
+      ++fc.segments_in_one_face;
+    else
+      ++fc.segments_in_no_face;
   }
   fc.nodes = g.node_count();
   fc.segments = g.segment_count();
@@ -367,14 +370,14 @@ Expected<FaceCycles> find_face_cycles(const CurveGraph& g, const FaceCycleOption
     normals = own;
   }
   if (normals.size() != g.node_count())
-    return Status(ErrorCode::kInvalidArgument, "find_face_cycles: " + std::to_string(normals.size()) +
-                                                   " normals for " + std::to_string(g.node_count()) + " nodes");
+    return Status(ErrorCode::kInvalidArgument, "find_face_cycles: " + std::to_string(normals.size()) + " normals for " +
+                                                   std::to_string(g.node_count()) + " nodes");
   for (std::size_t v = 0; v < normals.size(); ++v)
     if (!normals[v].allFinite() || !(normals[v].norm() > 0))
-      return Status(ErrorCode::kInvalidArgument, "find_face_cycles: the normal of node " + std::to_string(v) +
-                                                     " is zero or not finite");
-  FaceCycles fc = opt.method == FaceCycleMethod::kAngular ? angular_faces(g, normals)
-                                                          : paper_faces(g, normals, opt, ctx);
+      return Status(ErrorCode::kInvalidArgument,
+                    "find_face_cycles: the normal of node " + std::to_string(v) + " is zero or not finite");
+  FaceCycles fc =
+      opt.method == FaceCycleMethod::kAngular ? angular_faces(g, normals) : paper_faces(g, normals, opt, ctx);
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "find_face_cycles: cancelled");
   count_usage(g, fc);
   if (fc.face_count() == 0) return Status(ErrorCode::kTopology, "the curve network has no face cycle");

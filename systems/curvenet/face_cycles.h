@@ -51,7 +51,9 @@ struct FaceCycleOptions {
 
 /// Dart d = 2 s + r runs along segment s forwards (r = 0, from
 /// segment_nodes[s][0]) or backwards (r = 1).
-[[nodiscard]] constexpr std::uint32_t dart_segment(std::uint32_t d) noexcept { return d >> 1; }
+[[nodiscard]] constexpr std::uint32_t dart_segment(std::uint32_t d) noexcept {
+  return d >> 1;
+}
 
 struct FaceCycles {
   /// Face f: darts[offsets[f] .. offsets[f+1]), in order, the face on the

@@ -61,7 +61,8 @@ RingWeights fairing_weights(std::size_t k, FairingEquations eq) {
   w.gamma.assign(k, k ? 1.0 / static_cast<double>(k) : 0.0);
   w.gamma_self = -1.0;  // eq. (7)
   if (k == 4) {
-    for (std::size_t j = 0; j < 4; ++j) w.alpha[j] = (j % 2 == 0 ? 0.25 : -0.25);  // eq. (6): 1/4 cos(pi j); sin(pi j) = 0
+    for (std::size_t j = 0; j < 4; ++j)
+      w.alpha[j] = (j % 2 == 0 ? 0.25 : -0.25);                    // eq. (6): 1/4 cos(pi j); sin(pi j) = 0
     if (eq == FairingEquations::kPrinted) w.gamma.assign(4, 0.0);  // eq. (6) as printed has no gamma
     return w;
   }
@@ -148,8 +149,10 @@ Expected<QuadFairingReport> fair_quad_mesh(std::span<Vec3d> positions, const Pol
     fr.clear();
     Vec3d fixed_sum = Vec3d::Zero();
     for (const auto& [v, w] : r.w) {
-      if (local[v] >= 0) fr.emplace_back(local[v], w);
-      else fixed_sum += w * Vec3d(positions[v]);
+      if (local[v] >= 0)
+        fr.emplace_back(local[v], w);
+      else
+        fixed_sum += w * Vec3d(positions[v]);
     }
     for (const auto& [a, wa] : fr) {
       in_row[static_cast<std::size_t>(a)] = 1;

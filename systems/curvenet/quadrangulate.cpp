@@ -62,7 +62,8 @@ Expected<QuadPatch> quadrangulate_cycle(std::span<const Vec3d> boundary, const Q
                                                    " vertices cannot be all quads (needs an even count >= 4)");
   for (std::size_t i = 0; i < nb; ++i)
     if (!boundary[i].allFinite())
-      return Status(ErrorCode::kInvalidArgument, "quadrangulate: boundary vertex " + std::to_string(i) + " is not finite");
+      return Status(ErrorCode::kInvalidArgument,
+                    "quadrangulate: boundary vertex " + std::to_string(i) + " is not finite");
   QuadPatch out;
   std::vector<Vec3d> pos(boundary.begin(), boundary.end());
   Front fr{pos, out, static_cast<std::uint32_t>(nb), {}, &forbidden};
@@ -122,8 +123,7 @@ Expected<QuadPatch> quadrangulate_cycle(std::span<const Vec3d> boundary, const Q
     const std::size_t nc = corners.size();
     // Centre fill: every chain has two edges (corners at alternate vertices).
     bool alternate = opt.centre_fill && nc >= 3 && nc * 2 == n;
-    for (std::size_t j = 0; alternate && j < nc; ++j)
-      alternate = (corners[(j + 1) % nc] + n - corners[j]) % n == 2;
+    for (std::size_t j = 0; alternate && j < nc; ++j) alternate = (corners[(j + 1) % nc] + n - corners[j]) % n == 2;
     if (alternate) {
       fr.fan(front, corners[0] + 1);
       front.clear();

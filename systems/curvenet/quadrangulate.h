@@ -45,8 +45,8 @@ struct QuadrangulateOptions {
 using ChordFilter = std::function<bool(std::uint32_t, std::uint32_t)>;
 
 struct QuadPatch {
-  std::vector<Vec3d> interior;                     // new vertices, local index b + i
-  std::vector<std::array<std::uint32_t, 4>> quads; // local indices
+  std::vector<Vec3d> interior;                      // new vertices, local index b + i
+  std::vector<std::array<std::uint32_t, 4>> quads;  // local indices
   std::size_t rows = 0, closing_rows = 0, fans = 0;
 };
 

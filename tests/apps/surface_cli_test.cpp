@@ -4,8 +4,9 @@
 // curve, usage errors exit 2.
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
+
+#include <fstream>
 
 #include "tests/support/run_command.h"
 #include <atelier/io/obj.h>
@@ -113,8 +114,9 @@ TEST(SurfaceCli, SharedNetworkWithTracedMesh) {
   const fs::path data = fs::path(ATELIER_SHARED_DATA) / "curve-networks";
   if (!fs::exists(data / "hill_3.txt")) GTEST_SKIP() << "shared curve networks not found";
   const fs::path d = scratch_dir("surface_cli_hill");
-  const auto r = run_cli("surface --curves " + (data / "hill_3.txt").string() + " --mesh " + (data / "hill.obj").string() +
-                         " --levels 2 --out " + (d / "hill.obj").string() + " --json " + (d / "hill.json").string());
+  const auto r =
+      run_cli("surface --curves " + (data / "hill_3.txt").string() + " --mesh " + (data / "hill.obj").string() +
+              " --levels 2 --out " + (d / "hill.obj").string() + " --json " + (d / "hill.json").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const nlohmann::json j = read_json(d / "hill.json");
   EXPECT_EQ(j["curves"]["boundary_curves_added"], 1);

@@ -34,7 +34,8 @@ void write_text(const std::filesystem::path& p, const std::string& s) {
 
 TEST(CurveNetworkFile, ReadsCurvesWithGapsCommentsAndLineEndings) {
   const std::string text =
-      "# a network\r\nCURVE 3\r\n0 0 0\r\n1 0 0\t\r\n\r\n2 0.5 -1e-3 # a comment\nCURVE 10\n0 1 0\n  +1 1 0\nCURVE -2\n5 5 5\n6 6 6\n";
+      "# a network\r\nCURVE 3\r\n0 0 0\r\n1 0 0\t\r\n\r\n2 0.5 -1e-3 # a comment\nCURVE 10\n0 1 0\n  +1 1 0\nCURVE "
+      "-2\n5 5 5\n6 6 6\n";
   auto r = parse_curve_network(text, "net.txt");
   ASSERT_TRUE(r) << r.status().to_string();
   ASSERT_EQ(r->size(), 3u);
@@ -48,8 +49,10 @@ TEST(CurveNetworkFile, ReadsCurvesWithGapsCommentsAndLineEndings) {
 }
 
 TEST(CurveNetworkFile, MalformedInputIsRefusedNamingLineAndCurve) {
-  EXPECT_NE(parse_error_of("0 0 0\nCURVE 1\n0 0 0\n1 1 1\n").find("line 1: a point before the first"), std::string::npos);
-  EXPECT_NE(parse_error_of("CURVE 1\n0 0 0\n1 x 1\n").find("line 3: CURVE 1: non-numeric token 'x'"), std::string::npos);
+  EXPECT_NE(parse_error_of("0 0 0\nCURVE 1\n0 0 0\n1 1 1\n").find("line 1: a point before the first"),
+            std::string::npos);
+  EXPECT_NE(parse_error_of("CURVE 1\n0 0 0\n1 x 1\n").find("line 3: CURVE 1: non-numeric token 'x'"),
+            std::string::npos);
   EXPECT_NE(parse_error_of("CURVE 4\n0 0 0\n1 nan 1\n").find("line 3: CURVE 4: NaN/inf"), std::string::npos);
   EXPECT_NE(parse_error_of("CURVE 4\n0 0 0\n1 inf 1\n").find("NaN/inf"), std::string::npos);
   EXPECT_NE(parse_error_of("CURVE 4\n0 0 0\n1 1\n").find("line 3: CURVE 4: a point has 2 values"), std::string::npos);
@@ -58,8 +61,9 @@ TEST(CurveNetworkFile, MalformedInputIsRefusedNamingLineAndCurve) {
             std::string::npos);
   EXPECT_NE(parse_error_of("CURVE 7\n0 0 0\n1 1 1\nCURVE 8\n").find("CURVE 8 (net.txt: line 4) has 0 points"),
             std::string::npos);
-  EXPECT_NE(parse_error_of("CURVE 7\n0 0 0\n1 1 1\nCURVE 7\n0 0 0\n2 2 2\n").find("line 4: CURVE 7 repeats the id of line 1"),
-            std::string::npos);
+  EXPECT_NE(
+      parse_error_of("CURVE 7\n0 0 0\n1 1 1\nCURVE 7\n0 0 0\n2 2 2\n").find("line 4: CURVE 7 repeats the id of line 1"),
+      std::string::npos);
   EXPECT_NE(parse_error_of("CURVE x\n0 0 0\n1 1 1\n").find("curve id 'x' is not an integer"), std::string::npos);
   EXPECT_NE(parse_error_of("CURVE\n0 0 0\n1 1 1\n").find("`CURVE <integer id>`"), std::string::npos);
   EXPECT_NE(parse_error_of("CURVE 99999999999999999999\n0 0 0\n1 1 1\n").find("not an integer"), std::string::npos);
@@ -77,10 +81,13 @@ TEST(CurveNetworkFile, ArbitraryBytesNeverCrash) {
     std::string t = good;
     seed = seed * 6364136223846793005ull + 1442695040888963407ull;
     const std::size_t cut = (seed >> 33) % (good.size() + 1);
-    if (trial % 2) t.resize(cut);
-    else t[cut % t.size()] = static_cast<char>(seed >> 56);
+    if (trial % 2)
+      t.resize(cut);
+    else
+      t[cut % t.size()] = static_cast<char>(seed >> 56);
     auto r = parse_curve_network(t, "fuzz");
-    if (!r) EXPECT_EQ(r.status().code(), ErrorCode::kParse) << r.status().to_string();
+    if (!r)
+      EXPECT_EQ(r.status().code(), ErrorCode::kParse) << r.status().to_string();
     else
       for (std::size_t c = 0; c < r->size(); ++c) EXPECT_GE(r->curve(c).size(), 2u);
   }

@@ -32,8 +32,10 @@ namespace {
 /// A small open mesh with a triangle, quads and a pentagon.
 PolygonSoup mixed_mesh() {
   PolygonSoup s;
-  s.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0.2}, {0, 1, 0}, {1, 1, 0.3}, {2, 1, 0}, {0.5, 2, 0}, {1.5, 2.2, 0.1}, {3, 0.5, 0}};
-  for (const auto& f : std::vector<std::vector<std::uint32_t>>{{0, 1, 4, 3}, {1, 2, 5, 4}, {3, 4, 7, 6}, {2, 8, 5}, {4, 5, 7}})
+  s.positions = {{0, 0, 0}, {1, 0, 0},   {2, 0, 0.2},     {0, 1, 0},  {1, 1, 0.3},
+                 {2, 1, 0}, {0.5, 2, 0}, {1.5, 2.2, 0.1}, {3, 0.5, 0}};
+  for (const auto& f :
+       std::vector<std::vector<std::uint32_t>>{{0, 1, 4, 3}, {1, 2, 5, 4}, {3, 4, 7, 6}, {2, 8, 5}, {4, 5, 7}})
     s.add_face(f);
   return s;
 }
@@ -111,8 +113,10 @@ void expect_same_faces(const PolygonSoupView& a, const PolygonSoupView& b, const
     std::vector<std::uint32_t> q;
     for (std::uint32_t k = a.face_offsets[f]; k < a.face_offsets[f + 1]; ++k) q.push_back(m[a.face_nodes[k]]);
     auto it = fb.find(canon(q));
-    if (it == fb.end() || it->second == 0) ++missing;
-    else --it->second;
+    if (it == fb.end() || it->second == 0)
+      ++missing;
+    else
+      --it->second;
   }
   EXPECT_EQ(missing, 0u);
 }
@@ -197,7 +201,8 @@ TEST(CatmullClark, CreaseLimitIsTheCubicBSplineOfItsPolygon) {
   // inside a 6 x 2 quad strip on each side.
   const int m = 6;
   std::vector<Vec3d> P;
-  for (int i = 0; i <= m; ++i) P.emplace_back(i + 0.2 * std::sin(1.3 * i), 0.1 * std::cos(2.1 * i), 0.3 * std::sin(0.9 * i));
+  for (int i = 0; i <= m; ++i)
+    P.emplace_back(i + 0.2 * std::sin(1.3 * i), 0.1 * std::cos(2.1 * i), 0.3 * std::sin(0.9 * i));
   PolygonSoup s;
   for (int j = -2; j <= 2; ++j)
     for (int i = 0; i <= m; ++i)
@@ -305,7 +310,8 @@ TEST(CatmullClark, ThreadCountDoesNotChangeABit) {
   auto b = subdivide_catmull_clark(cm.mesh, cm.creases, cm.corners, co, two);
   ASSERT_TRUE(a && b);
   ASSERT_EQ(a->mesh.positions.size(), b->mesh.positions.size());
-  EXPECT_EQ(0, std::memcmp(a->mesh.positions.data(), b->mesh.positions.data(), a->mesh.positions.size() * sizeof(Vec3d)));
+  EXPECT_EQ(0,
+            std::memcmp(a->mesh.positions.data(), b->mesh.positions.data(), a->mesh.positions.size() * sizeof(Vec3d)));
   EXPECT_EQ(a->mesh.face_nodes, b->mesh.face_nodes);
   EXPECT_EQ(a->creases, b->creases);
 }
@@ -356,8 +362,10 @@ PolygonSoup opensubdiv_refine(const PolygonSoupView& s, std::span<const std::arr
                               std::span<const std::uint32_t> corners, int levels) {
   using namespace OpenSubdiv;
   using Descriptor = Far::TopologyDescriptor;
-  std::vector<int> nverts, idx(s.face_nodes.begin(), s.face_nodes.end()), crease_idx, corner_idx(corners.begin(), corners.end());
-  for (std::size_t f = 0; f < s.face_count(); ++f) nverts.push_back(static_cast<int>(s.face_offsets[f + 1] - s.face_offsets[f]));
+  std::vector<int> nverts, idx(s.face_nodes.begin(), s.face_nodes.end()), crease_idx,
+      corner_idx(corners.begin(), corners.end());
+  for (std::size_t f = 0; f < s.face_count(); ++f)
+    nverts.push_back(static_cast<int>(s.face_offsets[f + 1] - s.face_offsets[f]));
   for (const auto& c : creases) {
     crease_idx.push_back(static_cast<int>(c[0]));
     crease_idx.push_back(static_cast<int>(c[1]));
@@ -381,7 +389,8 @@ PolygonSoup opensubdiv_refine(const PolygonSoupView& s, std::span<const std::arr
       d, Far::TopologyRefinerFactory<Descriptor>::Options(Sdc::SCHEME_CATMARK, options)));
   refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(levels));
   std::vector<OsdPoint> buf(static_cast<std::size_t>(refiner->GetNumVerticesTotal()));
-  for (std::size_t v = 0; v < s.positions.size(); ++v) buf[v] = {s.positions[v].x(), s.positions[v].y(), s.positions[v].z()};
+  for (std::size_t v = 0; v < s.positions.size(); ++v)
+    buf[v] = {s.positions[v].x(), s.positions[v].y(), s.positions[v].z()};
   Far::PrimvarRefinerReal<double> primvar(*refiner);
   OsdPoint* src = buf.data();
   for (int l = 1; l <= levels; ++l) {
@@ -448,5 +457,7 @@ TEST(CatmullClark, OpenSubdivFarGivesTheSamePoints) {
   }
 }
 #else
-TEST(CatmullClark, OpenSubdivFarGivesTheSamePoints) { GTEST_SKIP() << "OpenSubdiv (libosd-dev) not installed"; }
+TEST(CatmullClark, OpenSubdivFarGivesTheSamePoints) {
+  GTEST_SKIP() << "OpenSubdiv (libosd-dev) not installed";
+}
 #endif

@@ -237,7 +237,8 @@ TEST(CurveTreatment, SharedNetworksSplitAtTheirCrossings) {
   };
   // Nodes and segments after pruning; every crossing is exact in these
   // files (closest approach <= 1e-7 of the diagonal), far below the tolerance.
-  for (const Case c : {Case{"shell_100", 819, 1578}, Case{"roof_75", 776, 1729}, Case{"kagome_114_regular", 3294, 6474}}) {
+  for (const Case c :
+       {Case{"shell_100", 819, 1578}, Case{"roof_75", 776, 1729}, Case{"kagome_114_regular", 3294, 6474}}) {
     auto t = treat_curves(shared_network(c.name));
     ASSERT_TRUE(t) << c.name << ": " << t.status().to_string();
     EXPECT_EQ(t->graph.node_count(), c.nodes) << c.name;

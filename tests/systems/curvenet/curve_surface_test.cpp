@@ -140,7 +140,8 @@ TEST(CurveSurface, BSplineCurvesAsInput) {
   ASSERT_EQ(pts->size(), 17u);
   for (std::size_t i = 0; i < pts->size(); ++i) {
     const double t = i / 16.0, u = 1 - t;
-    const Vec3d bez = u * u * u * b.control[0] + 3 * u * u * t * b.control[1] + 3 * u * t * t * b.control[2] + t * t * t * b.control[3];
+    const Vec3d bez = u * u * u * b.control[0] + 3 * u * u * t * b.control[1] + 3 * u * t * t * b.control[2] +
+                      t * t * t * b.control[3];
     EXPECT_LT(((*pts)[i] - bez).norm(), 1e-14);
   }
   // The cube's edges as degree-2 B-splines (straight, with an inner knot).

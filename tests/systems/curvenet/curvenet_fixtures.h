@@ -79,20 +79,22 @@ inline PolylineSet torus_grid(int nu, int nv, double R = 3.0, double r = 1.0, in
   auto at = [&](double u, double v) {
     return Vec3d((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v));
   };
-  auto u_of = [&](int i) { return 2 * kPi * (i + 0.1) / nu; };   // meridians off the coordinate planes
+  auto u_of = [&](int i) { return 2 * kPi * (i + 0.1) / nu; };  // meridians off the coordinate planes
   auto v_of = [&](int j) { return 2 * kPi * (j + 0.25) / nv; };
   std::int64_t id = 0;
   for (int i = 0; i < nu; ++i) {
     std::vector<Vec3d> p;
     for (int j = 0; j < nv; ++j)
-      for (int k = 0; k < per_span; ++k) p.push_back(at(u_of(i), k == 0 ? v_of(j) : v_of(j) + 2 * kPi * k / (nv * per_span)));
+      for (int k = 0; k < per_span; ++k)
+        p.push_back(at(u_of(i), k == 0 ? v_of(j) : v_of(j) + 2 * kPi * k / (nv * per_span)));
     p.push_back(p.front());
     s.add(id++, p);
   }
   for (int j = 0; j < nv; ++j) {
     std::vector<Vec3d> p;
     for (int i = 0; i < nu; ++i)
-      for (int k = 0; k < per_span; ++k) p.push_back(at(k == 0 ? u_of(i) : u_of(i) + 2 * kPi * k / (nu * per_span), v_of(j)));
+      for (int k = 0; k < per_span; ++k)
+        p.push_back(at(k == 0 ? u_of(i) : u_of(i) + 2 * kPi * k / (nu * per_span), v_of(j)));
     p.push_back(p.front());
     s.add(id++, p);
   }
@@ -106,7 +108,7 @@ inline std::filesystem::path shared_networks() {
 #define ATELIER_REQUIRE_SHARED_NETWORKS()                                                      \
   do {                                                                                         \
     if (!std::filesystem::exists(::atelier::curvenet_test::shared_networks() / "roof_75.txt")) \
-      GTEST_SKIP() << "shared curve networks not found";                                      \
+      GTEST_SKIP() << "shared curve networks not found";                                       \
   } while (0)
 
 inline PolylineSet shared_network(const std::string& name) {
@@ -121,7 +123,8 @@ inline PolygonSoup read_soup(const std::filesystem::path& path) {
   std::vector<std::uint32_t> index(m.nodes.slots.capacity(), 0);
   std::size_t nv = 0;
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-    if (m.alive(NodeIdx{v})) nv = std::max<std::size_t>(nv, static_cast<std::size_t>(src.valid() ? src[NodeIdx{v}] : v) + 1);
+    if (m.alive(NodeIdx{v}))
+      nv = std::max<std::size_t>(nv, static_cast<std::size_t>(src.valid() ? src[NodeIdx{v}] : v) + 1);
   s.positions.assign(nv, Vec3d::Zero());
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
     if (m.alive(NodeIdx{v})) {

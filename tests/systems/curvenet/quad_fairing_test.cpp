@@ -34,7 +34,8 @@ Grid planar_grid(int n) {
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const auto v = static_cast<std::uint32_t>(j * (n + 1) + i);
-      const std::uint32_t q[] = {v, v + 1, v + static_cast<std::uint32_t>(n) + 2, v + static_cast<std::uint32_t>(n) + 1};
+      const std::uint32_t q[] = {v, v + 1, v + static_cast<std::uint32_t>(n) + 2,
+                                 v + static_cast<std::uint32_t>(n) + 1};
       g.mesh.add_face(q);
     }
   g.exact = g.mesh.positions;
@@ -121,12 +122,15 @@ TEST(QuadFairing, PrintedEquationSixLacksGammaAndCannotRestoreTheGrid) {
   printed.equations = FairingEquations::kPrinted;
   std::vector<Vec3d> moved = g.mesh.positions;
   for (Vec3d& x : moved) x += Vec3d(5, -2, 1);
-  EXPECT_GT(std::abs(fairing_energy(moved, g.mesh, printed).value() - fairing_energy(g.mesh.positions, g.mesh, printed).value()), 1.0);
+  EXPECT_GT(std::abs(fairing_energy(moved, g.mesh, printed).value() -
+                     fairing_energy(g.mesh.positions, g.mesh, printed).value()),
+            1.0);
   EXPECT_NEAR(fairing_energy(moved, g.mesh).value(), fairing_energy(g.mesh.positions, g.mesh).value(), 1e-9);
   // The alpha term alone cannot see a sin x sin mode (a discrete wave).
   std::vector<Vec3d> wave = g.mesh.positions;
   for (int j = 0; j <= 10; ++j)
-    for (int i = 0; i <= 10; ++i) wave[static_cast<std::size_t>(j * 11 + i)].z() += 0.3 * std::sin(kPi * i / 10) * std::sin(kPi * j / 10);
+    for (int i = 0; i <= 10; ++i)
+      wave[static_cast<std::size_t>(j * 11 + i)].z() += 0.3 * std::sin(kPi * i / 10) * std::sin(kPi * j / 10);
   const auto alpha_only = [&](const std::vector<Vec3d>& p) {
     double e = 0;
     for (int j = 1; j < 10; ++j)
@@ -167,8 +171,7 @@ TEST(QuadFairing, PrintedEquationFiveAtValenceThreePullsTheRingIn) {
     EXPECT_EQ(a.beta, b.beta);
     EXPECT_EQ(a.gamma, b.gamma);
     std::vector<Vec3d> ring;
-    for (std::size_t j = 0; j < k; ++j)
-      ring.emplace_back(std::cos(2 * kPi * j / k), std::sin(2 * kPi * j / k), 0);
+    for (std::size_t j = 0; j < k; ++j) ring.emplace_back(std::cos(2 * kPi * j / k), std::sin(2 * kPi * j / k), 0);
     EXPECT_LT(harmonic2(b, ring), 1e-28);
   }
 }

@@ -80,7 +80,8 @@ TEST(Quadrangulate, RectanglesBecomeRegularGrids) {
 TEST(Quadrangulate, PolygonsWithTwoEdgesPerSideGetACentre) {
   for (int sides = 3; sides <= 7; ++sides) {  // corners below the 135-degree threshold
     std::vector<Vec3d> corners;
-    for (int k = 0; k < sides; ++k) corners.emplace_back(std::cos(2 * kPi * k / sides), std::sin(2 * kPi * k / sides), 0);
+    for (int k = 0; k < sides; ++k)
+      corners.emplace_back(std::cos(2 * kPi * k / sides), std::sin(2 * kPi * k / sides), 0);
     const auto b = polygon(corners, std::vector<int>(static_cast<std::size_t>(sides), 2));
     auto p = quadrangulate_cycle(b);
     ASSERT_TRUE(p);
