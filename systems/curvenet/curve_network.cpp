@@ -153,21 +153,10 @@ EndShape end_shape(std::span<const Vec3d> p, double h) {
   return e;
 }
 
-}  // namespace
-
-Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatmentOptions& opt, const ExecContext& ctx) {
-  if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "treat_curves: cancelled");
-  if (in.size() == 0) return Status(ErrorCode::kInvalidArgument, "the curve network has no curve");
-  if (!(opt.intersection_tolerance >= 0) || !(opt.merge_distance >= 0) || !(opt.cluster_length > 0))
-    return Status(ErrorCode::kInvalidArgument, "treat_curves: tolerances must be non-negative");
-  TreatedCurves out;
-  CurveTreatmentReport& rep = out.report;
-  rep.input_curves = in.size();
-  rep.input_points = in.points.size();
-
-  // ---- clean: finite points, consecutive duplicates dropped, >= 2 distinct points.
-  std::vector<Curve> curves(in.size());
-  Box3d box;
+/// Finite curves without repeated consecutive points, with arc lengths;
+/// errors name the curve.
+Status clean_curves(const PolylineSet& in, std::vector<Curve>& curves, Box3d& box) {
+  curves.assign(in.size(), {});
   for (std::size_t c = 0; c < in.size(); ++c) {
     for (const Vec3d& p : in.curve(c)) {
       if (!p.allFinite())
@@ -181,15 +170,14 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
     cu.arc.assign(cu.p.size(), 0.0);
     for (std::size_t i = 1; i < cu.p.size(); ++i) cu.arc[i] = cu.arc[i - 1] + (cu.p[i] - cu.p[i - 1]).norm();
   }
-  const double diag = (box.hi - box.lo).norm();
-  if (!(diag > 0) || !std::isfinite(diag))
-    return Status(ErrorCode::kInvalidArgument, "the curve network is degenerate (all points coincide)");
-  rep.diagonal = diag;
-  const double tol = opt.intersection_tolerance * diag;
-  const double cluster = opt.cluster_length * diag;
-  rep.tolerance = tol;
+  return {};
+}
 
-  // ---- intersections: sort-and-sweep over segment boxes (inflated by tol).
+/// Closest approaches within tol between pieces of different curves (or
+/// far-apart pieces of one), by sort-and-sweep over boxes inflated by tol;
+/// two curves lying along each other are refused as duplicates.
+Expected<std::vector<Hit>> find_hits(const PolylineSet& in, const std::vector<Curve>& curves, double tol,
+                                     double cluster) {
   struct Seg {
     std::uint32_t c, i;
     Box3d b;
@@ -249,6 +237,14 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
     return std::tie(a.ca, a.cb, a.ta, a.tb, a.dist) < std::tie(b.ca, b.cb, b.ta, b.tb, b.dist);
   });
 
+  return hits;
+}
+
+/// Nodes (a cluster of hits is one crossing; curve ends; candidates within
+/// tol of each other are one node) and the pieces of every curve between
+/// its nodes (section 4.1: the pieces end on the node, bit for bit).
+CurveGraph split_at_nodes(const std::vector<Curve>& curves, const std::vector<Hit>& hits, double tol, double cluster,
+                          CurveTreatmentReport& rep) {
   // ---- node candidates: one per cluster of hits (a crossing at a polyline
   // vertex is found by up to four segment pairs), one per curve end.
   std::vector<Vec3d> cand;
@@ -359,9 +355,16 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
     rep.splits += pieces > 1 ? pieces - 1 : 0;
   }
 
+  return g;
+}
+
+/// Merge threshold 1 (with 2 and 3): free ends close to each other that
+/// continue each other are joined into one node.
+void join_free_ends(CurveGraph& g, const CurveTreatmentOptions& opt, double diag, CurveTreatmentReport& rep) {
   // ---- merge threshold 1: free ends close to each other are joined.
-  auto deg = g.degrees();
-  if (opt.merge && opt.merge_distance > 0) {
+  if (!opt.merge || !(opt.merge_distance > 0)) return;
+  {
+    const auto deg = g.degrees();
     const double reach = opt.merge_distance * diag;
     std::vector<std::uint32_t> free_nodes, free_segment(g.node_count(), kNoCurveNode);
     for (std::uint32_t v = 0; v < g.node_count(); ++v)
@@ -413,12 +416,16 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
         g.segment_nodes[s][e] = joined_to[v];
         g.points[e == 0 ? g.offsets[s] : g.offsets[s + 1] - 1] = g.nodes[joined_to[v]];
       }
-    deg = g.degrees();
   }
+}
 
+/// Dangling ends removed repeatedly (with a warning naming their curves),
+/// then the live segments and their nodes renumbered in order.
+CurveGraph prune_dangling(const CurveGraph& g, const PolylineSet& in, bool prune, CurveTreatmentReport& rep) {
   // ---- prune dangling ends.
   std::vector<std::uint8_t> dead(g.segment_count(), 0);
-  if (opt.prune_dangling) {
+  if (prune) {
+    auto deg = g.degrees();
     std::vector<std::vector<std::uint32_t>> incident(g.node_count());
     for (std::uint32_t s = 0; s < g.segment_count(); ++s) {
       incident[g.segment_nodes[s][0]].push_back(s);
@@ -479,12 +486,15 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
       h.add_segment(ends[0], ends[1], g.polyline(s), g.segment_curve[s]);
     }
   }
-  if (h.segment_count() == 0)
-    return Status(ErrorCode::kTopology, "the curve network has no cycle: every curve is a dangling end (" +
-                                            std::to_string(rep.pruned_segments) + " pieces pruned)");
+  return h;
+}
 
+/// Merge thresholds 2 and 3 at degree-2 nodes (section 4.2, knot removal):
+/// the two pieces become one when their tangents and curvatures agree.
+void merge_continuations(CurveGraph& h, const CurveTreatmentOptions& opt, double diag, CurveTreatmentReport& rep) {
   // ---- merge threshold 2 and 3 at degree-2 nodes: knot removal.
-  if (opt.merge) {
+  if (!opt.merge) return;
+  {
     const double cos_max = std::cos(opt.merge_angle_degrees * 3.14159265358979323846 / 180.0);
     for (bool changed = true; changed;) {
       changed = false;
@@ -548,9 +558,10 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
     const auto d = h.degrees();
     for (std::uint32_t v = 0; v < h.node_count(); ++v) rep.kinks += d[v] == 2;
   }
+}
 
-  // Canonical segment order: by source curve, then by where they start
-  // along it (their first point's position in the input), then by nodes.
+/// Canonical segment order: by source curve, then by where they start.
+void canonical_order(CurveGraph& h) {
   {
     std::vector<std::uint32_t> order(h.segment_count());
     std::iota(order.begin(), order.end(), 0u);
@@ -566,6 +577,39 @@ Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatment
       r.add_segment(h.segment_nodes[s][0], h.segment_nodes[s][1], h.polyline(s), h.segment_curve[s]);
     h = std::move(r);
   }
+}
+
+}  // namespace
+
+Expected<TreatedCurves> treat_curves(const PolylineSet& in, const CurveTreatmentOptions& opt, const ExecContext& ctx) {
+  if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "treat_curves: cancelled");
+  if (in.size() == 0) return Status(ErrorCode::kInvalidArgument, "the curve network has no curve");
+  if (!(opt.intersection_tolerance >= 0) || !(opt.merge_distance >= 0) || !(opt.cluster_length > 0))
+    return Status(ErrorCode::kInvalidArgument, "treat_curves: tolerances must be non-negative");
+  TreatedCurves out;
+  CurveTreatmentReport& rep = out.report;
+  rep.input_curves = in.size();
+  rep.input_points = in.points.size();
+  std::vector<Curve> curves;
+  Box3d box;
+  if (Status st = clean_curves(in, curves, box); !st) return st;
+  const double diag = (box.hi - box.lo).norm();
+  if (!(diag > 0) || !std::isfinite(diag))
+    return Status(ErrorCode::kInvalidArgument, "the curve network is degenerate (all points coincide)");
+  rep.diagonal = diag;
+  const double tol = opt.intersection_tolerance * diag;
+  const double cluster = opt.cluster_length * diag;
+  rep.tolerance = tol;
+  auto hits = find_hits(in, curves, tol, cluster);
+  if (!hits) return hits.status();
+  CurveGraph g = split_at_nodes(curves, *hits, tol, cluster, rep);
+  join_free_ends(g, opt, diag, rep);
+  CurveGraph h = prune_dangling(g, in, opt.prune_dangling, rep);
+  if (h.segment_count() == 0)
+    return Status(ErrorCode::kTopology, "the curve network has no cycle: every curve is a dangling end (" +
+                                            std::to_string(rep.pruned_segments) + " pieces pruned)");
+  merge_continuations(h, opt, diag, rep);
+  canonical_order(h);
   out.graph = std::move(h);
   return out;
 }
