@@ -35,7 +35,9 @@ CLI::App* add_surface_subcommand(CLI::App& app, SurfaceOptions& opt) {
   auto* c = app.add_subcommand("surface", "a network of curves to a Catmull-Clark surface through them (seed 003)");
   c->add_option("--curves", opt.curves, "the curves: `CURVE i` text, or OBJ `l` polylines")->required();
   c->add_option("--mesh", opt.mesh, "the mesh the curves were traced on (orients faces, closes open networks)");
-  c->add_option("--levels", opt.levels, "Catmull-Clark levels")->check(CLI::Range(0, 6));
+  c->add_option("--levels", opt.levels, "Catmull-Clark levels (0 writes the control mesh itself)")
+      ->required()
+      ->check(CLI::Range(0, 6));
   c->add_option("--out", opt.out, "the subdivided surface (.obj)")->required();
   c->add_option("--control", opt.control, "also write the quad control mesh (.obj)");
   c->add_option("--json", opt.json, "also write the report as JSON");

@@ -88,7 +88,7 @@ TEST(SurfaceCli, BadInputAndUsage) {
     std::ofstream f(d / "one.txt");
     f << "CURVE 0\n0 0 0\n1 0 0\nCURVE 17\n2 2 2\n";
   }
-  auto r = run_cli("surface --curves " + (d / "one.txt").string() + " --out " + (d / "x.obj").string());
+  auto r = run_cli("surface --curves " + (d / "one.txt").string() + " --levels 1 --out " + (d / "x.obj").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("CURVE 17"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("line 4"), std::string::npos) << r.out;
@@ -97,14 +97,16 @@ TEST(SurfaceCli, BadInputAndUsage) {
     std::ofstream f(d / "open.txt");  // two crossing lines: nothing but dangling ends
     f << "CURVE 0\n-1 0 0\n1 0 0\nCURVE 1\n0 -1 0\n0 1 0\n";
   }
-  r = run_cli("surface --curves " + (d / "open.txt").string() + " --out " + (d / "x.obj").string());
+  r = run_cli("surface --curves " + (d / "open.txt").string() + " --levels 1 --out " + (d / "x.obj").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("no cycle"), std::string::npos) << r.out;
-  r = run_cli("surface --curves " + (d / "missing.txt").string() + " --out " + (d / "x.obj").string());
+  r = run_cli("surface --curves " + (d / "missing.txt").string() + " --levels 1 --out " + (d / "x.obj").string());
   EXPECT_EQ(r.code, 3) << r.out;
-  r = run_cli("surface --curves " + (d / "open.txt").string());
+  r = run_cli("surface --curves " + (d / "open.txt").string() + " --levels 1");
   EXPECT_EQ(r.code, 2) << r.out;
-  r = run_cli("surface --curves " + (d / "open.txt").string() + " --out " + (d / "x.ply").string());
+  r = run_cli("surface --curves " + (d / "open.txt").string() + " --out " + (d / "x.obj").string());
+  EXPECT_EQ(r.code, 2) << r.out;  // --levels is required
+  r = run_cli("surface --curves " + (d / "open.txt").string() + " --levels 1 --out " + (d / "x.ply").string());
   EXPECT_EQ(r.code, 2) << r.out;
   r = run_cli("surface --curves " + (d / "open.txt").string() + " --out " + (d / "x.obj").string() + " --levels 9");
   EXPECT_EQ(r.code, 2) << r.out;
