@@ -97,6 +97,17 @@ Expected<ControlMesh> build_control_mesh(const CurveGraph& g, const FaceCycles& 
     return Status(ErrorCode::kInvalidArgument, "control mesh: need n0 >= 2, C >= 0 and max_points >= n0");
   const std::size_t ns = g.segment_count(), nv = g.node_count(), nf = fc.face_count();
   if (ns == 0 || nf == 0) return Status(ErrorCode::kTopology, "control mesh: the network has no face");
+  // The cycles must bound a surface: each segment side in at most one face
+  // (the paper's search can validate overlapping cycles).
+  {
+    std::vector<std::uint32_t> use(2 * ns, 0);
+    for (std::uint32_t d : fc.darts)
+      if (++use[d] > 1 || use[d ^ 1u] > 1)
+        return Status(ErrorCode::kTopology,
+                      "control mesh: the face cycles overlap: segment " + std::to_string(d >> 1) +
+                          " (a piece of the input curve at index " + std::to_string(g.segment_curve[d >> 1]) +
+                          ") runs the same way in two of them");
+  }
   ControlMesh out;
   // 1. Density, eq. (1).
   std::vector<double> len(ns);

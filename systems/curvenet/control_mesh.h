@@ -89,7 +89,8 @@ struct ControlMesh {
   double fairing_energy_before = 0, fairing_energy_after = 0;
 };
 
-/// Builds the control mesh. Errors: bad options (kInvalidArgument); a face
+/// Builds the control mesh. Errors: bad options (kInvalidArgument); cycles
+/// that overlap (a segment side in two faces: kTopology); a face
 /// that stays odd (only when it has no segment to put a knot on: a closed
 /// network with an odd number of odd faces cannot occur), the errors of
 /// quadrangulate_cycle and fair_quad_mesh.
