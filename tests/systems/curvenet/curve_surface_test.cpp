@@ -212,3 +212,22 @@ TEST(CurveSurface, ThreadCountDoesNotChangeABit) {
                            a->refined.mesh.positions.size() * sizeof(Vec3d)));
   EXPECT_EQ(a->report.to_curves.max, b->report.to_curves.max);
 }
+
+TEST(CurveSurface, PaperSearchOptionEndToEnd) {
+  // On a grid every 4-cycle is a face: the paper's search finds them, but
+  // its stop rule is never met on an open network (reported).
+  CurveSurfaceOptions o;
+  o.cycles = FaceCycleMethod::kPaperSearch;
+  o.levels = 1;
+  auto grid = surface_from_curves(grid_network(4, 3, 1.0, 0.3, 0.4), {}, o);
+  ASSERT_TRUE(grid) << grid.status().to_string();
+  EXPECT_EQ(grid->report.faces, 12u);
+  EXPECT_FALSE(grid->report.stop_rule_met);
+  EXPECT_TRUE(validate(grid->model));
+  // On roof_75 it validates cycles that overlap: refused with the reason.
+  ATELIER_REQUIRE_SHARED_NETWORKS();
+  auto roof = surface_from_curves(shared_network("roof_75"), {}, o);
+  ASSERT_FALSE(roof);
+  EXPECT_EQ(roof.status().code(), ErrorCode::kTopology);
+  EXPECT_NE(roof.status().message().find("overlap"), std::string::npos) << roof.status().message();
+}
