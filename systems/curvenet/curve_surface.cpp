@@ -142,9 +142,11 @@ class TriangleGrid {
  private:
   [[nodiscard]] std::array<int, 3> index(const Vec3d& x) const {
     std::array<int, 3> i{};
-    for (int k = 0; k < 3; ++k)
-      i[static_cast<std::size_t>(k)] =
-          std::clamp(static_cast<int>(std::floor((x[k] - lo_[k]) / cell_)), 0, dims_[static_cast<std::size_t>(k)] - 1);
+    for (int k = 0; k < 3; ++k) {
+      const auto d = static_cast<double>(dims_[static_cast<std::size_t>(k)] - 1);
+      // Clamped as a double first: a far point must not overflow the cast.
+      i[static_cast<std::size_t>(k)] = static_cast<int>(std::clamp(std::floor((x[k] - lo_[k]) / cell_), 0.0, d));
+    }
     return i;
   }
   [[nodiscard]] std::size_t flat(int i, int j, int k) const {
