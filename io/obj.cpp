@@ -31,11 +31,15 @@ struct ObjData {
   std::vector<ObjFace> faces;
   std::vector<std::string> group_names;
   std::unordered_map<std::string, std::uint32_t> group_of;
+  // `l` statements, only when the parser is asked for them (read_obj_polylines).
+  std::vector<std::int64_t> line_v;  // 0-based once resolved
+  std::vector<ObjFace> polylines;    // group unused
 };
 
 class ObjParser {
  public:
-  ObjParser(std::string_view text, std::string_view file) : text_(text), file_(file) {}
+  ObjParser(std::string_view text, std::string_view file, bool polylines = false)
+      : text_(text), file_(file), polylines_(polylines) {}
 
   ObjData run() {
     std::size_t pos = 0, line_no = 0;
@@ -93,7 +97,9 @@ class ObjParser {
       if (tok_.size() > 2) t.y() = number(tok_[2], line_no, "texture coordinate");
       d_.texcoords.push_back(t);
     } else if (kw == "f") {
-      face(line_no);
+      if (!polylines_) face(line_no);
+    } else if (kw == "l" && polylines_) {
+      polyline(line_no);
     } else if (kw == "g" || kw == "o") {
       std::string name;
       for (std::size_t k = 1; k < tok_.size(); ++k) {
@@ -103,8 +109,8 @@ class ObjParser {
       current_ = name.empty() ? std::string("default") : std::move(name);
       group_ = kNone;
     }
-    // Everything else (vn, vp, l, s, mtllib, usemtl, ...) does not describe
-    // the surfaces' topology and is skipped.
+    // Everything else (vn, vp, s, mtllib, usemtl, ..., and `l` outside
+    // read_obj_polylines) does not describe the surfaces' topology and is skipped.
   }
 
   std::int64_t index(std::string_view tok, std::size_t count, std::size_t line_no, const char* what) const {
@@ -151,7 +157,30 @@ class ObjParser {
     d_.faces.push_back({group_, begin, static_cast<std::uint32_t>(d_.corner_v.size()), line_no});
   }
 
+  void polyline(std::size_t line_no) {
+    const std::size_t n = tok_.size() - 1;
+    if (n < 2) fail(line_no, "polyline has " + std::to_string(n) + " vertices (at least 2 needed)");
+    const auto begin = static_cast<std::uint32_t>(d_.line_v.size());
+    for (std::size_t k = 1; k <= n; ++k) {
+      const std::string_view t = tok_[k];
+      const std::size_t s1 = t.find('/');
+      const std::string_view tt = s1 == std::string_view::npos ? std::string_view{} : t.substr(s1 + 1);
+      if (!parse_int(t.substr(0, s1)) || (!tt.empty() && !parse_int(tt)))
+        fail(line_no, "non-numeric token '" + std::string(t) + "' in polyline (expected v or v/vt)");
+      d_.line_v.push_back(index(t.substr(0, s1), d_.positions.size(), line_no, "vertex"));
+      if (s1 != std::string_view::npos) {
+        if (!tt.empty()) (void)index(tt, d_.texcoords.size(), line_no, "texture");
+      }
+    }
+    d_.polylines.push_back({0, begin, static_cast<std::uint32_t>(d_.line_v.size()), line_no});
+  }
+
   void check_ranges() const {
+    for (const ObjFace& l : d_.polylines)
+      for (std::uint32_t k = l.begin; k < l.end; ++k)
+        if (d_.line_v[k] >= static_cast<std::int64_t>(d_.positions.size()))
+          fail(l.line, "bad index: vertex index " + std::to_string(d_.line_v[k] + 1) + " out of range (the file has " +
+                           std::to_string(d_.positions.size()) + " vertices)");
     for (const ObjFace& f : d_.faces)
       for (std::uint32_t k = f.begin; k < f.end; ++k) {
         if (d_.corner_v[k] >= static_cast<std::int64_t>(d_.positions.size()))
@@ -166,6 +195,7 @@ class ObjParser {
 
   std::string_view text_;
   std::string_view file_;
+  bool polylines_ = false;
   ObjData d_;
   std::vector<std::string_view> tok_;
   std::string current_ = "default";
@@ -253,6 +283,67 @@ Model read_obj_from_string(std::string_view text, std::string_view display_name)
 Model read_obj(const std::filesystem::path& path) {
   const std::string bytes = read_file_bytes(path);
   return read_obj_from_string(bytes, path.string());
+}
+
+PolylineSet read_obj_polylines_from_string(std::string_view text, std::string_view display_name) {
+  const ObjData d = ObjParser(text, display_name, true).run();
+  if (d.polylines.empty()) throw parse_error(display_name, "", "no polyline (`l` statement) in the file");
+  PolylineSet out;
+  out.source = std::string(display_name);
+  std::vector<Vec3d> pts;
+  for (std::size_t i = 0; i < d.polylines.size(); ++i) {
+    const ObjFace& l = d.polylines[i];
+    pts.clear();
+    for (std::uint32_t k = l.begin; k < l.end; ++k) pts.push_back(d.positions[static_cast<std::size_t>(d.line_v[k])]);
+    out.add(static_cast<std::int64_t>(i), pts, l.line);
+  }
+  return out;
+}
+
+PolylineSet read_obj_polylines(const std::filesystem::path& path) {
+  const std::string bytes = read_file_bytes(path);
+  return read_obj_polylines_from_string(bytes, path.string());
+}
+
+void write_obj_polylines(const PolylineSet& curves, const std::filesystem::path& path) {
+  for (std::size_t c = 0; c < curves.size(); ++c) {
+    if (curves.curve(c).size() < 2)
+      throw Error(
+          Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has fewer than 2 points"));
+    for (const Vec3d& p : curves.curve(c))
+      if (!p.allFinite())
+        throw Error(
+            Status(ErrorCode::kInvalidArgument, path.string() + ": " + curves.describe(c) + " has a non-finite point"));
+  }
+  write_atomically(path, [&](AtomicFile& out) {
+    std::string s = "# written by Atelier\n";
+    for (const Vec3d& p : curves.points) {
+      s += "v ";
+      append_double(s, p.x());
+      s += ' ';
+      append_double(s, p.y());
+      s += ' ';
+      append_double(s, p.z());
+      s += '\n';
+      if (s.size() > 1u << 15) {
+        out.write(s);
+        s.clear();
+      }
+    }
+    for (std::size_t c = 0; c < curves.size(); ++c) {
+      s += 'l';
+      for (std::uint32_t k = curves.offsets[c]; k < curves.offsets[c + 1]; ++k) {
+        s += ' ';
+        append_uint(s, k + 1u);
+      }
+      s += '\n';
+      if (s.size() > 1u << 15) {
+        out.write(s);
+        s.clear();
+      }
+    }
+    out.write(s);
+  });
 }
 
 void write_obj(const Model& m, const std::filesystem::path& path) {

@@ -16,11 +16,15 @@
 // Writing: one `g` per live surface, every live face, coordinates in the
 // shortest form that parses back to the same double (exact text round trip),
 // through an AtomicFile (all or nothing).
+//
+// Polylines (`l` statements, curve networks of seed 003) are read and
+// written by their own pair of functions below; read_obj skips them.
 #pragma once
 
 #include <filesystem>
 #include <string_view>
 
+#include <atelier/io/curve_network.h>
 #include <atelier/storage/model.h>
 
 namespace atelier {
@@ -30,5 +34,19 @@ namespace atelier {
 [[nodiscard]] Model read_obj_from_string(std::string_view text, std::string_view display_name = "<memory>");
 
 void write_obj(const Model& m, const std::filesystem::path& path);
+
+/// The `l` statements of an OBJ file as polylines, in file order (ids 0, 1,
+/// ... by order, lines = the statement's line). Indices as for faces (v or
+/// v/vt, negative = relative); `v` lines are read as for read_obj, faces
+/// and every other statement are ignored. Errors (Error(kParse) naming file
+/// and line): an `l` with fewer than 2 indices, a bad or out-of-range index,
+/// no `l` statement at all.
+[[nodiscard]] PolylineSet read_obj_polylines(const std::filesystem::path& path);
+[[nodiscard]] PolylineSet read_obj_polylines_from_string(std::string_view text,
+                                                         std::string_view display_name = "<memory>");
+/// Writes every curve as its own `v` lines and one `l` statement (atomic).
+/// Throws Error(kInvalidArgument) for a non-finite point or a curve with
+/// fewer than 2 points.
+void write_obj_polylines(const PolylineSet& curves, const std::filesystem::path& path);
 
 }  // namespace atelier

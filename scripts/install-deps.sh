@@ -10,6 +10,11 @@
 #            2-rank regen test; the CLI uses MPI when it is installed) and
 #            python3-ezdxf (the pattern tests read the DXF files back)
 #   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann)
+#   --test   adds GoogleTest, Chromium (HTML report test), Open MPI (the
+#            2-rank regen test; the CLI uses MPI when it is installed) and
+#            OpenSubdiv (oracle of the Catmull-Clark tests)
+#   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann,
+#            OpenSubdiv)
 set -euo pipefail
 bench=0
 pkgs=(build-essential cmake ninja-build pkg-config
@@ -21,6 +26,8 @@ for arg in "$@"; do
     --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev nodejs npm); bench=1 ;;
     --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin python3-ezdxf) ;;
     --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev) ;;
+    --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin libosd-dev) ;;
+    --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev libosd-dev) ;;
     *) echo "install-deps: unknown option $arg (use --test, --bench)" >&2; exit 2 ;;
   esac
 done

@@ -10,6 +10,7 @@
 #include "regen_cmd.h"
 #include "render_cmd.h"
 #include "sketch_cmd.h"
+#include "surface_cmd.h"
 #include <atelier/engine/memory.h>
 #include <atelier/engine/status.h>
 
@@ -75,6 +76,8 @@ int main(int argc, char** argv) {
   auto* sketch_cmd = add_sketch_subcommand(app, sketch_opt);
   FlattenCmdOptions flatten_opt;
   auto* flatten_cmd = add_flatten_subcommand(app, flatten_opt);
+  SurfaceOptions surface_opt;
+  auto* surface_cmd = add_surface_subcommand(app, surface_opt);
 
   try {
     app.parse(argc, argv);
@@ -97,6 +100,7 @@ int main(int argc, char** argv) {
     if (*round_cmd) return run_round(common, round_opt, log);
     if (*sketch_cmd) return run_sketch(common, sketch_opt, log);
     if (*flatten_cmd) return run_flatten(common, flatten_opt, log);
+    if (*surface_cmd) return run_surface(common, surface_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();
