@@ -34,9 +34,46 @@
 #include <utility>
 #include <vector>
 
+namespace atelier {
+struct GarmentFamily;
+struct GarmentTemplate;
+}  // namespace atelier
+
 namespace atelier::python {
 
 namespace py = pybind11;
+
+// ------------------------------------------------------------ argument types
+// Python objects checked by the binding itself (not by pybind11), named for
+// the signatures that help() shows: `vertices: numpy.ndarray` instead of
+// `vertices: handle`. Each accepts any object; the names are set below.
+inline int accept_any(PyObject*) {
+  return 1;
+}
+#define ATELIER_PY_ARG(Name)                          \
+  class Name : public py::object {                    \
+   public:                                            \
+    PYBIND11_OBJECT_DEFAULT(Name, object, accept_any) \
+  };
+ATELIER_PY_ARG(Array)          // numpy.ndarray (or a sequence np.asarray converts)
+ATELIER_PY_ARG(OptArray)       // numpy.ndarray | None
+ATELIER_PY_ARG(Faces)          // (F, k) array or a list of polygons
+ATELIER_PY_ARG(OptFaces)       // the same or None
+ATELIER_PY_ARG(Progress)       // callable(stage, done, total) or None
+ATELIER_PY_ARG(DType)          // numpy.dtype or its name
+ATELIER_PY_ARG(Params)         // body parameters
+ATELIER_PY_ARG(MeshLike)       // Mesh, Body or (vertices, faces)
+ATELIER_PY_ARG(OptMeshLike)    // the same or None
+ATELIER_PY_ARG(MeshOrArray)    // a mesh, or vertices with faces given apart
+ATELIER_PY_ARG(MeshList)       // one mesh or a list
+ATELIER_PY_ARG(GarmentSource)  // vertices, a Mesh or an OBJ path
+ATELIER_PY_ARG(Garments)       // GarmentTemplate or a list
+ATELIER_PY_ARG(Templates)      // ProfileTemplate or a list
+ATELIER_PY_ARG(Colours)        // list of (r, g, b) or None
+ATELIER_PY_ARG(Colour)         // (r, g, b) or None
+ATELIER_PY_ARG(CurveName)      // str or int
+ATELIER_PY_ARG(NDArray)        // a returned array (or a list of arrays for mixed polygons)
+#undef ATELIER_PY_ARG
 
 // ------------------------------------------------------------ errors
 
@@ -81,6 +118,19 @@ struct Body {
   /// Positions of another body of this topology: (n, 3), checked.
   [[nodiscard]] std::vector<Vec3d> positions_arg(py::handle array, const char* what) const;
 };
+
+/// A body family of the garment pipeline and the Body it was made from.
+struct Family {
+  std::shared_ptr<const GarmentFamily> family;
+  std::shared_ptr<Body> body;
+};
+/// An encoded garment (immutable) and its family.
+struct Garment {
+  std::shared_ptr<const GarmentTemplate> garment;
+  std::shared_ptr<Family> family;
+  double reference_mean_clearance = 0;  // mean encoded clearance (what clearance_change is relative to)
+};
+[[nodiscard]] std::shared_ptr<Garment> garment_of(GarmentTemplate garment, std::shared_ptr<Family> family);
 
 // ------------------------------------------------------------ arrays in
 
@@ -247,7 +297,33 @@ auto run_long(const py::object& progress, int threads, F&& work) {
 void bind_io(py::module_& m);
 void bind_body(py::module_& m);
 void bind_garment(py::module_& m);
+void bind_regenerate(py::module_& m);
 void bind_profile(py::module_& m);
 void bind_view(py::module_& m);
 
 }  // namespace atelier::python
+
+#define ATELIER_PY_NAME(Name, Text)                                  \
+  template <>                                                        \
+  struct pybind11::detail::handle_type_name<atelier::python::Name> { \
+    static constexpr auto name = pybind11::detail::const_name(Text); \
+  };
+ATELIER_PY_NAME(Array, "numpy.ndarray")
+ATELIER_PY_NAME(OptArray, "numpy.ndarray | None")
+ATELIER_PY_NAME(Faces, "numpy.ndarray | list[list[int]]")
+ATELIER_PY_NAME(OptFaces, "numpy.ndarray | list[list[int]] | None")
+ATELIER_PY_NAME(Progress, "Callable[[str, int, int], None] | None")
+ATELIER_PY_NAME(DType, "numpy.dtype | str")
+ATELIER_PY_NAME(Params, "dict | list[dict] | numpy.ndarray | None")
+ATELIER_PY_NAME(MeshLike, "Mesh | Body | tuple[numpy.ndarray, numpy.ndarray]")
+ATELIER_PY_NAME(OptMeshLike, "Mesh | Body | tuple[numpy.ndarray, numpy.ndarray] | None")
+ATELIER_PY_NAME(MeshOrArray, "Mesh | Body | numpy.ndarray")
+ATELIER_PY_NAME(MeshList, "Mesh | tuple[numpy.ndarray, numpy.ndarray] | list | None")
+ATELIER_PY_NAME(GarmentSource, "numpy.ndarray | Mesh | os.PathLike")
+ATELIER_PY_NAME(Garments, "GarmentTemplate | list[GarmentTemplate]")
+ATELIER_PY_NAME(Templates, "ProfileTemplate | list[ProfileTemplate]")
+ATELIER_PY_NAME(Colours, "list[tuple[float, float, float]] | None")
+ATELIER_PY_NAME(Colour, "tuple[float, float, float] | None")
+ATELIER_PY_NAME(CurveName, "str | int")
+ATELIER_PY_NAME(NDArray, "numpy.ndarray")
+#undef ATELIER_PY_NAME

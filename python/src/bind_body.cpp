@@ -5,7 +5,6 @@
 #include <atelier/storage/builder.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/body/mannequin.h>
-#include <atelier/systems/body/mannequin_source.h>
 #include <atelier/systems/body/measure.h>
 #include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
@@ -169,8 +168,8 @@ std::vector<MacroParams> macro_params(py::handle obj, bool& single) {
 /// Fills a new (B, n, 3) array (or (n, 3) when single) with body(b, out)
 /// for every b, in parallel on the worker thread.
 template <class F>
-py::object positions_array(std::size_t count, std::size_t n, bool single, bool f32, int threads, py::object progress,
-                           F&& body) {
+NDArray positions_array(std::size_t count, std::size_t n, bool single, bool f32, int threads, const Progress& progress,
+                        F&& body) {
   py::array out =
       f32 ? py::array(
                 py::array_t<float>({static_cast<py::ssize_t>(count), static_cast<py::ssize_t>(n), py::ssize_t{3}}))
@@ -200,8 +199,8 @@ py::object positions_array(std::size_t count, std::size_t n, bool single, bool f
     for (std::size_t b = 0; b < count; ++b)
       if (!status[b]) raise(Status(status[b].code(), "body " + std::to_string(b) + ": " + status[b].message()));
   });
-  if (single) return out[py::int_(0)];
-  return out;
+  if (single) return NDArray(out[py::int_(0)]);
+  return NDArray(out);
 }
 
 struct MannequinData {
@@ -222,7 +221,7 @@ py::dict measurements_dict(const ReferenceBody& ref, const BodyMeasurements& m) 
   return d;
 }
 
-py::array measure_many(const Body& body, py::handle bodies, int threads, py::object progress) {
+py::array measure_many(const Body& body, const Array& bodies, int threads, const Progress& progress) {
   const BodyBatch batch(bodies, body.node_count(), "bodies");
   const auto cols = measurement_columns(*body.reference);
   py::list fields;
@@ -292,7 +291,7 @@ Immutable; ``vertices`` and ``faces`` are read-only views (zero copy).
 )doc")
       .def_static(
           "from_arrays",
-          [](py::handle vertices, py::handle faces) {
+          [](const Array& vertices, const Faces& faces) {
             PolygonSoup soup = soup_from(vertices, faces, "body");
             ReferenceBody rb;
             rb.skin = unwrap(add_polygon_surface(rb.model, "skin", soup)).idx;
@@ -349,7 +348,7 @@ ValueError for bad arrays or a mesh the engine's model refuses.
           "Names of the feature points (crossings of two curves).")
       .def(
           "curve",
-          [](const Body& b, py::handle name, py::handle positions) {
+          [](const Body& b, const CurveName& name, const OptArray& positions) {
             const FeatureCurve& c = curve_named(*b.reference, name);
             if (positions.is_none()) return adopt_points(unwrap(feature_curve_polyline(*b.reference, c.id)));
             const auto p = b.positions_arg(positions, "positions");
@@ -362,7 +361,7 @@ do not repeat their first point.
 )doc")
       .def(
           "measure",
-          [](const Body& b, py::handle positions) {
+          [](const Body& b, const OptArray& positions) {
             if (positions.is_none()) return measurements_dict(*b.reference, unwrap(measure_body(*b.reference)));
             const auto p = b.positions_arg(positions, "positions");
             return measurements_dict(*b.reference, unwrap(measure_body(*b.reference, p)));
@@ -380,7 +379,7 @@ float64, as a structured array (B,) whose fields are the keys of
 )doc")
       .def(
           "with_positions",
-          [](const Body& b, py::handle positions) {
+          [](const Body& b, const Array& positions) {
             const auto p = b.positions_arg(positions, "positions");
             return Body::of(std::make_shared<const ReferenceBody>(unwrap(with_positions(*b.reference, p))));
           },
@@ -447,7 +446,7 @@ gives the same topology, so bodies of one Mannequin form a batch.
           "The faces (view).")
       .def(
           "reference",
-          [](MannequinData& d, py::handle params) {
+          [](MannequinData& d, const Params& params) {
             bool single = false;
             const auto p = mannequin_params(params, single);
             if (!single) value_error("params: one body (a dict or None)");
@@ -465,7 +464,7 @@ parameters (the CLI's reference body) when ``params`` is None.
 )doc")
       .def(
           "positions",
-          [](const MannequinData& d, py::handle params, py::handle dtype, int threads, py::object progress) {
+          [](const MannequinData& d, const Params& params, const DType& dtype, int threads, const Progress& progress) {
             bool single = false;
             const auto p = mannequin_params(params, single);
             const auto topo = d.topology;
@@ -494,7 +493,7 @@ MakeHuman bodies: the base mesh mixed with the macro targets (gender, age,
 muscle, weight, height, proportions, ethnicity) and measure modifiers, from
 the shared data folder (``<data>/makehuman``).
 )doc")
-      .def(py::init([](std::optional<fs::path> path, int threads, py::object progress) {
+      .def(py::init([](std::optional<fs::path> path, int threads, const Progress& progress) {
              const fs::path dir = path ? *path : default_makehuman_dir();
              if (!fs::exists(dir / "base.obj")) {
                const std::string message = dir.string() + ": no MakeHuman data (base.obj) here";
@@ -540,7 +539,7 @@ weight, height, proportions, african, asian, caucasian.
 )doc")
       .def(
           "positions",
-          [](const MakeHumanData& d, py::handle params, py::handle dtype, int threads, py::object progress) {
+          [](const MakeHumanData& d, const Params& params, const DType& dtype, int threads, const Progress& progress) {
             bool single = false;
             const auto p = macro_params(params, single);
             const auto lib = d.lib;
@@ -587,20 +586,6 @@ Skin positions (metres) for macro parameters: a structured array such as
 A MakeHuman garment (.mhclo and the OBJ beside it) fitted by its binding on
 the default body, in metres: the garment on ``reference()``, ready for
 ``encode_garment``. Returns a Mesh.
-)doc");
-
-  // ------------------------------------------------------------ garments cut from the skin
-  m.def(
-      "skin_band_garment",
-      [](const Body& body, double y_lo, double y_hi, double offset, double max_radius, const std::string& name) {
-        return mesh_of(unwrap(skin_band_garment(*body.reference, y_lo, y_hi, offset, max_radius, name)));
-      },
-      py::arg("body"), py::arg("y_lo"), py::arg("y_hi"), py::arg("offset"), py::arg("max_radius"),
-      py::arg("name") = "band", R"doc(
-A shell garment cut from the skin: the faces whose vertices all lie in the
-height band [y_lo, y_hi] within ``max_radius`` of the body's vertical axis,
-pushed ``offset`` metres out along the normals (the demo's shorts are the
-band from mid-thigh to 2 cm above the waist, 8 mm out, radius 0.4). Mesh.
 )doc");
 }
 

@@ -96,7 +96,7 @@ Immutable. ``vertices``, ``faces``, ``face_offsets`` and ``face_indices`` are
 read-only numpy views onto the engine's columns (zero copy; they keep the
 mesh alive). Unpacks as ``vertices, faces = mesh``.
 )doc")
-      .def(py::init([](py::handle vertices, py::handle faces) {
+      .def(py::init([](const Array& vertices, const Faces& faces) {
              auto mesh = std::make_shared<Mesh>();
              mesh->soup = soup_from(vertices, faces, "mesh");
              return mesh;
@@ -179,7 +179,7 @@ file, the line (or byte offset) and the problem.
 
   m.def(
       "write_mesh",
-      [](const fs::path& path, py::handle mesh_or_vertices, py::handle faces, bool binary) {
+      [](const fs::path& path, const MeshOrArray& mesh_or_vertices, const OptFaces& faces, bool binary) {
         const std::string e = lower_ext(path);
         if (e != ".obj" && e != ".ply" && e != ".off" && e != ".atm") unknown_format(path);
         std::shared_ptr<const Mesh> mesh = faces.is_none() ? mesh_from(mesh_or_vertices, "mesh")
@@ -225,7 +225,7 @@ ValueError for damaged data.
 
   m.def(
       "write_png",
-      [](const fs::path& path, py::handle image, int level) {
+      [](const fs::path& path, const Array& image, int level) {
         const py::array a = py::module_::import("numpy").attr("asarray")(image);
         if (a.dtype().kind() != 'u' || a.itemsize() != 1)
           value_error("image: dtype " + py::str(py::object(a.dtype())).cast<std::string>() + "; expected uint8");

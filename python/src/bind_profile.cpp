@@ -91,8 +91,8 @@ ProfileQualityRow row_of(const RegenQuality& q) {
           q.crack};
 }
 
-ProfileRegeneration regenerate_profiles(py::handle templates, const Body& reference, py::handle bodies, int levels,
-                                        double clearance, int threads, py::object progress) {
+ProfileRegeneration regenerate_profiles(const Templates& templates, const Body& reference, const Array& bodies,
+                                        int levels, double clearance, int threads, const Progress& progress) {
   const auto list = templates_arg(templates);
   std::vector<ProfileTemplate> ts;
   const std::string tag = reference_tag(*reference.reference);

@@ -37,9 +37,9 @@ Vec3d colour_arg(py::handle c, const char* what) {
 void bind_view(py::module_& m) {
   m.def(
       "render",
-      [](py::handle body, py::handle garments, std::uint32_t width, std::uint32_t height, const std::string& view,
-         const std::string& projection, py::handle colours, int supersample, bool outlines, py::handle background,
-         std::optional<fs::path> path, int threads, py::object progress) {
+      [](const OptMeshLike& body, const MeshList& garments, std::uint32_t width, std::uint32_t height,
+         const std::string& view, const std::string& projection, const Colours& colours, int supersample, bool outlines,
+         const Colour& background, std::optional<fs::path> path, int threads, const Progress& progress) {
         std::vector<std::shared_ptr<const Mesh>> meshes;
         if (!body.is_none()) meshes.push_back(mesh_from(body, "body"));
         if (!garments.is_none()) {

@@ -24,6 +24,7 @@ engine's message.
   bind_io(m);
   bind_body(m);
   bind_garment(m);
+  bind_regenerate(m);
   bind_profile(m);
   bind_view(m);
   m.attr("__version__") = ATELIER_VERSION_STRING;

@@ -37,7 +37,7 @@ def run_cli(*args):
 @pytest.fixture
 def scratch(request):
     """An empty folder under $ATELIER_TMP named after the test."""
-    root = pathlib.Path(os.environ.get("ATELIER_TMP", "/tmp/atelier-tests")) / "python"
+    root = pathlib.Path(os.environ.get("ATELIER_TMP", "/tmp/atelier-tests")).resolve() / "python"
     d = root / request.node.name.replace("[", "_").replace("]", "_")
     shutil.rmtree(d, ignore_errors=True)
     d.mkdir(parents=True)

@@ -10,19 +10,24 @@ import pytest
 import atelier
 from conftest import demo_shorts, run_cli, top_band
 
-COUNT = 3
+COUNT = 2
 SEED = 5
 
 
 @pytest.fixture(scope="module")
-def cli_reference():
-    """The CLI's reference body: the default mannequin (level 6), its family
-    and the demo's shorts, encoded by the binding from float32 vertices."""
+def job(tmp_path_factory):
+    """The CLI's reference body (the default mannequin, level 6), its family,
+    the sampled bodies, and the demo's shorts encoded by the binding from
+    float32 vertices and saved where the CLI reads templates."""
     mannequin = atelier.Mannequin()  # the CLI's resolution
     body = mannequin.reference()
     family = atelier.GarmentFamily(body)
     bodies = mannequin.positions(atelier.sample_mannequins(COUNT, SEED), dtype=np.float32)
-    return mannequin, body, family, bodies
+    v, f = demo_shorts(body)
+    shorts = atelier.encode_garment(family, v.astype(np.float32), f, name="shorts")
+    templates = tmp_path_factory.mktemp("templates")
+    shorts.save(templates)
+    return body, family, bodies, shorts, templates
 
 
 def obj_floats(path):
@@ -30,15 +35,12 @@ def obj_floats(path):
     return v.astype(np.float32)  # the file holds floats ("%.9g"): exact
 
 
-def test_binding_encode_cli_regen_binding_regen_same_bits(cli_reference, scratch):
-    _, body, family, bodies = cli_reference
-    v, f = demo_shorts(body)
-    shorts = atelier.encode_garment(family, v.astype(np.float32), f, name="shorts")
-    shorts.save(scratch / "templates")
-    run_cli("--threads", 1, "--seed", SEED, "regen", "--template", scratch / "templates" / "shorts.atd",
+def test_binding_encode_cli_regen_binding_regen_same_bits(job, scratch):
+    _, family, bodies, shorts, templates = job
+    run_cli("--threads", 1, "--seed", SEED, "regen", "--template", templates / "shorts.atd",
             "--source", "mannequin", "--count", COUNT, "--meshes", COUNT, "--out", scratch / "run")
     # The binding on the template read back from the same files.
-    template = atelier.read_garment_template(family, scratch / "templates" / "shorts.atd")
+    template = atelier.read_garment_template(family, templates / "shorts.atd")
     ours = atelier.regenerate(template, bodies, dtype=np.float32, threads=2)
     assert ours.ok.all()
     for b in range(COUNT):
@@ -50,19 +52,17 @@ def test_binding_encode_cli_regen_binding_regen_same_bits(cli_reference, scratch
     assert direct.positions[0].tobytes() == ours.positions[0].tobytes()
 
 
-def test_cli_encode_and_layers_same_bits(cli_reference, scratch):
-    _, body, family, bodies = cli_reference
-    # Garments as OBJ files, encoded by the CLI (`encode --garment`).
-    v, f = demo_shorts(body)
-    atelier.write_mesh(scratch / "shorts.obj", v.astype(np.float32), f)
+def test_cli_encode_and_layers_same_bits(job, scratch):
+    body, family, bodies, _, templates = job
+    # A second garment as an OBJ file, encoded by the CLI (`encode --garment`),
+    # worn over the shorts: the CLI regenerates both as layers.
     w, wf = top_band(body, offset=0.004)
     atelier.write_mesh(scratch / "wrap.obj", w.astype(np.float32), wf)
-    for name in ("shorts", "wrap"):
-        run_cli("encode", "--garment", scratch / f"{name}.obj", "--reference", "mannequin", "--out", scratch / "t")
-    run_cli("--threads", 2, "--seed", SEED, "regen", "--template", scratch / "t" / "shorts.atd",
+    run_cli("encode", "--garment", scratch / "wrap.obj", "--reference", "mannequin", "--out", scratch / "t")
+    run_cli("--threads", 2, "--seed", SEED, "regen", "--template", templates / "shorts.atd",
             "--template", scratch / "t" / "wrap.atd", "--source", "mannequin", "--count", COUNT,
             "--meshes", COUNT, "--out", scratch / "run")
-    shorts = atelier.read_garment_template(family, scratch / "t" / "shorts.atd")
+    shorts = atelier.read_garment_template(family, templates / "shorts.atd")
     wrap = atelier.read_garment_template(family, scratch / "t" / "wrap.atd")
     ours = atelier.regenerate([shorts, wrap], bodies, dtype=np.float32, threads=1)
     for b in range(COUNT):
