@@ -5,7 +5,7 @@ JOBS ?= $(shell nproc)
 GEN := $(shell command -v ninja >/dev/null 2>&1 && echo Ninja || echo "Unix Makefiles")
 CMAKE_ARGS ?=
 
-.PHONY: all deps configure build demo test bench asan tsan format clean
+.PHONY: all deps configure build demo python test bench asan tsan format clean
 
 all: build
 
@@ -25,6 +25,18 @@ build: deps configure
 demo: deps configure
 	cmake --build $(BUILD) -j $(JOBS) --target atelier
 	./$(BUILD)/atelier demo --out out/demo
+
+# The Python module (docs/python.md) for Debian's python3, whose NumPy it is
+# built against (a pyenv python3 first on PATH is not it): its packages,
+# configure again so that CMake finds pybind11, then the module alone, in
+# $(BUILD)/python/atelier. Use it with PYTHONPATH=$(BUILD)/python $(PYTHON).
+PYTHON ?= /usr/bin/python3
+python: configure
+	@bash scripts/install-deps.sh --python
+	cmake -S . -B $(BUILD) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_ARGS)
+	cmake --build $(BUILD) -j $(JOBS) --target atelier_python
+	@PYTHONPATH=$(BUILD)/python $(PYTHON) -c "import atelier; print('atelier', atelier.__version__, 'in', atelier.__path__[0])"
+	@echo "use it: PYTHONPATH=$(BUILD)/python $(PYTHON) examples/pipeline.py   (or: cmake --install $(BUILD))"
 
 # Test packages, then configure again so that CMake finds them.
 test: configure
@@ -53,7 +65,7 @@ tsan:
 	ATELIER_SKIP_LONG_TESTS=1 TSAN_OPTIONS="suppressions=$(CURDIR)/scripts/tsan.supp halt_on_error=1" ctest --test-dir build-tsan --output-on-failure -j $(JOBS)
 
 format:
-	find engine storage systems io apps tests bench examples -name '*.h' -o -name '*.cpp' | xargs clang-format -i
+	find engine storage systems io apps tests bench examples python -name '*.h' -o -name '*.cpp' | xargs clang-format -i
 
 clean:
 	rm -rf $(BUILD) build-asan build-tsan

@@ -1,0 +1,347 @@
+"""Type stubs of the extension module atelier._atelier (python/src/*.cpp).
+
+Arrays are numpy arrays; "view" means a read-only array onto the engine's
+memory that keeps its owner alive (zero copy). docs/python.md describes
+every call; the docstrings of the module repeat it (help(atelier.X)).
+"""
+from os import PathLike
+from typing import Any, Callable, Iterator, Optional, Sequence, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+Path = Union[str, PathLike[str]]
+FloatArray = npt.NDArray[np.floating[Any]]
+IndexArray = npt.NDArray[np.integer[Any]]
+#: (F, k) indices, or a list of polygons of any sizes.
+Faces = Union[IndexArray, Sequence[Sequence[int]]]
+#: progress(stage, done, total), called on the calling thread; raise to cancel.
+Progress = Optional[Callable[[str, int, int], Any]]
+DType = Union[str, type, np.dtype[Any]]
+#: Mannequin parameters: one dict, a list of dicts, or a structured array.
+Params = Union[None, dict[str, float], Sequence[dict[str, Any]], npt.NDArray[np.void]]
+
+# ---------------------------------------------------------------- files
+
+class Mesh:
+    """A polygon mesh: vertices (n, 3) and polygon faces (immutable)."""
+
+    def __init__(self, vertices: FloatArray, faces: Faces) -> None: ...
+    @property
+    def vertices(self) -> npt.NDArray[np.float64]:
+        """(n, 3) float64 view."""
+    @property
+    def faces(self) -> Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]]:
+        """(F, k) uint32 view, or a list of arrays for mixed polygons."""
+    @property
+    def face_offsets(self) -> npt.NDArray[np.uint32]: ...
+    @property
+    def face_indices(self) -> npt.NDArray[np.uint32]: ...
+    @property
+    def triangles(self) -> npt.NDArray[np.uint32]:
+        """(T, 3) fan triangles."""
+    @property
+    def vertex_count(self) -> int: ...
+    @property
+    def face_count(self) -> int: ...
+    @property
+    def surfaces(self) -> list[str]: ...
+    @property
+    def face_surface(self) -> npt.NDArray[np.int32]: ...
+    def validate(self) -> None: ...
+    def __iter__(self) -> Iterator[Any]: ...
+
+MeshLike = Union[Mesh, "Body", tuple[FloatArray, Faces]]
+
+def read_mesh(path: Path) -> Mesh:
+    """OBJ, PLY, OFF or .atm; ``vertices, faces = read_mesh(path)``."""
+
+def write_mesh(path: Path, mesh: Union[MeshLike, FloatArray], faces: Optional[Faces] = None, binary: bool = True) -> None:
+    """Writes by extension, atomically; bit-exact round trips."""
+
+def read_png(path: Path) -> npt.NDArray[np.uint8]:
+    """(H, W, 3) RGB."""
+
+def write_png(path: Path, image: npt.NDArray[np.uint8], level: int = 6) -> None: ...
+
+# ---------------------------------------------------------------- bodies
+
+class Body:
+    """A reference body: closed skin with feature curves and points."""
+
+    @staticmethod
+    def from_arrays(vertices: FloatArray, faces: Faces) -> Body: ...
+    @property
+    def vertices(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def faces(self) -> Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]]: ...
+    @property
+    def triangles(self) -> npt.NDArray[np.uint32]: ...
+    @property
+    def node_count(self) -> int: ...
+    @property
+    def mesh(self) -> Mesh: ...
+    @property
+    def curves(self) -> list[str]: ...
+    @property
+    def points(self) -> list[str]: ...
+    def curve(self, name: Union[str, int], positions: Optional[FloatArray] = None) -> npt.NDArray[np.float64]: ...
+    def measure(self, positions: Optional[FloatArray] = None) -> dict[str, float]: ...
+    def measure_many(self, bodies: FloatArray, *, threads: int = 0, progress: Progress = None) -> npt.NDArray[np.void]: ...
+    def with_positions(self, positions: FloatArray) -> Body: ...
+
+def sample_mannequins(n: int, seed: int = 1) -> npt.NDArray[np.void]:
+    """Structured array (n,) of mannequin parameters."""
+
+def sample_mannequin(seed: int, index: int) -> dict[str, float]: ...
+def mannequin_fields() -> list[str]: ...
+
+class Mannequin:
+    """The procedural mannequin at one resolution (one topology)."""
+
+    def __init__(self, level: int = 6) -> None: ...
+    @property
+    def node_count(self) -> int: ...
+    @property
+    def faces(self) -> Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]]: ...
+    def reference(self, params: Optional[dict[str, float]] = None) -> Body: ...
+    def positions(
+        self, params: Params, *, dtype: DType = "float64", threads: int = 0, progress: Progress = None
+    ) -> FloatArray:
+        """(B, n, 3), or (n, 3) for one dict."""
+
+class MakeHuman:
+    """MakeHuman bodies from the shared data."""
+
+    def __init__(self, path: Optional[Path] = None, *, threads: int = 0, progress: Progress = None) -> None: ...
+    @property
+    def node_count(self) -> int: ...
+    @property
+    def measure_modifiers(self) -> list[str]: ...
+    def reference(self) -> Body: ...
+    @staticmethod
+    def sample(n: int, seed: int = 1) -> npt.NDArray[np.void]: ...
+    def positions(
+        self, params: Params, *, dtype: DType = "float64", threads: int = 0, progress: Progress = None
+    ) -> FloatArray: ...
+    def garment(self, mhclo: Path) -> Mesh: ...
+
+def skin_band_garment(
+    body: Body, y_lo: float, y_hi: float, offset: float, max_radius: float, name: str = "band"
+) -> Mesh: ...
+
+# ---------------------------------------------------------------- garments
+
+class GarmentFamily:
+    """The reference body's polygons and collision topology."""
+
+    def __init__(self, body: Body) -> None: ...
+    @property
+    def body(self) -> Body: ...
+    @property
+    def node_count(self) -> int: ...
+
+class GarmentTemplate:
+    """A garment encoded on a family (immutable)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def family(self) -> GarmentFamily: ...
+    @property
+    def z_depth(self) -> int: ...
+    @property
+    def vertex_count(self) -> int: ...
+    @property
+    def entries(self) -> int: ...
+    @property
+    def vertices(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def faces(self) -> Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]]: ...
+    @property
+    def edges(self) -> npt.NDArray[np.uint32]: ...
+    @property
+    def rest_length(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def reference_clearance(self) -> npt.NDArray[np.float32]: ...
+    @property
+    def mesh(self) -> Mesh: ...
+    def with_z_depth(self, z_depth: int) -> GarmentTemplate: ...
+    def save(self, dir: Path) -> None: ...
+
+@overload
+def encode_garment(
+    family: GarmentFamily,
+    garment: FloatArray,
+    faces: Faces,
+    *,
+    name: Optional[str] = None,
+    edges: Optional[IndexArray] = None,
+    z_depth: int = 0,
+    polygons_per_vertex: int = 0,
+    scale: float = 1.0,
+    threads: int = 0,
+    progress: Progress = None,
+) -> GarmentTemplate: ...
+@overload
+def encode_garment(
+    family: GarmentFamily,
+    garment: Union[Mesh, Path],
+    faces: None = None,
+    *,
+    name: Optional[str] = None,
+    edges: Optional[IndexArray] = None,
+    z_depth: int = 0,
+    polygons_per_vertex: int = 0,
+    scale: float = 1.0,
+    threads: int = 0,
+    progress: Progress = None,
+) -> GarmentTemplate: ...
+def read_garment_template(
+    family: GarmentFamily, path: Path, *, z_depth: int = 0, threads: int = 0, progress: Progress = None
+) -> GarmentTemplate: ...
+
+class Regeneration:
+    """Positions and fit figures of a batch."""
+
+    @property
+    def names(self) -> list[str]: ...
+    @property
+    def positions(self) -> list[FloatArray]:
+        """Per garment (B, m, 3)."""
+    @property
+    def quality(self) -> list[npt.NDArray[np.void]]:
+        """Per garment, structured (B,)."""
+    @property
+    def ok(self) -> npt.NDArray[np.bool_]: ...
+    @property
+    def errors(self) -> list[Optional[str]]: ...
+    def __len__(self) -> int: ...
+
+class Regenerator:
+    """The reusable garment pipeline."""
+
+    def __init__(
+        self,
+        garments: Union[GarmentTemplate, Sequence[GarmentTemplate]],
+        *,
+        layers: bool = True,
+        edge_transfer: bool = True,
+        collision_pass: bool = True,
+        kernel: str = "auto",
+    ) -> None: ...
+    @property
+    def garments(self) -> list[GarmentTemplate]: ...
+    def run(
+        self,
+        bodies: FloatArray,
+        *,
+        threads: int = 0,
+        progress: Progress = None,
+        chunk: int = 256,
+        dtype: DType = "float64",
+        fit: bool = False,
+    ) -> Regeneration: ...
+    def run_one(self, body: FloatArray) -> list[tuple[npt.NDArray[np.float64], dict[str, Any]]]: ...
+
+def regenerate(
+    garments: Union[GarmentTemplate, Sequence[GarmentTemplate]],
+    bodies: FloatArray,
+    *,
+    layers: bool = True,
+    edge_transfer: bool = True,
+    collision_pass: bool = True,
+    threads: int = 0,
+    progress: Progress = None,
+    chunk: int = 256,
+    dtype: DType = "float64",
+    fit: bool = False,
+) -> Regeneration:
+    """Regenerates garments on a (B, n, 3) batch of bodies."""
+
+def measure_fit(
+    body: MeshLike,
+    garment: MeshLike,
+    *,
+    source_garment: Optional[FloatArray] = None,
+    source_body: Optional[FloatArray] = None,
+    inside_tolerance: float = 0.001,
+    threads: int = 0,
+) -> dict[str, float]: ...
+
+# ---------------------------------------------------------------- profile templates
+
+class ProfileTemplate:
+    """A profile template (feature nodes, surfaces, joints, profiles)."""
+
+    @staticmethod
+    def load(path: Path) -> ProfileTemplate: ...
+    @staticmethod
+    def from_json(text: str, name: str = "<memory>") -> ProfileTemplate: ...
+    def to_json(self) -> str: ...
+    def save(self, path: Path) -> None: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def reference(self) -> str: ...
+    @property
+    def levels(self) -> int: ...
+    @property
+    def clearance(self) -> float: ...
+    @property
+    def node_names(self) -> list[str]: ...
+    @property
+    def profile_count(self) -> int: ...
+    @property
+    def mesh(self) -> Mesh: ...
+
+def read_profile_template(path: Path) -> ProfileTemplate: ...
+def project_templates(body: Body) -> list[ProfileTemplate]: ...
+
+class ProfileRegeneration:
+    """Meshes and quality of regenerate_profiles."""
+
+    @property
+    def names(self) -> list[str]: ...
+    @property
+    def meshes(self) -> list[list[Optional[Mesh]]]: ...
+    @property
+    def quality(self) -> list[npt.NDArray[np.void]]: ...
+    @property
+    def ok(self) -> npt.NDArray[np.bool_]: ...
+    @property
+    def errors(self) -> list[Optional[str]]: ...
+    def __len__(self) -> int: ...
+
+def regenerate_profiles(
+    templates: Union[ProfileTemplate, Sequence[ProfileTemplate]],
+    reference: Body,
+    bodies: FloatArray,
+    *,
+    levels: int = -1,
+    clearance: float = -1.0,
+    threads: int = 0,
+    progress: Progress = None,
+) -> ProfileRegeneration: ...
+
+# ---------------------------------------------------------------- pictures
+
+def render(
+    body: Optional[MeshLike],
+    garments: Union[None, MeshLike, Sequence[MeshLike]] = None,
+    *,
+    width: int = 480,
+    height: int = 640,
+    view: str = "front",
+    projection: str = "orthographic",
+    colours: Optional[Sequence[Sequence[float]]] = None,
+    supersample: int = 1,
+    outlines: bool = False,
+    background: Optional[Sequence[float]] = None,
+    path: Optional[Path] = None,
+    threads: int = 0,
+    progress: Progress = None,
+) -> npt.NDArray[np.uint8]:
+    """(H, W, 3) RGB picture; also a PNG at ``path``."""
