@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian packages Atelier needs, only those missing.
-# Usage: scripts/install-deps.sh [--test] [--bench]
+# Usage: scripts/install-deps.sh [--test] [--bench] [--fuzz]
 #   (none)   what the library and the CLI need (`make demo`)
 #   --test   adds GoogleTest, Chromium (HTML report test) and Open MPI (the
 #            2-rank regen test; the CLI uses MPI when it is installed)
 #   --bench  adds Google Benchmark and the optional peers (OpenMesh, nanoflann)
+#   --fuzz   adds Debian's clang and libFuzzer (`make fuzz`, docs/reliability.md)
 set -euo pipefail
 pkgs=(build-essential cmake ninja-build pkg-config
       libtbb-dev libeigen3-dev libembree-dev libopenvdb-dev libboost-iostreams-dev
@@ -13,7 +14,8 @@ for arg in "$@"; do
   case "$arg" in
     --test) pkgs+=(libgtest-dev libgmock-dev chromium libopenmpi-dev openmpi-bin) ;;
     --bench) pkgs+=(libbenchmark-dev libopenmesh-dev libnanoflann-dev) ;;
-    *) echo "install-deps: unknown option $arg (use --test, --bench)" >&2; exit 2 ;;
+    --fuzz) pkgs+=(clang libfuzzer-14-dev) ;;
+    *) echo "install-deps: unknown option $arg (use --test, --bench, --fuzz)" >&2; exit 2 ;;
   esac
 done
 missing=()

@@ -102,6 +102,7 @@ void Model::sync_edge_columns() {
   halfedges.prev.resize(2 * n);
   halfedges.vnext.resize(2 * n);
   halfedges.vprev.resize(2 * n);
+  halfedges.props.resize(2 * n);
 }
 
 void Model::sync_face_columns() {
@@ -230,6 +231,8 @@ EdgeIdx Model::new_edge(NodeIdx a, NodeIdx b) {
     sync_edge_columns();
   } else {
     edges.props.reset(e);
+    halfedges.props.reset(halfedge_of(e, 0));
+    halfedges.props.reset(halfedge_of(e, 1));
   }
   edges.flags[e.value] = 0;
   edges.mesh_edge[e.value] = {};
@@ -257,6 +260,8 @@ void Model::delete_edge(EdgeIdx e) {
   edges.flags[e.value] = 0;
   edges.mesh_edge[e.value] = {};
   edges.props.reset(e);
+  halfedges.props.reset(halfedge_of(e, 0));
+  halfedges.props.reset(halfedge_of(e, 1));
   edges.slots.release(e);
   ++topology_version;
 }
@@ -468,6 +473,7 @@ CompactRemap Model::compact() {
       for (unsigned s = 0; s < 2; ++s)
         hr[2 * e + s] = r.edges[e].valid() ? halfedge_of(r.edges[e], s) : HalfedgeIdx{};
     compact_column(halfedges.tail, hr, 2 * ne);
+    halfedges.props.compact(hr, 2 * ne);
     compact_column(halfedges.face, hr, 2 * ne);
     compact_column(halfedges.next, hr, 2 * ne);
     compact_column(halfedges.prev, hr, 2 * ne);
