@@ -59,7 +59,6 @@ struct SurfaceSoup : PolygonSoup {
   std::vector<Vec2d> uv;                   // empty or one per position
   std::vector<std::int32_t> source;        // empty or one per position: index in the file's vertex list
   std::vector<std::uint64_t> face_where;   // one per face
-  std::vector<Vec2d> corner_uv;            // empty or one per face corner (face_nodes entry)
   std::vector<std::int32_t> corner_texcoord;  // empty or one per face corner: the file's texcoord index, -1 none
 };
 

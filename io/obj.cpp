@@ -1,6 +1,7 @@
 #include <atelier/io/obj.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -176,6 +177,92 @@ class ObjParser {
   std::uint32_t group_ = kNone;
 };
 
+/// Issue 27: where three or more faces of different groups share an OBJ
+/// edge, the surfaces are joined there by a MESHJOINT (the papers' way of
+/// assembling non-manifold bodies) instead of being left unconnected: one
+/// single-edge MESHEDGE per surface, running along that surface's face
+/// (negative flag when that is against the joint direction, which runs from
+/// the lower OBJ vertex index to the higher), members clockwise about the
+/// joint direction by the right-hand rule, as TemplateBuilder::joint orders
+/// them. Two faces of two groups meeting at an edge (a material seam, the
+/// common case) stay unjoined, as before. Returns the number of joints made.
+std::size_t join_shared_edges(Model& m) {
+  const auto src = m.nodes.props.find<std::int32_t>("source_vertex");
+  if (!src.valid()) return 0;
+  struct Side {
+    std::uint64_t key;
+    std::uint32_t edge;
+    bool operator<(const Side& o) const { return key != o.key ? key < o.key : edge < o.edge; }
+  };
+  std::vector<Side> sides;
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e})) continue;
+    const auto a = static_cast<std::uint32_t>(src[m.tail(halfedge_of(EdgeIdx{e}, 0))]);
+    const auto b = static_cast<std::uint32_t>(src[m.tail(halfedge_of(EdgeIdx{e}, 1))]);
+    sides.push_back({std::uint64_t{std::min(a, b)} << 32 | std::max(a, b), e});
+  }
+  std::sort(sides.begin(), sides.end());
+  std::size_t made = 0;
+  struct Member {
+    MeshEdgeIdx mesh_edge;
+    bool positive;
+    double angle;
+  };
+  std::vector<Member> members;
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i;
+    int faces = 0;
+    while (j < sides.size() && sides[j].key == sides[i].key) {
+      const EdgeIdx e{sides[j].edge};
+      faces += m.face(halfedge_of(e, 0)).valid() + m.face(halfedge_of(e, 1)).valid();
+      ++j;
+    }
+    // One surface holds one node per OBJ vertex, so a run of several edges
+    // is several surfaces.
+    if (j - i >= 2 && faces >= 3) {
+      const auto lo = static_cast<std::int32_t>(sides[i].key >> 32);
+      members.clear();
+      Vec3d dir = Vec3d::Zero(), e1 = Vec3d::Zero(), e2 = Vec3d::Zero();
+      for (std::size_t k = i; k < j; ++k) {
+        const EdgeIdx e{sides[k].edge};
+        HalfedgeIdx h = halfedge_of(e, src[m.tail(halfedge_of(e, 0))] == lo ? 0u : 1u);  // lo -> hi
+        if (k == i) {
+          dir = m.position(m.head(h)) - m.position(m.tail(h));
+          if (dir.norm() > 0) {
+            dir.normalize();
+            e1 = dir.unitOrthogonal();
+            e2 = dir.cross(e1);
+          }
+        }
+        bool positive = true;
+        if (!m.face(h).valid()) {
+          h = twin(h);
+          positive = false;
+        }
+        const std::array<HalfedgeIdx, 1> chain{h};
+        const MeshEdgeIdx me = m.new_mesh_edge(m.nodes.surface[m.tail(h).value], chain);
+        Vec3d c = Vec3d::Zero();
+        int n = 0;
+        m.for_each_face_halfedge(m.face(h), [&](HalfedgeIdx x) {
+          c += m.position(m.tail(x));
+          ++n;
+        });
+        const Vec3d w = c / n - 0.5 * (m.position(m.tail(h)) + m.position(m.head(h)));
+        members.push_back({me, positive, std::atan2(w.dot(e2), w.dot(e1))});
+      }
+      // Clockwise about dir by the right-hand rule: decreasing angle.
+      std::stable_sort(members.begin(), members.end(), [](const Member& x, const Member& y) { return x.angle > y.angle; });
+      std::vector<JointMember> jm;
+      for (const Member& mm : members) jm.push_back({mm.mesh_edge, mm.positive});
+      (void)m.new_joint(jm);
+      ++made;
+    }
+    i = j;
+  }
+  return made;
+}
+
+
 Model build(ObjData& d, std::string_view file) {
   const std::size_t nv = d.positions.size();
   std::vector<std::uint8_t> used(nv, 0);
@@ -249,8 +336,10 @@ Model build(ObjData& d, std::string_view file) {
     for (std::uint32_t v : verts) local[v] = kNone;
     add_soup_surface(m, soup, file, "line");
   }
+  (void)join_shared_edges(m);
   return m;
 }
+
 
 
 /// The `vt` list of a model with per-corner texture coordinates: one entry

@@ -21,7 +21,11 @@ while (($#)); do
     *) harnesses+=("$1"); shift ;;
   esac
 done
-((${#harnesses[@]})) || harnesses=(obj ply off atm atd template mhclo mh_target mh_base mh_modifiers)
+if ((${#harnesses[@]} == 0)); then
+  harnesses=(obj ply off atm atd template mhclo mh_target mh_base mh_modifiers)
+  # Built only once their parsers are in the tree (fuzz/CMakeLists.txt).
+  for h in curve_network strokes; do [[ -x $B/${h}_fuzz ]] && harnesses+=("$h"); done
+fi
 
 # Seeds: tests/data by extension, then the generated ones.
 seeds=$B/seeds

@@ -120,6 +120,10 @@ BaseMesh parse_base_mesh(std::string_view text, const std::filesystem::path& fil
   BaseMesh m;
   BaseMesh::Group* cur = nullptr;
   std::vector<std::uint32_t> face;
+  std::vector<Vec2d> texcoords;
+  std::vector<std::int64_t> corner_vt;  // per corner over all groups in file order, -1 none
+  std::vector<long long> face_vt;
+  std::vector<std::vector<long long>> cur_vt;  // per group: the texcoord of each corner, -1 none
   for_each_line(without_bom(text), [&](std::size_t line, const char* b, const char* e) {
     Cursor c{b, e};
     if (c.done() || *c.p == '#') return;
@@ -132,22 +136,47 @@ BaseMesh parse_base_mesh(std::string_view text, const std::filesystem::path& fil
         parse_error(file, line, c.out_of_range ? "vertex coordinate out of the range of a float" : "vertex needs three numbers");
       if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) parse_error(file, line, "non-finite vertex");
       m.positions.emplace_back(x, y, z);
+    } else if (key == "vt") {
+      float u = 0, v = 0;
+      if (!c.read(u)) parse_error(file, line, c.out_of_range ? "texture coordinate out of the range of a float" : "vt needs a number");
+      if (!c.done() && !c.read(v))
+        parse_error(file, line, c.out_of_range ? "texture coordinate out of the range of a float" : "vt needs numbers");
+      if (!std::isfinite(u) || !std::isfinite(v)) parse_error(file, line, "non-finite texture coordinate");
+      texcoords.emplace_back(static_cast<double>(u), static_cast<double>(v));
     } else if (key == "g" || key == "o") {
       c.skip_ws();
       std::string name(c.p, static_cast<std::size_t>(e - c.p));
       while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
       m.groups.emplace_back().name = name;
+      cur_vt.emplace_back();
       cur = &m.groups.back();
     } else if (key == "f") {
       if (!cur) {
         m.groups.emplace_back().name = "default";
+        cur_vt.emplace_back();
         cur = &m.groups.back();
       }
       face.clear();
+      face_vt.clear();
       while (!c.done()) {
         long long v = 0;
         if (!c.read(v)) parse_error(file, line, c.out_of_range ? "face index out of range" : "face index is not an integer");
-        while (c.p < e && *c.p != ' ' && *c.p != '\t' && *c.p != '\r') ++c.p;  // skip /vt/vn
+        long long t = 0;
+        if (c.p < e && *c.p == '/' && c.p + 1 < e && c.p[1] != '/') {
+          ++c.p;
+          if (!c.read(t)) parse_error(file, line, "texture index is not an integer");
+          const long long nt = static_cast<long long>(texcoords.size());
+          const long long ti = t > 0 ? t - 1 : nt + t;
+          if (t == 0 || ti < 0 || ti >= nt) {
+            std::ostringstream s;
+            s << "texture index " << t << " out of range (" << nt << " texture coordinates so far)";
+            parse_error(file, line, s.str());
+          }
+          face_vt.push_back(ti);
+        } else {
+          face_vt.push_back(-1);
+        }
+        while (c.p < e && *c.p != ' ' && *c.p != '\t' && *c.p != '\r') ++c.p;  // skip the rest (/vn)
         const long long n = static_cast<long long>(m.positions.size());
         const long long i = v > 0 ? v - 1 : n + v;
         if (v == 0 || i < 0 || i >= n) {
@@ -160,8 +189,17 @@ BaseMesh parse_base_mesh(std::string_view text, const std::filesystem::path& fil
       if (face.size() < 3) parse_error(file, line, "face with fewer than 3 vertices");
       cur->face_nodes.insert(cur->face_nodes.end(), face.begin(), face.end());
       cur->face_offsets.push_back(static_cast<std::uint32_t>(cur->face_nodes.size()));
+      for (const long long t : face_vt) cur_vt[static_cast<std::size_t>(cur - m.groups.data())].push_back(t);
     }
   });
+  // Texture coordinates per corner, kept only when every corner has one
+  // (a garment's uv map; a mesh with some corners unmapped keeps none).
+  bool all_mapped = !texcoords.empty();
+  for (const auto& g : cur_vt)
+    for (const long long t : g) all_mapped &= t >= 0;
+  if (all_mapped)
+    for (std::size_t g = 0; g < m.groups.size(); ++g)
+      for (const long long t : cur_vt[g]) m.groups[g].corner_uv.push_back(texcoords[static_cast<std::size_t>(t)]);
   // Text or bytes with no geometry are not an empty mesh: refuse them.
   if (m.positions.empty()) parse_error(file, 0, "no vertex ('v' line): not an OBJ mesh");
   bool any_face = false;

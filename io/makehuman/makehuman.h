@@ -39,7 +39,9 @@ struct BaseMesh {
   [[nodiscard]] const Group* group(std::string_view name) const noexcept;
 };
 
-/// Reads base.obj (v and f lines, g groups; vt and the rest skipped). Throws
+/// Reads base.obj (v, vt and f lines, g groups; the rest skipped): each
+/// group's corner_uv holds the texture coordinate of every face corner when
+/// every corner of the file has one (else all are empty). Throws
 /// atelier::Error naming file and line on malformed input (numbers out of
 /// float range included) and for a file with no vertex or no face. A UTF-8
 /// byte-order mark is skipped.

@@ -426,3 +426,58 @@ TEST(ObjReal, SpotKeepsEveryTexcoordAndItsSeams) {
   EXPECT_EQ(b.vt, a.vt);
   EXPECT_TRUE(same_corners(a, b));
 }
+
+TEST(Obj, ThreeFacesOnAnEdgeAcrossGroupsAreJoined) {
+  // A "fin": three triangles on the edge 1-2 (the z axis), one per group.
+  // Issue 27: they became three unconnected surfaces. Now one MESHJOINT
+  // holds one single-edge MESHEDGE of each surface.
+  const std::string text =
+      "v 0 0 0\nv 0 0 1\nv 1 0 0\nv -1 0 0\nv 0 1 0\n"
+      "g a\nf 1 2 3\ng b\nf 2 1 4\ng c\nf 1 2 5\n";
+  const Model m = read_obj_from_string(text, "fin.obj");
+  ASSERT_TRUE(validate(m)) << validate(m).to_string();
+  EXPECT_EQ(m.num_surfaces(), 3u);
+  ASSERT_EQ(m.num_joints(), 1u);
+  const auto members = m.joints.members.row(0);
+  ASSERT_EQ(members.size(), 3u);
+  // Each member lies on the z axis, in its own surface, and its halfedge has
+  // a face (a mesh edge runs along its surface).
+  std::set<std::uint32_t> surfaces;
+  std::vector<double> angles;
+  for (const JointMember& jm : members) {
+    const auto chain = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
+    ASSERT_EQ(chain.size(), 1u);
+    const HalfedgeIdx h = chain[0];
+    EXPECT_TRUE(m.face(h).valid());
+    const Vec3d a = m.position(m.tail(h)), b = m.position(m.head(h));
+    EXPECT_EQ(a.x(), 0.0);
+    EXPECT_EQ(a.y(), 0.0);
+    EXPECT_EQ(b.x(), 0.0);
+    EXPECT_EQ(b.y(), 0.0);
+    // positive: the halfedge runs along the joint (OBJ vertex 1 -> 2, +z).
+    EXPECT_EQ(jm.positive, b.z() > a.z());
+    surfaces.insert(m.mesh_edges.surface[jm.mesh_edge.value].value);
+    // The sheet's direction about +z: the face's third corner.
+    std::vector<NodeIdx> c;
+    m.face_nodes(m.face(h), c);
+    for (NodeIdx v : c)
+      if (m.position(v).head<2>().norm() > 0) angles.push_back(std::atan2(m.position(v).y(), m.position(v).x()));
+  }
+  EXPECT_EQ(surfaces.size(), 3u);
+  // Clockwise about +z (right-hand rule): going round the list, the angle
+  // (0: +x, pi/2: +y, pi: -x) decreases at every step but one (where it
+  // wraps), whichever member comes first.
+  ASSERT_EQ(angles.size(), 3u);
+  int increases = 0;
+  for (std::size_t k = 0; k < 3; ++k) increases += angles[(k + 1) % 3] > angles[k];
+  EXPECT_EQ(increases, 1) << angles[0] << " " << angles[1] << " " << angles[2];
+  // The joint survives the native format, and OBJ writes and reads it again.
+  EXPECT_EQ(diff_tables(m, deserialize_model(serialize_model(m))), "");
+  TempDir dir;
+  write_obj(m, dir / "fin.obj");
+  EXPECT_EQ(diff_tables(m, read_obj(dir / "fin.obj")), "");
+  // Two groups meeting at an edge (two faces, a material seam) stay unjoined.
+  const Model seam = read_obj_from_string("v 0 0 0\nv 0 0 1\nv 1 0 0\nv -1 0 0\ng a\nf 1 2 3\ng b\nf 2 1 4\n", "s.obj");
+  EXPECT_EQ(seam.num_joints(), 0u);
+  EXPECT_EQ(seam.num_surfaces(), 2u);
+}
