@@ -5,7 +5,7 @@ JOBS ?= $(shell nproc)
 GEN := $(shell command -v ninja >/dev/null 2>&1 && echo Ninja || echo "Unix Makefiles")
 CMAKE_ARGS ?=
 
-.PHONY: all deps configure build demo python test bench asan tsan format clean
+.PHONY: all deps configure build demo python test bench asan tsan fuzz format clean
 
 all: build
 
@@ -64,8 +64,19 @@ tsan:
 	cmake --build build-tsan -j $(JOBS)
 	ATELIER_SKIP_LONG_TESTS=1 TSAN_OPTIONS="suppressions=$(CURDIR)/scripts/tsan.supp halt_on_error=1" ctest --test-dir build-tsan --output-on-failure -j $(JOBS)
 
+# libFuzzer harnesses of every parser (fuzz/, docs/reliability.md), built by
+# clang under ASan+UBSan in build-fuzz, each run FUZZ_SECONDS (default 15) or
+# FUZZ_RUNS executions one after another: `make fuzz FUZZ_RUNS=10000000`.
+FUZZ_SECONDS ?= 15
+FUZZ_RUNS ?=
+fuzz:
+	@bash scripts/install-deps.sh --fuzz
+	cmake -S fuzz -B build-fuzz -G "$(GEN)" -DCMAKE_CXX_COMPILER=clang++
+	cmake --build build-fuzz -j $(JOBS)
+	bash scripts/fuzz.sh $(if $(FUZZ_RUNS),--runs $(FUZZ_RUNS),--seconds $(FUZZ_SECONDS)) $(FUZZ_TARGETS)
+
 format:
 	find engine storage systems io apps tests bench examples python -name '*.h' -o -name '*.cpp' | xargs clang-format -i
 
 clean:
-	rm -rf $(BUILD) build-asan build-tsan
+	rm -rf $(BUILD) build-asan build-tsan build-fuzz

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <regex>
@@ -59,9 +61,15 @@ std::optional<double> parse_double(std::string_view t) noexcept {
   double v = 0;
   const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
   if (r.ec == std::errc::result_out_of_range) {
-    // Subnormal underflow parses as "out of range" but is a real number.
-    if (r.ptr == t.data() + t.size()) return v;
-    return std::nullopt;
+    // from_chars leaves v untouched on "out of range" (it was read as 0
+    // before): tell overflow (refused) from underflow (a real number, read
+    // as strtod rounds it) with strtod on a copy of the token.
+    if (r.ptr != t.data() + t.size()) return std::nullopt;
+    const std::string copy(t);
+    errno = 0;
+    const double s = std::strtod(copy.c_str(), nullptr);
+    if (std::isinf(s)) return std::nullopt;
+    return s;
   }
   if (r.ec != std::errc() || r.ptr != t.data() + t.size()) return std::nullopt;
   return v;
@@ -74,6 +82,31 @@ std::optional<std::int64_t> parse_int(std::string_view t) noexcept {
   const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
   if (r.ec != std::errc() || r.ptr != t.data() + t.size()) return std::nullopt;
   return v;
+}
+
+std::string number_problem(std::string_view t, bool integer) {
+  std::string_view u = t;
+  if (!u.empty() && u.front() == '+') u.remove_prefix(1);
+  bool out_of_range = false;
+  if (integer) {
+    std::int64_t v = 0;
+    const auto r = std::from_chars(u.data(), u.data() + u.size(), v);
+    out_of_range = r.ec == std::errc::result_out_of_range;
+  } else {
+    double v = 0;
+    const auto r = std::from_chars(u.data(), u.data() + u.size(), v);
+    out_of_range = r.ec == std::errc::result_out_of_range && r.ptr == u.data() + u.size();
+  }
+  if (out_of_range)
+    return "number '" + std::string(t) + "' is out of range (beyond " + (integer ? "a 64-bit integer" : "a double") + ")";
+  return "non-numeric token '" + std::string(t) + "'";
+}
+
+std::string_view skip_utf8_bom(std::string_view text) noexcept {
+  if (text.size() >= 3 && static_cast<unsigned char>(text[0]) == 0xEF && static_cast<unsigned char>(text[1]) == 0xBB &&
+      static_cast<unsigned char>(text[2]) == 0xBF)
+    text.remove_prefix(3);
+  return text;
 }
 
 void split_blanks(std::string_view line, std::vector<std::string_view>& out) {
@@ -108,6 +141,7 @@ std::vector<std::uint64_t> faces_named_in(const std::string& msg) {
 
 void add_soup_surface(Model& m, SurfaceSoup& soup, std::string_view file, std::string_view where_label) {
   const std::uint32_t first = static_cast<std::uint32_t>(m.nodes.slots.capacity());
+  const std::uint32_t first_face = static_cast<std::uint32_t>(m.faces.slots.capacity());
   auto made = add_polygon_surface(m, soup.name, soup, ExecContext::sequential());
   if (!made) {
     std::string msg = made.status().message();
@@ -127,6 +161,20 @@ void add_soup_surface(Model& m, SurfaceSoup& soup, std::string_view file, std::s
   if (!soup.source.empty()) {
     auto prop = m.nodes.props.add<std::int32_t>("source_vertex", -1);
     for (std::size_t i = 0; i < soup.source.size(); ++i) prop[NodeIdx{first + static_cast<std::uint32_t>(i)}] = soup.source[i];
+  }
+  // Face corners: the builder makes soup face k as face first_face + k, its
+  // first halfedge leaving the face's first corner, in corner order.
+  if (!soup.corner_uv.empty() || !soup.corner_texcoord.empty()) {
+    auto uv = m.halfedges.props.add<Vec2d>("corner_uv", Vec2d::Zero());
+    auto src = m.halfedges.props.add<std::int32_t>("source_texcoord", -1);
+    for (std::size_t f = 0; f < soup.face_count(); ++f) {
+      std::uint32_t k = soup.face_offsets[f];
+      m.for_each_face_halfedge(FaceIdx{first_face + static_cast<std::uint32_t>(f)}, [&](HalfedgeIdx h) {
+        if (!soup.corner_uv.empty()) uv[h] = soup.corner_uv[k];
+        if (!soup.corner_texcoord.empty()) src[h] = soup.corner_texcoord[k];
+        ++k;
+      });
+    }
   }
 }
 

@@ -35,9 +35,19 @@ namespace io_detail {
 void append_double(std::string& out, double v);
 void append_uint(std::string& out, std::uint64_t v);
 
-/// Strict number parsing of a whole token (a leading '+' is accepted).
+/// Strict number parsing of a whole token (a leading '+' is accepted). A
+/// number beyond the range of a double (1e400) is refused, not read as 0 or
+/// inf; one below the smallest subnormal reads as the nearest (0 or a
+/// subnormal), as strtod gives.
 [[nodiscard]] std::optional<double> parse_double(std::string_view token) noexcept;
 [[nodiscard]] std::optional<std::int64_t> parse_int(std::string_view token) noexcept;
+/// Why parse_double/parse_int refused a token, for messages:
+/// "number 'T' is out of range (beyond a double)" or "non-numeric token 'T'".
+[[nodiscard]] std::string number_problem(std::string_view token, bool integer = false);
+
+/// The text without a leading UTF-8 byte-order mark (EF BB BF), which some
+/// editors write: it is not part of the first statement.
+[[nodiscard]] std::string_view skip_utf8_bom(std::string_view text) noexcept;
 
 /// Splits on blanks (space, tab, \r, \v, \f).
 void split_blanks(std::string_view line, std::vector<std::string_view>& out);
@@ -49,12 +59,14 @@ struct SurfaceSoup : PolygonSoup {
   std::vector<Vec2d> uv;                   // empty or one per position
   std::vector<std::int32_t> source;        // empty or one per position: index in the file's vertex list
   std::vector<std::uint64_t> face_where;   // one per face
+  std::vector<std::int32_t> corner_texcoord;  // empty or one per face corner: the file's texcoord index, -1 none
 };
 
 /// Adds the soup as one surface. Builder errors become Error(kParse) naming
 /// the file and, for each face the builder names, where it came from
-/// (`where_label` is "line" or "byte offset"). Also fills nodes.uv and the
-/// "source_vertex" node property when the soup has them.
+/// (`where_label` is "line" or "byte offset"). Also fills nodes.uv, the
+/// "source_vertex" node property, and the halfedge (face-corner) properties
+/// "corner_uv" and "source_texcoord" when the soup has them.
 void add_soup_surface(Model& m, SurfaceSoup& soup, std::string_view file, std::string_view where_label);
 
 /// The live part of a model as one flat polygon list: live nodes numbered

@@ -20,7 +20,7 @@ using namespace io_detail;
 namespace {
 
 constexpr char kMagic[8] = {'A', 'T', 'E', 'L', 'I', 'E', 'R', '\x1a'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 1: no halfedge properties (still read)
 constexpr std::uint32_t kInvalid = std::numeric_limits<std::uint32_t>::max();
 
 constexpr std::uint32_t tag(const char (&s)[5]) {
@@ -221,6 +221,7 @@ std::string serialize_compact(const Model& m) {
     write_props(o, m.faces.props);
     write_props(o, m.surfaces.props);
     write_props(o, m.attrib_edges.props);
+    write_props(o, m.halfedges.props);  // version 2
     add_section(file, kSections[10], o);
   }
   return std::move(file.str());
@@ -384,10 +385,10 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
   In head(bytes.substr(8, 8), 8, file, "file header");
   const auto version = head.get<std::uint32_t>();
   const auto nsec = head.get<std::uint32_t>();
-  if (version != kVersion)
-    throw parse_error(
-        file, "byte offset 8",
-        "unsupported version " + std::to_string(version) + " (this reader knows " + std::to_string(kVersion) + ")");
+  if (version != 1 && version != kVersion)
+    throw parse_error(file, "byte offset 8",
+                      "unsupported version " + std::to_string(version) + " (this reader knows 1 and " +
+                          std::to_string(kVersion) + ")");
   if (nsec != kSections.size())
     throw parse_error(
         file, "byte offset 12",
@@ -580,6 +581,7 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
   m.faces.props.resize(nf);
   m.surfaces.props.resize(ns);
   m.attrib_edges.props.resize(nae);
+  m.halfedges.props.resize(2 * ne);
   {
     In& s = sec[10];
     read_props(s, m.nodes.props, nn, "node");
@@ -587,6 +589,7 @@ Model deserialize_impl(std::string_view bytes, std::string_view file) {
     read_props(s, m.faces.props, nf, "face");
     read_props(s, m.surfaces.props, ns, "surface");
     read_props(s, m.attrib_edges.props, nae, "attribute edge");
+    if (version >= 2) read_props(s, m.halfedges.props, 2 * ne, "halfedge");
     s.expect_end();
   }
   ++m.topology_version;

@@ -1,9 +1,11 @@
 #include <atelier/io/obj.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <unordered_map>
 
 #include <atelier/io/atomic_file.h>
@@ -39,7 +41,7 @@ struct ObjData {
 class ObjParser {
  public:
   ObjParser(std::string_view text, std::string_view file, bool polylines = false)
-      : text_(text), file_(file), polylines_(polylines) {}
+      : text_(skip_utf8_bom(text)), file_(file), polylines_(polylines) {}
 
   ObjData run() {
     std::size_t pos = 0, line_no = 0;
@@ -66,6 +68,9 @@ class ObjParser {
       line(logical, first_line);
     }
     check_ranges();
+    // Text or bytes with no `v` statement are not a mesh (an empty model
+    // would be written back by convert as if something had been read).
+    if (d_.positions.empty()) fail(line_no, "no vertex ('v' statement) in the file: not an OBJ mesh");
     return std::move(d_);
   }
 
@@ -74,7 +79,7 @@ class ObjParser {
 
   double number(std::string_view tok, std::size_t line, const char* what) const {
     const auto v = parse_double(tok);
-    if (!v) fail(line, "non-numeric token '" + std::string(tok) + "' in " + what);
+    if (!v) fail(line, number_problem(tok) + " in " + what);
     if (!std::isfinite(*v)) fail(line, "NaN/inf coordinate '" + std::string(tok) + "' in " + what);
     return *v;
   }
@@ -115,7 +120,7 @@ class ObjParser {
 
   std::int64_t index(std::string_view tok, std::size_t count, std::size_t line_no, const char* what) const {
     const auto v = parse_int(tok);
-    if (!v) fail(line_no, "non-numeric token '" + std::string(tok) + "' as " + what + " index in face");
+    if (!v) fail(line_no, number_problem(tok, true) + " as " + what + " index in face");
     if (*v == 0) fail(line_no, std::string("bad index: ") + what + " index 0 (OBJ indices start at 1)");
     if (*v < 0) {
       // Relative: -1 is the last one defined so far.
@@ -202,6 +207,92 @@ class ObjParser {
   std::uint32_t group_ = kNone;
 };
 
+/// Issue 27: where three or more faces of different groups share an OBJ
+/// edge, the surfaces are joined there by a MESHJOINT (the papers' way of
+/// assembling non-manifold bodies) instead of being left unconnected: one
+/// single-edge MESHEDGE per surface, running along that surface's face
+/// (negative flag when that is against the joint direction, which runs from
+/// the lower OBJ vertex index to the higher), members clockwise about the
+/// joint direction by the right-hand rule, as TemplateBuilder::joint orders
+/// them. Two faces of two groups meeting at an edge (a material seam, the
+/// common case) stay unjoined, as before. Returns the number of joints made.
+std::size_t join_shared_edges(Model& m) {
+  const auto src = m.nodes.props.find<std::int32_t>("source_vertex");
+  if (!src.valid()) return 0;
+  struct Side {
+    std::uint64_t key;
+    std::uint32_t edge;
+    bool operator<(const Side& o) const { return key != o.key ? key < o.key : edge < o.edge; }
+  };
+  std::vector<Side> sides;
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e})) continue;
+    const auto a = static_cast<std::uint32_t>(src[m.tail(halfedge_of(EdgeIdx{e}, 0))]);
+    const auto b = static_cast<std::uint32_t>(src[m.tail(halfedge_of(EdgeIdx{e}, 1))]);
+    sides.push_back({std::uint64_t{std::min(a, b)} << 32 | std::max(a, b), e});
+  }
+  std::sort(sides.begin(), sides.end());
+  std::size_t made = 0;
+  struct Member {
+    MeshEdgeIdx mesh_edge;
+    bool positive;
+    double angle;
+  };
+  std::vector<Member> members;
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i;
+    int faces = 0;
+    while (j < sides.size() && sides[j].key == sides[i].key) {
+      const EdgeIdx e{sides[j].edge};
+      faces += m.face(halfedge_of(e, 0)).valid() + m.face(halfedge_of(e, 1)).valid();
+      ++j;
+    }
+    // One surface holds one node per OBJ vertex, so a run of several edges
+    // is several surfaces.
+    if (j - i >= 2 && faces >= 3) {
+      const auto lo = static_cast<std::int32_t>(sides[i].key >> 32);
+      members.clear();
+      Vec3d dir = Vec3d::Zero(), e1 = Vec3d::Zero(), e2 = Vec3d::Zero();
+      for (std::size_t k = i; k < j; ++k) {
+        const EdgeIdx e{sides[k].edge};
+        HalfedgeIdx h = halfedge_of(e, src[m.tail(halfedge_of(e, 0))] == lo ? 0u : 1u);  // lo -> hi
+        if (k == i) {
+          dir = m.position(m.head(h)) - m.position(m.tail(h));
+          if (dir.norm() > 0) {
+            dir.normalize();
+            e1 = dir.unitOrthogonal();
+            e2 = dir.cross(e1);
+          }
+        }
+        bool positive = true;
+        if (!m.face(h).valid()) {
+          h = twin(h);
+          positive = false;
+        }
+        const std::array<HalfedgeIdx, 1> chain{h};
+        const MeshEdgeIdx me = m.new_mesh_edge(m.nodes.surface[m.tail(h).value], chain);
+        Vec3d c = Vec3d::Zero();
+        int n = 0;
+        m.for_each_face_halfedge(m.face(h), [&](HalfedgeIdx x) {
+          c += m.position(m.tail(x));
+          ++n;
+        });
+        const Vec3d w = c / n - 0.5 * (m.position(m.tail(h)) + m.position(m.head(h)));
+        members.push_back({me, positive, std::atan2(w.dot(e2), w.dot(e1))});
+      }
+      // Clockwise about dir by the right-hand rule: decreasing angle.
+      std::stable_sort(members.begin(), members.end(), [](const Member& x, const Member& y) { return x.angle > y.angle; });
+      std::vector<JointMember> jm;
+      for (const Member& mm : members) jm.push_back({mm.mesh_edge, mm.positive});
+      (void)m.new_joint(jm);
+      ++made;
+    }
+    i = j;
+  }
+  return made;
+}
+
+
 Model build(ObjData& d, std::string_view file) {
   const std::size_t nv = d.positions.size();
   std::vector<std::uint8_t> used(nv, 0);
@@ -259,6 +350,11 @@ Model build(ObjData& d, std::string_view file) {
       for (std::uint32_t c = f.begin; c < f.end; ++c) {
         const std::uint32_t l = local[static_cast<std::size_t>(d.corner_v[c])];
         soup.face_nodes.push_back(l);
+        if (has_uv) {
+          const std::int64_t vt = d.corner_vt[c];
+          soup.corner_uv.push_back(vt >= 0 ? d.texcoords[static_cast<std::size_t>(vt)] : Vec2d::Zero());
+          soup.corner_texcoord.push_back(static_cast<std::int32_t>(vt));
+        }
         if (has_uv && d.corner_vt[c] >= 0 && !uv_set[l]) {
           soup.uv[l] = d.texcoords[static_cast<std::size_t>(d.corner_vt[c])];
           uv_set[l] = 1;
@@ -270,9 +366,58 @@ Model build(ObjData& d, std::string_view file) {
     for (std::uint32_t v : verts) local[v] = kNone;
     add_soup_surface(m, soup, file, "line");
   }
+  (void)join_shared_edges(m);
   return m;
 }
 
+
+
+/// The `vt` list of a model with per-corner texture coordinates: one entry
+/// per distinct (source texcoord index, value) over the live face corners,
+/// in source order (so a file read and written again lists its `vt` as it
+/// did), then corners with no source index by value in first-use order.
+/// Corners read without a `vt` (source index -1 beside others) get none.
+struct CornerTexcoords {
+  std::vector<Vec2d> values;
+  std::vector<std::uint32_t> index;  // per halfedge: into values, or kNone
+};
+
+CornerTexcoords corner_texcoords(const Model& m) {
+  const auto uv = m.halfedges.props.find<Vec2d>("corner_uv");
+  const auto src = m.halfedges.props.find<std::int32_t>("source_texcoord");
+  CornerTexcoords out;
+  out.index.assign(2 * std::size_t{m.edges.slots.capacity()}, kNone);
+  struct Key {
+    std::int64_t source;
+    std::uint64_t u, v;  // bits: equal values are the same texcoord
+    auto operator<=>(const Key&) const = default;
+  };
+  std::vector<std::pair<Key, std::uint32_t>> keys;  // key, halfedge
+  std::uint64_t fresh = 0;
+  std::map<std::pair<std::uint64_t, std::uint64_t>, std::uint64_t> unsourced;
+  for (std::uint32_t h = 0; h < out.index.size(); ++h) {
+    const HalfedgeIdx hi{h};
+    if (!m.alive(hi) || !m.face(hi).valid()) continue;
+    const Vec2d t = uv[hi];
+    std::uint64_t ub, vb;
+    std::memcpy(&ub, &t.x(), 8);
+    std::memcpy(&vb, &t.y(), 8);
+    std::int64_t s = src.valid() ? src[hi] : -2;
+    if (s == -1) continue;  // read without a vt
+    if (s < 0) {            // no source index: by value, first use first
+      auto [it, inserted] = unsourced.try_emplace({ub, vb}, fresh);
+      if (inserted) ++fresh;
+      s = std::int64_t{1} << 40 | static_cast<std::int64_t>(it->second);
+    }
+    keys.push_back({{s, ub, vb}, h});
+  }
+  std::sort(keys.begin(), keys.end());
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (i == 0 || keys[i].first != keys[i - 1].first) out.values.push_back(uv[HalfedgeIdx{keys[i].second}]);
+    out.index[keys[i].second] = static_cast<std::uint32_t>(out.values.size() - 1);
+  }
+  return out;
+}
 }  // namespace
 
 Model read_obj_from_string(std::string_view text, std::string_view display_name) {
@@ -359,8 +504,13 @@ void write_obj(const Model& m, const std::filesystem::path& path) {
     return std::int64_t{std::numeric_limits<std::int32_t>::max()} + 1 + v.value;
   };
   std::stable_sort(live.begin(), live.end(), [&](NodeIdx a, NodeIdx b) { return key(a) < key(b); });
+  // Texture coordinates: per face corner when the model has them (the
+  // halfedge property "corner_uv", seams kept), else per node (nodes.uv).
+  const auto corner_uv = m.halfedges.props.find<Vec2d>("corner_uv");
+  const CornerTexcoords vt = corner_uv.valid() ? corner_texcoords(m) : CornerTexcoords{};
   bool has_uv = false;
-  for (NodeIdx v : live) has_uv |= !m.nodes.uv[v.value].isZero(0.0);
+  if (!corner_uv.valid())
+    for (NodeIdx v : live) has_uv |= !m.nodes.uv[v.value].isZero(0.0);
 
   std::vector<std::uint32_t> obj_index(m.nodes.slots.capacity(), kNone);
   std::vector<NodeIdx> written;  // obj index -> first node written there
@@ -399,6 +549,17 @@ void write_obj(const Model& m, const std::filesystem::path& path) {
         s.clear();
       }
     }
+    for (const Vec2d& t : vt.values) {
+      s += "vt ";
+      append_double(s, t.x());
+      s += ' ';
+      append_double(s, t.y());
+      s += '\n';
+      if (s.size() > 1u << 15) {
+        out.write(s);
+        s.clear();
+      }
+    }
     if (has_uv)
       for (NodeIdx v : written) {
         s += "vt ";
@@ -415,7 +576,7 @@ void write_obj(const Model& m, const std::filesystem::path& path) {
     std::vector<std::vector<FaceIdx>> by_surface(m.surfaces.slots.capacity());
     for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
       if (m.alive(FaceIdx{f})) by_surface[m.faces.surface[f].value].push_back(FaceIdx{f});
-    std::vector<NodeIdx> corners;
+    std::vector<HalfedgeIdx> corner_h;
     for (std::uint32_t si = 0; si < m.surfaces.slots.capacity(); ++si) {
       if (!m.alive(SurfaceIdx{si})) continue;
       // A name is one line of text in OBJ: line breaks would start new
@@ -427,14 +588,18 @@ void write_obj(const Model& m, const std::filesystem::path& path) {
       s += name;
       s += '\n';
       for (FaceIdx f : by_surface[si]) {
-        m.face_nodes(f, corners);
+        m.face_halfedges(f, corner_h);
         s += 'f';
-        for (NodeIdx v : corners) {
+        for (HalfedgeIdx h : corner_h) {
+          const NodeIdx v = m.tail(h);
           s += ' ';
           append_uint(s, obj_index[v.value] + 1u);
           if (has_uv) {
             s += '/';
             append_uint(s, obj_index[v.value] + 1u);
+          } else if (!vt.index.empty() && vt.index[h.value] != kNone) {
+            s += '/';
+            append_uint(s, vt.index[h.value] + 1u);
           }
         }
         s += '\n';

@@ -15,7 +15,7 @@ namespace {
 /// Non-blank, comment-free lines with their numbers.
 class LineSource {
  public:
-  explicit LineSource(std::string_view text) : text_(text) {}
+  explicit LineSource(std::string_view text) : text_(skip_utf8_bom(text)) {}
   bool next(std::vector<std::string_view>& tok) {
     while (pos_ < text_.size()) {
       const std::size_t nl = text_.find('\n', pos_);
@@ -58,11 +58,12 @@ Model read_off_impl(std::string_view text, std::string_view file, std::string su
   std::int64_t counts[2];
   for (int k = 0; k < 2; ++k) {
     const auto v = parse_int(tok[first + k]);
-    if (!v) throw fail("non-numeric token '" + std::string(tok[first + k]) + "' in the counts line");
+    if (!v) throw fail(number_problem(tok[first + k], true) + " in the counts line");
     if (*v < 0) throw fail("negative count " + std::to_string(*v));
     counts[k] = *v;
   }
   const std::int64_t nv = counts[0], nf = counts[1];
+  if (nv == 0) throw fail("the header declares no vertex: nothing to read");
   // Every vertex and face needs at least one line of at least two bytes.
   if (static_cast<std::uint64_t>(nv) + static_cast<std::uint64_t>(nf) > text.size() / 2 + 1)
     throw fail("element count mismatch: " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
@@ -79,7 +80,7 @@ Model read_off_impl(std::string_view text, std::string_view file, std::string su
     Vec3d p;
     for (int c = 0; c < 3; ++c) {
       const auto v = parse_double(tok[c]);
-      if (!v) throw fail("non-numeric token '" + std::string(tok[c]) + "' in vertex " + std::to_string(i));
+      if (!v) throw fail(number_problem(tok[c]) + " in vertex " + std::to_string(i));
       if (!std::isfinite(*v)) throw fail("NaN/inf coordinate '" + std::string(tok[c]) + "' in vertex " + std::to_string(i));
       p[c] = *v;
     }
@@ -90,14 +91,14 @@ Model read_off_impl(std::string_view text, std::string_view file, std::string su
       throw fail("element count mismatch: the file ends after " + std::to_string(i) + " of " + std::to_string(nf) +
                  " faces");
     const auto n = parse_int(tok[0]);
-    if (!n) throw fail("non-numeric token '" + std::string(tok[0]) + "' as the vertex count of face " + std::to_string(i));
+    if (!n) throw fail(number_problem(tok[0], true) + " as the vertex count of face " + std::to_string(i));
     if (*n < 3) throw fail("face " + std::to_string(i) + " has " + std::to_string(*n) + " vertices (at least 3 needed)");
     if (static_cast<std::int64_t>(tok.size()) - 1 < *n)
       throw fail("face " + std::to_string(i) + " declares " + std::to_string(*n) + " vertices but lists " +
                  std::to_string(tok.size() - 1));
     for (std::int64_t c = 1; c <= *n; ++c) {
       const auto idx = parse_int(tok[static_cast<std::size_t>(c)]);
-      if (!idx) throw fail("non-numeric token '" + std::string(tok[static_cast<std::size_t>(c)]) + "' in face " + std::to_string(i));
+      if (!idx) throw fail(number_problem(tok[static_cast<std::size_t>(c)], true) + " in face " + std::to_string(i));
       if (*idx < 0 || *idx >= nv)
         throw fail("bad index: vertex index " + std::to_string(*idx) + " out of range in face " + std::to_string(i) +
                    " (" + std::to_string(nv) + " vertices)");
@@ -123,7 +124,7 @@ Model read_off(const std::filesystem::path& path) {
   return read_off_impl(bytes, path.string(), path.stem().string());
 }
 
-void write_off(const Model& m, const std::filesystem::path& path) {
+std::size_t write_off(const Model& m, const std::filesystem::path& path) {
   const FlatMesh flat = flatten(m);
   write_atomically(path, [&](AtomicFile& out) {
     std::string s = "OFF\n# written by Atelier\n";
@@ -161,6 +162,7 @@ void write_off(const Model& m, const std::filesystem::path& path) {
     }
     out.write(s);
   });
+  return m.num_surfaces();
 }
 
 }  // namespace atelier

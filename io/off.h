@@ -8,7 +8,11 @@
 // Error(kParse) naming the file, the line and the problem.
 //
 // Writing: all live nodes and faces of all surfaces, flattened, shortest exact
-// decimal coordinates, through an AtomicFile.
+// decimal coordinates, through an AtomicFile. OFF has no way to keep
+// surfaces apart: a model of several surfaces is merged into one (and its
+// shared OBJ vertices stay separate nodes); write_off reports how many
+// surfaces it merged so the caller can warn (the CLI's `convert` does).
+// A file with no vertex is refused when reading.
 #pragma once
 
 #include <filesystem>
@@ -21,6 +25,7 @@ namespace atelier {
 [[nodiscard]] Model read_off(const std::filesystem::path& path);
 [[nodiscard]] Model read_off_from_string(std::string_view text, std::string_view display_name = "<memory>");
 
-void write_off(const Model& m, const std::filesystem::path& path);
+/// Returns the number of live surfaces merged into the file's one mesh.
+std::size_t write_off(const Model& m, const std::filesystem::path& path);
 
 }  // namespace atelier

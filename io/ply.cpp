@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <string>
 
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/mesh_arrays.h>
@@ -59,6 +61,7 @@ struct PlyElement {
 
 struct PlyHeader {
   PlyFormat format = PlyFormat::kAscii;
+  std::map<std::int64_t, std::string> surface_names;  // "comment surface <id> <name>"
   std::vector<PlyElement> elements;
   std::size_t data_begin = 0;  // byte offset of the first data byte
   std::size_t data_line = 0;   // line number of the first data line (ascii)
@@ -87,6 +90,16 @@ PlyHeader parse_header(std::string_view bytes, std::string_view file) {
     }
     if (tok.empty()) continue;
     const std::string_view kw = tok[0];
+    if (kw == "comment" && tok.size() >= 3 && tok[1] == "surface") {
+      // Our own comment naming a surface id: the rest of the line is the name.
+      if (const auto id = parse_int(tok[2])) {
+        const std::size_t at = static_cast<std::size_t>(tok[2].data() + tok[2].size() - l.data());
+        std::string_view name = l.substr(at);
+        while (!name.empty() && (name.front() == ' ' || name.front() == '\t')) name.remove_prefix(1);
+        h.surface_names[*id] = std::string(name);
+      }
+      continue;
+    }
     if (kw == "comment" || kw == "obj_info") continue;
     if (kw == "format") {
       if (tok.size() != 3) fail("wrong header: 'format' needs a format name and a version");
@@ -162,11 +175,14 @@ class DataReader {
       const std::string_view tok = next_token(t);
       if (is_float(t)) {
         const auto v = parse_double(tok);
-        if (!v) fail("non-numeric token '" + std::string(tok) + "'");
+        if (!v) fail(number_problem(tok));
+        // A float property holds what a float can: 1e300 would become inf.
+        if (t == PlyType::kFloat32 && std::isfinite(*v) && std::abs(*v) > std::numeric_limits<float>::max())
+          fail("value " + std::string(tok) + " does not fit the property type (float)");
         return *v;
       }
       const auto v = parse_int(tok);
-      if (!v) fail("non-numeric token '" + std::string(tok) + "' (an integer is expected)");
+      if (!v) fail(number_problem(tok, true) + " (an integer is expected)");
       if (!fits(t, *v)) fail("value " + std::string(tok) + " does not fit the property type");
       return static_cast<double>(*v);
     }
@@ -286,6 +302,53 @@ class DataReader {
   const PlyProperty* prop_ = nullptr;
 };
 
+/// A `surface` face property splits the faces into surfaces (ascending
+/// ids; names from "comment surface <id> <name>" lines, else
+/// "<stem>_<id>"): each surface gets the vertices its faces use, in file
+/// order; vertices no face uses go to the first surface.
+void split_surfaces(Model& m, const SurfaceSoup& all, const std::vector<std::int64_t>& face_surface,
+                    const std::map<std::int64_t, std::string>& names, const std::string& stem, std::string_view file,
+                    std::string_view where_label) {
+  std::vector<std::int64_t> ids(face_surface);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  const std::size_t nv = all.positions.size();
+  std::vector<std::uint8_t> used(nv, 0);
+  for (std::uint32_t v : all.face_nodes) used[v] = 1;
+  if (ids.empty()) ids.push_back(0);  // no face: one surface for the vertices
+  // Faces bucketed by surface (file order kept): linear in the corners.
+  std::vector<std::vector<std::uint32_t>> faces_of(ids.size());
+  for (std::size_t f = 0; f < all.face_count(); ++f)
+    faces_of[static_cast<std::size_t>(std::lower_bound(ids.begin(), ids.end(), face_surface[f]) - ids.begin())]
+        .push_back(static_cast<std::uint32_t>(f));
+  std::vector<std::uint32_t> local(nv, std::numeric_limits<std::uint32_t>::max());
+  std::vector<std::uint32_t> verts;
+  for (std::size_t si = 0; si < ids.size(); ++si) {
+    SurfaceSoup s;
+    const auto named = names.find(ids[si]);
+    s.name = named != names.end() ? named->second : stem + "_" + std::to_string(ids[si]);
+    verts.clear();
+    for (std::uint32_t f : faces_of[si])
+      for (std::uint32_t v : all.face(f)) verts.push_back(v);
+    if (si == 0)
+      for (std::uint32_t v = 0; v < nv; ++v)
+        if (!used[v]) verts.push_back(v);
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    for (std::uint32_t v : verts) {
+      local[v] = static_cast<std::uint32_t>(s.positions.size());
+      s.positions.push_back(all.positions[v]);
+      if (!all.uv.empty()) s.uv.push_back(all.uv[v]);
+    }
+    for (std::uint32_t f : faces_of[si]) {
+      for (std::uint32_t v : all.face(f)) s.face_nodes.push_back(local[v]);
+      s.face_offsets.push_back(static_cast<std::uint32_t>(s.face_nodes.size()));
+      s.face_where.push_back(all.face_where[f]);
+    }
+    add_soup_surface(m, s, file, where_label);
+  }
+}
+
 Model read_ply_impl(std::string_view bytes, std::string_view file, std::string surface_name) {
   const PlyHeader h = parse_header(bytes, file);
   const PlyElement* vert = nullptr;
@@ -304,10 +367,11 @@ Model read_ply_impl(std::string_view bytes, std::string_view file, std::string s
               : (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") ? &uvp[1] : nullptr;
     if (slot && *slot < 0 && !p.is_list) *slot = static_cast<int>(k);
   }
+  if (vert->count == 0) throw parse_error(file, "header", "element 'vertex' has no vertex: nothing to read");
   if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
     throw parse_error(file, "header", "wrong header: element 'vertex' lacks scalar x, y and z properties");
   const bool has_uv = uvp[0] >= 0 && uvp[1] >= 0;
-  int list = -1;
+  int list = -1, surface_prop = -1;
   if (face) {
     for (std::size_t k = 0; k < face->props.size(); ++k)
       if (face->props[k].is_list && (face->props[k].name == "vertex_indices" || face->props[k].name == "vertex_index")) {
@@ -315,6 +379,11 @@ Model read_ply_impl(std::string_view bytes, std::string_view file, std::string s
         break;
       }
     if (list < 0) throw parse_error(file, "header", "wrong header: element 'face' has no 'vertex_indices' list");
+    for (std::size_t k = 0; k < face->props.size(); ++k)
+      if (!face->props[k].is_list && face->props[k].name == "surface" && !is_float(face->props[k].type)) {
+        surface_prop = static_cast<int>(k);
+        break;
+      }
   }
 
   // Counts come from the file: do not trust them for allocation beyond what
@@ -325,7 +394,8 @@ Model read_ply_impl(std::string_view bytes, std::string_view file, std::string s
                                           " vertices cannot fit in the " + std::to_string(bytes.size()) + "-byte file");
 
   SurfaceSoup soup;
-  soup.name = std::move(surface_name);
+  soup.name = surface_name;
+  std::vector<std::int64_t> face_surface;  // the `surface` face property, when present
   soup.positions.reserve(vert->count);
   if (has_uv) soup.uv.reserve(vert->count);
   DataReader r(bytes, h, file);
@@ -348,7 +418,10 @@ Model read_ply_impl(std::string_view bytes, std::string_view file, std::string s
               p[c] = v;
             }
           for (int c = 0; c < 2; ++c)
-            if (ki == uvp[c]) t[c] = v;
+            if (ki == uvp[c]) {
+              if (!std::isfinite(v)) r.fail("NaN/inf texture coordinate");
+              t[c] = v;
+            }
         } else if (is_face && static_cast<int>(k) == list) {
           const std::int64_t n = r.integer(prop.count_type);
           if (n < 0) r.fail("negative list length " + std::to_string(n));
@@ -365,6 +438,8 @@ Model read_ply_impl(std::string_view bytes, std::string_view file, std::string s
             r.fail("too many face corners for 32-bit indices");
           soup.face_offsets.push_back(static_cast<std::uint32_t>(soup.face_nodes.size()));
           soup.face_where.push_back(face_where);
+        } else if (is_face && static_cast<int>(k) == surface_prop) {
+          face_surface.push_back(r.integer(prop.type));
         } else {
           r.skip(prop);
         }
@@ -377,7 +452,11 @@ Model read_ply_impl(std::string_view bytes, std::string_view file, std::string s
   }
   r.expect_end();
   Model m;
-  add_soup_surface(m, soup, file, where_label);
+  if (surface_prop < 0) {
+    add_soup_surface(m, soup, file, where_label);
+    return m;
+  }
+  split_surfaces(m, soup, face_surface, h.surface_names, surface_name, file, where_label);
   return m;
 }
 
@@ -407,14 +486,32 @@ void write_ply(const Model& m, const std::filesystem::path& path, bool binary) {
   for (std::size_t f = 0; f + 1 < flat.face_offsets.size(); ++f)
     max_degree = std::max(max_degree, flat.face_offsets[f + 1] - flat.face_offsets[f]);
   const bool small = max_degree <= 255;
+  // Several surfaces: a `surface` face property (the surface's ordinal among
+  // the live ones) and one "comment surface <ordinal> <name>" line each, so
+  // the reader splits them again instead of merging them into one.
+  std::vector<std::int32_t> ordinal(m.surfaces.slots.capacity(), -1);
+  std::string surface_comments;
+  std::int32_t n_surfaces = 0;
+  for (std::uint32_t si = 0; si < m.surfaces.slots.capacity(); ++si) {
+    if (!m.alive(SurfaceIdx{si})) continue;
+    ordinal[si] = n_surfaces++;
+    std::string name = m.surfaces.name[si];
+    for (char& ch : name)
+      if (ch == '\n' || ch == '\r') ch = ' ';
+    surface_comments += "comment surface " + std::to_string(ordinal[si]) + " " + name + "\n";
+  }
+  const bool multi = n_surfaces > 1;
   write_atomically(path, [&](AtomicFile& out) {
     std::string s = "ply\nformat ";
     s += binary ? "binary_little_endian" : "ascii";
-    s += " 1.0\ncomment written by Atelier\nelement vertex ";
+    s += " 1.0\ncomment written by Atelier\n";
+    if (multi) s += surface_comments;
+    s += "element vertex ";
     append_uint(s, flat.nodes.size());
     s += "\nproperty double x\nproperty double y\nproperty double z\nelement face ";
     append_uint(s, flat.faces.size());
     s += small ? "\nproperty list uchar int vertex_indices\n" : "\nproperty list int int vertex_indices\n";
+    if (multi) s += "property int surface\n";
     s += "end_header\n";
     for (NodeIdx v : flat.nodes) {
       const Vec3d& p = m.nodes.position[v.value];
@@ -446,11 +543,16 @@ void write_ply(const Model& m, const std::filesystem::path& path, bool binary) {
           const std::int32_t i = static_cast<std::int32_t>(flat.face_nodes[k]);
           put_scalar(s, &i, 4);
         }
+        if (multi) put_scalar(s, &ordinal[m.faces.surface[flat.faces[f].value].value], 4);
       } else {
         append_uint(s, e - b);
         for (std::uint32_t k = b; k < e; ++k) {
           s += ' ';
           append_uint(s, flat.face_nodes[k]);
+        }
+        if (multi) {
+          s += ' ';
+          s += std::to_string(ordinal[m.faces.surface[flat.faces[f].value].value]);
         }
         s += '\n';
       }

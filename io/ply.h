@@ -6,12 +6,18 @@
 // PLY scalar or list type, is skipped. Faces come from the `face` element's
 // `vertex_indices` (or `vertex_index`) list, any count and index type; other
 // elements are skipped. One surface named after the file stem ("ply" for
-// in-memory input). Malformed input throws Error(kParse) naming the file, the
-// line (ascii) or byte offset (binary), the element and the problem.
+// in-memory input), or, when the `face` element has an integer `surface`
+// property, one surface per distinct value (ascending; named by
+// "comment surface <id> <name>" header lines, else "<stem>_<id>"; each gets
+// the vertices its faces use, unused vertices go to the first). A file with
+// no vertex is refused. Malformed input throws Error(kParse) naming the file,
+// the line (ascii) or byte offset (binary), the element and the problem.
 //
-// Writing: all live nodes and faces of all surfaces flattened into one mesh;
-// binary little-endian with double coordinates (bit exact), or ascii with the
-// shortest exact decimal form. Written through an AtomicFile.
+// Writing: all live nodes and faces, binary little-endian with double
+// coordinates (bit exact), or ascii with the shortest exact decimal form.
+// A model of several surfaces gets the `surface` face property and the
+// naming comments, so it reads back as the same surfaces. Written through an
+// AtomicFile.
 #pragma once
 
 #include <filesystem>

@@ -180,13 +180,17 @@ Expected<Surface> add_polygon_surface(Model& m, std::string name, const PolygonS
 PolygonSoup polygon_soup(const Model& m, SurfaceIdx only) {
   PolygonSoup s;
   s.positions.assign(m.nodes.position.begin(), m.nodes.position.begin() + m.nodes.slots.capacity());
-  std::vector<NodeIdx> fn;
+  const auto uv = m.halfedges.props.find<Vec2d>("corner_uv");
+  std::vector<HalfedgeIdx> fh;
   std::vector<std::uint32_t> ids;
   for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
     if (!m.alive(FaceIdx{f}) || (only.valid() && m.faces.surface[f] != only)) continue;
-    m.face_nodes(FaceIdx{f}, fn);
+    m.face_halfedges(FaceIdx{f}, fh);
     ids.clear();
-    for (NodeIdx v : fn) ids.push_back(v.value);
+    for (HalfedgeIdx h : fh) {
+      ids.push_back(m.tail(h).value);
+      if (uv.valid()) s.corner_uv.push_back(uv[h]);
+    }
     s.add_face(ids);
   }
   return s;

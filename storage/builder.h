@@ -25,7 +25,9 @@ namespace atelier {
 
 /// The inverse: the model's live faces (of one surface, or all) in index
 /// order as a polygon soup over node indices, with every node slot's
-/// position (dead slots included, so indices stay the model's).
+/// position (dead slots included, so indices stay the model's), and the
+/// per-corner texture coordinates when the model has the halfedge property
+/// "corner_uv".
 [[nodiscard]] PolygonSoup polygon_soup(const Model& m, SurfaceIdx only = {});
 
 }  // namespace atelier

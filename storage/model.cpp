@@ -105,6 +105,7 @@ void Model::sync_edge_columns() {
   halfedges.prev.resize(2 * n);
   halfedges.vnext.resize(2 * n);
   halfedges.vprev.resize(2 * n);
+  halfedges.props.resize(2 * n);
 }
 
 void Model::sync_face_columns() {
@@ -233,6 +234,8 @@ EdgeIdx Model::new_edge(NodeIdx a, NodeIdx b) {
     sync_edge_columns();
   } else {
     edges.props.reset(e);
+    halfedges.props.reset(halfedge_of(e, 0));
+    halfedges.props.reset(halfedge_of(e, 1));
   }
   edges.flags[e.value] = 0;
   edges.mesh_edge[e.value] = {};
@@ -260,6 +263,8 @@ void Model::delete_edge(EdgeIdx e) {
   edges.flags[e.value] = 0;
   edges.mesh_edge[e.value] = {};
   edges.props.reset(e);
+  halfedges.props.reset(halfedge_of(e, 0));
+  halfedges.props.reset(halfedge_of(e, 1));
   edges.slots.release(e);
   ++topology_version;
 }

@@ -60,6 +60,10 @@ struct EdgeTable {
 };
 
 /// Halfedge columns: sized 2 * edge capacity, alive exactly when their edge is.
+/// A halfedge with a face is one corner of that face (its tail node in that
+/// face), so `props` holds per-face-corner attributes: "corner_uv" (Vec2d,
+/// texture coordinates with their seams) and "source_texcoord" (int32, the
+/// OBJ `vt` index it came from) written by the readers (docs/glossary.md).
 struct HalfedgeTable {
   std::vector<NodeIdx> tail;
   std::vector<FaceIdx> face;
@@ -67,6 +71,7 @@ struct HalfedgeTable {
   std::vector<HalfedgeIdx> prev;   // prev in face (invalid when faceless)
   std::vector<HalfedgeIdx> vnext;  // next outgoing halfedge around tail (sorted ring)
   std::vector<HalfedgeIdx> vprev;  // previous outgoing halfedge around tail
+  PropertyRegistry<HalfedgeTag> props;
 };
 
 struct FaceTable {

@@ -51,6 +51,7 @@ CompactRemap Model::compact() {
       for (unsigned s = 0; s < 2; ++s)
         hr[2 * e + s] = r.edges[e].valid() ? halfedge_of(r.edges[e], s) : HalfedgeIdx{};
     compact_column(halfedges.tail, hr, 2 * ne);
+    halfedges.props.compact(hr, 2 * ne);
     compact_column(halfedges.face, hr, 2 * ne);
     compact_column(halfedges.next, hr, 2 * ne);
     compact_column(halfedges.prev, hr, 2 * ne);

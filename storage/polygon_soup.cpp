@@ -32,6 +32,10 @@ Status PolygonSoup::check(std::size_t vertex_count) const {
   if (face_offsets.back() != face_nodes.size())
     return {ErrorCode::kInvalidArgument, "polygon soup: face offsets end at " + std::to_string(face_offsets.back()) +
                                              " but there are " + std::to_string(face_nodes.size()) + " face nodes"};
+  if (!corner_uv.empty() && corner_uv.size() != face_nodes.size())
+    return {ErrorCode::kInvalidArgument, "polygon soup: " + std::to_string(corner_uv.size()) +
+                                             " corner texture coordinates for " + std::to_string(face_nodes.size()) +
+                                             " face corners"};
   for (std::size_t f = 0; f + 1 < face_offsets.size(); ++f) {
     if (face_offsets[f + 1] < face_offsets[f] + 3)
       return {ErrorCode::kInvalidArgument, "polygon soup: face " + std::to_string(f) + " has fewer than 3 corners"};

@@ -22,11 +22,15 @@ using Triangle = std::array<std::uint32_t, 3>;
 
 /// Face f has nodes face_nodes[face_offsets[f] .. face_offsets[f+1]),
 /// counter-clockwise seen from outside. `positions` may be empty when the
-/// soup describes a topology shared by many position arrays.
+/// soup describes a topology shared by many position arrays. `corner_uv`
+/// holds texture coordinates per face corner (OBJ `vt`, seams kept), or is
+/// empty: they belong to the topology, so a soup regenerated on another
+/// body keeps them unchanged.
 struct PolygonSoup {
   std::vector<Vec3d> positions;
   std::vector<std::uint32_t> face_offsets{0};  // size F+1, starts at 0
   std::vector<std::uint32_t> face_nodes;
+  std::vector<Vec2d> corner_uv;  // empty, or one per face_nodes entry
 
   [[nodiscard]] std::size_t face_count() const noexcept { return face_offsets.size() - 1; }
   [[nodiscard]] std::span<const std::uint32_t> face(std::size_t f) const noexcept {
@@ -39,7 +43,8 @@ struct PolygonSoup {
   [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> edges() const;
   /// Structure check: offsets start at 0 and never decrease, end at the
   /// node count, every face has at least 3 corners and every index is below
-  /// `vertex_count` (positions.size() when 0). Names the first bad face.
+  /// `vertex_count` (positions.size() when 0), corner_uv empty or one per
+  /// corner. Names the first bad face.
   [[nodiscard]] Status check(std::size_t vertex_count = 0) const;
 };
 

@@ -30,11 +30,17 @@ std::string lower_ext(const fs::path& p) {
   return e;
 }
 
-void write_any(const Model& m, const fs::path& p) {
+void write_any(const Model& m, const fs::path& p, const Log& log) {
   const std::string e = lower_ext(p);
   if (e == ".obj") return write_obj(m, p);
   if (e == ".ply") return write_ply(m, p, true);
-  if (e == ".off") return write_off(m, p);
+  if (e == ".off") {
+    // OFF has one mesh: say so instead of merging the surfaces silently.
+    if (const std::size_t merged = write_off(m, p); merged > 1)
+      log.warn(p.string() + ": OFF keeps no surfaces: " + std::to_string(merged) +
+               " surfaces merged into one mesh (write .ply, .obj or .atm to keep them)");
+    return;
+  }
   if (e == ".atm") return write_model(m, p);
   throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
 }
@@ -70,7 +76,7 @@ int run_validate(const Common&, const fs::path& file, Log& log) {
 
 int run_convert(const Common&, const fs::path& in, const fs::path& out, Log& log) {
   const Model m = read_mesh_file(in);
-  write_any(m, out);
+  write_any(m, out, log);
   log.info("wrote " + out.string());
   return kExitOk;
 }

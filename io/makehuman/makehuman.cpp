@@ -27,6 +27,12 @@ std::string slurp(const std::filesystem::path& f) {
   return std::move(ss).str();
 }
 
+/// A UTF-8 byte-order mark is not part of the first line.
+std::string_view without_bom(std::string_view text) {
+  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
+  return text;
+}
+
 // Minimal tokeniser over a line.
 struct Cursor {
   const char* p;
@@ -38,10 +44,14 @@ struct Cursor {
     skip_ws();
     return p >= end;
   }
+  /// Why the last read() failed: the token is a number out of the type's
+  /// range (std::from_chars leaves the value untouched then).
+  bool out_of_range = false;
   template <class T>
   bool read(T& v) {
     skip_ws();
     auto [q, ec] = std::from_chars(p, end, v);
+    out_of_range = ec == std::errc::result_out_of_range;
     if (ec != std::errc{} || (q < end && *q != ' ' && *q != '\t' && *q != '\r' && *q != '/')) return false;
     p = q;
     return true;
@@ -49,7 +59,7 @@ struct Cursor {
 };
 
 template <class F>
-void for_each_line(const std::string& text, F&& f) {
+void for_each_line(std::string_view text, F&& f) {
   std::size_t line = 0, pos = 0;
   while (pos < text.size()) {
     std::size_t nl = text.find('\n', pos);
@@ -63,17 +73,26 @@ void for_each_line(const std::string& text, F&& f) {
 }  // namespace
 
 Target read_target(const std::filesystem::path& file, std::uint32_t vertex_count) {
-  const std::string text = slurp(file);
+  return parse_target(slurp(file), file, vertex_count);
+}
+
+Target parse_target(std::string_view text, const std::filesystem::path& file, std::uint32_t vertex_count) {
   Target t;
   t.name = file.stem().string();
-  for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
+  for_each_line(without_bom(text), [&](std::size_t line, const char* b, const char* e) {
     Cursor c{b, e};
     if (c.done() || *c.p == '#') return;
     std::uint32_t idx = 0;
     float d[3];
-    if (!c.read(idx)) parse_error(file, line, "expected 'INDEX DX DY DZ', got a non-integer index");
+    if (!c.read(idx))
+      parse_error(file, line,
+                  c.out_of_range ? "vertex index out of range (above 2^32 - 1)"
+                                 : "expected 'INDEX DX DY DZ', got a non-integer index");
     for (float& x : d)
-      if (!c.read(x)) parse_error(file, line, "expected 'INDEX DX DY DZ', a displacement is missing or not a number");
+      if (!c.read(x))
+        parse_error(file, line,
+                    c.out_of_range ? "displacement out of the range of a float"
+                                   : "expected 'INDEX DX DY DZ', a displacement is missing or not a number");
     if (!c.done()) parse_error(file, line, "extra tokens after 'INDEX DX DY DZ'");
     if (idx >= vertex_count) {
       std::ostringstream s;
@@ -85,6 +104,7 @@ Target read_target(const std::filesystem::path& file, std::uint32_t vertex_count
     t.index.push_back(idx);
     t.delta.emplace_back(d[0], d[1], d[2]);
   });
+  if (t.index.empty()) parse_error(file, 0, "no 'INDEX DX DY DZ' line: not a morph target");
   return t;
 }
 
@@ -94,12 +114,17 @@ const BaseMesh::Group* BaseMesh::group(std::string_view name) const noexcept {
   return nullptr;
 }
 
-BaseMesh read_base_mesh(const std::filesystem::path& file) {
-  const std::string text = slurp(file);
+BaseMesh read_base_mesh(const std::filesystem::path& file) { return parse_base_mesh(slurp(file), file); }
+
+BaseMesh parse_base_mesh(std::string_view text, const std::filesystem::path& file) {
   BaseMesh m;
   BaseMesh::Group* cur = nullptr;
   std::vector<std::uint32_t> face;
-  for_each_line(text, [&](std::size_t line, const char* b, const char* e) {
+  std::vector<Vec2d> texcoords;
+  std::vector<std::int64_t> corner_vt;  // per corner over all groups in file order, -1 none
+  std::vector<long long> face_vt;
+  std::vector<std::vector<long long>> cur_vt;  // per group: the texcoord of each corner, -1 none
+  for_each_line(without_bom(text), [&](std::size_t line, const char* b, const char* e) {
     Cursor c{b, e};
     if (c.done() || *c.p == '#') return;
     const char* kw = c.p;
@@ -107,25 +132,51 @@ BaseMesh read_base_mesh(const std::filesystem::path& file) {
     const std::string_view key(kw, static_cast<std::size_t>(c.p - kw));
     if (key == "v") {
       float x, y, z;
-      if (!c.read(x) || !c.read(y) || !c.read(z)) parse_error(file, line, "vertex needs three numbers");
+      if (!c.read(x) || !c.read(y) || !c.read(z))
+        parse_error(file, line, c.out_of_range ? "vertex coordinate out of the range of a float" : "vertex needs three numbers");
       if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) parse_error(file, line, "non-finite vertex");
       m.positions.emplace_back(x, y, z);
+    } else if (key == "vt") {
+      float u = 0, v = 0;
+      if (!c.read(u)) parse_error(file, line, c.out_of_range ? "texture coordinate out of the range of a float" : "vt needs a number");
+      if (!c.done() && !c.read(v))
+        parse_error(file, line, c.out_of_range ? "texture coordinate out of the range of a float" : "vt needs numbers");
+      if (!std::isfinite(u) || !std::isfinite(v)) parse_error(file, line, "non-finite texture coordinate");
+      texcoords.emplace_back(static_cast<double>(u), static_cast<double>(v));
     } else if (key == "g" || key == "o") {
       c.skip_ws();
       std::string name(c.p, static_cast<std::size_t>(e - c.p));
       while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
       m.groups.emplace_back().name = name;
+      cur_vt.emplace_back();
       cur = &m.groups.back();
     } else if (key == "f") {
       if (!cur) {
         m.groups.emplace_back().name = "default";
+        cur_vt.emplace_back();
         cur = &m.groups.back();
       }
       face.clear();
+      face_vt.clear();
       while (!c.done()) {
         long long v = 0;
-        if (!c.read(v)) parse_error(file, line, "face index is not an integer");
-        while (c.p < e && *c.p != ' ' && *c.p != '\t' && *c.p != '\r') ++c.p;  // skip /vt/vn
+        if (!c.read(v)) parse_error(file, line, c.out_of_range ? "face index out of range" : "face index is not an integer");
+        long long t = 0;
+        if (c.p < e && *c.p == '/' && c.p + 1 < e && c.p[1] != '/') {
+          ++c.p;
+          if (!c.read(t)) parse_error(file, line, "texture index is not an integer");
+          const long long nt = static_cast<long long>(texcoords.size());
+          const long long ti = t > 0 ? t - 1 : nt + t;
+          if (t == 0 || ti < 0 || ti >= nt) {
+            std::ostringstream s;
+            s << "texture index " << t << " out of range (" << nt << " texture coordinates so far)";
+            parse_error(file, line, s.str());
+          }
+          face_vt.push_back(ti);
+        } else {
+          face_vt.push_back(-1);
+        }
+        while (c.p < e && *c.p != ' ' && *c.p != '\t' && *c.p != '\r') ++c.p;  // skip the rest (/vn)
         const long long n = static_cast<long long>(m.positions.size());
         const long long i = v > 0 ? v - 1 : n + v;
         if (v == 0 || i < 0 || i >= n) {
@@ -138,16 +189,35 @@ BaseMesh read_base_mesh(const std::filesystem::path& file) {
       if (face.size() < 3) parse_error(file, line, "face with fewer than 3 vertices");
       cur->face_nodes.insert(cur->face_nodes.end(), face.begin(), face.end());
       cur->face_offsets.push_back(static_cast<std::uint32_t>(cur->face_nodes.size()));
+      for (const long long t : face_vt) cur_vt[static_cast<std::size_t>(cur - m.groups.data())].push_back(t);
     }
   });
+  // Texture coordinates per corner, kept only when every corner has one
+  // (a garment's uv map; a mesh with some corners unmapped keeps none).
+  bool all_mapped = !texcoords.empty();
+  for (const auto& g : cur_vt)
+    for (const long long t : g) all_mapped &= t >= 0;
+  if (all_mapped)
+    for (std::size_t g = 0; g < m.groups.size(); ++g)
+      for (const long long t : cur_vt[g]) m.groups[g].corner_uv.push_back(texcoords[static_cast<std::size_t>(t)]);
+  // Text or bytes with no geometry are not an empty mesh: refuse them.
+  if (m.positions.empty()) parse_error(file, 0, "no vertex ('v' line): not an OBJ mesh");
+  bool any_face = false;
+  for (const auto& g : m.groups) any_face |= g.face_count() > 0;
+  if (!any_face) parse_error(file, 0, "no face ('f' line)");
   return m;
 }
 
 std::map<std::string, std::vector<std::uint32_t>> read_measures(const std::filesystem::path& file,
                                                                 std::uint32_t vertex_count) {
+  return parse_measures(slurp(file), file, vertex_count);
+}
+
+std::map<std::string, std::vector<std::uint32_t>> parse_measures(std::string_view text, const std::filesystem::path& file,
+                                                                 std::uint32_t vertex_count) {
   nlohmann::json j;
   try {
-    j = nlohmann::json::parse(slurp(file));
+    j = nlohmann::json::parse(without_bom(text));
   } catch (const nlohmann::json::parse_error& e) {
     parse_error(file, 0, e.what());
   }
@@ -162,6 +232,46 @@ std::map<std::string, std::vector<std::uint32_t>> read_measures(const std::files
       v.push_back(x.get<std::uint32_t>());
     }
     out[name] = std::move(v);
+  }
+  return out;
+}
+
+std::vector<MeasureModifier> read_measure_modifiers(const std::filesystem::path& file) {
+  return parse_measure_modifiers(slurp(file), file);
+}
+
+std::vector<MeasureModifier> parse_measure_modifiers(std::string_view text, const std::filesystem::path& file) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(without_bom(text));
+  } catch (const nlohmann::json::parse_error& e) {
+    parse_error(file, 0, e.what());
+  }
+  // Every access is checked first: nlohmann's type errors would otherwise
+  // escape as exceptions that name neither the file nor the place.
+  if (!j.is_array()) parse_error(file, 0, "expected an array of modifier groups");
+  std::vector<MeasureModifier> out;
+  for (std::size_t g = 0; g < j.size(); ++g) {
+    const auto& group = j[g];
+    const std::string at = "/" + std::to_string(g);
+    if (!group.is_object()) parse_error(file, 0, at + ": a modifier group must be an object");
+    const auto mods = group.find("modifiers");
+    if (mods == group.end()) continue;
+    if (!mods->is_array()) parse_error(file, 0, at + "/modifiers: must be an array");
+    for (std::size_t k = 0; k < mods->size(); ++k) {
+      const auto& m = (*mods)[k];
+      const std::string mat = at + "/modifiers/" + std::to_string(k);
+      if (!m.is_object()) parse_error(file, 0, mat + ": a modifier must be an object");
+      MeasureModifier mm;
+      for (auto [key, dst] : {std::pair<const char*, std::string*>{"target", &mm.target}, {"min", &mm.min}, {"max", &mm.max}}) {
+        const auto it = m.find(key);
+        if (it == m.end()) continue;
+        if (!it->is_string()) parse_error(file, 0, mat + "/" + key + ": must be a string");
+        *dst = it->get<std::string>();
+      }
+      if (mm.target.empty()) continue;
+      out.push_back(std::move(mm));
+    }
   }
   return out;
 }

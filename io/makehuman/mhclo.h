@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <atelier/engine/math.h>
@@ -32,7 +33,14 @@ struct GarmentBinding {
 };
 
 /// Reads a .mhclo file. Throws atelier::Error (kParse) naming file and line on
-/// a malformed line or a vertex index >= body_vertex_count.
+/// a malformed line, a number out of range, a vertex index >=
+/// body_vertex_count, or a file with no `verts` section. Blank and
+/// whitespace-only lines are skipped wherever they are, inside a `verts`
+/// section too, as MakeHuman's own reader does (a line with no word is
+/// ignored, it does not end the section); a UTF-8 byte-order mark is skipped.
 [[nodiscard]] GarmentBinding read_mhclo(const std::filesystem::path& file, std::uint32_t body_vertex_count);
+/// The same on text already read; `file` names it in errors.
+[[nodiscard]] GarmentBinding parse_mhclo(std::string_view text, const std::filesystem::path& file,
+                                         std::uint32_t body_vertex_count);
 
 }  // namespace atelier::makehuman

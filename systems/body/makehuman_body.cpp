@@ -1,8 +1,6 @@
 #include <atelier/systems/body/makehuman_body.h>
 
 #include <algorithm>
-#include <fstream>
-#include <nlohmann/json.hpp>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -153,23 +151,13 @@ HumanLibrary HumanLibrary::load(const std::filesystem::path& dir, const ExecCont
   // The measure sliders MakeHuman declares, each two-sided (min "decr", max "incr").
   const fs::path mods = dir / "modifiers" / "measurement_modifiers.json";
   if (fs::exists(mods)) {
-    std::ifstream in(mods);
-    nlohmann::json j;
-    try {
-      j = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-      throw Error(Status(ErrorCode::kParse, mods.string() + ": " + e.what()));
+    for (const MeasureModifier& m : read_measure_modifiers(mods)) {
+      for (const std::string* side : {&m.min, &m.max})
+        if (!lib.find_target(m.target + "-" + *side))
+          throw Error(Status(ErrorCode::kParse, mods.string() + ": modifier '" + m.target + "' has no " + *side +
+                                                    " target in targets/measure"));
+      lib.measure_modifiers_.push_back(m.target);
     }
-    for (const auto& group : j)
-      for (const auto& m : group.value("modifiers", nlohmann::json::array())) {
-        const std::string name = m.value("target", "");
-        if (name.empty()) continue;
-        for (const char* side : {"min", "max"})
-          if (!lib.find_target(name + "-" + m.value(side, side[1] == 'i' ? "decr" : "incr")))
-            throw Error(Status(ErrorCode::kParse, mods.string() + ": modifier '" + name + "' has no " +
-                                                      m.value(side, "") + " target in targets/measure"));
-        lib.measure_modifiers_.push_back(name);
-      }
   }
   if (const auto* body = lib.base_.group("body")) {
     for (auto v : body->face_nodes) lib.skin_vertices_ = std::max(lib.skin_vertices_, v + 1);

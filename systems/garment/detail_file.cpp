@@ -5,6 +5,7 @@
 // still read.
 #include <atelier/systems/garment/detail_template.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -55,13 +56,18 @@ void write_detail(const DetailEncoding& enc, const std::filesystem::path& path) 
 }
 
 DetailEncoding read_detail(const std::filesystem::path& path) {
-  const std::string s = io_detail::read_file_bytes(path);
+  const std::string bytes = io_detail::read_file_bytes(path);
+  return read_detail_from_bytes(bytes, path.string());
+}
+
+DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view display_name) {
   std::size_t pos = 0;
   auto fail = [&](const std::string& what) {
-    throw Error(Status(ErrorCode::kParse, path.string() + ": byte offset " + std::to_string(pos) + ": " + what));
+    throw Error(Status(ErrorCode::kParse, std::string(display_name) + ": byte offset " + std::to_string(pos) + ": " + what));
   };
   auto get = [&](void* dst, std::size_t n, const char* what) {
     if (n > s.size() - pos) fail(std::string("truncated file (while reading ") + what + ")");
+    if (n == 0) return;  // an empty array's data() may be null: memcpy(nullptr, ., 0) is undefined
     std::memcpy(dst, s.data() + pos, n);
     pos += n;
   };
@@ -89,6 +95,9 @@ DetailEncoding read_detail(const std::filesystem::path& path) {
   // Sizes are checked against the file before anything is allocated.
   if (nv >= s.size() || ne > s.size() || nc > s.size() || s.size() - pos < (nv + 1) * 4 + ne * 20 + nc * 8 + sum_bytes)
     fail("truncated file (the sizes in the header exceed the file)");
+  // Where each array starts, to name the byte offset of a bad value.
+  const std::size_t row_at = pos, polygon_at = row_at + (nv + 1) * 4, coeff_at = polygon_at + ne * 4,
+                    corners_at = coeff_at + ne * 16;
   e.row.resize(nv + 1);
   e.polygon.resize(ne);
   for (auto* v : {&e.a, &e.b, &e.c, &e.d}) v->resize(ne);
@@ -113,14 +122,29 @@ DetailEncoding read_detail(const std::filesystem::path& path) {
     fail("checksum mismatch (corrupted file)");
   }
   if (pos != s.size()) fail(std::to_string(s.size() - pos) + " bytes after the checksum");
-  if (e.row.front() != 0 || e.row.back() != ne) fail("row offsets do not cover the entries");
-  for (std::size_t v = 0; v < nv; ++v)
+  pos = row_at;
+  if (e.row.front() != 0) fail("row offsets do not start at 0");
+  pos = row_at + nv * 4;
+  if (e.row.back() != ne) fail("row offsets do not cover the entries");
+  for (std::size_t v = 0; v < nv; ++v) {
+    pos = row_at + (v + 1) * 4;
     if (e.row[v] > e.row[v + 1]) fail("row offsets decrease at vertex " + std::to_string(v));
-  for (std::size_t i = 0; i < ne; ++i)
+  }
+  for (std::size_t i = 0; i < ne; ++i) {
+    pos = polygon_at + i * 4;
     if (e.polygon[i] >= e.polygon_count) fail("entry " + std::to_string(i) + " names a polygon out of range");
-  for (const auto* v : {&e.a, &e.b, &e.c, &e.d})
-    for (std::size_t i = 0; i < ne; ++i)
-      if (!std::isfinite((*v)[i])) fail("entry " + std::to_string(i) + " has a non-finite coefficient");
+  }
+  for (std::size_t k = 0; k < 4; ++k) {
+    const std::vector<float>& v = *std::array{&e.a, &e.b, &e.c, &e.d}[k];
+    for (std::size_t i = 0; i < ne; ++i) {
+      pos = coeff_at + (k * ne + i) * 4;
+      if (!std::isfinite(v[i])) fail("entry " + std::to_string(i) + " has a non-finite coefficient");
+    }
+  }
+  for (std::size_t i = 0; i < nc; ++i) {
+    pos = corners_at + i * 8;
+    if (!e.reference_corners[i].allFinite()) fail("reference corner " + std::to_string(i) + " is not finite");
+  }
   return e;
 }
 

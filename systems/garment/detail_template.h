@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include <atelier/engine/exec_context.h>
@@ -215,5 +216,7 @@ struct DecodeWorkspace {
 /// topology hash), the CSR matrix, a checksum. Written atomically.
 void write_detail(const DetailEncoding& enc, const std::filesystem::path& path);
 [[nodiscard]] DetailEncoding read_detail(const std::filesystem::path& path);
+/// The same on bytes already read; `display_name` names them in errors.
+[[nodiscard]] DetailEncoding read_detail_from_bytes(std::string_view bytes, std::string_view display_name);
 
 }  // namespace atelier

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <cstdio>
 #include <limits>
 #include <numeric>
@@ -195,14 +196,30 @@ Expected<PolygonSoup> read_garment_mesh(const fs::path& file, double scale) {
   PolygonSoup g;
   g.positions.reserve(m.positions.size());
   for (const Vec3f& p : m.positions) g.positions.push_back(scale * p.cast<double>());
-  for (const auto& grp : m.groups)
+  for (const auto& grp : m.groups) {
     for (std::size_t f = 0; f < grp.face_count(); ++f) g.add_face(grp.face(f));
+    g.corner_uv.insert(g.corner_uv.end(), grp.corner_uv.begin(), grp.corner_uv.end());  // all or none (read_base_mesh)
+  }
   if (g.positions.empty()) return Status(ErrorCode::kInvalidArgument, file.string() + ": no vertices");
   if (g.face_nodes.empty()) return Status(ErrorCode::kInvalidArgument, file.string() + ": no faces");
   return g;
 }
 
 void write_garment_mesh(const PolygonSoup& g, std::span<const Vec3d> positions, const fs::path& file) {
+  // Texture coordinates per corner (seams kept), written once per distinct
+  // value in first-use order: the uv map does not move with the body.
+  const bool has_uv = !g.corner_uv.empty() && g.corner_uv.size() == g.face_nodes.size();
+  std::vector<std::uint32_t> vt_of(has_uv ? g.corner_uv.size() : 0);
+  std::vector<Vec2d> vt;
+  if (has_uv) {
+    std::map<std::pair<double, double>, std::uint32_t> index;
+    for (std::size_t k = 0; k < g.corner_uv.size(); ++k) {
+      const auto [it, inserted] =
+          index.try_emplace({g.corner_uv[k].x(), g.corner_uv[k].y()}, static_cast<std::uint32_t>(vt.size()));
+      if (inserted) vt.push_back(g.corner_uv[k]);
+      vt_of[k] = it->second;
+    }
+  }
   write_atomically(file, [&](AtomicFile& f) {
     char line[128];
     for (const Vec3d& p : positions) {
@@ -211,10 +228,18 @@ void write_garment_mesh(const PolygonSoup& g, std::span<const Vec3d> positions, 
                         static_cast<double>(static_cast<float>(p.y())), static_cast<double>(static_cast<float>(p.z())));
       f.write(line, static_cast<std::size_t>(n));
     }
+    for (const Vec2d& t : vt) {
+      const int n = std::snprintf(line, sizeof line, "vt %.9g %.9g\n", static_cast<double>(static_cast<float>(t.x())),
+                                  static_cast<double>(static_cast<float>(t.y())));
+      f.write(line, static_cast<std::size_t>(n));
+    }
     std::string face;
     for (std::size_t k = 0; k < g.face_count(); ++k) {
       face = "f";
-      for (const std::uint32_t i : g.face(k)) face += " " + std::to_string(i + 1);
+      for (std::uint32_t c = g.face_offsets[k]; c < g.face_offsets[k + 1]; ++c) {
+        face += " " + std::to_string(g.face_nodes[c] + 1);
+        if (has_uv) face += "/" + std::to_string(vt_of[c] + 1);
+      }
       face += "\n";
       f.write(face);
     }

@@ -106,10 +106,13 @@ void write_garment_template(const GarmentTemplate& garment, const std::filesyste
 
 /// A garment as a polygon soup from an OBJ file: every `v` and every face of
 /// every group, positions times `scale` (no Model is built: real garments
-/// are often not manifold). Errors name the file and line.
+/// are often not manifold), and the texture coordinates of every corner
+/// (corner_uv) when every corner has a `vt`. Errors name the file and line.
 [[nodiscard]] Expected<PolygonSoup> read_garment_mesh(const std::filesystem::path& file, double scale = 1.0);
 /// Writes the soup with `positions` in float precision (what
-/// read_garment_mesh gives back), atomically.
+/// read_garment_mesh gives back), with its corner_uv as `vt` (one per
+/// distinct value, seams kept), atomically. Regeneration moves positions
+/// only, so a regenerated garment keeps the uv map of the garment encoded.
 void write_garment_mesh(const PolygonSoup& mesh, std::span<const Vec3d> positions, const std::filesystem::path& file);
 
 struct GarmentRegenOptions {

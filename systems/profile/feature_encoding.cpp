@@ -6,26 +6,6 @@
 
 namespace atelier {
 
-const char* to_string(NodeEncodingMode m) noexcept {
-  switch (m) {
-    case NodeEncodingMode::kFeaturePoint:
-      return "feature_point";
-    case NodeEncodingMode::kFeatureOffset:
-      return "feature_offset";
-    case NodeEncodingMode::kVertex:
-      return "vertex";
-    case NodeEncodingMode::kEdge:
-      return "edge";
-    case NodeEncodingMode::kFace:
-      return "face";
-    case NodeEncodingMode::kOneToOne:
-      return "one_to_one";
-    case NodeEncodingMode::kNToOne:
-      return "n_to_one";
-  }
-  return "?";
-}
-
 namespace {
 
 Status bad(const std::string& what) {

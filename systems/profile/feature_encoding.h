@@ -46,7 +46,26 @@ enum class NodeEncodingMode : std::uint8_t {
   kNToOne = 6,
 };
 
-[[nodiscard]] const char* to_string(NodeEncodingMode m) noexcept;
+/// The mode's name in template files (inline: readers need it without the encoders).
+[[nodiscard]] inline const char* to_string(NodeEncodingMode m) noexcept {
+  switch (m) {
+    case NodeEncodingMode::kFeaturePoint:
+      return "feature_point";
+    case NodeEncodingMode::kFeatureOffset:
+      return "feature_offset";
+    case NodeEncodingMode::kVertex:
+      return "vertex";
+    case NodeEncodingMode::kEdge:
+      return "edge";
+    case NodeEncodingMode::kFace:
+      return "face";
+    case NodeEncodingMode::kOneToOne:
+      return "one_to_one";
+    case NodeEncodingMode::kNToOne:
+      return "n_to_one";
+  }
+  return "?";
+}
 
 /// One node's encoding. For kNToOne the references are the range
 /// [first_ref, first_ref + ref_count) of NodeEncodings::refs.

@@ -61,39 +61,6 @@ std::vector<ProfileCurve> ProfileTemplate::decode_profiles(std::span<const Vec3d
   return out;
 }
 
-Status validate_template(const ProfileTemplate& t) {
-  if (Status s = validate(t.model); !s) return Status(s.code(), "template '" + t.name + "': " + s.message());
-  const std::size_t n = t.model.nodes.slots.capacity();
-  if (t.encodings.nodes.size() != n)
-    return Status(ErrorCode::kMismatch, "template '" + t.name + "': " + std::to_string(t.encodings.nodes.size()) +
-                                            " node encodings for " + std::to_string(n) + " node slots");
-  if (!t.encoded_clearance.empty() && t.encoded_clearance.size() != n)
-    return Status(ErrorCode::kMismatch, "template '" + t.name + "': encoded clearances do not match the node slots");
-  if (t.node_names.size() != n)
-    return Status(ErrorCode::kMismatch, "template '" + t.name + "': " + std::to_string(t.node_names.size()) +
-                                            " node names for " + std::to_string(n) + " node slots");
-  for (std::size_t i = 0; i < t.profiles.size(); ++i) {
-    const TemplateProfile& p = t.profiles[i];
-    const std::string where = "template '" + t.name + "', profile " + std::to_string(i);
-    if (!p.halfedge.valid() || edge_of(p.halfedge).value >= t.model.edges.slots.capacity() ||
-        !t.model.alive(p.halfedge))
-      return invalid(where + ": dead or out-of-range halfedge");
-    if (p.kind == ProfileCurve::Kind::kBezier) {
-      if (p.bezier.offsets.size() < 2) return invalid(where + ": a Bezier profile needs at least 2 control points");
-    } else {
-      if (p.points.u.size() != p.points.points.size()) return invalid(where + ": point list u/points sizes differ");
-      for (double u : p.points.u)
-        if (!(u > 0.0 && u < 1.0)) return invalid(where + ": point parameter outside (0, 1)");
-      if (!std::is_sorted(p.points.u.begin(), p.points.u.end())) return invalid(where + ": parameters not increasing");
-    }
-    for (std::size_t k = 0; k < i; ++k)
-      if (edge_of(t.profiles[k].halfedge) == edge_of(p.halfedge))
-        return invalid(where + ": edge " + std::to_string(edge_of(p.halfedge).value) + " already has profile " +
-                       std::to_string(k));
-  }
-  return {};
-}
-
 // ------------------------------------------------------------------ builder
 
 struct TemplateBuilder::Impl {

@@ -65,9 +65,22 @@ struct ProfileTemplate {
   [[nodiscard]] std::vector<ProfileCurve> decode_profiles(std::span<const Vec3d> node_positions) const;
 };
 
+/// Most refinement levels regeneration runs (systems/profile/regenerate.h):
+/// each level multiplies the face count by about 4.
+inline constexpr int kMaxTemplateLevels = 8;
+
 /// Checks a template: the model validates, one encoding and one name per node
-/// slot, profiles on live halfedges with consistent data.
+/// slot, profiles on live halfedges with consistent data, `levels` in
+/// [0, kMaxTemplateLevels] and a finite, non-negative clearance.
 [[nodiscard]] Status validate_template(const ProfileTemplate& t);
+
+/// Checks what a template refers to on its reference body, so that a template
+/// that cannot regenerate is refused when it is read rather than once per
+/// body: every live node's feature point exists on `reference`, its body
+/// vertex, halfedge or face is a live element of the reference model, and its
+/// edge parameter is finite. Returns kInvalidArgument naming the template and
+/// the node. (Implemented beside validate_template, systems/profile/template_check.cpp.)
+[[nodiscard]] Status check_template_references(const ProfileTemplate& t, const ReferenceBody& reference);
 
 class TemplateBuilder {
  public:

@@ -612,7 +612,9 @@ Expected<RegenResult> regenerate(const ProfileTemplate& t, const ReferenceBody& 
   const double clearance = params.clearance >= 0 ? params.clearance : t.clearance;
   if (params.collision && !collider)
     return Status(ErrorCode::kInvalidArgument, "regenerate '" + t.name + "': collision requested without a collider");
-  if (levels > 8) return Status(ErrorCode::kInvalidArgument, "regenerate: more than 8 levels requested");
+  if (levels > kMaxTemplateLevels)
+    return Status(ErrorCode::kInvalidArgument,
+                  "regenerate: more than " + std::to_string(kMaxTemplateLevels) + " levels requested");
   if (body_positions.size() < reference.model.nodes.slots.capacity())
     return Status(ErrorCode::kMismatch, "regenerate '" + t.name + "': the body has " +
                                             std::to_string(body_positions.size()) + " node positions, the reference " +

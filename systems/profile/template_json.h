@@ -44,9 +44,19 @@ inline constexpr int kTemplateFormatVersion = 1;
 /// not validate, or holds non-finite numbers).
 void write_template_json(const ProfileTemplate& t, const std::filesystem::path& path);
 
+/// Largest magnitude of any number in a template file (lengths in metres,
+/// parameters, weights): larger values are refused when reading.
+inline constexpr double kTemplateMaxMagnitude = 1e4;
+
 /// Reads and validates a template. Throws Error(kParse) naming the file, the
-/// JSON location and the problem (kIo when the file cannot be read).
+/// JSON location and the problem (kIo when the file cannot be read). Numbers
+/// beyond kTemplateMaxMagnitude and `levels` above kMaxTemplateLevels are
+/// refused. A UTF-8 byte-order mark is skipped.
 [[nodiscard]] ProfileTemplate read_template_json(const std::filesystem::path& path);
+/// The same, then check_template_references against the body the template
+/// will be regenerated on: a feature point or body element out of range is
+/// an Error(kParse) naming the file, the template and the node.
+[[nodiscard]] ProfileTemplate read_template_json(const std::filesystem::path& path, const ReferenceBody& reference);
 
 /// In-memory forms of the two above (same document, same checks).
 [[nodiscard]] std::string template_to_json_string(const ProfileTemplate& t);

@@ -80,6 +80,12 @@ class Reader {
     if (!a.v.is_number()) wrong(a, "a number");
     const double x = a.v.get<double>();
     if (!std::isfinite(x)) fail(a.ptr, "non-finite number");
+    // Every number of a template is a length in metres, a parameter or a
+    // weight: beyond kTemplateMaxMagnitude it is a typo or an attack (1e300
+    // becomes inf as a float inside the BVH queries and a body takes minutes).
+    if (std::abs(x) > kTemplateMaxMagnitude)
+      fail(a.ptr, "number " + a.v.dump() + " out of range (|x| <= " + Json(kTemplateMaxMagnitude).dump() +
+                      "; lengths are in metres)");
     return x;
   }
   std::int64_t integer(const At& a, std::int64_t lo, std::int64_t hi, const char* what) const {
@@ -569,6 +575,7 @@ ProfileTemplate parse(std::string_view text, std::string_view source) {
   const Reader R(source);
   Json root;
   try {
+    text = io_detail::skip_utf8_bom(text);
     root = Json::parse(text.begin(), text.end());
   } catch (const Json::parse_error& e) {
     // e.byte is the position of the error; a truncated file fails at its end.
@@ -604,6 +611,13 @@ ProfileTemplate template_from_json_string(std::string_view text, std::string_vie
 ProfileTemplate read_template_json(const std::filesystem::path& path) {
   const std::string text = io_detail::read_file_bytes(path);
   return parse(text, path.string());
+}
+
+ProfileTemplate read_template_json(const std::filesystem::path& path, const ReferenceBody& reference) {
+  ProfileTemplate t = read_template_json(path);
+  if (Status s = check_template_references(t, reference); !s)
+    throw Error(Status(ErrorCode::kParse, path.string() + ": " + s.message()));
+  return t;
 }
 
 }  // namespace atelier

@@ -114,7 +114,7 @@ void check_writable(const ProfileTemplate& t) {
   const Model& m = t.model;
   const std::string& tn = t.name;
   // The reader's ranges: a file this writes must read back.
-  if (t.levels < 0 || t.levels > kMaxLevels) refuse(tn, "levels " + std::to_string(t.levels) + " outside [0, 16]");
+  if (t.levels < 0 || t.levels > kMaxLevels) refuse(tn, "levels " + std::to_string(t.levels) + " outside [0, " + std::to_string(kMaxLevels) + "]");
   if (m.complex_holes < 0) refuse(tn, "negative complex hole count");
 }
 

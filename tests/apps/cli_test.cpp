@@ -81,3 +81,34 @@ TEST(Cli, DemoWritesAReportMeshesAndMeasurements) {
   for (const auto& e : fs::recursive_directory_iterator(d))
     EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
 }
+
+TEST(Cli, ConvertRefusesInputWithNoGeometryAndWritesNothing) {
+  // Issue 27: text with no vertex was read as an empty model and written.
+  const fs::path d = dir("cli-convert-empty");
+  std::ofstream(d / "notes.obj") << "these are notes, not a mesh\n";
+  for (const char* out : {"notes.ply", "notes.off", "notes.atm", "notes2.obj"}) {
+    auto r = run("convert " + (d / "notes.obj").string() + " " + (d / out).string());
+    EXPECT_EQ(r.code, 3) << r.out;
+    EXPECT_NE(r.out.find("notes.obj"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("no vertex"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(d / out)) << out;
+  }
+  // Nothing else (no temporary) is left in the folder either.
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(d)) ++entries;
+  EXPECT_EQ(entries, 1u);
+}
+
+TEST(Cli, ConvertToOffWarnsThatSurfacesAreMerged) {
+  const fs::path d = dir("cli-convert-off");
+  std::ofstream(d / "two.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\ng a\nf 1 2 3\ng b\nf 1 3 4\n";
+  auto r = run("convert " + (d / "two.obj").string() + " " + (d / "two.off").string());
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("2 surfaces merged into one mesh"), std::string::npos) << r.out;
+  // PLY keeps them: no warning, two surfaces back.
+  auto p = run("convert " + (d / "two.obj").string() + " " + (d / "two.ply").string());
+  EXPECT_EQ(p.code, 0) << p.out;
+  EXPECT_EQ(p.out.find("merged"), std::string::npos) << p.out;
+  auto v = run("validate " + (d / "two.ply").string());
+  EXPECT_NE(v.out.find("2 surfaces"), std::string::npos) << v.out;
+}

@@ -277,11 +277,33 @@ TEST(Native, IndicesAreCheckedBeforeBuilding) {
   }
 }
 
+TEST(Native, VersionOneFilesWithoutHalfedgePropertiesStillRead) {
+  // Version 2 appends the halfedge (face-corner) property columns to PROP,
+  // the last section. A version 1 file is the same without them.
+  const Model m = every_kind_model();
+  ASSERT_TRUE(m.halfedges.props.names().empty());
+  std::string v1 = serialize_model(m);
+  std::size_t pos = 16;
+  for (int k = 0; k < 10; ++k) {
+    std::uint64_t size = 0;
+    std::memcpy(&size, v1.data() + pos + 4, 8);
+    pos += 16 + size;
+  }
+  std::uint64_t size = 0;
+  std::memcpy(&size, v1.data() + pos + 4, 8);
+  ASSERT_EQ(pos + 16 + size, v1.size());
+  v1.resize(v1.size() - 4);  // the halfedge registry's property count (0)
+  put_le<std::uint64_t>(v1, pos + 4, size - 4);
+  put_le<std::uint32_t>(v1, pos + 12, crc32_bitwise(std::string_view(v1).substr(pos + 16, size - 4)));
+  put_le<std::uint32_t>(v1, 8, 1);
+  EXPECT_EQ(diff_tables(deserialize_model(v1, "v1.atm"), m), "");
+}
+
 TEST(Native, VersionAndMagicAreChecked) {
   std::string b = serialize_model(every_kind_model());
-  std::string v2 = b;
-  put_le<std::uint32_t>(v2, 8, 2);
-  expect_error([&] { (void)deserialize_model(v2, "v.atm"); }, ErrorCode::kParse, {"v.atm", "unsupported version 2"});
+  std::string v3 = b;
+  put_le<std::uint32_t>(v3, 8, 3);
+  expect_error([&] { (void)deserialize_model(v3, "v.atm"); }, ErrorCode::kParse, {"v.atm", "unsupported version 3"});
   b[0] = 'X';
   expect_error([&] { (void)deserialize_model(b, "m.atm"); }, ErrorCode::kParse, {"m.atm", "bad magic"});
   TempDir dir;

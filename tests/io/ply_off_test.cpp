@@ -81,22 +81,58 @@ TEST(Ply, BinaryAndAsciiRoundTripsAreExact) {
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"grid.ply"});
 }
 
-TEST(Ply, FlattensSurfacesAndKeepsIsolatedNodes) {
+TEST(Ply, KeepsSurfacesAsAFacePropertyAndIsolatedNodes) {
+  // Issue 27: a multi-surface model was merged into one surface.
   Model m = model_of(cube(), "a");
   const Soup g = jittered_grid(2, 2, 9);
-  ASSERT_TRUE(add_polygon_surface(m, "b", g.arrays()));
+  ASSERT_TRUE(add_polygon_surface(m, "b with spaces", g.arrays()));
   const NodeIdx iso = m.new_node(SurfaceIdx{0}, Vec3d(5, 6, 7));
   m.complex_holes = count_topology(m).implied_holes();
   ASSERT_TRUE(validate(m));
   TempDir dir;
-  write_ply(m, dir / "two.ply");
-  const Model back = read_ply(dir / "two.ply");
-  ASSERT_TRUE(validate(back));
-  EXPECT_EQ(back.num_surfaces(), 1u);
-  EXPECT_EQ(back.num_nodes(), m.num_nodes());
-  EXPECT_EQ(face_positions(back), face_positions(m));
-  EXPECT_EQ(back.nodes.position[iso.value], Vec3d(5, 6, 7));
-  EXPECT_TRUE(back.is_isolated(NodeIdx{iso.value}));
+  for (bool binary : {true, false}) {
+    SCOPED_TRACE(binary ? "binary" : "ascii");
+    write_ply(m, dir / "two.ply", binary);
+    const Model back = read_ply(dir / "two.ply");
+    ASSERT_TRUE(validate(back)) << validate(back).to_string();
+    ASSERT_EQ(back.num_surfaces(), 2u);
+    EXPECT_EQ(back.surfaces.name[0], "a");
+    EXPECT_EQ(back.surfaces.name[1], "b with spaces");
+    EXPECT_EQ(back.num_nodes(), m.num_nodes());
+    EXPECT_EQ(face_positions(back), face_positions(m));
+    for (std::uint32_t f = 0; f < back.faces.slots.capacity(); ++f)
+      EXPECT_EQ(back.faces.surface[f], m.faces.surface[f]) << "face " << f;
+    // The isolated node stays isolated, in the first surface.
+    std::size_t found = 0;
+    for (std::uint32_t v = 0; v < back.nodes.slots.capacity(); ++v)
+      if (back.nodes.position[v] == Vec3d(5, 6, 7)) {
+        ++found;
+        EXPECT_TRUE(back.is_isolated(NodeIdx{v}));
+        EXPECT_EQ(back.nodes.surface[v], SurfaceIdx{0});
+      }
+    EXPECT_EQ(found, 1u);
+    EXPECT_EQ(count_topology(back).faces, count_topology(m).faces);
+    EXPECT_EQ(count_topology(back).edges, count_topology(m).edges);
+  }
+  (void)iso;
+  // One surface: no surface property is written (files stay as before).
+  write_ply(model_of(cube(), "c"), dir / "one.ply", false);
+  EXPECT_EQ(slurp(dir / "one.ply").find("surface"), std::string::npos);
+}
+
+TEST(Ply, SurfacePropertyOfAnotherWriterSplitsTheFaces) {
+  // Ids need not be dense or sorted; a vertex used by two surfaces becomes a
+  // node of each; names default to <stem>_<id>.
+  const std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 2\nproperty list uchar int vertex_indices\nproperty uchar surface\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2 7\n3 0 2 3 3\n";
+  const Model m = read_ply_from_string(text, "s.ply");
+  ASSERT_TRUE(validate(m));
+  ASSERT_EQ(m.num_surfaces(), 2u);
+  EXPECT_EQ(m.surfaces.name[0], "ply_3");
+  EXPECT_EQ(m.surfaces.name[1], "ply_7");
+  EXPECT_EQ(m.num_nodes(), 6u);  // vertices 0 and 2 in both surfaces
 }
 
 TEST(Ply, SkipsEveryPropertyTypeInBothEndians) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -672,6 +673,54 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
   }
   // Writing into a missing folder fails cleanly and leaves nothing behind.
   EXPECT_THROW(write_detail(*enc, tmp_dir() / "no" / "such" / "dir" / "x.atd"), Error);
+}
+
+TEST(DetailTemplate, FileErrorsNameTheByteOffsetOfTheBadValue) {
+  // Issue 27: values that pass the checksum but break the format are named
+  // by the byte offset of the value, not of the end of the file.
+  DetailEncoding d;
+  d.polygon_count = 2;
+  d.body_node_count = 4;
+  d.row = {0, 1, 3, 4};
+  d.polygon = {0, 1, 0, 1};
+  d.a = {0.1f, 0.2f, 0.3f, 0.4f};
+  d.b = d.c = d.d = d.a;
+  const std::size_t header = 52, polygons_at = header + 4 * d.row.size(), coeff_at = polygons_at + 4 * 4;
+  auto error_of = [](const DetailEncoding& e, const std::string& name) -> std::string {
+    const fs::path p = tmp_dir() / name;
+    write_detail(e, p);
+    try {
+      (void)read_detail(p);
+    } catch (const Error& err) {
+      return err.what();
+    }
+    return "accepted";
+  };
+  DetailEncoding bad_polygon = d;
+  bad_polygon.polygon[2] = 2;
+  EXPECT_NE(error_of(bad_polygon, "p.atd").find("byte offset " + std::to_string(polygons_at + 8) + ": entry 2 names a polygon"),
+            std::string::npos)
+      << error_of(bad_polygon, "p.atd");
+  DetailEncoding bad_coeff = d;
+  bad_coeff.c[3] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_NE(error_of(bad_coeff, "c.atd").find("byte offset " + std::to_string(coeff_at + 4 * (2 * 4 + 3)) + ": entry 3"),
+            std::string::npos)
+      << error_of(bad_coeff, "c.atd");
+  DetailEncoding bad_row = d;
+  bad_row.row[2] = 0;  // decreasing at vertex 1
+  EXPECT_NE(error_of(bad_row, "r.atd").find("byte offset " + std::to_string(header + 8) + ": row offsets decrease"),
+            std::string::npos)
+      << error_of(bad_row, "r.atd");
+  // Found by fuzzing: a file with no entries and no reference corners
+  // memcpy'd into the null data() of empty vectors (undefined behaviour,
+  // reported by UBSan in the sanitizer run). It reads as the empty matrix.
+  DetailEncoding empty;
+  empty.row = {0};
+  write_detail(empty, tmp_dir() / "empty.atd");
+  const DetailEncoding back = read_detail(tmp_dir() / "empty.atd");
+  EXPECT_EQ(back.vertex_count(), 0u);
+  EXPECT_EQ(back.entries(), 0u);
+  EXPECT_TRUE(back.reference_corners.empty());
 }
 
 namespace {

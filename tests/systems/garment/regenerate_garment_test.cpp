@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 #include <atelier/storage/builder.h>
 #include <atelier/systems/body/mannequin.h>
@@ -191,6 +192,65 @@ TEST(GarmentPipeline, TemplateFilesRoundTrip) {
   ASSERT_FALSE(missing);
   EXPECT_NE(missing.status().message().find("inner.obj"), std::string::npos);
   fs::remove_all(dir);
+}
+
+TEST(GarmentPipeline, TextureCoordinatesAndSeamsSurviveEncodingAndRegeneration) {
+  // Issue 27: regenerated garments had no `vt`. The uv map belongs to the
+  // topology: encoding keeps it beside the .atd, regeneration writes it
+  // unchanged with the new positions. Corner uv of the shorts: a seam on
+  // every face (each face its own copy of the unit square's corners).
+  const Scene& s = scene();
+  const char* env = std::getenv("ATELIER_TMP");
+  const fs::path dir = (env ? fs::path(env) : fs::temp_directory_path()) / "garment-uv";
+  fs::remove_all(dir);
+  GarmentTemplate t = *s.shorts;
+  for (Vec3d& p : t.mesh.positions) p = round_to_float(p);
+  t.mesh.corner_uv.clear();
+  for (std::size_t f = 0; f < t.mesh.face_count(); ++f)
+    for (std::size_t k = 0; k < t.mesh.face(f).size(); ++k)
+      t.mesh.corner_uv.emplace_back(0.125 * static_cast<double>(f % 7), 0.25 * static_cast<double>(k));
+  ASSERT_TRUE(t.mesh.check());
+  auto enc = encode_garment(*s.family, "uvshorts", t.mesh);
+  ASSERT_TRUE(enc);
+  write_garment_template(*enc, dir);
+  auto back = read_garment_template(*s.family, dir / "uvshorts.atd");
+  ASSERT_TRUE(back) << back.status().to_string();
+  EXPECT_EQ(back->mesh.corner_uv, t.mesh.corner_uv);
+  // A regenerated body's garment file: new positions, the same corner uv.
+  const std::vector<Vec3d> body = bodies(1, 9).positions(0);
+  auto r = regenerate_garment(*s.family, *back, body);
+  ASSERT_TRUE(r);
+  write_garment_mesh(back->mesh, r->positions, dir / "regenerated.obj");
+  auto again = read_garment_mesh(dir / "regenerated.obj");
+  ASSERT_TRUE(again) << again.status().to_string();
+  EXPECT_EQ(again->corner_uv, t.mesh.corner_uv);
+  EXPECT_EQ(again->face_nodes, t.mesh.face_nodes);
+  EXPECT_NE(again->positions, back->mesh.positions);  // it did move
+  fs::remove_all(dir);
+}
+
+TEST(GarmentPipeline, MakeHumanGarmentKeepsItsUvMapThroughAWriteAndRead) {
+  const fs::path obj = fs::path(ATELIER_SHARED_DATA) / "makehuman" / "clothes" / "female_sportsuit01.obj";
+  if (!fs::exists(obj)) GTEST_SKIP() << "shared data absent: " << obj;
+  auto g = read_garment_mesh(obj);
+  ASSERT_TRUE(g) << g.status().to_string();
+  ASSERT_EQ(g->corner_uv.size(), g->face_nodes.size());
+  ASSERT_TRUE(g->check());
+  // Seams: some vertex has two different uv in two of its faces.
+  std::map<std::uint32_t, Vec2d> first;
+  std::size_t seam_corners = 0;
+  for (std::size_t k = 0; k < g->face_nodes.size(); ++k) {
+    const auto [it, inserted] = first.try_emplace(g->face_nodes[k], g->corner_uv[k]);
+    seam_corners += !inserted && it->second != g->corner_uv[k];
+  }
+  EXPECT_GT(seam_corners, 0u);
+  const char* env = std::getenv("ATELIER_TMP");
+  const fs::path out = (env ? fs::path(env) : fs::temp_directory_path()) / "sportsuit-uv.obj";
+  write_garment_mesh(*g, g->positions, out);
+  auto back = read_garment_mesh(out);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->corner_uv, g->corner_uv);
+  fs::remove(out);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -458,4 +459,81 @@ TEST(TemplateJson, EveryIndexChangeIsReadOrRefusedNeverACrash) {
   // id, the refinement levels) are legal.
   EXPECT_GT(refused, accepted);
   EXPECT_GT(accepted, 0u);
+}
+
+TEST(TemplateJson, NumbersAndLevelsBeyondWhatRegenerationTakesAreRefusedWhenRead) {
+  // Issue 27: a coordinate of 1e300 was accepted (a body then took minutes,
+  // the point becoming inf as a float in the BVH query), and levels up to 16
+  // although regeneration refuses more than 8 (every body failed, exit 1).
+  const std::string top = template_to_json_string(fixture().templates[0]);
+  const Json doc = Json::parse(top);
+  auto refused = [&](const std::function<void(Json&)>& edit, const std::vector<std::string>& fragments) {
+    Json j = doc;
+    edit(j);
+    try {
+      (void)template_from_json_string(j.dump(), "edited.template.json");
+      ADD_FAILURE() << "accepted: " << fragments.front();
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status().code(), ErrorCode::kParse);
+      for (const auto& f : fragments) EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
+    }
+  };
+  refused([](Json& j) { j["nodes"][2]["position"][0] = 1e300; }, {"edited.template.json", "/nodes/2/position/0", "out of range"});
+  refused([](Json& j) { j["nodes"][1]["encoding"]["coords"][1] = -2e4; }, {"/nodes/1/encoding/coords/1", "out of range"});
+  refused([](Json& j) { j["clearance"] = 1e5; }, {"/clearance", "out of range"});
+  refused([](Json& j) { j["levels"] = kMaxTemplateLevels + 1; }, {"/levels", "out of range [0, 8]"});
+  // The largest accepted values do read, and the largest level regenerates
+  // (the check and regeneration agree on the bound).
+  Json ok = doc;
+  ok["levels"] = kMaxTemplateLevels;
+  EXPECT_EQ(template_from_json_string(ok.dump(), "ok.json").levels, kMaxTemplateLevels);
+  ProfileTemplate t = fixture().templates[0];
+  t.levels = kMaxTemplateLevels + 1;
+  EXPECT_FALSE(validate_template(t).is_ok());
+}
+
+TEST(TemplateJson, ReferencesOutOfTheBodyAreFoundWhenTheTemplateIsRead) {
+  // Issue 27: a feature point id or body element out of range was found per
+  // body (every body failing, the message not naming the file).
+  const Fixture& f = fixture();
+  const std::string top = template_to_json_string(f.templates[0]);
+  const fs::path dir = scratch();
+  // The template as written reads against its body.
+  {
+    std::ofstream(dir / "good.template.json") << top;
+    EXPECT_NO_THROW((void)read_template_json(dir / "good.template.json", f.body));
+  }
+  Json doc = Json::parse(top);
+  // One node of each body-referring kind present in the template.
+  std::map<std::string, std::size_t> node_of_mode;
+  for (std::size_t i = 0; i < doc["nodes"].size(); ++i)
+    node_of_mode.try_emplace(doc["nodes"][i]["encoding"]["mode"].get<std::string>(), i);
+  ASSERT_TRUE(node_of_mode.count("feature_point") || node_of_mode.count("feature_offset"));
+  std::size_t broken_cases = 0;
+  for (const auto& [mode, i] : node_of_mode) {
+    Json j = doc;
+    const bool feature = mode == "feature_point" || mode == "feature_offset";
+    if (feature) {
+      j["nodes"][i]["encoding"]["feature_point"] = 100000;
+    } else if (mode == "vertex" || mode == "edge" || mode == "face") {
+      j["nodes"][i]["encoding"]["element"] = 50000000;
+    } else {
+      continue;
+    }
+    ++broken_cases;
+    const fs::path p = dir / ("broken-" + mode + ".template.json");
+    std::ofstream(p) << j.dump();
+    EXPECT_NO_THROW((void)read_template_json(p));  // without the body it cannot be told
+    try {
+      (void)read_template_json(p, f.body);
+      ADD_FAILURE() << mode << ": accepted";
+    } catch (const Error& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(e.status().code(), ErrorCode::kParse);
+      EXPECT_NE(msg.find(p.string()), std::string::npos) << msg;
+      EXPECT_NE(msg.find("node " + std::to_string(i)), std::string::npos) << msg;
+      EXPECT_NE(msg.find(feature ? "feature point 100000" : "50000000"), std::string::npos) << msg;
+    }
+  }
+  EXPECT_GE(broken_cases, 1u);
 }

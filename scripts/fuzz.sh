@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Runs the libFuzzer harnesses of fuzz/ (built into build-fuzz by `make fuzz`)
+# one after another on one core each (-jobs=1 equivalent: in-process), seeded
+# from tests/data (good and malformed files, by extension) and the seeds
+# make_seeds writes; the corpus grows in build-fuzz/corpus/<harness>.
+# Usage: scripts/fuzz.sh [--seconds N | --runs N] [harness ...]
+#   --seconds N  run each harness N seconds (default 15: what CI runs)
+#   --runs N     run each harness N executions (docs/reliability.md: 10^7)
+# Prints one line per harness ("fuzz <name>: <runs> runs in <s> s, ok") and
+# exits non-zero at the first crash, leak, timeout or sanitizer report (the
+# input is left in build-fuzz/artifacts/).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+B=${FUZZ_BUILD:-build-fuzz}
+limit=(-max_total_time=15)
+harnesses=()
+while (($#)); do
+  case "$1" in
+    --seconds) limit=(-max_total_time="$2"); shift 2 ;;
+    --runs) limit=(-runs="$2"); shift 2 ;;
+    *) harnesses+=("$1"); shift ;;
+  esac
+done
+if ((${#harnesses[@]} == 0)); then
+  harnesses=(obj ply off atm atd template mhclo mh_target mh_base mh_modifiers)
+  # Built only once their parsers are in the tree (fuzz/CMakeLists.txt).
+  for h in curve_network strokes; do [[ -x $B/${h}_fuzz ]] && harnesses+=("$h"); done
+fi
+
+# Seeds: tests/data by extension, then the generated ones.
+seeds=$B/seeds
+rm -rf "$seeds"
+mkdir -p "$seeds" "$B/artifacts"
+for f in tests/data/good/* tests/data/malformed/*; do
+  ext=${f##*.}
+  mkdir -p "$seeds/$ext"
+  cp "$f" "$seeds/$ext/"
+done
+"$B/make_seeds" "$seeds"
+
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+for h in "${harnesses[@]}"; do
+  corpus=$B/corpus/$h
+  mkdir -p "$corpus"
+  seed_dir=$seeds/$h
+  [[ -d $seed_dir ]] || mkdir -p "$seed_dir"
+  log=$B/logs/$h.log
+  mkdir -p "$B/logs"
+  start=$(date +%s)
+  # -timeout: one input taking 10 s is a hang; -rss_limit_mb: a parser that
+  # allocates what a header claims instead of what the bytes hold.
+  if ! "$B/${h}_fuzz" "${limit[@]}" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+       -artifact_prefix="$B/artifacts/${h}-" "$corpus" "$seed_dir" >"$log" 2>&1; then
+    echo "fuzz $h: FAILED (see $log and $B/artifacts/)"
+    tail -40 "$log"
+    exit 1
+  fi
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  echo "fuzz $h: ${runs:-?} runs in $(( $(date +%s) - start )) s, ok (corpus $(ls "$corpus" | wc -l) files)"
+done
