@@ -30,7 +30,15 @@ std::string lower_ext(const fs::path& p) {
   return e;
 }
 
-void write_any(const Model& m, const fs::path& p, const Log& log) {
+}  // namespace
+
+void check_mesh_output(const fs::path& p) {
+  const std::string e = lower_ext(p);
+  if (e != ".obj" && e != ".ply" && e != ".off" && e != ".atm")
+    throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
+}
+
+void write_mesh_file(const Model& m, const fs::path& p, const Log& log) {
   const std::string e = lower_ext(p);
   if (e == ".obj") return write_obj(m, p);
   if (e == ".ply") return write_ply(m, p, true);
@@ -44,8 +52,6 @@ void write_any(const Model& m, const fs::path& p, const Log& log) {
   if (e == ".atm") return write_model(m, p);
   throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
 }
-
-}  // namespace
 
 Model read_mesh_file(const fs::path& p) {
   if (!fs::exists(p)) throw Error(Status(ErrorCode::kIo, p.string() + ": no such file"));
@@ -76,7 +82,7 @@ int run_validate(const Common&, const fs::path& file, Log& log) {
 
 int run_convert(const Common&, const fs::path& in, const fs::path& out, Log& log) {
   const Model m = read_mesh_file(in);
-  write_any(m, out, log);
+  write_mesh_file(m, out, log);
   log.info("wrote " + out.string());
   return kExitOk;
 }

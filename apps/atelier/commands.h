@@ -39,6 +39,12 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log);
 /// Reads OBJ, PLY, OFF or the native .atm by extension; Error(kIo) for a
 /// missing file, Error(kInvalidArgument) for an unknown extension.
 [[nodiscard]] Model read_mesh_file(const std::filesystem::path& p);
+/// Refuses an output path whose extension is not .obj, .ply, .off or .atm
+/// (before any work is done).
+void check_mesh_output(const std::filesystem::path& p);
+/// Writes the model in the format its extension names, atomically; OFF
+/// merges surfaces, which is logged as a warning.
+void write_mesh_file(const Model& m, const std::filesystem::path& p, const Log& log);
 
 int run_validate(const Common& common, const std::filesystem::path& file, Log& log);
 int run_convert(const Common& common, const std::filesystem::path& in, const std::filesystem::path& out, Log& log);

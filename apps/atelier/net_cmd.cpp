@@ -27,22 +27,6 @@ T need(Expected<T> e) {
 }
 
 /// Checks the output's format before any work, then writes atomically.
-void check_out(const fs::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (e != ".obj" && e != ".ply" && e != ".off" && e != ".atm")
-    throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
-}
-
-void write_model_file(const Model& m, const fs::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (e == ".obj") return write_obj(m, p);
-  if (e == ".ply") return write_ply(m, p, true);
-  if (e == ".off") return write_off(m, p);
-  return write_model(m, p);
-}
-
 Model to_model(const PolygonSoup& s, const std::string& name) {
   Model m;
   if (s.face_count() > 0) (void)need(add_polygon_surface(m, name, s));
@@ -95,11 +79,11 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
   o.join = need(parse_boolean_join(opt.join));
   o.rule = need(parse_connect_rule(opt.rule));
   o.check_self_intersection = !opt.no_self_check;
-  check_out(opt.out);
+  check_mesh_output(opt.out);
   const PolygonSoup a = read_net(opt.a), b = read_net(opt.b);
   const BooleanReport r = named(net_boolean(a, b, o, common.context()), opt.a, opt.b);
   const Model m = to_model(r.result, "result");
-  write_model_file(m, opt.out);
+  write_mesh_file(m, opt.out, log);
   if (!opt.seam_out.empty())
     write_atomically(opt.seam_out, [&](AtomicFile& f) {
       std::string s = "# vertices of " + opt.out.filename().string() + " on the intersection polygons (0-based)\n";
@@ -157,8 +141,8 @@ CLI::App* add_trim_subcommand(CLI::App& app, NetTrimOptions& opt) {
 }
 
 int run_trim(const Common& common, const NetTrimOptions& opt, Log& log) {
-  check_out(opt.out);
-  if (!opt.band_out.empty()) check_out(opt.band_out);
+  check_mesh_output(opt.out);
+  if (!opt.band_out.empty()) check_mesh_output(opt.band_out);
   const PolygonSoup net = read_net(opt.mesh);
   const std::vector<Vec3d> curve = read_curve(opt.curve);
   TrimOptions o;
@@ -167,8 +151,8 @@ int run_trim(const Common& common, const NetTrimOptions& opt, Log& log) {
   auto r = trim_net(net, curve, o, common.context());
   if (!r)
     throw Error(Status(r.status().code(), opt.mesh.string() + ", " + opt.curve.string() + ": " + r.status().message()));
-  write_model_file(to_model(r->result, "trimmed"), opt.out);
-  if (!opt.band_out.empty()) write_model_file(to_model(r->band, "band"), opt.band_out);
+  write_mesh_file(to_model(r->result, "trimmed"), opt.out, log);
+  if (!opt.band_out.empty()) write_mesh_file(to_model(r->band, "band"), opt.band_out, log);
   if (!opt.json.empty())
     write_json(opt.json, {{"area", {{"before", r->area_before}, {"after", r->area_after}}},
                           {"cut_points", r->cut_points},
@@ -193,7 +177,7 @@ CLI::App* add_round_subcommand(CLI::App& app, NetRoundOptions& opt) {
 }
 
 int run_round(const Common& common, const NetRoundOptions& opt, Log& log) {
-  check_out(opt.out);
+  check_mesh_output(opt.out);
   Model m = read_mesh_file(opt.mesh);
   const std::vector<std::uint32_t> seam_ids = read_seam(opt.seam);
   // Seam indices are file vertex indices: map through the reader's source_vertex.
@@ -214,7 +198,7 @@ int run_round(const Common& common, const NetRoundOptions& opt, Log& log) {
   o.nu = opt.nu;
   o.rings = opt.rings;
   const RoundReport r = need(round_off(m, seam, o, common.context()));
-  write_model_file(m, opt.out);
+  write_mesh_file(m, opt.out, log);
   if (!opt.json.empty())
     write_json(opt.json, {{"energy", {{"before", r.energy_before}, {"after", r.energy_after}}},
                           {"free_vertices", r.free_nodes},

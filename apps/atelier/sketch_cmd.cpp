@@ -16,26 +16,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string lower_ext(const fs::path& p) {
-  std::string e = p.extension().string();
-  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
-
-void check_output(const fs::path& p) {
-  const std::string e = lower_ext(p);
-  if (e != ".obj" && e != ".ply" && e != ".off" && e != ".atm")
-    throw Error(Status(ErrorCode::kInvalidArgument, p.string() + ": unknown format (use .obj, .ply, .off or .atm)"));
-}
-
-void write_mesh(const Model& m, const fs::path& p) {
-  const std::string e = lower_ext(p);
-  if (e == ".obj") return write_obj(m, p);
-  if (e == ".ply") return write_ply(m, p, true);
-  if (e == ".off") return write_off(m, p);
-  write_model(m, p);
-}
-
 nlohmann::json report_json(const Model& m, const atelier::SketchReport& r, const fs::path& mesh,
                            const fs::path& strokes, const Status& overall) {
   nlohmann::json tools = nlohmann::json::array();
@@ -109,7 +89,7 @@ CLI::App* add_sketch_subcommand(CLI::App& app, SketchOptions& opt) {
 }
 
 int run_sketch(const Common& common, const SketchOptions& opt, Log& log) {
-  check_output(opt.out);
+  check_mesh_output(opt.out);
   Model m = read_mesh_file(opt.mesh);
   auto file = read_strokes(opt.strokes);
   if (!file) throw Error(file.status());
@@ -144,7 +124,7 @@ int run_sketch(const Common& common, const SketchOptions& opt, Log& log) {
       std::printf(", %zu pieces, %zu faces added, %zu removed", t.pieces.size(), t.faces_added, t.faces_removed);
     std::printf("\n");
   }
-  write_mesh(m, opt.out);
+  write_mesh_file(m, opt.out, log);
   std::printf("%s: %zu surfaces, %zu faces, %zu joints\n", opt.out.string().c_str(), m.num_surfaces(), m.num_faces(),
               m.num_joints());
   return r->failed ? kExitPartial : kExitOk;

@@ -22,6 +22,7 @@
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Surface_mesh.h>
 #include <atelier/io/obj.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/storage/builder.h>
 #include <atelier/storage/topology.h>
 #include <atelier/systems/body/makehuman_body.h>

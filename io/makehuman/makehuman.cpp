@@ -104,7 +104,10 @@ Target parse_target(std::string_view text, const std::filesystem::path& file, st
     t.index.push_back(idx);
     t.delta.emplace_back(d[0], d[1], d[2]);
   });
-  if (t.index.empty()) parse_error(file, 0, "no 'INDEX DX DY DZ' line: not a morph target");
+  // A target with no displacement line is valid: MakeHuman ships such files
+  // (macrodetails/universal-female-child-averagemuscle-averageweight.target
+  // is its licence header only: the neutral blend). Text that is not a
+  // target fails on its first line above.
   return t;
 }
 

@@ -139,11 +139,10 @@ def test_ctrl_c_cancels_through_the_engine(small):
     # A real SIGINT, sent from another thread while the engine works: the
     # waiting thread's signal check raises KeyboardInterrupt and cancels the
     # engine (ExecContext::cancel), which stops long before the end.
-    bodies = np.repeat(small["bodies"], 6, axis=0)
+    # Judged by the work done, not by the clock (a loaded machine stretches
+    # both runs): the job is long (about 1 s) next to the 50 ms timer.
+    bodies = np.repeat(small["bodies"], 60, axis=0)
     regen = atelier.Regenerator(small["shorts"])
-    t0 = time.perf_counter()
-    regen.run(bodies, chunk=1, threads=1)
-    full = time.perf_counter() - t0
     calls = []
 
     def progress(stage, done, total):
@@ -151,9 +150,6 @@ def test_ctrl_c_cancels_through_the_engine(small):
         if len(calls) == 1:  # the signal arrives after the callback returned, while the engine works
             threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGINT)).start()
 
-    t0 = time.perf_counter()
     with pytest.raises(KeyboardInterrupt):
         regen.run(bodies, chunk=1, threads=1, progress=progress)
-    interrupted = time.perf_counter() - t0
     assert max(calls) < len(bodies)
-    assert interrupted < 0.5 * full, (interrupted, full)

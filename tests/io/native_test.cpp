@@ -296,7 +296,9 @@ TEST(Native, VersionOneFilesWithoutHalfedgePropertiesStillRead) {
   put_le<std::uint64_t>(v1, pos + 4, size - 4);
   put_le<std::uint32_t>(v1, pos + 12, crc32_bitwise(std::string_view(v1).substr(pos + 16, size - 4)));
   put_le<std::uint32_t>(v1, 8, 1);
-  EXPECT_EQ(diff_tables(deserialize_model(v1, "v1.atm"), m), "");
+  Model expected = m;  // files hold the compacted tables
+  (void)expected.compact();
+  EXPECT_EQ(diff_tables(deserialize_model(v1, "v1.atm"), expected), "");
 }
 
 TEST(Native, VersionAndMagicAreChecked) {
