@@ -3,7 +3,6 @@ counts, progress and cancellation, zero-copy results."""
 import os
 import signal
 import threading
-import time
 
 import numpy as np
 import pytest
