@@ -4,12 +4,14 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <limits>
+#include <numbers>
 
 namespace atelier {
 
 /// A quiet NaN: "no value" in double columns (unset profile samples, no
 /// depth).
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+inline constexpr double kPi = std::numbers::pi;
 
 using Vec2d = Eigen::Vector2d;
 using Vec3d = Eigen::Vector3d;
@@ -30,6 +32,10 @@ struct Box3d {
   }
   [[nodiscard]] bool empty() const noexcept { return !(lo.array() <= hi.array()).all(); }
 };
+
+/// The z component of the cross product of two plane vectors: twice the
+/// signed area of the triangle (0, a, b), positive when counter-clockwise.
+[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept { return a.x() * b.y() - a.y() * b.x(); }
 
 [[nodiscard]] inline bool is_finite(const Vec3d& p) noexcept { return p.allFinite(); }
 

@@ -22,7 +22,6 @@ namespace atelier {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 // ------------------------------------------------------------ 2D helpers
 struct P2 {

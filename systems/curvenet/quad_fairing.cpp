@@ -12,7 +12,6 @@ namespace atelier {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// One row of eq. (4): sum_j w_j p_j over (vertex, weight) pairs.
 struct Row {

@@ -10,7 +10,6 @@ namespace atelier {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::uint64_t key(std::uint32_t a, std::uint32_t b) {
   return a < b ? (std::uint64_t{a} << 32) | b : (std::uint64_t{b} << 32) | a;

@@ -26,9 +26,6 @@ using Clock = std::chrono::steady_clock;
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept {
-  return a.x() * b.y() - a.y() * b.x();
-}
 
 /// Twice the signed area of (a, b, c): positive when counter-clockwise.
 [[nodiscard]] inline double signed_area2(const Vec2d& a, const Vec2d& b, const Vec2d& c) noexcept {

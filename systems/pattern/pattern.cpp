@@ -19,9 +19,6 @@ std::size_t PatternSet::failed_seams() const noexcept {
 
 namespace {
 
-[[nodiscard]] inline double cross2(const Vec2d& a, const Vec2d& b) noexcept {
-  return a.x() * b.y() - a.y() * b.x();
-}
 [[nodiscard]] inline Vec2d left_normal(const Vec2d& d) noexcept {
   return Vec2d(-d.y(), d.x());
 }

@@ -303,9 +303,6 @@ class Planner {
   double snap_;
 };
 
-double cross2(const Vec2d& a, const Vec2d& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
 
 /// The curve's segments, split at the fan diagonals of polygon faces when
 /// two consecutive points share a face but no fan triangle.

@@ -15,7 +15,6 @@
 namespace atelier {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr std::uint32_t kRings = 15, kAround = 24;
 
 std::uint32_t node_id(std::uint32_t r, std::uint32_t j) { return r * kAround + j % kAround; }

@@ -17,7 +17,6 @@
 
 namespace atelier::curvenet_test {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// n + 1 points from a to b.
 inline std::vector<Vec3d> line(const Vec3d& a, const Vec3d& b, int n = 8) {

@@ -20,7 +20,6 @@ using namespace atelier;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 std::vector<Vec3d> random_points(std::mt19937& rng, std::size_t n, double scale = 1.0) {
   std::uniform_real_distribution<double> d(-scale, scale);

@@ -21,7 +21,6 @@
 namespace atelier {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 // Tiny deterministic generator (SplitMix64).
 struct Rng {
