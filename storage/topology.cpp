@@ -1,4 +1,5 @@
 #include <atelier/storage/topology.h>
+#include <atelier/storage/union_find.h>
 
 #include <numeric>
 #include <vector>
@@ -7,22 +8,6 @@ namespace atelier {
 
 namespace {
 
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) {
-      parent[x] = parent[parent[x]];
-      x = parent[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 TopologyCounts count_impl(const Model& m, SurfaceIdx only) {
   TopologyCounts c;

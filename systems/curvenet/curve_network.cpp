@@ -6,6 +6,8 @@
 #include <numeric>
 #include <tuple>
 
+#include <atelier/storage/union_find.h>
+
 namespace atelier {
 
 double CurveGraph::length(std::size_t s) const noexcept {
@@ -103,20 +105,6 @@ struct Hit {
 struct Cut {
   double t;
   std::uint32_t node;
-};
-
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
 };
 
 std::string at(const Vec3d& p) {

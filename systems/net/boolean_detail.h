@@ -8,6 +8,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/polygon_soup.h>
+#include <atelier/storage/union_find.h>
 
 #include <array>
 #include <cstdint>
@@ -29,25 +30,6 @@ template <class... A>
   return {c, s.str()};
 }
 
-/// Disjoint sets over 0..n-1; roots are the smallest member, so results do
-/// not depend on the order of unions.
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) {
-      parent[x] = parent[parent[x]];
-      x = parent[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a < b) parent[b] = a;
-    if (b < a) parent[a] = b;
-  }
-};
 
 /// A simplex of one net: dimension (0 vertex, 1 edge, 2 triangle, 3 none)
 /// and index, packed so keys sort and compare as integers.

@@ -4,6 +4,7 @@
 #include <atelier/engine/parallel.h>
 #include <atelier/engine/status_format.h>
 #include <atelier/storage/topology.h>
+#include <atelier/storage/union_find.h>
 #include <atelier/systems/sketch/cut.h>
 
 #include <algorithm>
@@ -32,24 +33,8 @@ struct Pieces {
   std::vector<std::uint8_t> crossed_comp;
 };
 
-/// Union-find over face slots; the root of a set is its smallest index, so
-/// sets come out ordered and independent of the order of unions.
-struct FaceSets {
-  std::vector<std::uint32_t> parent;
-  explicit FaceSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) {
-      parent[x] = parent[parent[x]];
-      x = parent[x];
-    }
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
+/// Union-find over face slots (storage/union_find.h).
+using FaceSets = UnionFind;
 
 /// Pieces of the surfaces the curve edges lie in: one pass over the edges
 /// (union-find), one over the faces.
