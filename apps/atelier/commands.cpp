@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -117,6 +118,36 @@ static ReferenceBody reference_from_obj(const fs::path& file, double scale, cons
   return rb;  // no features: profile templates refuse it, detail templates work
 }
 
+CLI::Validator body_count_check() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        // Parsed here as a signed number: CLI11 would wrap "-1" into 2^64-1.
+        long double v = 0;
+        std::istringstream in(text);
+        if (!(in >> v) || !(in >> std::ws).eof() || v != std::floor(v))
+          return "'" + text + "' is not a whole number of bodies";
+        if (v < 1 || v > static_cast<long double>(kMaxBodyCount))
+          return "'" + text + "' bodies: a count is from 1 to " + std::to_string(kMaxBodyCount);
+        return {};
+      },
+      "COUNT");
+}
+
+CLI::Validator clearance_check() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v = 0;
+        std::istringstream in(text);
+        if (!(in >> v) || !(in >> std::ws).eof() || !std::isfinite(v) || v < 0 || v > kMaxClearance) {
+          std::ostringstream m;
+          m << "clearance '" << text << "': a distance in metres from 0 to " << kMaxClearance;
+          return m.str();
+        }
+        return {};
+      },
+      "METRES");
+}
+
 std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt) {
   const ExecContext ctx = common.context();
   std::unique_ptr<BodySource> src;
@@ -133,6 +164,11 @@ std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesO
     auto ref = std::make_shared<const ReferenceBody>(makehuman::make_reference_body(*lib));
     src = std::make_unique<makehuman::MakeHumanSource>(lib, makehuman::sample_adults(opt.count, common.seed), ref);
   } else {
+    // Not a directory: a misspelt source name, which "--reference is
+    // required" would only hide.
+    if (!fs::is_directory(opt.source))
+      throw Error(Status(ErrorCode::kInvalidArgument, "--source '" + opt.source +
+                                                          "': neither mannequin, makehuman nor a directory of OBJ bodies"));
     if (opt.reference.empty())
       throw Error(Status(ErrorCode::kInvalidArgument, "--reference is required with a directory source"));
     src = std::make_unique<ObjDirectorySource>(

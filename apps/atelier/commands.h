@@ -3,6 +3,7 @@
 //   problems), 2 usage error, 3 bad input, 4 internal error.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -48,6 +49,17 @@ void write_mesh_file(const Model& m, const std::filesystem::path& p, const Log& 
 
 int run_validate(const Common& common, const std::filesystem::path& file, Log& log);
 int run_convert(const Common& common, const std::filesystem::path& in, const std::filesystem::path& out, Log& log);
+
+/// The most bodies one job may ask for: beyond it a count is a typo (or a
+/// negative number wrapped around), not a job.
+inline constexpr std::size_t kMaxBodyCount = 100'000'000;
+/// The largest clearance a template may be regenerated with, in metres.
+inline constexpr double kMaxClearance = 1.0;
+/// `--count`: a whole number in [1, kMaxBodyCount]; "-1" and 2^64 are usage
+/// errors instead of an endless job.
+[[nodiscard]] CLI::Validator body_count_check();
+/// `--clearance`: a finite distance in [0, kMaxClearance] metres.
+[[nodiscard]] CLI::Validator clearance_check();
 
 struct BodiesOptions {
   std::string source = "mannequin";  // mannequin | makehuman | a directory of OBJ files

@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   BodiesOptions bodies;
   auto* bodies_cmd = app.add_subcommand("bodies", "sample or load a body set and export its measurements");
   bodies_cmd->add_option("--source", bodies.source, "mannequin, makehuman, or a directory of OBJ bodies");
-  bodies_cmd->add_option("--count", bodies.count, "bodies to sample (mannequin, makehuman)");
+  bodies_cmd->add_option("--count", bodies.count, "bodies to sample (mannequin, makehuman)")->check(body_count_check());
   bodies_cmd->add_option("--meshes", bodies.meshes, "write OBJ meshes of the first N bodies");
   bodies_cmd->add_option("--out", bodies.out, "output folder");
   bodies_cmd->add_option("--data", bodies.data, "the shared data folder (for makehuman)");

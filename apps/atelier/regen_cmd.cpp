@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -160,15 +161,17 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--template", opt.templates, "template file (repeatable): profile .template.json or detail .atd")
       ->required();
   c->add_option("--source", opt.bodies.source, "mannequin, makehuman, or a directory of OBJ bodies");
-  c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)");
+  c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)")->check(body_count_check());
   c->add_option("--data", opt.bodies.data, "the shared data folder (for makehuman)");
   c->add_option("--reference", opt.bodies.reference, "reference body OBJ (directory sources)");
   c->add_option("--scale", opt.bodies.scale, "file units to metres (directory sources)");
   c->add_option("--out", opt.out, "output folder");
   c->add_option("--meshes", opt.meshes, "write OBJ meshes of the first N bodies");
   c->add_option("--chunk", opt.chunk, "bodies per chunk (bounds memory)")->check(CLI::PositiveNumber);
-  c->add_option("--levels", opt.levels, "refinement levels (default: each template's)");
-  c->add_option("--clearance", opt.clearance, "distance kept from the body in metres (default: each template's)");
+  c->add_option("--levels", opt.levels, "refinement levels (default: each template's)")
+      ->check(CLI::Range(0, kMaxTemplateLevels));
+  c->add_option("--clearance", opt.clearance, "distance kept from the body in metres (default: each template's)")
+      ->check(clearance_check());
   c->add_flag("--no-resume", opt.no_resume, "recompute bodies whose outputs already exist");
   return c;
 }
@@ -190,12 +193,14 @@ struct RegenJob {
 /// Reads the templates and the body set and checks they fit (throws Error).
 RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   RegenJob job;
-  std::vector<fs::path> detail_files;
+  std::vector<fs::path> detail_files, profile_files;
   for (const auto& p : opt.templates) {
-    if (p.extension() == ".atd")
+    if (p.extension() == ".atd") {
       detail_files.push_back(p);
-    else
+    } else {
       job.templates.push_back(read_template_json(p));
+      profile_files.push_back(p);
+    }
   }
   job.src = make_body_source(common, opt.bodies);
   const auto ref = job.src->reference();
@@ -210,6 +215,18 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
       job.details.push_back(std::make_shared<const GarmentTemplate>(std::move(*d)));
     }
   }
+  // Outputs are named after the templates: two of one name would overwrite
+  // each other's meshes and records.
+  std::map<std::string, fs::path> named;
+  auto claim = [&](const std::string& name, const fs::path& file) {
+    const auto [it, fresh] = named.emplace(name, file);
+    if (!fresh)
+      throw Error(Status(ErrorCode::kInvalidArgument, "templates " + it->second.string() + " and " + file.string() +
+                                                          " are both named '" + name +
+                                                          "': their outputs would overwrite each other"));
+  };
+  for (std::size_t i = 0; i < job.templates.size(); ++i) claim(job.templates[i].name, profile_files[i]);
+  for (std::size_t i = 0; i < job.details.size(); ++i) claim(job.details[i]->name, detail_files[i]);
   for (const auto& t : job.templates) {
     if (t.model.nodes.slots.capacity() != t.encodings.nodes.size())
       throw Error(Status(ErrorCode::kMismatch, t.name + ": encodings do not match the template's nodes"));

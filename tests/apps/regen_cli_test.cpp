@@ -160,6 +160,51 @@ TEST(RegenCli, BadInputIsReportedWithExitCodes) {
   EXPECT_NE(r.out.find("atelier encode"), std::string::npos) << r.out;
 }
 
+TEST(RegenCli, CountsClearancesAndLevelsOutOfRangeAreUsageErrors) {
+  // Issue 27: "--count -1" used to wrap to 2^64-1 and loop forever; a
+  // clearance of 1e300 made one body take minutes. Each is refused before
+  // any work (exit 2) with the option named.
+  const fs::path out = dir("regen_ranges");
+  const std::string tpl = " --template " + (templates() / "skirt.template.json").string();
+  struct Case {
+    std::string args, says;
+  };
+  for (const Case& c : std::vector<Case>{{"--count -1", "--count"},
+                                         {"--count 18446744073709551616", "--count"},
+                                         {"--count 0", "--count"},
+                                         {"--count 2.5", "--count"},
+                                         {"--count 2 --clearance -0.01", "--clearance"},
+                                         {"--count 2 --clearance nan", "--clearance"},
+                                         {"--count 2 --clearance inf", "--clearance"},
+                                         {"--count 2 --clearance 1e300", "--clearance"},
+                                         {"--count 2 --levels 99", "--levels"},
+                                         {"--count 2 --levels -3", "--levels"}}) {
+    const CliRun r = run("regen" + tpl + " " + c.args + " --out " + (out / "run").string());
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
+    EXPECT_NE(r.out.find(c.says), std::string::npos) << c.args << "\n" << r.out;
+  }
+  EXPECT_FALSE(fs::exists(out / "run" / "bodies")) << "nothing is started for a usage error";
+  const CliRun b = run("bodies --count -5 --out " + (out / "bodies").string());
+  EXPECT_EQ(b.code, 2) << b.out;
+}
+
+TEST(RegenCli, TwoTemplatesOfOneNameAndAMisspeltSourceAreRefused) {
+  const fs::path out = dir("regen_names");
+  fs::create_directories(out / "a");
+  fs::copy_file(templates() / "skirt.template.json", out / "a" / "skirt.template.json",
+                fs::copy_options::overwrite_existing);
+  CliRun r = run("regen --template " + (templates() / "skirt.template.json").string() + " --template " +
+                 (out / "a" / "skirt.template.json").string() + " --count 2 --out " + (out / "run").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("both named 'skirt'"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(out / "run" / "bodies" / "mannequin-00000.json")) << r.out;
+  // A typo in --source names the source instead of asking for --reference.
+  r = run("bodies --source mannequinn --count 2 --out " + (out / "b").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("'mannequinn'"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("--reference is required"), std::string::npos) << r.out;
+}
+
 TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheBody) {
   // Any garment mesh on the reference body (here the coarse top the profile
   // encoder writes) becomes a detail template (seed 001 section 6) and is
