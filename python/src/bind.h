@@ -300,6 +300,7 @@ void bind_garment(py::module_& m);
 void bind_regenerate(py::module_& m);
 void bind_profile(py::module_& m);
 void bind_view(py::module_& m);
+void bind_net(py::module_& m);
 
 }  // namespace atelier::python
 

@@ -27,5 +27,6 @@ engine's message.
   bind_regenerate(m);
   bind_profile(m);
   bind_view(m);
+  bind_net(m);
   m.attr("__version__") = ATELIER_VERSION_STRING;
 }
