@@ -385,3 +385,18 @@ def round_off(
     progress: Progress = None,
 ) -> tuple[npt.NDArray[np.float64], Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]], dict[str, Any]]:
     """Rounds off a seam by the umbrella energy: (vertices, faces, report)."""
+
+def surface_from_curves(
+    curves: Union[Path, Sequence[FloatArray]],
+    *,
+    levels: int = 2,
+    mesh: Optional[MeshLike] = None,
+    cycles: str = "angular",
+    n0: int = 3,
+    density: float = 0.0,
+    tolerance: float = 1e-6,
+    fairing: bool = True,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.uint32], dict[str, Any]]:
+    """A curve network to a Catmull-Clark surface through it: (vertices, faces, report)."""

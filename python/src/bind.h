@@ -73,6 +73,7 @@ ATELIER_PY_ARG(Colours)        // list of (r, g, b) or None
 ATELIER_PY_ARG(Colour)         // (r, g, b) or None
 ATELIER_PY_ARG(CurveName)      // str or int
 ATELIER_PY_ARG(NDArray)        // a returned array (or a list of arrays for mixed polygons)
+ATELIER_PY_ARG(Curves)         // a list of (k, 3) arrays or a curve file path
 #undef ATELIER_PY_ARG
 
 // ------------------------------------------------------------ errors
@@ -301,6 +302,7 @@ void bind_regenerate(py::module_& m);
 void bind_profile(py::module_& m);
 void bind_view(py::module_& m);
 void bind_net(py::module_& m);
+void bind_curvenet(py::module_& m);
 
 }  // namespace atelier::python
 
@@ -327,4 +329,5 @@ ATELIER_PY_NAME(Colours, "list[tuple[float, float, float]] | None")
 ATELIER_PY_NAME(Colour, "tuple[float, float, float] | None")
 ATELIER_PY_NAME(CurveName, "str | int")
 ATELIER_PY_NAME(NDArray, "numpy.ndarray")
+ATELIER_PY_NAME(Curves, "list[numpy.ndarray] | os.PathLike")
 #undef ATELIER_PY_NAME

@@ -28,5 +28,6 @@ engine's message.
   bind_profile(m);
   bind_view(m);
   bind_net(m);
+  bind_curvenet(m);
   m.attr("__version__") = ATELIER_VERSION_STRING;
 }
