@@ -400,3 +400,14 @@ def surface_from_curves(
     progress: Progress = None,
 ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.uint32], dict[str, Any]]:
     """A curve network to a Catmull-Clark surface through it: (vertices, faces, report)."""
+
+def flatten(
+    mesh: MeshLike,
+    *,
+    surfaces: Optional[Sequence[str]] = None,
+    grain: Optional[FloatArray] = None,
+    allow_holes: bool = False,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[npt.NDArray[np.float64], list[dict[str, Any]]]:
+    """Flattens the pieces into the plane: (uv (n, 2), pieces with distortion figures)."""

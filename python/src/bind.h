@@ -303,6 +303,7 @@ void bind_profile(py::module_& m);
 void bind_view(py::module_& m);
 void bind_net(py::module_& m);
 void bind_curvenet(py::module_& m);
+void bind_pattern(py::module_& m);
 
 }  // namespace atelier::python
 

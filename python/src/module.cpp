@@ -29,5 +29,6 @@ engine's message.
   bind_view(m);
   bind_net(m);
   bind_curvenet(m);
+  bind_pattern(m);
   m.attr("__version__") = ATELIER_VERSION_STRING;
 }
