@@ -411,3 +411,14 @@ def flatten(
     progress: Progress = None,
 ) -> tuple[npt.NDArray[np.float64], list[dict[str, Any]]]:
     """Flattens the pieces into the plane: (uv (n, 2), pieces with distortion figures)."""
+
+def sketch(
+    mesh: MeshLike,
+    strokes: Union[Path, dict[str, Any]],
+    *,
+    surfaces: Optional[Sequence[str]] = None,
+    keep_going: bool = False,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[Mesh, dict[str, Any]]:
+    """Paints, cuts and partitions a mesh with strokes: (mesh, report)."""

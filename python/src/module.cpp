@@ -30,5 +30,6 @@ engine's message.
   bind_net(m);
   bind_curvenet(m);
   bind_pattern(m);
+  bind_sketch(m);
   m.attr("__version__") = ATELIER_VERSION_STRING;
 }
