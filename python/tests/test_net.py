@@ -73,14 +73,18 @@ def test_union_of_disjoint_boxes_and_same_bits_as_the_cli(scratch):
     assert polygons(ours_f) == polygons(theirs_f)
 
 
-def test_trimmed_plane_loses_the_curve_polygon_area():
-    n = 12
+def plane_and_ellipse(n=12):
     xs = np.linspace(-1, 1, n + 1)
     v = np.array([[x, y, 0.0] for y in xs for x in xs])
     f = np.array([[j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1, (j + 1) * (n + 1) + i]
                   for j in range(n) for i in range(n)])
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False) + 0.013
     curve = np.stack([0.5 * np.cos(t), 0.47 * np.sin(t), np.zeros_like(t)], axis=1)
+    return v, f, curve
+
+
+def test_trimmed_plane_loses_the_curve_polygon_area():
+    v, f, curve = plane_and_ellipse()
     polygon_area = 0.5 * abs(np.dot(curve[:, 0], np.roll(curve[:, 1], -1)) - np.dot(curve[:, 1], np.roll(curve[:, 0], -1)))
     tv, tf, rep = atelier.trim((v, f), curve)
     assert rep["area"]["before"] == pytest.approx(4.0, abs=1e-12)
@@ -92,9 +96,33 @@ def test_trimmed_plane_loses_the_curve_polygon_area():
 def test_round_off_lowers_the_energy_of_a_union_seam():
     v, f, rep = atelier.boolean(A, B)
     rv, rf, r = atelier.round_off((v, f), rep["seam"], rings=1)
-    assert r["energy"]["after"] <= r["energy"]["before"]
+    assert r["moved"] and r["energy"]["after"] < r["energy"]["before"]
     assert r["free_vertices"] > 0 and rv.shape == v.shape
+    assert np.abs(rv - v).max() > 1e-3  # the seam's neighbourhood moved
     assert polygons(rf) == polygons(f)  # only positions move
+
+
+def test_trim_and_round_off_same_bits_as_the_cli(scratch):
+    v, f, curve = plane_and_ellipse()
+    atelier.write_mesh(scratch / "plane.obj", v, f)
+    (scratch / "curve.txt").write_text("".join(" ".join(repr(float(x)) for x in p) + "\n" for p in curve))
+    run_cli("trim", "--mesh", scratch / "plane.obj", "--curve", scratch / "curve.txt", "--out", scratch / "t.obj")
+    tv, tf, _ = atelier.trim(atelier.read_mesh(scratch / "plane.obj"), curve)
+    theirs_v, theirs_f = atelier.read_mesh(scratch / "t.obj")
+    assert tv.tobytes() == theirs_v.tobytes() and polygons(tf) == polygons(theirs_f)
+    # The union's seam as `boolean --seam-out` writes it, then `round` on the union's file.
+    atelier.write_mesh(scratch / "a.obj", *A)
+    atelier.write_mesh(scratch / "b.obj", *B)
+    run_cli("boolean", scratch / "a.obj", scratch / "b.obj", "--out", scratch / "u.obj", "--seam-out",
+            scratch / "seam.txt")
+    _, _, rep = atelier.boolean(atelier.read_mesh(scratch / "a.obj"), atelier.read_mesh(scratch / "b.obj"))
+    seam = [int(w) for line in (scratch / "seam.txt").read_text().splitlines() if not line.startswith("#")
+            for w in line.split()]
+    assert seam == rep["seam"].tolist()
+    run_cli("round", "--mesh", scratch / "u.obj", "--seam", scratch / "seam.txt", "--out", scratch / "r.obj")
+    rv, rf, _ = atelier.round_off(atelier.read_mesh(scratch / "u.obj"), rep["seam"])
+    theirs_v, theirs_f = atelier.read_mesh(scratch / "r.obj")
+    assert rv.tobytes() == theirs_v.tobytes() and polygons(rf) == polygons(theirs_f)
 
 
 def test_bad_input_is_a_value_error_with_the_engines_message():
