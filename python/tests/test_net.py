@@ -52,6 +52,7 @@ def test_overlapping_boxes_have_the_analytic_volume(op, expected):
     assert abs(rep["volume"]["result"] - expected) < 1e-12
     assert rep["volume"]["a"] == pytest.approx(1.0) and rep["volume"]["b"] == pytest.approx(1.0)
     assert rep["intersection_polygons"] == 1
+    assert not v.flags.writeable and v.base is not None  # a view onto the engine's result
     # Watertight: every edge shared by exactly two faces.
     assert set(edge_uses(f).values()) == {2}
     # The seam lies on both boxes' surfaces.

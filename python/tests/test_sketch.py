@@ -72,6 +72,8 @@ def test_a_plane_cut_leaves_the_part_above_the_plane():
     assert 0.44 < left / full < 0.5
     assert rep["tools"][0]["removed_area"] == pytest.approx(full - left, rel=1e-9)
     mesh.validate()
+    # The result's arrays are read-only views onto the engine's model (zero copy).
+    assert np.shares_memory(mesh.vertices, mesh.vertices) and not rv.flags.writeable
 
 
 def test_same_file_as_the_cli(scratch):
