@@ -345,3 +345,80 @@ def render(
     progress: Progress = None,
 ) -> npt.NDArray[np.uint8]:
     """(H, W, 3) RGB picture; also a PNG at ``path``."""
+
+# ---------------------------------------------------------------- modelling families
+
+def boolean(
+    a: MeshLike,
+    b: MeshLike,
+    *,
+    op: str = "union",
+    mode: str = "exact",
+    correspondence: str = "visual",
+    join: str = "cut",
+    rule: str = "a",
+    self_check: bool = True,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[npt.NDArray[np.float64], Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]], dict[str, Any]]:
+    """Union, intersection or difference of two closed nets: (vertices, faces, report)."""
+
+def trim(
+    net: MeshLike,
+    curve: FloatArray,
+    *,
+    height: float = 0.0,
+    keep_enclosed: bool = False,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[npt.NDArray[np.float64], Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]], dict[str, Any]]:
+    """Trims a net by a closed curve on it: (vertices, faces, report)."""
+
+def round_off(
+    net: MeshLike,
+    seam: IndexArray,
+    *,
+    mu: float = 1.0,
+    nu: float = 1.0,
+    rings: int = 1,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[npt.NDArray[np.float64], Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]], dict[str, Any]]:
+    """Rounds off a seam by the umbrella energy: (vertices, faces, report)."""
+
+def surface_from_curves(
+    curves: Union[Path, Sequence[FloatArray]],
+    *,
+    levels: int = 2,
+    mesh: Optional[MeshLike] = None,
+    cycles: str = "angular",
+    n0: int = 3,
+    density: float = 0.0,
+    tolerance: float = 1e-6,
+    fairing: bool = True,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.uint32], dict[str, Any]]:
+    """A curve network to a Catmull-Clark surface through it: (vertices, faces, report)."""
+
+def flatten(
+    mesh: MeshLike,
+    *,
+    surfaces: Optional[Sequence[str]] = None,
+    grain: Optional[FloatArray] = None,
+    allow_holes: bool = False,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[npt.NDArray[np.float64], list[dict[str, Any]]]:
+    """Flattens the pieces into the plane: (uv (n, 2), pieces with distortion figures)."""
+
+def sketch(
+    mesh: MeshLike,
+    strokes: Union[Path, dict[str, Any]],
+    *,
+    surfaces: Optional[Sequence[str]] = None,
+    keep_going: bool = False,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[Mesh, dict[str, Any]]:
+    """Paints, cuts and partitions a mesh with strokes: (mesh, report)."""

@@ -73,6 +73,8 @@ ATELIER_PY_ARG(Colours)        // list of (r, g, b) or None
 ATELIER_PY_ARG(Colour)         // (r, g, b) or None
 ATELIER_PY_ARG(CurveName)      // str or int
 ATELIER_PY_ARG(NDArray)        // a returned array (or a list of arrays for mixed polygons)
+ATELIER_PY_ARG(Curves)         // a list of (k, 3) arrays or a curve file path
+ATELIER_PY_ARG(Strokes)        // a stroke file path or its JSON as a dict
 #undef ATELIER_PY_ARG
 
 // ------------------------------------------------------------ errors
@@ -300,6 +302,10 @@ void bind_garment(py::module_& m);
 void bind_regenerate(py::module_& m);
 void bind_profile(py::module_& m);
 void bind_view(py::module_& m);
+void bind_net(py::module_& m);
+void bind_curvenet(py::module_& m);
+void bind_pattern(py::module_& m);
+void bind_sketch(py::module_& m);
 
 }  // namespace atelier::python
 
@@ -326,4 +332,6 @@ ATELIER_PY_NAME(Colours, "list[tuple[float, float, float]] | None")
 ATELIER_PY_NAME(Colour, "tuple[float, float, float] | None")
 ATELIER_PY_NAME(CurveName, "str | int")
 ATELIER_PY_NAME(NDArray, "numpy.ndarray")
+ATELIER_PY_NAME(Curves, "list[numpy.ndarray] | os.PathLike")
+ATELIER_PY_NAME(Strokes, "dict | os.PathLike")
 #undef ATELIER_PY_NAME

@@ -27,5 +27,9 @@ engine's message.
   bind_regenerate(m);
   bind_profile(m);
   bind_view(m);
+  bind_net(m);
+  bind_curvenet(m);
+  bind_pattern(m);
+  bind_sketch(m);
   m.attr("__version__") = ATELIER_VERSION_STRING;
 }

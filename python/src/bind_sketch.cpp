@@ -1,0 +1,147 @@
+// Sketch tools (systems/sketch, seed 001 section 5): the call of
+// `atelier sketch`, over the same one library call (apply_strokes): a mesh
+// painted, cut and partitioned by the strokes of a stroke file (a path, or
+// the same JSON as a dict; docs/strokes.md).
+#include <atelier/storage/builder.h>
+#include <atelier/systems/sketch/sketch.h>
+#include <atelier/systems/view/strokes.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bind.h"
+
+namespace atelier::python {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+StrokeFile strokes_arg(py::handle strokes) {
+  if (py::isinstance<py::str>(strokes) || py::hasattr(strokes, "__fspath__")) {
+    const fs::path p = strokes.cast<fs::path>();
+    Expected<StrokeFile> f = [&] {
+      py::gil_scoped_release release;
+      return read_strokes(p);
+    }();
+    return unwrap(std::move(f));
+  }
+  if (!py::isinstance<py::dict>(strokes))
+    throw py::type_error("strokes: expected a stroke file path or a dict of its JSON (docs/strokes.md)");
+  // The dict as the JSON of a stroke file (json.dumps writes NaN for a
+  // non-finite number: parse_strokes refuses it by name).
+  const std::string text = py::module_::import("json").attr("dumps")(strokes).cast<std::string>();
+  return unwrap(parse_strokes(text, "strokes"));
+}
+
+py::dict report_dict(const Model& m, const SketchReport& r) {
+  py::list tools;
+  for (const StrokeReport& t : r.tools) {
+    py::dict j;
+    j["stroke"] = t.stroke;
+    j["strokes"] = t.strokes;
+    j["tool"] = to_string(t.tool);
+    j["through"] = t.through;
+    j["ok"] = t.status.is_ok();
+    if (!t.name.empty()) j["name"] = t.name;
+    if (!t.status) {
+      j["error"] = t.status.message();
+      tools.append(j);
+      continue;
+    }
+    py::list curves;
+    for (std::size_t c = 0; c < t.curve_lengths.size(); ++c)
+      curves.append(
+          py::dict(py::arg("length") = t.curve_lengths[c], py::arg("closed") = static_cast<bool>(t.curve_closed[c])));
+    j["curves"] = curves;
+    if (t.tool == StrokeTool::kPaint || t.tool == StrokeTool::kPaintThrough) {
+      py::list lines;
+      for (const AttribEdge& e : t.curves) {
+        if (!m.alive(e)) continue;
+        std::vector<Vec3d> pts;
+        for (AttribNodeIdx a : m.attrib_edges.nodes.row(e.idx.value)) pts.push_back(m.attrib_position_on_surface(a));
+        lines.append(py::dict(py::arg("surface") = m.surfaces.name[m.attrib_edges.surface[e.idx.value].value],
+                              py::arg("points") = adopt_points(std::move(pts))));
+      }
+      j["polylines"] = lines;
+    }
+    j["faces_added"] = t.faces_added;
+    j["nodes_added"] = t.nodes_added;
+    j["faces_removed"] = t.faces_removed;
+    j["crossings"] = t.crossings;
+    py::list pieces;
+    for (const Piece& p : t.pieces) {
+      py::dict pj(py::arg("faces") = p.faces, py::arg("area") = p.area, py::arg("removed") = p.removed);
+      if (!p.removed && m.alive(p.surface)) pj["surface"] = m.surfaces.name[p.surface.idx.value];
+      pieces.append(pj);
+    }
+    j["pieces"] = pieces;
+    if (t.tool == StrokeTool::kCut) j["removed_area"] = t.removed_area;
+    tools.append(j);
+  }
+  py::dict root;
+  root["failed"] = r.failed;
+  root["tools"] = tools;
+  return root;
+}
+
+}  // namespace
+
+void bind_sketch(py::module_& m) {
+  m.def(
+      "sketch",
+      [](const MeshLike& mesh, const Strokes& strokes, const std::optional<std::vector<std::string>>& surfaces,
+         bool keep_going, int threads, const Progress& progress) {
+        const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
+        Model model;
+        if (in->model)
+          model = *in->model;
+        else
+          (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+        const StrokeFile file = strokes_arg(strokes);
+        atelier::SketchOptions so;
+        so.keep_going = keep_going;
+        if (surfaces)
+          for (const std::string& name : *surfaces) {
+            SurfaceIdx found;
+            for (std::uint32_t s = 0; s < model.surfaces.slots.capacity(); ++s)
+              if (model.alive(SurfaceIdx{s}) && model.surfaces.name[s] == name) found = SurfaceIdx{s};
+            if (!found.valid()) value_error("surfaces: the mesh has no surface named '" + name + "'");
+            so.surfaces.push_back(found);
+          }
+        const SketchReport r = unwrap(
+            run_long(progress, threads, [&](const ExecContext& ctx) { return apply_strokes(model, file, so, ctx); }));
+        py::dict rep = report_dict(model, r);
+        (void)model.compact();  // the live nodes and faces in order, as the writers number them
+        rep["result"] = py::dict(py::arg("surfaces") = model.num_surfaces(), py::arg("nodes") = model.num_nodes(),
+                                 py::arg("faces") = model.num_faces(), py::arg("joints") = model.num_joints());
+        return py::make_tuple(mesh_of(std::move(model)), rep);
+      },
+      py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("surfaces") = py::none(),
+      py::arg("keep_going") = false, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+Paints, cuts and partitions a mesh with the strokes of a stroke file (``atelier sketch``; seed 001 section 5).
+
+mesh: a Mesh (``read_mesh``) or a (vertices, faces) pair.
+strokes: a stroke file path, or a dict of the same JSON (camera and
+    strokes, docs/strokes.md).
+surfaces: paint only on the surfaces of these names (default: all).
+keep_going: skip strokes that fail (report["failed"] counts them) instead
+    of raising.
+
+Returns (mesh, report): the result as a Mesh (pieces of a partition are its
+``surfaces``, ``face_surface`` says each face's; ``write_mesh`` gives the
+CLI's file) and a dict: ``failed`` and ``tools``, one dict per tool as the
+CLI's --json writes it (``tool``, ``ok``, ``curves`` with lengths,
+``polylines`` of painted curves as (k, 3) arrays, ``faces_added``,
+``pieces`` with areas, ``removed_area``...), and ``result`` (counts).
+Long call (GIL released, Ctrl-C cancels). Raises ValueError with the
+engine's message (naming the file and JSON location for bad stroke files,
+the stroke for a failed tool), FileNotFoundError for a missing file.
+)doc");
+}
+
+}  // namespace atelier::python
