@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <atelier/engine/status_format.h>
+#include <atelier/storage/mesh_edge_chain.h>
 
 #include "euler_detail.h"
 
@@ -155,20 +156,7 @@ RawSplit split_edge_raw(Model& m, HalfedgeIdx h, const Vec3d& p, bool new_forwar
     if (m.faces.halfedge[ft.value] == t) m.faces.halfedge[ft.value] = gt;  // keep the face's first corner b
   }
   // Mesh edge chain: the new edge goes next to e, in chain order.
-  if (const MeshEdgeIdx me = m.edges.mesh_edge[e.value]; me.valid()) {
-    auto row = m.mesh_edges.halfedges.row(me.value);
-    for (std::size_t k = 0; k < row.size(); ++k) {
-      if (row[k] == h) {
-        m.mesh_edges.halfedges.insert(me.value, k + 1, gs);
-        break;
-      }
-      if (row[k] == t) {
-        m.mesh_edges.halfedges.insert(me.value, k, gt);
-        break;
-      }
-    }
-    m.edges.mesh_edge[g.value] = me;
-  }
+  chain_split_edge(m, h, gs);
   // ATTRIB_EDGENODEs: to the half holding them, u reparametrised (seed 001 Fig. 6b).
   auto& an = m.attrib_nodes;
   for (AttribNodeIdx x : touched.edge_nodes) {

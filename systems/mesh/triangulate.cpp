@@ -12,6 +12,8 @@
 #include <limits>
 #include <sstream>
 
+#include <atelier/storage/mesh_edge_chain.h>
+
 namespace atelier {
 
 namespace {
@@ -97,21 +99,7 @@ HalfedgeIdx split_side(Model& m, HalfedgeIdx h, NodeIdx x) {
     m.link_face(gt, t);
   }
   m.edges.flags[e2.value] = m.edges.flags[e.value];
-  const MeshEdgeIdx me = m.edges.mesh_edge[e.value];
-  if (me.valid()) {
-    auto row = m.mesh_edges.halfedges.row(me.value);
-    for (std::size_t i = 0; i < row.size(); ++i) {
-      if (row[i] == h) {
-        m.mesh_edges.halfedges.insert(me.value, i + 1, g);
-        break;
-      }
-      if (row[i] == t) {
-        m.mesh_edges.halfedges.insert(me.value, i, gt);
-        break;
-      }
-    }
-    m.edges.mesh_edge[e2.value] = me;
-  }
+  chain_split_edge(m, h, g);
   return g;
 }
 

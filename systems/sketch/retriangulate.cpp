@@ -9,6 +9,7 @@
 #include <atelier/engine/status_format.h>
 #include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/sketch/retriangulate.h>
+#include <atelier/storage/mesh_edge_chain.h>
 
 #include <algorithm>
 #include <array>
@@ -862,20 +863,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       const EdgeIdx e2 = m.new_edge(x, b);
       const HalfedgeIdx g = halfedge_of(e2, 0), gt = halfedge_of(e2, 1);
       m.edges.flags[e2.value] = m.edges.flags[e];
-      if (const MeshEdgeIdx me = m.edges.mesh_edge[edge_of(h).value]; me.valid()) {
-        auto row = m.mesh_edges.halfedges.row(me.value);
-        for (std::size_t i = 0; i < row.size(); ++i) {
-          if (row[i] == h) {
-            m.mesh_edges.halfedges.insert(me.value, i + 1, g);
-            break;
-          }
-          if (row[i] == t) {
-            m.mesh_edges.halfedges.insert(me.value, i, gt);
-            break;
-          }
-        }
-        m.edges.mesh_edge[e2.value] = me;
-      }
+      chain_split_edge(m, h, g);
       h = g;
     }
     chain.push_back(last);
