@@ -287,6 +287,7 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
                              " piece(s) of the traced mesh's boundary (curve ids -1, -2, ...)");
   }
   rep.seconds["traced mesh"] = seconds_since(t0);
+  ctx.report("surface: traced mesh", 1, 7);
 
   // ---- 1. curve treatment.
   t0 = Clock::now();
@@ -296,6 +297,7 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
   rep.treatment = treated->report;
   rep.warnings.insert(rep.warnings.end(), rep.treatment.warnings.begin(), rep.treatment.warnings.end());
   rep.seconds["curve treatment"] = seconds_since(t0);
+  ctx.report("surface: curve treatment", 2, 7);
 
   // ---- 2. face cycles.
   t0 = Clock::now();
@@ -332,6 +334,7 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
   if (!out.cycles.stop_rule_met)
     rep.warnings.push_back("the paper's cycle search stopped with segments in fewer than two cycles");
   rep.seconds["face cycles"] = seconds_since(t0);
+  ctx.report("surface: face cycles", 3, 7);
 
   // ---- 3-4. control mesh (density, parity, quadrangulation, fairing).
   t0 = Clock::now();
@@ -355,6 +358,7 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
     rep.warnings.push_back(std::to_string(cm.inverted_quads) +
                            " control quad(s) fold against their face cycle (strongly concave cycles)");
   rep.seconds["control mesh"] = seconds_since(t0);
+  ctx.report("surface: control mesh", 4, 7);
 
   // ---- 5. Catmull-Clark with creases.
   t0 = Clock::now();
@@ -380,6 +384,7 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
   for (const Vec3d& p : out.refined.mesh.positions)
     if (!p.allFinite()) return Status(ErrorCode::kDegenerate, "surface: the subdivided surface has non-finite points");
   rep.seconds["subdivision"] = seconds_since(t0);
+  ctx.report("surface: subdivision", 5, 7);
 
   // ---- the Model surface.
   t0 = Clock::now();
@@ -390,6 +395,7 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
                     "surface: the subdivided mesh was refused as a surface: " + s.status().message());
   }
   rep.seconds["model"] = seconds_since(t0);
+  ctx.report("surface: model", 6, 7);
 
   // ---- distances.
   t0 = Clock::now();
@@ -408,6 +414,7 @@ Expected<CurveSurface> surface_from_curves(const PolylineSet& curves, const Poly
     }
   }
   rep.seconds["distances"] = seconds_since(t0);
+  ctx.report("surface: distances", 7, 7);
   return out;
 }
 

@@ -351,6 +351,9 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   TriMesh A, B;
   if (Status s = build_tri_mesh(sa, "A", A, ctx); !s) return s;
   if (Status s = build_tri_mesh(sb, "B", B, ctx); !s) return s;
+  // Five stages reported to ctx.progress, each ending in a cancellation check.
+  constexpr std::size_t kStages = 5;
+  if (Status s = stage_done(ctx, "boolean: input", 1, kStages); !s) return s;
   rep.volume_a = soup_volume(sa);
   rep.volume_b = soup_volume(sb);
   rep.area_a = soup_area(sa);
@@ -372,8 +375,11 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     }
   }
 
+  if (Status s = stage_done(ctx, "boolean: self-intersection check", 2, kStages); !s) return s;
+
   Cut cut;
   if (Status st = cut_nets(A, bvh_a, B, bvh_b, ctx, cut); !st) return st;
+  if (Status s = stage_done(ctx, "boolean: cut", 3, kStages); !s) return s;
   rep.candidate_pairs = cut.candidate_pairs;
   rep.intersecting_pairs = cut.intersecting_pairs;
   rep.intersection_points = cut.new_keys.size();
@@ -467,6 +473,8 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     }
   }
 
+  if (Status s = stage_done(ctx, "boolean: classify", 4, kStages); !s) return s;
+
   // ---- intersection polygons: components of the edges both nets share
   std::vector<std::uint64_t> common;
   {
@@ -545,6 +553,7 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     rep.volume = soup_volume(out);
     rep.area = soup_area(out);
   }
+  if (Status s = stage_done(ctx, "boolean: result", 5, kStages); !s) return s;
   return rep;
 }
 

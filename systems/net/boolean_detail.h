@@ -16,6 +16,7 @@
 #include <sstream>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace atelier::net_detail {
@@ -30,6 +31,15 @@ template <class... A>
   return {c, s.str()};
 }
 
+/// The end of one stage of a net operation: progress(stage, done, total) to
+/// the caller, then kCancelled if the caller cancelled. The stages are
+/// coarse (each at most a parallel pass), so a cancel is seen within one.
+[[nodiscard]] inline Status stage_done(const ExecContext& ctx, std::string_view stage, std::size_t done,
+                                       std::size_t total) {
+  ctx.report(stage, done, total);
+  if (ctx.cancelled()) return {ErrorCode::kCancelled, std::string(stage) + ": cancelled"};
+  return {};
+}
 
 /// A simplex of one net: dimension (0 vertex, 1 edge, 2 triangle, 3 none)
 /// and index, packed so keys sort and compare as integers.

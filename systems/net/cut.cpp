@@ -42,7 +42,9 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
   const auto pairs = overlapping_pairs(A, bvh_a, B, bvh_b, ctx);
   out.candidate_pairs = pairs.size();
   std::vector<PairHit> hits(pairs.size());
+  if (ctx.cancelled()) return {ErrorCode::kCancelled, "cut: cancelled"};
   par::for_each_n(ctx, pairs.size(), [&](std::size_t i) { intersect_pair(A, pairs[i][0], B, pairs[i][1], hits[i]); });
+  if (ctx.cancelled()) return {ErrorCode::kCancelled, "cut: cancelled"};
   std::vector<std::uint32_t> met;
   for (std::uint32_t i = 0; i < pairs.size(); ++i)
     if (!hits[i].points.empty()) met.push_back(i);
@@ -148,6 +150,7 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
 
   // ---- re-triangulate the cut triangles (exact), in parallel
   for (CutSide& s : sides) {
+    if (ctx.cancelled()) return {ErrorCode::kCancelled, "cut: cancelled"};
     std::vector<Status> status(s.cut.size());
     par::for_each_n(ctx, s.cut.size(), [&](std::size_t c) {
       auto& pts = s.points[c];

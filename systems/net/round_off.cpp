@@ -17,6 +17,7 @@ namespace atelier {
 namespace {
 
 using net_detail::fail;
+using net_detail::stage_done;
 
 using SpMat = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 using Trip = Eigen::Triplet<double>;
@@ -108,7 +109,6 @@ Expected<double> umbrella_energy(const Model& m, std::span<const std::uint8_t> f
 
 Expected<RoundReport> round_off(Model& m, std::span<const NodeIdx> seam, const RoundOptions& opt,
                                 const ExecContext& ctx) {
-  (void)ctx;
   if (Status s = check_weights(opt); !s) return s;
   const std::size_t nodes = m.nodes.position.size();
   if (seam.empty()) return fail(ErrorCode::kInvalidArgument, "round: the seam is empty");
@@ -150,6 +150,7 @@ Expected<RoundReport> round_off(Model& m, std::span<const NodeIdx> seam, const R
         mt.emplace_back(row, col[static_cast<std::size_t>(it.col())], it.value());
   Eigen::SparseMatrix<double> M(res.r.rows(), static_cast<int>(free_nodes.size()));
   M.setFromTriplets(mt.begin(), mt.end());
+  if (Status s = stage_done(ctx, "round: system", 1, 3); !s) return s;
   const Eigen::SparseMatrix<double> A = M.transpose() * M;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
   if (solver.info() != Eigen::Success ||
@@ -159,6 +160,8 @@ Expected<RoundReport> round_off(Model& m, std::span<const NodeIdx> seam, const R
   const Eigen::MatrixX3d rhs = -(M.transpose() * c);
   const Eigen::MatrixX3d xf = solver.solve(rhs);
   if (!xf.allFinite()) return fail(ErrorCode::kDegenerate, "round: the minimiser is not finite");
+  // The last chance to cancel: after it the model is written.
+  if (Status s = stage_done(ctx, "round: solve", 2, 3); !s) return s;
   Eigen::MatrixX3d x1 = x0;
   for (std::size_t k = 0; k < free_nodes.size(); ++k)
     x1.row(static_cast<int>(free_nodes[k])) = xf.row(static_cast<int>(k));
@@ -171,6 +174,7 @@ Expected<RoundReport> round_off(Model& m, std::span<const NodeIdx> seam, const R
   rep.moved = true;
   for (std::uint32_t p : free_nodes) m.nodes.position[p] = x1.row(static_cast<int>(p)).transpose();
   ++m.geometry_version;
+  ctx.report("round: result", 3, 3);
   return rep;
 }
 

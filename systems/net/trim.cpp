@@ -96,8 +96,10 @@ Expected<TrimReport> trim_net(const PolygonSoupView& net, std::span<const Vec3d>
   Bvh bvh_a, bvh_s;
   build_bvh(A, bvh_a, ctx);
   build_bvh(S, bvh_s, ctx);
+  if (Status s = stage_done(ctx, "trim: band", 1, 3); !s) return s;
   Cut cut;
   if (Status s = cut_nets(A, bvh_a, S, bvh_s, ctx, cut); !s) return s;
+  if (Status s = stage_done(ctx, "trim: cut", 2, 3); !s) return s;
   rep.cut_points = cut.new_keys.size();
 
   // Parts: components of pieces; does a part reach the net's boundary? its area?
@@ -139,6 +141,7 @@ Expected<TrimReport> trim_net(const PolygonSoupView& net, std::span<const Vec3d>
   std::vector<std::uint8_t> face_side;
   emit_side(cut, A, S, 0, net, false, rep.result, out_index, face_side);
   rep.area_after = soup_area(rep.result);
+  if (Status s = stage_done(ctx, "trim: result", 3, 3); !s) return s;
   return rep;
 }
 

@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <mutex>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -546,8 +547,14 @@ Expected<FlattenReport> ModelFlattener::flatten(std::span<const Vec3d> positions
   ExecContext outer = ctx;
   outer.sequential_threshold = 2;
   outer.grain = 1;
+  std::mutex report_mutex;  // ctx.progress is called from one thread at a time
+  std::size_t finished = 0;
+  ctx.report("flatten: pieces", 0, pieces_.size());
   par::for_each_n(outer, pieces_.size(), [&](std::size_t i) {
-    if (!ctx.cancelled()) done[i] = pieces_[i].flatten(positions, out, warm_start, ctx);
+    if (ctx.cancelled()) return;
+    done[i] = pieces_[i].flatten(positions, out, warm_start, ctx);
+    const std::lock_guard<std::mutex> lock(report_mutex);
+    ctx.report("flatten: pieces", ++finished, pieces_.size());
   });
   FlattenReport rep;
   for (auto& d : done) {

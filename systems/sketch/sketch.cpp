@@ -150,6 +150,7 @@ Expected<SketchReport> apply_strokes(Model& m, const StrokeFile& file, const Ske
     }
     i += rep.strokes;
     out.tools.push_back(std::move(rep));
+    ctx.report("sketch: strokes", i, file.strokes.size());
   }
   return out;
 }
