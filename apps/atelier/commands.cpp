@@ -133,6 +133,26 @@ CLI::Validator body_count_check() {
       "COUNT");
 }
 
+std::string unknown_subcommand(const CLI::App& app, int argc, const char* const* argv) {
+  if (!app.get_subcommands().empty()) return {};  // a subcommand was recognised: its own error
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a = argv[i];
+    if (a == "--threads" || a == "--seed") {
+      ++i;  // their value
+      continue;
+    }
+    if (a.empty() || a[0] == '-') continue;
+    std::string known;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      if (sub->get_name() == a) return {};
+      known += (known.empty() ? "" : ", ") + sub->get_name();
+    }
+    return "atelier: unknown subcommand '" + std::string(a) + "'; the subcommands are: " + known +
+           " (atelier --help)";
+  }
+  return {};
+}
+
 CLI::Validator clearance_check() {
   return CLI::Validator(
       [](std::string& text) -> std::string {

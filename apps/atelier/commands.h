@@ -61,6 +61,20 @@ inline constexpr double kMaxClearance = 1.0;
 /// `--clearance`: a finite distance in [0, kMaxClearance] metres.
 [[nodiscard]] CLI::Validator clearance_check();
 
+/// The footer of every --help: the global options, which may stand before
+/// or after the subcommand.
+inline constexpr const char* kGlobalOptionsHelp =
+    "Global options (before or after the subcommand):\n"
+    "  --threads N    worker threads (0 = all cores)\n"
+    "  --seed S       random seed for sampled bodies\n"
+    "  --quiet        only warnings and errors\n"
+    "  --log-json     log lines as JSON on stderr (for pipelines)\n"
+    "  --version      print the version and exit";
+/// When a parse failed because the first word that is not an option (nor
+/// the value of a global option) names no subcommand: the error naming it
+/// and the subcommands there are. Empty otherwise.
+[[nodiscard]] std::string unknown_subcommand(const CLI::App& app, int argc, const char* const* argv);
+
 struct BodiesOptions {
   std::string source = "mannequin";  // mannequin | makehuman | a directory of OBJ files
   std::size_t count = 100;

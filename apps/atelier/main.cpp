@@ -31,6 +31,11 @@ int main(int argc, char** argv) {
   app.add_option("--seed", common.seed, "random seed for sampled bodies");
   app.add_flag("--quiet", common.quiet, "only warnings and errors");
   app.add_flag("--log-json", common.log_json, "log lines as JSON on stderr (for pipelines)");
+  // Global options may come after the subcommand too (`atelier regen
+  // --threads 2`): subcommands made below inherit fallthrough and the footer
+  // that lists them in every --help.
+  app.fallthrough();
+  app.footer(kGlobalOptionsHelp);
 
   DemoOptions demo;
   auto* demo_cmd = app.add_subcommand("demo", "sample mannequin bodies and regenerate the project's templates on each");
@@ -82,6 +87,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (const std::string unknown = unknown_subcommand(app, argc, argv); !unknown.empty()) {
+      std::fprintf(stderr, "%s\n", unknown.c_str());
+      return kExitUsage;
+    }
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitUsage;
   }

@@ -112,3 +112,47 @@ TEST(Cli, ConvertToOffWarnsThatSurfacesAreMerged) {
   auto v = run("validate " + (d / "two.ply").string());
   EXPECT_NE(v.out.find("2 surfaces"), std::string::npos) << v.out;
 }
+
+TEST(Cli, GlobalOptionsWorkAfterTheSubcommandAndEveryHelpListsThem) {
+  const fs::path d = dir("cli_global_options");
+  auto slurp = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  // The same seed before and after the subcommand gives the same bodies;
+  // the default seed gives others (so the option after it was not ignored).
+  ASSERT_EQ(run("--seed 5 bodies --count 3 --out " + (d / "before").string()).code, 0);
+  ASSERT_EQ(run("bodies --count 3 --out " + (d / "after").string() + " --seed 5 --threads 1 --quiet").code, 0);
+  ASSERT_EQ(run("bodies --count 3 --out " + (d / "default").string()).code, 0);
+  const std::string before = slurp(d / "before" / "measurements.csv");
+  ASSERT_FALSE(before.empty());
+  EXPECT_EQ(before, slurp(d / "after" / "measurements.csv"));
+  EXPECT_NE(before, slurp(d / "default" / "measurements.csv"));
+  // --quiet after the subcommand silences the progress lines as before it.
+  const auto quiet = run("bodies --count 2 --out " + (d / "quiet").string() + " --quiet");
+  EXPECT_EQ(quiet.code, 0);
+  EXPECT_EQ(quiet.out.find("bodies 2/2"), std::string::npos) << quiet.out;
+
+  // An unknown subcommand is named, with the list of those there are; every
+  // one of them lists the global options in its --help.
+  const auto bad = run("--threads 2 frobnicate --out x");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.out.find("unknown subcommand 'frobnicate'"), std::string::npos) << bad.out;
+  const std::string key = "the subcommands are: ";
+  const auto at = bad.out.find(key);
+  ASSERT_NE(at, std::string::npos);
+  std::string list = bad.out.substr(at + key.size());
+  list = list.substr(0, list.find(" ("));
+  std::size_t count = 0;
+  for (std::size_t b = 0; b < list.size();) {
+    const std::size_t e = std::min(list.find(", ", b), list.size());
+    const std::string sub = list.substr(b, e - b);
+    b = e + 2;
+    ++count;
+    const auto help = run(sub + " --help");
+    EXPECT_EQ(help.code, 0) << sub;
+    for (const char* opt : {"--threads N", "--seed S", "--quiet", "--log-json"})
+      EXPECT_NE(help.out.find(opt), std::string::npos) << sub << " --help does not list " << opt;
+  }
+  EXPECT_GE(count, 14u);
+}
