@@ -1,11 +1,14 @@
 #include <atelier/io/atomic_file.h>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cstring>
+#include <limits>
 #include <system_error>
 
 #include <atelier/engine/status.h>
@@ -92,6 +95,47 @@ void write_atomically(const std::filesystem::path& path, const std::function<voi
   AtomicFile f(path);
   produce(f);
   f.commit();
+}
+
+namespace {
+
+/// The writer's pid of a name `<dest>.tmp.<pid>.<n>`, or 0 when the name is
+/// not one of AtomicFile's temporaries.
+pid_t temporary_writer(const std::string& name) {
+  const std::size_t dot_n = name.rfind('.');
+  if (dot_n == std::string::npos || dot_n + 1 == name.size()) return 0;
+  const std::size_t dot_pid = name.rfind('.', dot_n - 1);
+  if (dot_pid == std::string::npos || dot_pid < 4 || name.compare(dot_pid - 4, 4, ".tmp") != 0) return 0;
+  auto all_digits = [&](std::size_t b, std::size_t e) {
+    if (b >= e) return false;
+    for (std::size_t i = b; i < e; ++i)
+      if (name[i] < '0' || name[i] > '9') return false;
+    return true;
+  };
+  if (!all_digits(dot_n + 1, name.size()) || !all_digits(dot_pid + 1, dot_n)) return 0;
+  long pid = 0;
+  const auto [p, ec] = std::from_chars(name.data() + dot_pid + 1, name.data() + dot_n, pid);
+  if (ec != std::errc() || pid <= 0 || pid > std::numeric_limits<pid_t>::max()) return 0;
+  return static_cast<pid_t>(pid);
+}
+
+}  // namespace
+
+std::size_t remove_stale_temporaries(const std::filesystem::path& dir) noexcept {
+  std::size_t removed = 0;
+  std::error_code ec;
+  std::filesystem::directory_iterator it(dir, ec), end;
+  for (; !ec && it != end; it.increment(ec)) {
+    std::error_code e2;
+    if (!it->is_regular_file(e2)) continue;
+    const pid_t pid = temporary_writer(it->path().filename().string());
+    if (pid == 0 || pid == ::getpid()) continue;
+    // ESRCH: no such process, so nobody will commit or remove this file.
+    // EPERM means a live process of another user: keep it.
+    if (::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    removed += std::filesystem::remove(it->path(), e2) ? 1 : 0;
+  }
+  return removed;
 }
 
 }  // namespace atelier

@@ -51,4 +51,13 @@ class AtomicFile {
 /// was there before.
 void write_atomically(const std::filesystem::path& path, const std::function<void(AtomicFile&)>& produce);
 
+/// Removes the temporaries `<name>.tmp.<pid>.<n>` in `dir` (not recursive)
+/// that a writer killed before commit() left behind: those whose <pid> is no
+/// running process (kill(pid, 0) fails with ESRCH). A temporary of a live
+/// process (this one, or another run writing into the same folder) is kept;
+/// a pid reused by an unrelated process keeps its file until a later call.
+/// Reads and writes: the directory's entries. Returns the number removed;
+/// entries that cannot be read or removed are skipped (never throws).
+std::size_t remove_stale_temporaries(const std::filesystem::path& dir) noexcept;
+
 }  // namespace atelier

@@ -168,6 +168,23 @@ CLI::Validator clearance_check() {
       "METRES");
 }
 
+void make_output_dir(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) return;
+  fs::create_directories(dir, ec);
+  if (!ec && fs::is_directory(dir)) return;
+  // Name what is in the way: the nearest existing part of the path that is not a folder.
+  for (fs::path p = dir; !p.empty() && p != p.parent_path(); p = p.parent_path()) {
+    std::error_code e2;
+    const auto st = fs::status(p, e2);
+    if (fs::exists(st) && !fs::is_directory(st))
+      throw Error(Status(ErrorCode::kIo, dir.string() + ": cannot create the output folder: " + p.string() +
+                                             " is a file, not a folder"));
+  }
+  throw Error(Status(ErrorCode::kIo, dir.string() + ": cannot create the output folder: " +
+                                         (ec ? ec.message() : std::string("not a folder"))));
+}
+
 std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt) {
   const ExecContext ctx = common.context();
   std::unique_ptr<BodySource> src;
@@ -182,7 +199,7 @@ std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesO
   } else if (opt.source == "makehuman") {
     auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(opt.data / "makehuman", ctx));
     auto ref = std::make_shared<const ReferenceBody>(makehuman::make_reference_body(*lib));
-    src = std::make_unique<makehuman::MakeHumanSource>(lib, makehuman::sample_adults(opt.count, common.seed), ref);
+    src = std::make_unique<makehuman::MakeHumanSource>(lib, opt.count, common.seed, ref);
   } else {
     // Not a directory: a misspelt source name, which "--reference is
     // required" would only hide.
@@ -201,7 +218,7 @@ std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesO
 int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
   const ExecContext ctx = common.context();
   std::unique_ptr<BodySource> src = make_body_source(common, opt);
-  fs::create_directories(opt.out);
+  make_output_dir(opt.out);
   const auto ref = src->reference();
   BodySet chunk(ref);
   std::vector<BodyFailure> failures;

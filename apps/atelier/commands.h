@@ -47,6 +47,12 @@ void check_mesh_output(const std::filesystem::path& p);
 /// merges surfaces, which is logged as a warning.
 void write_mesh_file(const Model& m, const std::filesystem::path& p, const Log& log);
 
+/// Creates the output folder `dir` (and its parents). Error(kIo), exit 3,
+/// naming the path when it cannot: a file where a folder should be (that
+/// file named), no permission. std::filesystem's own exception would be an
+/// "internal error" (exit 4) at the entry point.
+void make_output_dir(const std::filesystem::path& dir);
+
 int run_validate(const Common& common, const std::filesystem::path& file, Log& log);
 int run_convert(const Common& common, const std::filesystem::path& in, const std::filesystem::path& out, Log& log);
 

@@ -143,7 +143,7 @@ DemoReference set_up(const DemoOptions& opt, const ExecContext& ctx, Log& log) {
   auto made = make_project_templates(ref);
   if (!made) throw Error(made.status());
   r.templates = std::move(*made);
-  fs::create_directories(opt.out / "templates");
+  make_output_dir(opt.out / "templates");
   for (const auto& t : r.templates) {
     write_obj(t.model, opt.out / "templates" / (t.name + ".obj"));
     for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) r.roi.extend(t.model.nodes.position[v]);
@@ -443,12 +443,14 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
       if (rows[i].contains(c) && rows[i][c].get<double>() < rows[best][c].get<double>()) best = i;
     if (!rows.empty()) picks.emplace_back(best, std::string("lowest ") + c);
   }
-  for (const char* c : {"shorts_strain_p95", "top_ms"}) {
+  // Quality figures only, never a timing (the "_ms" columns): the same run
+  // picks the same pictures (issue 27).
+  for (const char* c : {"shorts_strain_p95", "top_profile_error_mm"}) {
     auto w = worst_rows(html, c, 1);
     if (!w.empty()) picks.emplace_back(w[0], std::string("highest ") + c);
   }
   nlohmann::json pictures = nlohmann::json::array();
-  fs::create_directories(opt.out / "pictures");
+  make_output_dir(opt.out / "pictures");
   std::vector<std::size_t> done_rows;
   for (const auto& [row, why] : picks) {
     if (std::find(done_rows.begin(), done_rows.end(), row) != done_rows.end()) continue;
@@ -501,7 +503,7 @@ void print_summary(const DemoOptions& opt, const DemoReference& ref, const DemoR
 int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   const auto t_start = std::chrono::steady_clock::now();
   const ExecContext ctx = common.context();
-  fs::create_directories(opt.out / "meshes");
+  make_output_dir(opt.out / "meshes");
 
   // The reference mannequin, the shorts encoded on it, the profile templates.
   const DemoReference ref = set_up(opt, ctx, log);

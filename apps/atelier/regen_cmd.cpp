@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "mpi_split.h"
+#include "regen_job.h"
 #include <atelier/engine/parallel.h>
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/makehuman/makehuman.h>
@@ -129,7 +130,7 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
     lib.emplace(makehuman::HumanLibrary::load(opt.data / "makehuman", common.context()));
     ref = makehuman::make_reference_body(*lib);
   }
-  fs::create_directories(opt.out);
+  make_output_dir(opt.out);
   int written = 0;
   if (!opt.garment.empty()) {
     encode_garment_files(common, opt, ref, lib ? &*lib : nullptr, log);
@@ -237,7 +238,7 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
                                                    " (encode the template on this reference with `atelier encode`)"));
   }
   job.bodies_dir = opt.out / "bodies";
-  fs::create_directories(job.bodies_dir);
+  make_output_dir(job.bodies_dir);
   return job;
 }
 
@@ -292,11 +293,11 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
     if (!mpi::regen_share(c, group.rank(), group.size())) continue;
     const std::size_t count = std::min(opt.chunk, n - first);
     share_seen += count;
-    // Resume: bodies whose record exists are complete.
+    // Resume: bodies whose record says ok are complete; failed ones are retried.
     std::vector<std::uint8_t> pending(count, 1);
     bool any = false;
     for (std::size_t i = 0; i < pending.size(); ++i) {
-      if (!opt.no_resume && fs::exists(bodies_dir / (src.body_name(first + i) + ".json"))) {
+      if (!opt.no_resume && body_record_complete(bodies_dir / (src.body_name(first + i) + ".json"))) {
         pending[i] = 0;
         ++job.skipped;
       }
@@ -349,9 +350,17 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           if (g.quality.inside > 0)
             throw Error(Status(ErrorCode::kDegenerate, d.name + ": " + std::to_string(g.quality.inside) +
                                                            " vertices could not be pushed out of the body"));
+          const GarmentQuality& gq = g.quality;
+          require_finite(d.name, g.positions,
+                         {{"max_depth_m", gq.max_depth},
+                          {"min_clearance_m", gq.min_clearance},
+                          {"mean_clearance_m", gq.mean_clearance},
+                          {"clearance_error_m", gq.clearance_error},
+                          {"strain_max", gq.strain_max},
+                          {"strain_p95", gq.strain_p95}});
           per[d.name] = garment_quality_json(g.quality);
           if (index < opt.meshes) {
-            fs::create_directories(bodies_dir / chunk.name(b));
+            make_output_dir(bodies_dir / chunk.name(b));
             write_garment_mesh(d.mesh, g.positions, bodies_dir / chunk.name(b) / (d.name + ".obj"));
           }
         }
@@ -361,9 +370,18 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           if (r.quality.inside > 0)
             throw Error(Status(ErrorCode::kDegenerate, t.name + ": " + std::to_string(r.quality.inside) +
                                                            " nodes could not be pushed out of the body"));
+          const RegenQuality& q = r.quality;
+          require_finite(t.name, r.model.nodes.position,
+                         {{"max_depth_m", q.max_depth},
+                          {"min_distance_m", q.min_distance},
+                          {"node_clearance_error_m", q.node_clearance_error},
+                          {"profile_error_m", q.profile_error},
+                          {"umbrella", q.umbrella},
+                          {"crack_m", q.crack}},
+                         &r.model);
           per[t.name] = quality_json(r.quality);
           if (index < opt.meshes) {
-            fs::create_directories(bodies_dir / chunk.name(b));
+            make_output_dir(bodies_dir / chunk.name(b));
             write_obj(r.model, bodies_dir / chunk.name(b) / (t.name + ".obj"));
           }
         }
@@ -478,10 +496,18 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
   // error is caught, logged and reduced instead of leaving the others
   // waiting; one process keeps the plain exception path of main().
   std::optional<RegenJob> job;
+  nlohmann::json definition;
   int code = kExitOk;
   try {
     job.emplace(prepare_regen(common, opt));
-    regen_share(common, opt, group, *job, log);
+    definition = describe_regen_job(common, opt);  // job.json: a rerun resumes only its own job
+    if (const std::string refused = claim_regen_folder(opt.out, definition, opt.no_resume, group.rank() == 0);
+        refused.empty()) {
+      regen_share(common, opt, group, *job, log);
+    } else {
+      log.error(who + refused);
+      code = kExitUsage;
+    }
   } catch (const Error& e) {
     if (!group.distributed()) throw;
     log.error(who + e.what());
@@ -506,6 +532,9 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
 
   if (group.rank() == 0 && code < kExitUsage) {
     try {
+      // Every rank is done writing: temporaries of killed runs can go.
+      remove_stale_regen_temporaries(opt.out);
+      record_regen_job(opt.out, definition);
       const MergeCounts m = merge_report(common, opt, *job);
       const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
       std::size_t done = 0, skipped = 0;

@@ -16,8 +16,10 @@
 //       pass; its record has inside nodes, clearance error and strain). Per
 //       body, run/bodies/<body>/<template>.obj (first --meshes bodies) and
 //       run/bodies/<body>.json, the body's quality record,
-//       written last and atomically: it marks the body complete, so a rerun
-//       skips it (resume after a kill). A failing body is recorded with its
+//       written last and atomically: an "ok" record marks the body complete,
+//       so a rerun of the same job skips it (resume after a kill) and retries
+//       failed ones; run/job.json says what the job is, and a rerun of
+//       another job into run/ is refused (apps/atelier/regen_job.h). A failing body is recorded with its
 //       reason and the others go on (exit code 1). run/report.json merges
 //       the records in body order; it holds no timings, so the same inputs
 //       and seed give byte-identical outputs for any --threads (timings go to

@@ -52,9 +52,27 @@ CLI::App* add_render_subcommand(CLI::App& app, RenderOptions& opt) {
   return cmd;
 }
 
+std::size_t render_cost_bytes(const RenderOptions& opt) noexcept {
+  const std::size_t views = opt.view == "both" ? 2 : 1;
+  const std::size_t pixels = std::size_t{opt.width} * opt.height;
+  return render_scene_bytes(opt.width, opt.height) + pixels * views * (3 + 3 + 6);
+}
+
 int run_render(const Common& common, const RenderOptions& opt, Log& log) {
   if (opt.body.empty() && opt.garments.empty()) {
     log.error("render: give --body and/or --garment");
+    return kExitUsage;
+  }
+  if (const std::size_t cost = render_cost_bytes(opt); cost > kRenderMaxBytes) {
+    const double rays = static_cast<double>(opt.width) * opt.height * (opt.view == "both" ? 2 : 1) *
+                        (1 + (opt.supersample > 1 ? opt.supersample * opt.supersample : 0));
+    char msg[400];
+    std::snprintf(msg, sizeof msg,
+                  "render: a %u x %u picture (%s view) needs about %.1f GB of memory and %.2g rays per mesh; the "
+                  "limit is %.1f GB: use a smaller --width/--height",
+                  opt.width, opt.height, opt.view.c_str(), static_cast<double>(cost) / 1e9, rays,
+                  static_cast<double>(kRenderMaxBytes) / 1e9);
+    log.error(msg);
     return kExitUsage;
   }
   ExecContext ctx = common.context();

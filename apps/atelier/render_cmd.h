@@ -24,6 +24,15 @@ struct RenderOptions {
   bool no_outlines = false;
 };
 
+/// The most memory `render` may plan to use, in bytes (2 GiB): a larger
+/// picture is refused before any work, with its cost (issue 27: 8192 x 8192,
+/// both views, grew past 2.5 GB).
+inline constexpr std::size_t kRenderMaxBytes = std::size_t{2} << 30;
+/// Peak memory of `render` for these options: one view's render_scene
+/// buffers (systems/view/render.h), the pictures kept, their side-by-side
+/// copy and the PNG's bytes (at most 6 a pixel).
+[[nodiscard]] std::size_t render_cost_bytes(const RenderOptions& opt) noexcept;
+
 /// Declares the subcommand and its options on `app` (filled into `opt`).
 CLI::App* add_render_subcommand(CLI::App& app, RenderOptions& opt);
 /// Reads the meshes (OBJ, PLY or OFF), renders and writes the PNG atomically.

@@ -1,6 +1,7 @@
 #include <atelier/systems/body/body_set.h>
 
 #include <algorithm>
+#include <limits>
 #include <sstream>
 
 #include <atelier/engine/parallel.h>
@@ -20,10 +21,14 @@ Status add_impl(std::vector<float>& data, std::vector<std::string>& names, std::
     s << "body '" << name << "' has " << p.size() << " positions, the body set needs " << n;
     return {ErrorCode::kMismatch, s.str()};
   }
+  // Stored as float: a finite double beyond the float range (1e300) would
+  // become infinity.
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
   for (std::size_t v = 0; v < n; ++v)
-    if (!p[v].allFinite()) {
+    if (!p[v].allFinite() || p[v].template cast<double>().cwiseAbs().maxCoeff() > kFloatMax) {
       std::ostringstream s;
-      s << "body '" << name << "': node " << v << " has a non-finite position";
+      s << "body '" << name << "': node " << v << " has a non-finite position"
+        << (p[v].allFinite() ? " once stored as float (a coordinate beyond 3.4e38)" : "");
       return {ErrorCode::kDegenerate, s.str()};
     }
   const std::size_t base = data.size();

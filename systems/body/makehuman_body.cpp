@@ -90,10 +90,16 @@ double macro_target_weight(std::string_view name, const MacroParams& p) {
 }
 
 std::vector<MacroParams> sample_adults(std::size_t n, std::uint64_t seed) {
-  std::vector<MacroParams> out(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    SplitMix64 r(stream_seed(seed, i));
-    MacroParams& p = out[i];
+  std::vector<MacroParams> out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) out.push_back(sample_adult(seed, i));
+  return out;
+}
+
+MacroParams sample_adult(std::uint64_t seed, std::size_t index) {
+  MacroParams p;
+  {
+    SplitMix64 r(stream_seed(seed, index));
     // Gender: mostly clearly male or female, some androgynous mixes.
     const bool male = r.uniform() < 0.5;
     const double spread = r.uniform(0.0, 0.25);
@@ -111,7 +117,7 @@ std::vector<MacroParams> sample_adults(std::size_t n, std::uint64_t seed) {
     p.asian = e[1] / s;
     p.caucasian = e[2] / s;
   }
-  return out;
+  return p;
 }
 
 HumanLibrary HumanLibrary::load(const std::filesystem::path& dir, const ExecContext& ctx) {
@@ -472,6 +478,10 @@ MakeHumanSource::MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::v
                                  std::shared_ptr<const ReferenceBody> reference)
     : lib_(std::move(lib)), params_(std::move(params)), reference_(std::move(reference)) {}
 
+MakeHumanSource::MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::size_t count, std::uint64_t seed,
+                                 std::shared_ptr<const ReferenceBody> reference)
+    : lib_(std::move(lib)), sampled_(true), count_(count), seed_(seed), reference_(std::move(reference)) {}
+
 std::string MakeHumanSource::body_name(std::size_t i) const {
   std::ostringstream s;
   s << "makehuman-" << std::setw(5) << std::setfill('0') << i;
@@ -480,7 +490,7 @@ std::string MakeHumanSource::body_name(std::size_t i) const {
 
 std::vector<Vec3d> MakeHumanSource::skin_positions(std::size_t i) const {
   std::vector<Vec3f> full(lib_->vertex_count());
-  lib_->build(params_[i], full);
+  lib_->build(params(i), full);
   std::vector<Vec3d> p(reference_->model.nodes.slots.capacity(), Vec3d::Zero());
   for (std::size_t v = 0; v < p.size(); ++v) p[v] = kMakeHumanToMetres * full[v].cast<double>();
   return p;
@@ -489,7 +499,7 @@ std::vector<Vec3d> MakeHumanSource::skin_positions(std::size_t i) const {
 void MakeHumanSource::generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                                const ExecContext& ctx) const {
   out.clear();
-  const std::size_t end = std::min(params_.size(), first + count);
+  const std::size_t end = std::min(size(), first + count);
   if (first >= end) return;
   std::vector<std::vector<Vec3d>> bodies(end - first);
   std::vector<std::string> errors(end - first);

@@ -49,6 +49,9 @@ struct MacroParams {
 /// 0.1-0.9, height 0.2-0.9, muscle 0.3-0.8, proportions 0.3-0.9, both
 /// genders (gender near 0 or 1 with some spread), mixed ethnicity.
 [[nodiscard]] std::vector<MacroParams> sample_adults(std::size_t n, std::uint64_t seed);
+/// Adult `index` of sample_adults(n, seed) for any n > index, drawn alone
+/// (its own random stream): a source draws each body when it is made.
+[[nodiscard]] MacroParams sample_adult(std::uint64_t seed, std::size_t index);
 
 class HumanLibrary {
  public:
@@ -107,7 +110,13 @@ class MakeHumanSource final : public BodySource {
  public:
   MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::vector<MacroParams> params,
                   std::shared_ptr<const ReferenceBody> reference);
-  [[nodiscard]] std::size_t size() const override { return params_.size(); }
+  /// `count` bodies of sample_adults(count, seed), each drawn when its chunk
+  /// is generated: the source's memory does not grow with `count` (issue 27:
+  /// the list of 10^7 parameters took 1 GB before the first body).
+  MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::size_t count, std::uint64_t seed,
+                  std::shared_ptr<const ReferenceBody> reference);
+  [[nodiscard]] std::size_t size() const override { return sampled_ ? count_ : params_.size(); }
+  [[nodiscard]] MacroParams params(std::size_t i) const { return sampled_ ? sample_adult(seed_, i) : params_[i]; }
   [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
   [[nodiscard]] std::string body_name(std::size_t i) const override;
   void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
@@ -118,6 +127,9 @@ class MakeHumanSource final : public BodySource {
  private:
   std::shared_ptr<const HumanLibrary> lib_;
   std::vector<MacroParams> params_;
+  bool sampled_ = false;
+  std::size_t count_ = 0;
+  std::uint64_t seed_ = 0;
   std::shared_ptr<const ReferenceBody> reference_;
 };
 

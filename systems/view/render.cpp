@@ -74,6 +74,11 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Re
   return render_scene(meshes, *cam, params, ctx);
 }
 
+std::size_t render_scene_bytes(std::uint32_t width, std::uint32_t height) noexcept {
+  // RgbImage 3 + mesh int32 4 + depth double 8 + colour Vec3d 24 + edge 1.
+  return std::size_t{40} * width * height;
+}
+
 Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Camera& camera,
                                     const RenderParams& params, const ExecContext& ctx) {
   if (Status s = check_meshes(meshes); !s) return s;

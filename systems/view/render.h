@@ -66,6 +66,12 @@ struct RenderResult {
   std::size_t covered_pixels = 0;  // pixels whose centre ray hits a mesh
 };
 
+/// Working memory of render_scene for a width x height picture, in bytes:
+/// the picture (3 bytes a pixel), the per-pixel mesh index (4), depth (8),
+/// colour (24) and outline flag (1), 40 bytes a pixel. The supersample adds
+/// time, not memory: a pixel's samples are summed, never stored.
+[[nodiscard]] std::size_t render_scene_bytes(std::uint32_t width, std::uint32_t height) noexcept;
+
 /// Renders the scene. kInvalidArgument for no meshes, a null or empty BVH,
 /// a zero size or a bad supersample; kCancelled when ctx is cancelled (polled
 /// per row). Progress: stage "render", rows done.

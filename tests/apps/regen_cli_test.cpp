@@ -121,8 +121,28 @@ TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
     if (e.path().extension() == ".json") {
       EXPECT_FALSE(nlohmann::json::parse(slurp(e.path()), nullptr, false).is_discarded()) << e.path();
     }
+  // A temporary of the killed writer (a kill between open and rename leaves
+  // one): the rerun removes it.
+  const fs::path stale = out / "bodies" / ("mannequin-00059.json.tmp." + std::to_string(pid) + ".0");
+  std::ofstream(stale) << "{\"body\": \"mannequin-00059\", \"ok\": tr";
+  // The same folder with a changed job (another seed, other levels) is
+  // refused, naming the difference, and left as it was.
+  for (const std::string& changed :
+       {std::string("--seed 9 --threads 2 regen") + template_args() + " --count 60 --chunk 4 --out " + out.string(),
+        std::string("--threads 2 regen") + template_args() + " --count 60 --chunk 4 --levels 1 --out " +
+            out.string()}) {
+    const CliRun refused = run(changed);
+    EXPECT_EQ(refused.code, 2) << refused.out;
+    EXPECT_NE(refused.out.find(changed.find("--seed") == 0 ? "seed: 1 in the folder, 9 now" : "levels"),
+              std::string::npos)
+        << refused.out;
+    EXPECT_EQ(records(), before);
+  }
   const CliRun again = run("--threads 2 regen" + template_args() + " --count 60 --chunk 4 --out " + out.string());
   ASSERT_EQ(again.code, 0) << again.out;
+  EXPECT_FALSE(fs::exists(stale));
+  for (const auto& e : fs::recursive_directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << "left behind: " << e.path();
   const auto timing = nlohmann::json::parse(slurp(out / "timing.json"));
   if (before < 60) {
     EXPECT_GE(timing["skipped_complete"].get<std::size_t>(), before);

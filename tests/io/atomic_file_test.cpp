@@ -1,6 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fstream>
 
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/native.h>
@@ -111,4 +116,54 @@ TEST(AtomicFile, WriterFailingMidwayLeavesOldFileIntact) {
     EXPECT_EQ(slurp(dir / name), "previous good contents");
   }
   EXPECT_EQ(dir.entries(), (std::vector<std::string>{"old.obj", "old.off", "old.ply"}));
+}
+
+namespace {
+/// The pid of a process that has exited (and been reaped): no process has it
+/// until the kernel reuses it, which takes a full turn of the pid space.
+pid_t dead_pid() {
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  int st = 0;
+  waitpid(child, &st, 0);
+  return child;
+}
+}  // namespace
+
+// Issue 27: a run killed between AtomicFile's open and its rename leaves
+// `<name>.tmp.<pid>.<n>`; a later run removes those whose writer is gone
+// and keeps those of live writers (this process, another running job).
+TEST(AtomicFile, StaleTemporariesOfDeadWritersAreRemovedLiveOnesKept) {
+  TempDir dir;
+  const pid_t gone = dead_pid();
+  ASSERT_GT(gone, 0);
+  ASSERT_NE(::kill(gone, 0), 0) << "the exited child is still a process";
+  const std::string dead = std::to_string(gone);
+  auto touch = [&](const std::string& name) { std::ofstream(dir / name) << "partial"; };
+  touch("b.json.tmp." + dead + ".0");
+  touch("b.json.tmp." + dead + ".12");
+  touch("report.json.tmp." + dead + ".3");
+  touch("mine.json.tmp." + std::to_string(getpid()) + ".0");  // a live writer: this process
+  touch("init.json.tmp.1.0");                                  // pid 1 is always alive
+  // Not temporaries of AtomicFile: kept whatever their numbers say.
+  touch("notes.tmp");
+  touch("a.json");
+  touch("x.tmp." + dead);
+  touch("y.tmp." + dead + ".");
+  touch("z.tmp.abc.0");
+  touch("w.tmp." + dead + ".0x");
+  std::filesystem::create_directories(dir / ("sub.tmp." + dead + ".0"));  // a folder, never removed
+  EXPECT_EQ(remove_stale_temporaries(dir.path()), 3u);
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"a.json", "init.json.tmp.1.0",
+                                                      "mine.json.tmp." + std::to_string(getpid()) + ".0",
+                                                      "notes.tmp", "sub.tmp." + dead + ".0", "w.tmp." + dead + ".0x",
+                                                      "x.tmp." + dead, "y.tmp." + dead + ".", "z.tmp.abc.0"}));
+  // A missing folder is nothing to clean.
+  EXPECT_EQ(remove_stale_temporaries(dir / "absent"), 0u);
+  // A temporary this process really has open is kept until it commits.
+  {
+    AtomicFile f(dir / "live.json");
+    EXPECT_EQ(remove_stale_temporaries(dir.path()), 0u);
+    EXPECT_TRUE(std::filesystem::exists(f.temp_path()));
+  }
 }

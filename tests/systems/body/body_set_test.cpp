@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include <atelier/io/obj.h>
 #include "support/shapes.h"
@@ -55,6 +57,25 @@ TEST(BodySet, StoresBodiesAsFloatColumnsAndChecksInput) {
   EXPECT_EQ(set.size(), 2u);
   set.clear();
   EXPECT_TRUE(set.empty());
+}
+
+// Issue 27: a finite double beyond the float range (1e300 in a body OBJ)
+// was stored as infinity; the body is refused as non-finite once stored.
+TEST(BodySet, CoordinatesBeyondTheFloatRangeAreRefused) {
+  auto ref = ball();
+  BodySet set(ref);
+  std::vector<Vec3d> p = skin_positions(*ref);
+  p[7].z() = -1e300;
+  Status s = set.add("far", std::span<const Vec3d>(p));
+  EXPECT_EQ(s.code(), ErrorCode::kDegenerate);
+  EXPECT_NE(s.message().find("node 7"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("float"), std::string::npos) << s.message();
+  EXPECT_TRUE(set.empty());
+  // The largest float itself is stored as it is.
+  p[7].z() = static_cast<double>(std::numeric_limits<float>::max());
+  ASSERT_TRUE(set.add("edge", std::span<const Vec3d>(p)));
+  EXPECT_EQ(set.z(0)[7], std::numeric_limits<float>::max());
+  for (float v : set.z(0)) EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(BodySet, ObjDirectoryReportsBadFilesByNameAndLoadsTheRest) {

@@ -3,6 +3,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
+
+#include <unistd.h>
 
 #include <atelier/engine/status.h>
 #include <atelier/io/makehuman/makehuman.h>
@@ -84,6 +87,62 @@ TEST(MakeHumanMixing, UniversalWeightsPartitionUnityForAdults) {
     EXPECT_GE(p.weight, 0.1);
     EXPECT_LE(p.weight, 0.9);
     EXPECT_NEAR(p.african + p.asian + p.caucasian, 1.0, 1e-12);
+  }
+}
+
+namespace {
+/// Resident memory of this process in bytes (Linux /proc/self/statm).
+std::size_t resident_bytes() {
+  std::ifstream in("/proc/self/statm");
+  std::size_t pages = 0, resident = 0;
+  in >> pages >> resident;
+  return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+}
+}  // namespace
+
+// Issue 27: the source held one MacroParams per requested body (1.07 GB at
+// 10^7 bodies, bad_alloc at 2^32) before making the first one. A sampled
+// source draws each body's parameters when its chunk is made.
+TEST(MakeHumanMixing, ASampledSourceHoldsNoPerBodyMemory) {
+  const std::size_t before = resident_bytes();
+  const MakeHumanSource huge(nullptr, std::size_t{1} << 32, 7, nullptr);
+  EXPECT_EQ(huge.size(), std::size_t{1} << 32);
+  EXPECT_LT(resident_bytes(), before + (std::size_t{16} << 20)) << "the source grew with the count";
+  // The same bodies as the list of sample_adults, for any count.
+  const auto list = sample_adults(40, 7);
+  const MakeHumanSource small(nullptr, 40, 7, nullptr);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    for (const MakeHumanSource* s : {&huge, &small}) {
+      const MacroParams p = s->params(i);
+      EXPECT_EQ(p.gender, list[i].gender) << i;
+      EXPECT_EQ(p.age, list[i].age) << i;
+      EXPECT_EQ(p.height, list[i].height) << i;
+      EXPECT_EQ(p.weight, list[i].weight) << i;
+      EXPECT_EQ(p.muscle, list[i].muscle) << i;
+      EXPECT_EQ(p.proportions, list[i].proportions) << i;
+      EXPECT_EQ(p.african, list[i].african) << i;
+      EXPECT_EQ(p.caucasian, list[i].caucasian) << i;
+    }
+  }
+  EXPECT_EQ(huge.params((std::size_t{1} << 32) - 1).gender, sample_adult(7, (std::size_t{1} << 32) - 1).gender);
+}
+
+TEST(MakeHumanMixing, ASampledSourceMakesTheBodiesOfItsList) {
+  REQUIRE_MAKEHUMAN();
+  auto lib = std::make_shared<const HumanLibrary>(HumanLibrary::load(mh_dir()));
+  auto ref = std::make_shared<const ReferenceBody>(make_reference_body(*lib));
+  const MakeHumanSource listed(lib, sample_adults(3, 21), ref);
+  const MakeHumanSource sampled(lib, 100'000'000, 21, ref);
+  BodySet a(ref), b(ref);
+  std::vector<BodyFailure> fa, fb;
+  listed.generate(1, 2, a, fa, {});
+  sampled.generate(1, 2, b, fb, {});
+  ASSERT_TRUE(fa.empty() && fb.empty());
+  ASSERT_EQ(a.size(), 2u);
+  ASSERT_EQ(b.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(a.name(k), b.name(k));
+    EXPECT_EQ(a.positions(k), b.positions(k));
   }
 }
 
