@@ -273,7 +273,7 @@ std::vector<Pair> sweep_one(const std::vector<Vec3d>& q) {
     };
     consider(i + 1, j);
     consider(i, j - 1);
-    if (j > i + 3) consider(i + 1, j - 1);
+    consider(i + 1, j - 1);  // j >= i + 3: the pair stays apart
     i = ni, j = nj;
     out.push_back({q[i], q[j]});
   }
@@ -282,12 +282,12 @@ std::vector<Pair> sweep_one(const std::vector<Vec3d>& q) {
   return out;
 }
 
-/// Signed volume of the faces of a surface (fan triangles about the origin).
-double signed_volume(const Model& m, SurfaceIdx s) {
+/// Signed volume of the model's faces (fan triangles about the origin).
+double signed_volume(const Model& m) {
   double v = 0;
   std::vector<NodeIdx> f;
   for (std::uint32_t i = 0; i < m.faces.slots.capacity(); ++i) {
-    if (!m.alive(FaceIdx{i}) || m.faces.surface[i] != s) continue;
+    if (!m.alive(FaceIdx{i})) continue;
     m.face_nodes(FaceIdx{i}, f);
     for (std::size_t k = 1; k + 1 < f.size(); ++k)
       v += m.position(f[0]).dot(m.position(f[k]).cross(m.position(f[k + 1]))) / 6.0;
@@ -320,6 +320,7 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
     if (!m.alive(s)) return fail(ErrorCode::kStaleHandle, "surface " + std::to_string(s.value) + " is dead");
 
   ExtrudeReport rep;
+  const double volume_before = signed_volume(m);
   const bool closed_stroke = in.base.size() > 2 && in.base.front() == in.base.back();
   const bool capped = in.sweep.size() == 1;
   // Step 1: base curve. A closed stroke on an open boundary loop is the
@@ -342,7 +343,6 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
     for (std::size_t i = 0; i < segs; ++i) sum += (m.position(B[(i + 1) % n]) - m.position(B[i])).norm();
     rep.base_mean_edge = sum / static_cast<double>(segs);
   }
-  const double volume_before = signed_volume(m, surface);
 
   // Step 2: projection plane (eq. 1).
   Vec3d centroid = Vec3d::Zero();
@@ -490,7 +490,7 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   }
   rep.nodes_added = m.num_nodes() - nodes0;
   rep.faces_added = m.num_faces() - faces0;
-  rep.volume_change = signed_volume(m, surface) - volume_before;
+  rep.volume_change = signed_volume(m) - volume_before;
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
     if (m.alive(NodeIdx{v}) && !m.nodes.position[v].allFinite())
       return fail(ErrorCode::kInternal, "node " + std::to_string(v) + " has a non-finite position");
@@ -499,6 +499,21 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
 }
 
 }  // namespace
+
+Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t first) {
+  std::size_t j = first;
+  while (j < file.strokes.size() && file.strokes[j].tool == StrokeTool::kExtrude) ++j;
+  if (j - first < 2 || j - first > 3)
+    return fail(ErrorCode::kInvalidArgument, "stroke " + std::to_string(first) +
+                                                 ": expected a run of 2 or 3 extrude strokes, found " +
+                                                 std::to_string(j - first));
+  ExtrudeStrokes in;
+  in.base_camera = file.strokes[first].camera.value_or(file.camera);
+  in.base = file.strokes[first].points;
+  in.sweep_camera = file.strokes[first + 1].camera.value_or(file.camera);
+  for (std::size_t k = first + 1; k < j; ++k) in.sweep.push_back(file.strokes[k].points);
+  return in;
+}
 
 Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes, const ExtrudeOptions& options,
                                 const ExecContext& ctx) {

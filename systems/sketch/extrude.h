@@ -64,6 +64,7 @@
 #include <atelier/storage/model.h>
 #include <atelier/systems/sketch/retriangulate.h>
 #include <atelier/systems/view/camera.h>
+#include <atelier/systems/view/strokes.h>
 
 #include <cstddef>
 #include <vector>
@@ -122,6 +123,12 @@ struct ExtrudeReport {
   std::size_t nodes_added = 0, faces_added = 0;  // net, after optimisation
   double volume_change = 0;                      // signed volume (of B's surface) after minus before
 };
+
+/// The extrusion held by the run of "extrude" strokes starting at stroke
+/// `first` of a stroke file (docs/strokes.md): the base stroke, then one or
+/// two extruding strokes, each through its own camera or the file's. Reads
+/// the file only. kInvalidArgument when no such run starts there.
+[[nodiscard]] Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t first = 0);
 
 /// Extrudes (see above).
 [[nodiscard]] Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes,
