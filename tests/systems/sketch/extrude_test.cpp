@@ -4,6 +4,8 @@
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/sketch/sketch.h>
+#include <atelier/systems/view/strokes.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -362,4 +364,39 @@ TEST(Extrude, StraightBaseIsDegenerate) {
   ASSERT_FALSE(r);
   EXPECT_EQ(r.status().code(), ErrorCode::kDegenerate) << r.status().to_string();
   EXPECT_EQ(diff_tables(before, m), "");
+}
+
+TEST(Extrude, StrokeFileRunsTheSameExtrusion) {
+  // The extrude tool with the sweep drawn through its own camera: parsed,
+  // written and read back, and run by apply_strokes, gives the tables of
+  // the direct call.
+  const ExtrudeStrokes in = dome_strokes();
+  StrokeFile f;
+  f.camera = in.base_camera;
+  f.strokes.push_back({in.base, StrokeTool::kExtrude, false, "rim", std::nullopt});
+  f.strokes.push_back({in.sweep[0], StrokeTool::kExtrude, false, "dome", in.sweep_camera});
+  auto text = strokes_to_json(f);
+  ASSERT_TRUE(text) << text.status().to_string();
+  auto back = parse_strokes(*text, "dome.json");
+  ASSERT_TRUE(back) << back.status().to_string();
+  ASSERT_EQ(back->strokes.size(), 2u);
+  EXPECT_EQ(back->strokes[1].tool, StrokeTool::kExtrude);
+  ASSERT_TRUE(back->strokes[1].camera.has_value());
+  EXPECT_EQ(back->strokes[1].camera->view, in.sweep_camera.view);
+  EXPECT_FALSE(back->strokes[0].camera.has_value());
+  Model a = cup(), b = cup();
+  ASSERT_TRUE(extrude(a, in));
+  auto r = apply_strokes(b, *back);
+  ASSERT_TRUE(r) << r.status().to_string();
+  ASSERT_EQ(r->tools.size(), 1u);
+  EXPECT_EQ(r->tools[0].strokes, 2u);
+  EXPECT_EQ(diff_tables(a, b), "");
+  // A lone extrude stroke is refused by the parser, naming its place.
+  auto one = parse_strokes(
+      R"({"camera": {"view": [1,0,0,0, 0,1,0,0, 0,0,1,-5, 0,0,0,1], "projection": [1,0,0,0, 0,1,0,0, 0,0,-1,0, 0,0,0,1],
+          "viewport": [100, 100]}, "strokes": [{"points": [[1, 1], [2, 2]], "tool": "extrude"}]})",
+      "one.json");
+  ASSERT_FALSE(one);
+  EXPECT_NE(one.status().message().find("one.json: at /strokes/0: an extrusion is a run of 2 or 3"), std::string::npos)
+      << one.status().message();
 }
