@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
+#include <map>
 #include <limits>
 
 #include "systems/sketch/sketch_fixtures.h"
@@ -399,4 +401,68 @@ TEST(Extrude, StrokeFileRunsTheSameExtrusion) {
   ASSERT_FALSE(one);
   EXPECT_NE(one.status().message().find("one.json: at /strokes/0: an extrusion is a run of 2 or 3"), std::string::npos)
       << one.status().message();
+}
+
+namespace {
+
+/// The cube [-1, 1]^3, each side an n x n grid of triangles, outward.
+Model box(int n) {
+  Soup s;
+  std::map<std::array<long, 3>, std::uint32_t> ids;
+  auto node = [&](const Vec3d& p) {
+    const std::array<long, 3> key{std::lround(p.x() * n), std::lround(p.y() * n), std::lround(p.z() * n)};
+    auto [it, fresh] = ids.try_emplace(key, static_cast<std::uint32_t>(s.p.size()));
+    if (fresh) s.p.push_back(p);
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int sign = -1; sign <= 1; sign += 2) {
+      // u x v = sign * e_axis, so the faces face outwards.
+      Vec3d e = Vec3d::Zero(), u = Vec3d::Zero(), v = Vec3d::Zero();
+      e[axis] = sign;
+      u[(axis + 1) % 3] = 1;
+      v[(axis + 2) % 3] = sign;
+      auto at = [&](int i, int j) { return node(e + (2.0 * i / n - 1) * u + (2.0 * j / n - 1) * v); };
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          s.face({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+          s.face({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    }
+  Model m;
+  (void)add_polygon_surface(m, "box", s.view()).value();
+  return m;
+}
+
+}  // namespace
+
+TEST(Extrude, HemisphericalCavityInABox) {
+  // A circle of radius r painted on the flat front of a box, then a
+  // semicircular stroke drawn inwards: the cut removes no volume (the front
+  // is flat), the cavity a half ball, (2/3) pi r^3.
+  Model m = box(16);
+  ASSERT_GT(signed_volume(m), 7.99);
+  const double v0 = signed_volume(m), r = 0.5;
+  ExtrudeStrokes in;
+  in.base_camera = front_ortho();
+  std::vector<Vec3d> ring;
+  for (int k = 0; k <= 96; ++k) ring.push_back(Vec3d(r * std::cos(2 * M_PI * k / 96), r * std::sin(2 * M_PI * k / 96), 1));
+  in.base = project(in.base_camera, ring);
+  in.base.back() = in.base.front();
+  in.sweep_camera = side();
+  in.sweep = {project(in.sweep_camera, semicircle(Vec3d(0, 0, 1), r, -Vec3d::UnitY(), -Vec3d::UnitZ(), 20))};
+  auto res = extrude(m, in);
+  ASSERT_TRUE(res) << res.status().to_string();
+  ASSERT_TRUE(validate(m)) << validate(m).to_string();
+  expect_closed_oriented(m, 2);
+  const double removed = v0 - signed_volume(m), half_ball = 2.0 / 3.0 * M_PI * r * r * r;
+  EXPECT_NEAR(res->volume_change, -removed, 1e-12);
+  EXPECT_NEAR(removed, half_ball, 0.04 * half_ball);
+  // The cavity's nodes lie inside the box, within the half ball's radius.
+  for (NodeIdx v : res->base) EXPECT_NEAR((m.position(v) - Vec3d(0, 0, 1)).norm(), r, 0.02);
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v) {
+    const Vec3d p = m.position(NodeIdx{v});
+    if (m.alive(NodeIdx{v}) && p.z() < 1 - 1e-9 && std::abs(p.x()) < 0.9 && std::abs(p.y()) < 0.9 && p.z() > 0.2)
+      EXPECT_LE((p - Vec3d(0, 0, 1)).norm(), r + 1e-9);
+  }
 }
