@@ -31,10 +31,11 @@
 //     negative in it where it was positive in the previous strip (rule 2).
 //  5. Mesh optimisation (Fig. 9; the paper's [1]) of the new faces only:
 //     split edges longer than 4/3 L, collapse edges shorter than 4/5 L, swap
-//     towards valence 6 (systems/mesh/edit.h), L the mean edge length of B.
-//     B's nodes never move (B is a constraint for the collapses); new nodes
-//     are only created on new edges (midpoints), so the surface stays on the
-//     swept triangulation.
+//     towards valence 6 (systems/mesh/edit.h), L the mean edge length of B,
+//     then relax inner nodes tangentially and project them back onto the
+//     swept triangles (systems/spatial/body_bvh.h). B's nodes never move (B
+//     is a constraint for the collapses); every node stays on the swept
+//     triangulation.
 //
 // Counts before optimisation, K copies (report.copies): a ring of n nodes
 // with a closed extrusion adds n(K-1) + 1 nodes and n(2K-1) triangles; a

@@ -1,9 +1,13 @@
 // Step 5 of the extrusion (seed 002 Fig. 9, the paper's reference [1]):
 // short edges and small triangles of the swept region removed with the
-// existing edit operators, towards the mean edge length L of B. The passes
-// run over edges in index order, so the result is one fixed sequence of
-// operators (independent of threads).
+// existing edit operators, towards the mean edge length L of B, then a
+// tangential relaxation of the region's inner nodes projected back onto the
+// swept surface (its triangles before the optimisation, an Embree BVH) so
+// the surface stays where the sweep put it. The passes run over edges and
+// nodes in index order, so the result is one fixed sequence of operators
+// (independent of threads).
 #include <atelier/systems/mesh/edit.h>
+#include <atelier/systems/spatial/body_bvh.h>
 
 #include <algorithm>
 #include <cmath>
@@ -53,6 +57,52 @@ bool collapse_ok(const Model& m, NodeIdx r, NodeIdx k, const Vec3d& p, double hi
   return ok;
 }
 
+/// Every face around v is new (v is inside the region, not on B or a border).
+bool inner(const Model& m, const Region& r, NodeIdx v) {
+  if (r.fixed(v)) return false;
+  bool ok = true;
+  m.for_each_outgoing(v, [&](HalfedgeIdx h) { ok = ok && r.is_new(m, m.face(h)) && r.is_new(m, m.face(twin(h))); });
+  return ok;
+}
+
+/// Moves every inner node towards the centroid of its neighbours within
+/// its tangent plane, then onto the swept surface; a move that would turn
+/// a face over is skipped.
+void relax(Model& m, const Region& r, const BodyBvh& swept) {
+  std::vector<std::pair<NodeIdx, Vec3d>> moves;
+  std::vector<NodeIdx> f;
+  for (std::uint32_t i = 0; i < m.nodes.slots.capacity(); ++i) {
+    const NodeIdx v{i};
+    if (!m.alive(v) || m.is_isolated(v) || !inner(m, r, v)) continue;
+    Vec3d c = Vec3d::Zero(), n = Vec3d::Zero();
+    int k = 0;
+    m.for_each_outgoing(v, [&](HalfedgeIdx h) {
+      c += m.position(m.head(h));
+      ++k;
+      m.face_nodes(m.face(h), f);
+      if (f.size() == 3) n += tri_normal(m.position(f[0]), m.position(f[1]), m.position(f[2]));
+    });
+    if (k == 0 || !(n.norm() > 0)) continue;
+    n.normalize();
+    const Vec3d p = m.position(v), d = c / k - p;
+    const ClosestHit hit = swept.closest_point(p + d - d.dot(n) * n);
+    if (hit.triangle != kNoTriangle && hit.point.allFinite()) moves.emplace_back(v, hit.point);
+  }
+  for (const auto& [v, q] : moves) {
+    bool ok = true;
+    m.for_each_outgoing(v, [&](HalfedgeIdx h) {
+      m.face_nodes(m.face(h), f);
+      if (f.size() != 3) return;
+      Vec3d a[3];
+      for (int i = 0; i < 3; ++i) a[i] = f[i] == v ? q : m.position(f[i]);
+      const Vec3d n0 = tri_normal(m.position(f[0]), m.position(f[1]), m.position(f[2])),
+                  n1 = tri_normal(a[0], a[1], a[2]);
+      ok = ok && n0.dot(n1) > 0.5 * n0.norm() * n1.norm();
+    });
+    if (ok) m.nodes.position[v.value] = q;
+  }
+}
+
 std::vector<EdgeIdx> editable_edges(const Model& m, const Region& r) {
   std::vector<EdgeIdx> out;
   for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e)
@@ -100,6 +150,25 @@ Expected<OptimiseCounts> optimise_region(Model& m, const Region& r, std::span<co
   bool free = !base_chain.empty();
   for (HalfedgeIdx h : base_chain) free = free && h.valid() && !m.edges.mesh_edge[edge_of(h).value].valid();
   if (free) temp = m.new_mesh_edge(m.nodes.surface[m.tail(base_chain[0]).value], base_chain);
+  // The swept surface as it is before the optimisation (relaxation target).
+  std::vector<Vec3d> pts;
+  std::vector<Triangle> tris;
+  {
+    std::vector<NodeIdx> f;
+    for (std::uint32_t i = 0; i < m.faces.slots.capacity(); ++i) {
+      if (!r.is_new(m, FaceIdx{i})) continue;
+      m.face_nodes(FaceIdx{i}, f);
+      for (std::size_t k = 1; k + 1 < f.size(); ++k) {
+        tris.push_back({static_cast<std::uint32_t>(pts.size()), static_cast<std::uint32_t>(pts.size() + 1),
+                        static_cast<std::uint32_t>(pts.size() + 2)});
+        pts.push_back(m.position(f[0]));
+        pts.push_back(m.position(f[k]));
+        pts.push_back(m.position(f[k + 1]));
+      }
+    }
+  }
+  BodyBvh swept;
+  const bool can_relax = !tris.empty() && swept.build(pts, tris, {}, ExecContext::sequential()).is_ok();
 
   for (int pass = 0; pass < passes; ++pass) {
     if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "extrude: cancelled");
@@ -157,6 +226,7 @@ Expected<OptimiseCounts> optimise_region(Model& m, const Region& r, std::span<co
       if ((m.position(x) - m.position(y)).norm() > hi) continue;
       if (auto s = edge_swap(m, m.handle(e), eo)) ++c.swaps;
     }
+    if (can_relax) relax(m, r, swept);
     if (c.splits + c.collapses + c.swaps == before) break;
   }
   if (temp.valid()) m.delete_mesh_edge(temp);
