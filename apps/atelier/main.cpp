@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "commands.h"
+#include "extrude_cmd.h"
 #include "flatten_cmd.h"
 #include "measure_cmd.h"
 #include "net_cmd.h"
@@ -83,6 +84,8 @@ int main(int argc, char** argv) {
   auto* flatten_cmd = add_flatten_subcommand(app, flatten_opt);
   SurfaceOptions surface_opt;
   auto* surface_cmd = add_surface_subcommand(app, surface_opt);
+  ExtrudeCmdOptions extrude_opt;
+  auto* extrude_cmd = add_extrude_subcommand(app, extrude_opt);
 
   try {
     app.parse(argc, argv);
@@ -110,6 +113,7 @@ int main(int argc, char** argv) {
     if (*sketch_cmd) return run_sketch(common, sketch_opt, log);
     if (*flatten_cmd) return run_flatten(common, flatten_opt, log);
     if (*surface_cmd) return run_surface(common, surface_opt, log);
+    if (*extrude_cmd) return run_extrude(common, extrude_opt, log);
   } catch (const atelier::Error& e) {
     log.error(e.what());
     const auto c = e.status().code();

@@ -422,3 +422,15 @@ def sketch(
     progress: Progress = None,
 ) -> tuple[Mesh, dict[str, Any]]:
     """Paints, cuts and partitions a mesh with strokes: (mesh, report)."""
+
+def extrude(
+    mesh: MeshLike,
+    strokes: Union[Path, dict[str, Any]],
+    *,
+    first: int = 0,
+    pick_radius: float = 12.0,
+    optimise: bool = True,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[Mesh, dict[str, Any]]:
+    """Extrudes a surface or cavity from a mesh by sketched strokes (seed 002): (mesh, report)."""

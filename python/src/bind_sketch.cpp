@@ -1,8 +1,10 @@
 // Sketch tools (systems/sketch, seed 001 section 5): the call of
-// `atelier sketch`, over the same one library call (apply_strokes): a mesh
+// `atelier sketch`, over the same one library call (apply_strokes), and of
+// `atelier extrude` (extrude, seed 002): a mesh
 // painted, cut and partitioned by the strokes of a stroke file (a path, or
 // the same JSON as a dict; docs/strokes.md).
 #include <atelier/storage/builder.h>
+#include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/sketch.h>
 #include <atelier/systems/view/strokes.h>
 #include <pybind11/stl.h>
@@ -89,6 +91,8 @@ py::dict report_dict(const Model& m, const SketchReport& r) {
   return root;
 }
 
+void def_extrude(py::module_& m);
+
 }  // namespace
 
 void bind_sketch(py::module_& m) {
@@ -142,6 +146,77 @@ Long call (GIL released, Ctrl-C cancels). Raises ValueError with the
 engine's message (naming the file and JSON location for bad stroke files,
 the stroke for a failed tool), FileNotFoundError for a missing file.
 )doc");
+  def_extrude(m);
 }
+
+namespace {
+
+void def_extrude(py::module_& m) {
+  m.def(
+      "extrude",
+      [](const MeshLike& mesh, const Strokes& strokes, std::size_t first, double pick_radius, bool optimise,
+         int threads, const Progress& progress) {
+        const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
+        Model model;
+        if (in->model)
+          model = *in->model;
+        else
+          (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+        const StrokeFile file = strokes_arg(strokes);
+        const ExtrudeStrokes es = unwrap(extrusion_from_file(file, first));
+        ExtrudeOptions eo;
+        eo.pick_radius = pick_radius;
+        eo.optimise = optimise;
+        const ExtrudeReport r =
+            unwrap(run_long(progress, threads, [&](const ExecContext& ctx) { return extrude(model, es, eo, ctx); }));
+        auto stats = [](const EdgeLengthStats& s) {
+          return py::dict(py::arg("edges") = s.edges, py::arg("mean") = s.mean, py::arg("min") = s.min,
+                          py::arg("max") = s.max, py::arg("within") = s.within);
+        };
+        py::dict rep;
+        rep["base_ring"] = r.base_ring;
+        rep["capped"] = r.capped;
+        rep["base_nodes"] = r.base.size();
+        rep["base_mean_edge"] = r.base_mean_edge;
+        rep["copies"] = r.copies;
+        rep["scales"] = r.scales;
+        rep["faces_removed"] = r.faces_removed;
+        rep["swept_nodes"] = r.swept_nodes;
+        rep["swept_faces"] = r.swept_faces;
+        rep["splits"] = r.splits;
+        rep["collapses"] = r.collapses;
+        rep["swaps"] = r.swaps;
+        rep["before"] = stats(r.before);
+        rep["after"] = stats(r.after);
+        rep["nodes_added"] = r.nodes_added;
+        rep["faces_added"] = r.faces_added;
+        rep["volume_change"] = r.volume_change;
+        (void)model.compact();
+        return py::make_tuple(mesh_of(std::move(model)), rep);
+      },
+      py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("first") = 0, py::arg("pick_radius") = 12.0,
+      py::arg("optimise") = true, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+Extrudes a surface or a cavity from a mesh by sketched strokes (``atelier extrude``; seed 002).
+
+mesh: a Mesh (``read_mesh``) or a (vertices, faces) pair.
+strokes: a stroke file path, or a dict of the same JSON, holding a run of
+    "extrude" strokes from index ``first``: the base stroke (closed: painted
+    and cut; open: selects boundary edges), then one (closed extrusion) or
+    two (open extrusion) extruding strokes, each with its own "camera" or
+    the file's (docs/strokes.md).
+pick_radius: pixels within which the strokes must start near the base curve.
+optimise: run the mesh optimisation of the new region (towards B's mean
+    edge length, B fixed).
+
+Returns (mesh, report): the result as a Mesh and the dict the CLI's --json
+writes (``copies``, ``swept_nodes``, ``swept_faces``, ``splits``,
+``collapses``, ``swaps``, edge-length ``before``/``after``,
+``volume_change``...). Long call (GIL released, Ctrl-C cancels). Raises
+ValueError with the engine's message (a stroke not starting near the base,
+NaN, a degenerate plane), FileNotFoundError for a missing file.
+)doc");
+}
+
+}  // namespace
 
 }  // namespace atelier::python

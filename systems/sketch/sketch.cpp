@@ -1,3 +1,4 @@
+#include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/paint.h>
 #include <atelier/systems/sketch/sketch.h>
 
@@ -37,7 +38,7 @@ Status paint_into(Model& m, const Camera& cam, const Stroke& s, bool through, co
   PaintOptions po;
   po.through = through;
   po.surfaces = opt.surfaces;
-  auto r = paint_stroke(m, cam, s.points, po, ctx);
+  auto r = paint_stroke(m, s.camera.value_or(cam), s.points, po, ctx);
   if (!r) return r.status();
   for (const PaintedCurve& c : r->curves) {
     rep.curve_lengths.push_back(c.length);
@@ -79,7 +80,8 @@ Expected<SketchReport> apply_strokes(Model& m, const StrokeFile& file, const Ske
         co.retriangulate = opt.retriangulate;
         if (i + 1 < file.strokes.size() && file.strokes[i + 1].tool == StrokeTool::kPick) {
           rep.strokes = 2;
-          auto p = locate_pixel(m, cam, file.strokes[i + 1].points.at(0), opt.surfaces, ctx);
+          auto p = locate_pixel(m, file.strokes[i + 1].camera.value_or(cam), file.strokes[i + 1].points.at(0),
+                                opt.surfaces, ctx);
           if (!p) {
             st = Status(p.status().code(), label(file, i + 1) + ": " + p.status().message());
             break;
@@ -129,6 +131,26 @@ Expected<SketchReport> apply_strokes(Model& m, const StrokeFile& file, const Ske
         rep.nodes_added = r->nodes_added;
         rep.crossings = r->crossings;
         rep.pieces = r->pieces;
+        break;
+      }
+      case StrokeTool::kExtrude: {
+        auto in = extrusion_from_file(file, i);
+        if (!in) {
+          st = in.status();
+          break;
+        }
+        rep.strokes = 1 + in->sweep.size();
+        ExtrudeOptions eo;
+        eo.surfaces = opt.surfaces;
+        eo.retriangulate = opt.retriangulate;
+        auto r = extrude(m, *in, eo, ctx);
+        if (!r) {
+          st = r.status();
+          break;
+        }
+        rep.faces_added = r->faces_added;
+        rep.nodes_added = r->nodes_added;
+        rep.faces_removed = r->faces_removed;
         break;
       }
       case StrokeTool::kPick:

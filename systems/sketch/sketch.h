@@ -12,6 +12,10 @@
 //  - "partition": consecutive partition strokes are painted together, then
 //    partition_along_curves splits the surfaces along all their curves at
 //    once (crossings included).
+//  - "extrude": a run of 2 or 3 extrude strokes is one extrusion
+//    (systems/sketch/extrude.h, seed 002).
+//
+// A stroke with its own camera is drawn through it, else the file's.
 //
 // Reads: the stroke file, the model. Writes: the model (see the tools).
 // Transactional as a whole: when a stroke fails the model is left as it

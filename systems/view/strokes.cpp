@@ -13,7 +13,7 @@ namespace {
 
 using Json = nlohmann::json;
 
-constexpr const char* kToolNames[] = {"paint", "paint-through", "cut", "partition", "pick"};
+constexpr const char* kToolNames[] = {"paint", "paint-through", "cut", "partition", "pick", "extrude"};
 
 /// Thrown inside the reader only; turned into a Status at the entry point.
 struct Refusal {
@@ -161,7 +161,7 @@ class Reader {
   }
 
   Stroke stroke(const Json& v, const std::string& ptr, std::size_t& total_points) const {
-    expect_object(v, ptr, {"points", "tool"}, {"through", "name", "comment"});
+    expect_object(v, ptr, {"points", "tool"}, {"through", "name", "comment", "camera"});
     Stroke s;
     const Json& tool = v["tool"];
     if (!tool.is_string()) fail(ptr + "/tool", std::string("expected a string, found ") + type_of(tool));
@@ -173,7 +173,8 @@ class Reader {
         found = true;
       }
     if (!found)
-      fail(ptr + "/tool", "unknown tool \"" + t + "\" (expected paint, paint-through, cut, partition or pick)");
+      fail(ptr + "/tool",
+           "unknown tool \"" + t + "\" (expected paint, paint-through, cut, partition, pick or extrude)");
     s.through = s.tool == StrokeTool::kPaintThrough;
     if (v.contains("through")) {
       const Json& th = v["through"];
@@ -189,6 +190,7 @@ class Reader {
       if (!v["name"].is_string()) fail(ptr + "/name", std::string("expected a string, found ") + type_of(v["name"]));
       s.name = v["name"].get<std::string>();
     }
+    if (v.contains("camera")) s.camera = camera(v["camera"], ptr + "/camera");
     if (v.contains("comment") && !v["comment"].is_string())
       fail(ptr + "/comment", std::string("expected a string, found ") + type_of(v["comment"]));
     const Json& pts = v["points"];
@@ -236,6 +238,18 @@ class Reader {
       f.strokes.push_back(stroke(st[i], "/strokes/" + std::to_string(i), total));
       if (f.strokes.back().tool == StrokeTool::kPick && (i == 0 || f.strokes[i - 1].tool != StrokeTool::kCut))
         fail("/strokes/" + std::to_string(i), "a pick stroke must follow a cut stroke");
+    }
+    // A run of consecutive extrude strokes is one extrusion: the base stroke
+    // and one (closed extrusion) or two (open extrusion) extruding strokes.
+    for (std::size_t i = 0; i < f.strokes.size();) {
+      std::size_t j = i;
+      while (j < f.strokes.size() && f.strokes[j].tool == StrokeTool::kExtrude) ++j;
+      if (j > i && (j - i < 2 || j - i > 3))
+        fail("/strokes/" + std::to_string(i),
+             "an extrusion is a run of 2 or 3 extrude strokes (a base stroke, then "
+             "one or two extruding strokes); found " +
+                 std::to_string(j - i));
+      i = j > i ? j : i + 1;
     }
     return f;
   }
@@ -327,20 +341,25 @@ Expected<StrokeFile> read_strokes(const std::filesystem::path& path, const Strok
 
 Expected<std::string> strokes_to_json(const StrokeFile& f) {
   auto finite = [](double x) { return std::isfinite(x); };
+  auto camera_json = [&](const Camera& c, Json& cam) -> Status {
+    cam = Json::object();
+    for (const auto& [key, m] : {std::pair<const char*, const Mat4d*>{"view", &c.view},
+                                 std::pair<const char*, const Mat4d*>{"projection", &c.projection}}) {
+      Json a = Json::array();
+      for (int r = 0; r < 4; ++r)
+        for (int k = 0; k < 4; ++k) {
+          if (!finite((*m)(r, k)))
+            return Status(ErrorCode::kInvalidArgument, std::string("strokes_to_json: non-finite ") + key + " matrix");
+          a.push_back((*m)(r, k));
+        }
+      cam[key] = std::move(a);
+    }
+    cam["viewport"] = Json::array({c.width, c.height});
+    return {};
+  };
   Json root = Json::object();
-  Json cam = Json::object();
-  for (const auto& [key, m] : {std::pair<const char*, const Mat4d*>{"view", &f.camera.view},
-                               std::pair<const char*, const Mat4d*>{"projection", &f.camera.projection}}) {
-    Json a = Json::array();
-    for (int r = 0; r < 4; ++r)
-      for (int c = 0; c < 4; ++c) {
-        if (!finite((*m)(r, c)))
-          return Status(ErrorCode::kInvalidArgument, std::string("strokes_to_json: non-finite ") + key + " matrix");
-        a.push_back((*m)(r, c));
-      }
-    cam[key] = std::move(a);
-  }
-  cam["viewport"] = Json::array({f.camera.width, f.camera.height});
+  Json cam;
+  if (Status st = camera_json(f.camera, cam); !st) return st;
   root["camera"] = std::move(cam);
   Json strokes = Json::array();
   for (std::size_t i = 0; i < f.strokes.size(); ++i) {
@@ -357,6 +376,11 @@ Expected<std::string> strokes_to_json(const StrokeFile& f) {
     js["tool"] = to_string(s.tool);
     if (s.tool == StrokeTool::kCut || s.tool == StrokeTool::kPartition) js["through"] = s.through;
     if (!s.name.empty()) js["name"] = s.name;
+    if (s.camera) {
+      Json sc;
+      if (Status st = camera_json(*s.camera, sc); !st) return st;
+      js["camera"] = std::move(sc);
+    }
     strokes.push_back(std::move(js));
   }
   root["strokes"] = std::move(strokes);

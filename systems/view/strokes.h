@@ -10,8 +10,12 @@
 // Screen points are pixels with the origin at the top-left corner, y down
 // (Camera::project). Tools: "paint" (visible painting), "paint-through"
 // (penetrated painting), "cut", "partition" (their curve comes from visible
-// painting, or penetrated painting with "through": true) and "pick" (one
-// point: the side that the preceding "cut" removes).
+// painting, or penetrated painting with "through": true), "pick" (one
+// point: the side that the preceding "cut" removes) and "extrude" (seed 002:
+// a run of 2 or 3 consecutive extrude strokes is one extrusion, the base
+// stroke then one or two extruding strokes). A stroke may carry its own
+// "camera" (same keys as the file's), e.g. the extruding strokes drawn from
+// a second view.
 //
 // Reads: bytes or a file. Writes: nothing (write_strokes: one file,
 // atomically). Malformed input is refused with kParse naming the file and
@@ -26,15 +30,16 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace atelier {
 
-enum class StrokeTool : std::uint8_t { kPaint, kPaintThrough, kCut, kPartition, kPick };
+enum class StrokeTool : std::uint8_t { kPaint, kPaintThrough, kCut, kPartition, kPick, kExtrude };
 
-/// "paint", "paint-through", "cut", "partition", "pick".
+/// "paint", "paint-through", "cut", "partition", "pick", "extrude".
 [[nodiscard]] const char* to_string(StrokeTool t) noexcept;
 
 struct Stroke {
@@ -45,6 +50,8 @@ struct Stroke {
   /// kPaintThrough; "paint" with "through": true reads as kPaintThrough.
   bool through = false;
   std::string name;  // optional, for reports
+  /// The camera this stroke was drawn through, when not the file's.
+  std::optional<Camera> camera;
 };
 
 struct StrokeFile {
@@ -64,7 +71,8 @@ struct StrokeLimits {
 /// numbers per matrix, a positive integer viewport, Camera::check() (a
 /// singular projection * view is refused), finite coordinates within
 /// limits.max_coordinate, at least 2 distinct points for paint, cut and
-/// partition strokes, exactly 1 for a pick, which must follow a cut.
+/// partition and extrude strokes, exactly 1 for a pick, which must follow a
+/// cut, runs of 2 or 3 extrude strokes, per-stroke cameras as the file's.
 /// Errors: kParse "<file>: at <JSON pointer>: <problem>" or
 /// "<file>:<line>:<column>: <problem>" for syntax errors.
 [[nodiscard]] Expected<StrokeFile> parse_strokes(std::string_view bytes, std::string_view file_name,

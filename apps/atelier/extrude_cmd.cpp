@@ -1,0 +1,88 @@
+#include "extrude_cmd.h"
+
+#include <atelier/io/atomic_file.h>
+#include <atelier/systems/sketch/extrude.h>
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+namespace atelier::cli {
+
+namespace {
+
+nlohmann::json stats_json(const EdgeLengthStats& s) {
+  return {{"edges", s.edges}, {"mean", s.mean}, {"min", s.min}, {"max", s.max}, {"within", s.within}};
+}
+
+nlohmann::json report_json(const ExtrudeCmdOptions& opt, const ExtrudeReport* r, const Status& st) {
+  nlohmann::json j = {{"mesh", opt.mesh.string()}, {"strokes", opt.strokes.string()}, {"ok", st.is_ok()}};
+  if (!st) {
+    j["error"] = st.message();
+    return j;
+  }
+  auto v3 = [](const Vec3d& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
+  j["base_ring"] = r->base_ring;
+  j["capped"] = r->capped;
+  j["base_nodes"] = r->base.size();
+  j["base_mean_edge"] = r->base_mean_edge;
+  j["base_normal"] = v3(r->base_normal);
+  j["plane_normal"] = v3(r->plane_normal);
+  j["p1"] = v3(r->p1);
+  j["p2"] = v3(r->p2);
+  j["copies"] = r->copies;
+  j["scales"] = r->scales;
+  j["faces_removed"] = r->faces_removed;
+  j["swept_nodes"] = r->swept_nodes;
+  j["swept_faces"] = r->swept_faces;
+  j["splits"] = r->splits;
+  j["collapses"] = r->collapses;
+  j["swaps"] = r->swaps;
+  j["before"] = stats_json(r->before);
+  j["after"] = stats_json(r->after);
+  j["nodes_added"] = r->nodes_added;
+  j["faces_added"] = r->faces_added;
+  j["volume_change"] = r->volume_change;
+  return j;
+}
+
+}  // namespace
+
+CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
+  auto* c = app.add_subcommand("extrude", "extrude a surface or a cavity from a mesh by sketched strokes (seed 002)");
+  c->add_option("--mesh", opt.mesh, "input mesh: OBJ, PLY, OFF or .atm")->required();
+  c->add_option("--strokes", opt.strokes, "stroke file with a run of extrude strokes (docs/strokes.md)")->required();
+  c->add_option("--out", opt.out, "output mesh: OBJ, PLY, OFF or .atm")->required();
+  c->add_option("--json", opt.json, "write the extrusion report as JSON");
+  c->add_option("--first", opt.first, "index of the base stroke of the extrusion (default 0)");
+  c->add_option("--pick-radius", opt.pick_radius, "pixels within which strokes must start near the base curve")
+      ->check(CLI::PositiveNumber);
+  c->add_flag("--no-optimise", opt.no_optimise, "skip the mesh optimisation of the new region");
+  return c;
+}
+
+int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
+  check_mesh_output(opt.out);
+  Model m = read_mesh_file(opt.mesh);
+  auto file = read_strokes(opt.strokes);
+  if (!file) throw Error(file.status());
+  auto in = extrusion_from_file(*file, opt.first);
+  ExtrudeOptions eo;
+  eo.pick_radius = opt.pick_radius;
+  eo.optimise = !opt.no_optimise;
+  Expected<ExtrudeReport> r = in ? extrude(m, *in, eo, common.context()) : Expected<ExtrudeReport>(in.status());
+  const Status st = r ? Status{} : r.status();
+  if (!opt.json.empty()) {
+    const std::string text = report_json(opt, r ? &*r : nullptr, st).dump(1) + "\n";
+    write_atomically(opt.json, [&](AtomicFile& f) { f.write(text); });
+  }
+  if (!r) throw Error(Status(st.code(), opt.strokes.string() + ": " + st.message()));
+  std::printf(
+      "extrude: %zu copies of a %s of %zu nodes, %zu nodes and %zu faces added (%zu splits, %zu collapses, "
+      "%zu swaps), volume change %.6g\n",
+      r->copies, r->base_ring ? "ring" : "chain", r->base.size(), r->nodes_added, r->faces_added, r->splits,
+      r->collapses, r->swaps, r->volume_change);
+  write_mesh_file(m, opt.out, log);
+  return kExitOk;
+}
+
+}  // namespace atelier::cli

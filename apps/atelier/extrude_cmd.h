@@ -1,0 +1,28 @@
+// `atelier extrude`: sketch extrusion (seed 002) driven by a stroke file
+// (docs/strokes.md: a run of "extrude" strokes, the base stroke then one or
+// two extruding strokes, each through its own camera or the file's), e.g.
+//   atelier extrude --mesh cup.obj --strokes dome.json --out dome.obj --json report.json
+// Thin over extrude (systems/sketch/extrude.h). Exit codes: 0 ok, 2 usage,
+// 3 bad input (mesh, stroke file, or strokes the extrusion refuses on this
+// mesh: no mesh is written, the --json report holds the error), 4 internal.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstddef>
+#include <filesystem>
+
+#include "commands.h"
+
+namespace atelier::cli {
+
+struct ExtrudeCmdOptions {
+  std::filesystem::path mesh, strokes, out, json;
+  std::size_t first = 0;  // index of the run's first (base) stroke
+  double pick_radius = 12.0;
+  bool no_optimise = false;
+};
+
+CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt);
+int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log);
+
+}  // namespace atelier::cli

@@ -1,0 +1,102 @@
+"""Sketch extrusion (atelier.extrude; systems/sketch/extrude.h, seed 002): a
+dome drawn on an open cup lies on the unit sphere and closes the cup
+(V - E + F = 2) with the counts of the sweep, gives the same file bytes as
+`atelier extrude`, and bad strokes raise with the engine's message."""
+import json
+
+import numpy as np
+import pytest
+
+import atelier
+from conftest import run_cli
+
+SIZE = 800
+HALF = 1.5
+N = 24
+
+
+def cup(n=N):
+    """Unit circles at y = 0, -0.5, -1 and a bottom centre; open at y = 0."""
+    v = [[np.cos(2 * np.pi * i / n), -0.5 * r, np.sin(2 * np.pi * i / n)] for r in range(3) for i in range(n)]
+    v.append([0.0, -1.0, 0.0])
+    idx = lambda r, i: r * n + i % n  # noqa: E731
+    f = []
+    for r in range(2):
+        for i in range(n):
+            f.append([idx(r, i), idx(r, i + 1), idx(r + 1, i + 1)])
+            f.append([idx(r, i), idx(r + 1, i + 1), idx(r + 1, i)])
+    f += [[idx(2, i), idx(2, i + 1), 3 * n] for i in range(n)]
+    return np.array(v), f
+
+
+def px(x, y):
+    return [(x / HALF + 1) / 2 * SIZE, (1 - y / HALF) / 2 * SIZE]
+
+
+def strokes(start_y=0.0, k=10):
+    n, far = 0.1, 10.0
+    arc = [px(np.cos(np.pi * (1 - i / (2 * k))), start_y + np.sin(np.pi * (1 - i / (2 * k)))) for i in range(2 * k + 1)]
+    return {
+        "camera": {
+            "view": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -5, 0, 0, 0, 1],
+            "projection": [1 / HALF, 0, 0, 0, 0, 1 / HALF, 0, 0, 0, 0, -2 / (far - n), -(far + n) / (far - n), 0, 0,
+                           0, 1],
+            "viewport": [SIZE, SIZE],
+        },
+        "strokes": [
+            # The rim seen edge-on: a closed stroke along it selects the whole boundary loop.
+            {"points": [px(-1, 0), px(1, 0), px(-1, 0)], "tool": "extrude", "name": "rim"},
+            {"points": arc, "tool": "extrude", "name": "dome"},
+        ],
+    }
+
+
+def euler(nv, faces):
+    edges = set()
+    for p in faces:
+        p = list(p)
+        for a, b in zip(p, p[1:] + p[:1]):
+            edges.add((min(a, b), max(a, b)))
+    return nv - len(edges) + len(faces)
+
+
+def test_dome_on_a_cup_is_on_the_sphere_and_closed():
+    v, f = cup()
+    mesh, rep = atelier.extrude((v, f), strokes(), optimise=False)
+    assert rep["copies"] == 10 and rep["capped"] and rep["base_ring"]
+    assert len(mesh.vertices) == len(v) + N * (rep["copies"] - 1) + 1
+    assert len(mesh.faces) == len(f) + N * (2 * rep["copies"] - 1)
+    new = np.asarray(mesh.vertices)[len(v):]
+    assert np.max(np.abs(np.linalg.norm(new, axis=1) - 1)) < 1e-9
+    assert euler(len(mesh.vertices), [list(x) for x in mesh.faces]) == 2
+    # Optimised: the edge lengths move towards the rim's mean edge length.
+    _, opt = atelier.extrude((v, f), strokes())
+    target = opt["base_mean_edge"]
+    assert abs(opt["after"]["mean"] - target) < abs(opt["before"]["mean"] - target)
+
+
+def test_same_file_as_the_cli(scratch):
+    v, f = cup()
+    atelier.write_mesh(scratch / "cup.obj", v, f)
+    (scratch / "strokes.json").write_text(json.dumps(strokes()))
+    run_cli("--threads", 1, "extrude", "--mesh", scratch / "cup.obj", "--strokes", scratch / "strokes.json",
+            "--out", scratch / "cli.obj", "--json", scratch / "cli.json")
+    mesh, rep = atelier.extrude(atelier.read_mesh(scratch / "cup.obj"), scratch / "strokes.json", threads=2)
+    atelier.write_mesh(scratch / "py.obj", mesh)
+    assert (scratch / "py.obj").read_bytes() == (scratch / "cli.obj").read_bytes()
+    theirs = json.loads((scratch / "cli.json").read_text())
+    assert theirs["ok"] and theirs["copies"] == rep["copies"] and theirs["volume_change"] == rep["volume_change"]
+
+
+def test_bad_strokes_raise_with_the_engines_message():
+    v, f = cup()
+    with pytest.raises(ValueError, match="does not start near the base curve"):
+        atelier.extrude((v, f), strokes(start_y=0.5))
+    bad = strokes()
+    bad["strokes"][1]["points"][3][0] = float("nan")
+    with pytest.raises(ValueError, match="non-finite|NaN"):
+        atelier.extrude((v, f), bad)
+    lone = strokes()
+    del lone["strokes"][1]
+    with pytest.raises(ValueError, match="run of 2 or 3 extrude strokes"):
+        atelier.extrude((v, f), lone)

@@ -1,0 +1,526 @@
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/sketch/cut.h>
+#include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/sketch/paint.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "extrude_detail.h"
+
+namespace atelier {
+
+namespace {
+
+Status fail(ErrorCode c, const std::string& what) {
+  return Status(c, "extrude: " + what);
+}
+
+/// At least 2 distinct points, all finite.
+Status check_stroke(std::span<const Vec2d> s, const std::string& name) {
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (!s[i].allFinite())
+      return fail(ErrorCode::kInvalidArgument, name + " point " + std::to_string(i) + " is not finite");
+  std::size_t distinct = s.empty() ? 0 : 1;
+  for (std::size_t i = 1; i < s.size(); ++i) distinct += s[i] != s[i - 1];
+  if (distinct < 2)
+    return fail(ErrorCode::kInvalidArgument,
+                name + " needs at least 2 distinct points (found " + std::to_string(s.size()) + ")");
+  return {};
+}
+
+Vec2d screen(const Camera& c, const Vec3d& p) {
+  return c.project(p).head<2>();
+}
+
+/// Screen distance from q to the polyline.
+double distance_to(std::span<const Vec2d> line, const Vec2d& q) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    const Vec2d a = line[i], d = line[i + 1] - a;
+    const double dd = d.squaredNorm();
+    const double t = dd > 0 ? std::clamp((q - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + t * d - q).norm());
+  }
+  if (line.size() == 1) best = (line[0] - q).norm();
+  return best;
+}
+
+/// The point of B nearest on screen to pixel q (section 3.2, constraint 1):
+/// on B's segments, linearly interpolated in 3D. Returns the screen distance.
+double nearest_on_base(const Model& m, const Camera& cam, std::span<const NodeIdx> base, bool ring, const Vec2d& q,
+                       Vec3d& out) {
+  double best = std::numeric_limits<double>::infinity();
+  const std::size_t segs = ring ? base.size() : base.size() - 1;
+  for (std::size_t i = 0; i < segs; ++i) {
+    const Vec3d A = m.position(base[i]), B = m.position(base[(i + 1) % base.size()]);
+    const Vec2d a = screen(cam, A), b = screen(cam, B);
+    if (!a.allFinite() || !b.allFinite()) continue;
+    const Vec2d d = b - a;
+    const double dd = d.squaredNorm();
+    const double t = dd > 0 ? std::clamp((q - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+    const double dist = (a + t * d - q).norm();
+    if (dist < best) {
+      best = dist;
+      out = A + t * (B - A);
+    }
+  }
+  return best;
+}
+
+bool in_surfaces(const Model& m, NodeIdx v, std::span<const SurfaceIdx> only) {
+  if (only.empty()) return true;
+  return std::find(only.begin(), only.end(), m.nodes.surface[v.value]) != only.end();
+}
+
+/// The unique faceless outgoing halfedge of v with a face on its twin.
+Expected<HalfedgeIdx> boundary_out(const Model& m, NodeIdx v) {
+  HalfedgeIdx found;
+  int count = 0;
+  m.for_each_outgoing(v, [&](HalfedgeIdx h) {
+    if (!m.face(h).valid() && m.face(twin(h)).valid()) {
+      found = h;
+      ++count;
+    }
+  });
+  if (count > 1)
+    return fail(ErrorCode::kNonManifold,
+                "boundary node " + std::to_string(v.value) + " starts " + std::to_string(count) + " boundary arcs");
+  if (count == 0) return fail(ErrorCode::kInvalidArgument, "node " + std::to_string(v.value) + " is not on a boundary");
+  return found;
+}
+
+/// Nodes from s along the boundary (faceless halfedges) to t; empty when the
+/// loop returns to s first. s == t walks the whole loop (s not repeated).
+Expected<std::vector<NodeIdx>> walk_boundary(const Model& m, NodeIdx s, NodeIdx t) {
+  std::vector<NodeIdx> out{s};
+  NodeIdx v = s;
+  for (std::size_t steps = 0; steps <= m.num_edges(); ++steps) {
+    auto h = boundary_out(m, v);
+    if (!h) return h.status();
+    v = m.head(*h);
+    if (v == t) {
+      if (t != s) out.push_back(v);
+      return out;
+    }
+    if (v == s) return std::vector<NodeIdx>{};
+    out.push_back(v);
+  }
+  return fail(ErrorCode::kInternal, "boundary walk did not end");
+}
+
+struct Base {
+  std::vector<NodeIdx> nodes;  // along the faceless halfedges
+  bool ring = false;
+  std::size_t faces_removed = 0;
+};
+
+/// Closed base stroke: paint, cut away the enclosed side, read B off the curve.
+Expected<Base> closed_base(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx) {
+  PaintOptions po;
+  po.surfaces = opt.surfaces;
+  auto pr = paint_stroke(m, in.base_camera, in.base, po, ctx);
+  if (!pr) return fail(pr.status().code(), "base stroke: " + pr.status().message());
+  if (pr->curves.size() != 1 || !pr->curves[0].closed)
+    return fail(ErrorCode::kInvalidArgument, "the closed base stroke must paint one closed curve (got " +
+                                                 std::to_string(pr->curves.size()) + " curve(s)" +
+                                                 (pr->curves.size() == 1 ? ", open" : "") + ")");
+  if (pr->curves[0].edges.size() != 1) return fail(ErrorCode::kUnsupported, "the base curve crosses several surfaces");
+  const AttribEdge curve = pr->curves[0].edges[0];
+  CutOptions co;
+  co.retriangulate = opt.retriangulate;
+  auto cr = cut_along_curves(m, pr->curves[0].edges, co, ctx);
+  if (!cr) return fail(cr.status().code(), "base cut: " + cr.status().message());
+  Base b;
+  b.ring = true;
+  b.faces_removed = cr->faces_removed;
+  if (!m.alive(curve)) return fail(ErrorCode::kInternal, "the base curve did not survive the cut");
+  for (AttribNodeIdx a : m.attrib_edges.nodes.row(curve.idx.value)) {
+    if (m.attrib_nodes.kind[a.value] != AttribNodeKind::kVertex)
+      return fail(ErrorCode::kInternal, "a base curve node is not on a mesh node after the cut");
+    const NodeIdx v{m.attrib_nodes.element[a.value]};
+    if (b.nodes.empty() || b.nodes.back() != v) b.nodes.push_back(v);
+  }
+  if (b.nodes.size() > 1 && b.nodes.front() == b.nodes.back()) b.nodes.pop_back();
+  if (b.nodes.size() < 3) return fail(ErrorCode::kDegenerate, "the base ring has fewer than 3 nodes");
+  // Orient B along its faceless halfedges (the side the new faces go on).
+  int forward = 0, backward = 0;
+  for (std::size_t i = 0; i < b.nodes.size(); ++i) {
+    const HalfedgeIdx h = m.find_halfedge(b.nodes[i], b.nodes[(i + 1) % b.nodes.size()]);
+    if (!h.valid()) return fail(ErrorCode::kInternal, "consecutive base nodes share no edge");
+    forward += !m.face(h).valid();
+    backward += !m.face(twin(h)).valid();
+  }
+  const int n = static_cast<int>(b.nodes.size());
+  if (backward == n && forward == 0)
+    std::reverse(b.nodes.begin(), b.nodes.end());
+  else if (!(forward == n && backward == 0))
+    return fail(ErrorCode::kTopology, "the cut did not leave the base curve as one boundary ring");
+  return b;
+}
+
+/// Open base stroke: the boundary arc it follows on screen.
+Expected<Base> open_base(const Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt) {
+  const Camera& cam = in.base_camera;
+  const Vec2d first = in.base.front(), last = in.base.back();
+  NodeIdx s, t;
+  double ds = opt.pick_radius, dt = opt.pick_radius;
+  std::vector<Vec2d> px(m.nodes.slots.capacity(), Vec2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e}) || !m.is_boundary(EdgeIdx{e})) continue;
+    for (unsigned side = 0; side < 2; ++side) {
+      const NodeIdx v = m.tail(halfedge_of(EdgeIdx{e}, side));
+      if (!in_surfaces(m, v, opt.surfaces)) continue;
+      const Vec2d p = px[v.value] = screen(cam, m.position(v));
+      if (!p.allFinite()) continue;
+      if (const double d = (p - first).norm(); d < ds || (d == ds && s.valid() && v.value < s.value)) ds = d, s = v;
+      if (const double d = (p - last).norm(); d < dt || (d == dt && t.valid() && v.value < t.value)) dt = d, t = v;
+    }
+  }
+  if (!s.valid() || !t.valid())
+    return fail(ErrorCode::kInvalidArgument, std::string("the open base stroke's ") + (s.valid() ? "last" : "first") +
+                                                 " point is not within " + std::to_string(opt.pick_radius) +
+                                                 " pixels of a boundary node");
+  Base b;
+  auto score = [&](const std::vector<NodeIdx>& arc) {
+    double worst = 0;
+    for (NodeIdx v : arc) worst = std::max(worst, distance_to(in.base, px[v.value]));
+    return arc.empty() ? std::numeric_limits<double>::infinity() : worst;
+  };
+  if (s == t) {
+    auto loop = walk_boundary(m, s, s);
+    if (!loop) return loop.status();
+    if ((first - last).norm() > opt.pick_radius || score(*loop) > opt.pick_radius)
+      return fail(ErrorCode::kInvalidArgument, "the open base stroke selects a single node");
+    b.nodes = std::move(*loop);
+    b.ring = true;
+  } else {
+    auto a1 = walk_boundary(m, s, t);
+    if (!a1) return a1.status();
+    auto a2 = walk_boundary(m, t, s);
+    if (!a2) return a2.status();
+    const double s1 = score(*a1), s2 = score(*a2);
+    if (std::min(s1, s2) > opt.pick_radius)
+      return fail(ErrorCode::kInvalidArgument,
+                  "the open base stroke does not follow a boundary between its ends (within " +
+                      std::to_string(opt.pick_radius) + " pixels)");
+    b.nodes = s1 <= s2 ? std::move(*a1) : std::move(*a2);
+  }
+  if (b.nodes.size() < 2 || (b.ring && b.nodes.size() < 3))
+    return fail(ErrorCode::kDegenerate, "the base curve has too few nodes");
+  return b;
+}
+
+/// Pixel ray cut with the plane through o with normal n.
+Expected<Vec3d> cast(const Camera& cam, const Vec2d& px, const Vec3d& o, const Vec3d& n, const std::string& name) {
+  const auto [origin, dir] = cam.ray(px);
+  const double den = n.dot(dir);
+  if (!(std::abs(den) > 1e-9))
+    return fail(ErrorCode::kDegenerate, name + ": a ray runs parallel to the projection plane (seen edge-on)");
+  const Vec3d p = origin + (n.dot(o - origin) / den) * dir;
+  if (!p.allFinite()) return fail(ErrorCode::kDegenerate, name + ": a projected point is not finite");
+  return p;
+}
+
+/// Consecutive repeats removed.
+std::vector<Vec3d> dedupe(std::vector<Vec3d> v) {
+  std::vector<Vec3d> out;
+  for (const Vec3d& p : v)
+    if (out.empty() || p != out.back()) out.push_back(p);
+  return out;
+}
+
+/// (left, right) pairs of the sweep (eq. 2): every step the case with the
+/// shortest new segment; ties to the lower case.
+struct Pair {
+  Vec3d left, right;
+};
+std::vector<Pair> sweep_two(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
+  std::vector<Pair> out;
+  std::size_t i = 0, j = 0;
+  while (i + 1 < a.size() || j + 1 < b.size()) {
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t ni = i, nj = j;
+    auto consider = [&](std::size_t ci, std::size_t cj) {
+      const double l = (a[ci] - b[cj]).norm();
+      if (l < best) best = l, ni = ci, nj = cj;
+    };
+    if (i + 1 < a.size()) consider(i + 1, j);                          // case 1
+    if (j + 1 < b.size()) consider(i, j + 1);                          // case 2
+    if (i + 1 < a.size() && j + 1 < b.size()) consider(i + 1, j + 1);  // case 3
+    i = ni, j = nj;
+    out.push_back({a[i], b[j]});
+  }
+  return out;
+}
+/// One stroke q: left from q.front(), right from q.back(), towards each
+/// other; the last pair is the meeting point (left == right).
+std::vector<Pair> sweep_one(const std::vector<Vec3d>& q) {
+  std::vector<Pair> out;
+  std::size_t i = 0, j = q.size() - 1;
+  while (j > i + 2) {
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t ni = i, nj = j;
+    auto consider = [&](std::size_t ci, std::size_t cj) {
+      const double l = (q[ci] - q[cj]).norm();
+      if (l < best) best = l, ni = ci, nj = cj;
+    };
+    consider(i + 1, j);
+    consider(i, j - 1);
+    consider(i + 1, j - 1);  // j >= i + 3: the pair stays apart
+    i = ni, j = nj;
+    out.push_back({q[i], q[j]});
+  }
+  const Vec3d apex = j == i + 2 ? q[i + 1] : 0.5 * (q[i] + q[j]);
+  out.push_back({apex, apex});
+  return out;
+}
+
+/// Signed volume of the model's faces (fan triangles about the origin).
+double signed_volume(const Model& m) {
+  double v = 0;
+  std::vector<NodeIdx> f;
+  for (std::uint32_t i = 0; i < m.faces.slots.capacity(); ++i) {
+    if (!m.alive(FaceIdx{i})) continue;
+    m.face_nodes(FaceIdx{i}, f);
+    for (std::size_t k = 1; k + 1 < f.size(); ++k)
+      v += m.position(f[0]).dot(m.position(f[k]).cross(m.position(f[k + 1]))) / 6.0;
+  }
+  return v;
+}
+
+Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
+  HalfedgeIdx h = m.find_halfedge(a, b);
+  if (!h.valid()) h = halfedge_of(m.new_edge(a, b), 0);
+  if (m.face(h).valid())
+    return fail(ErrorCode::kTopology, "edge " + std::to_string(a.value) + "-" + std::to_string(b.value) +
+                                          " already has a face on the side to sew");
+  return h;
+}
+
+Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx) {
+  if (!(opt.pick_radius > 0) || !std::isfinite(opt.pick_radius))
+    return fail(ErrorCode::kInvalidArgument, "pick_radius must be positive and finite");
+  for (const Camera* c : {&in.base_camera, &in.sweep_camera})
+    if (Status s = c->check(); !s) return fail(ErrorCode::kInvalidArgument, s.message());
+  if (Status s = check_stroke(in.base, "base stroke"); !s) return s;
+  if (in.sweep.empty() || in.sweep.size() > 2)
+    return fail(ErrorCode::kInvalidArgument,
+                "one (closed extrusion) or two (open extrusion) extruding strokes needed, found " +
+                    std::to_string(in.sweep.size()));
+  for (std::size_t k = 0; k < in.sweep.size(); ++k)
+    if (Status s = check_stroke(in.sweep[k], "extruding stroke " + std::to_string(k)); !s) return s;
+  for (SurfaceIdx s : opt.surfaces)
+    if (!m.alive(s)) return fail(ErrorCode::kStaleHandle, "surface " + std::to_string(s.value) + " is dead");
+
+  ExtrudeReport rep;
+  const double volume_before = signed_volume(m);
+  const bool closed_stroke = in.base.size() > 2 && in.base.front() == in.base.back();
+  const bool capped = in.sweep.size() == 1;
+  // Step 1: base curve. A closed stroke on an open boundary loop is the
+  // loop (open_base); on the surface it is painted and cut (closed_base).
+  Expected<Base> base = open_base(m, in, opt);
+  if (!base && closed_stroke) base = closed_base(m, in, opt, ctx);
+  if (!base) return base.status();
+  rep.base = base->nodes;
+  rep.base_ring = base->ring;
+  rep.capped = capped;
+  rep.faces_removed = base->faces_removed;
+  if (capped && !base->ring)
+    return fail(ErrorCode::kInvalidArgument, "a closed extrusion (one extruding stroke) needs a closed base ring");
+  const std::vector<NodeIdx>& B = rep.base;
+  const std::size_t n = B.size();
+  const SurfaceIdx surface = m.nodes.surface[B[0].value];
+  {
+    double sum = 0;
+    const std::size_t segs = base->ring ? n : n - 1;
+    for (std::size_t i = 0; i < segs; ++i) sum += (m.position(B[(i + 1) % n]) - m.position(B[i])).norm();
+    rep.base_mean_edge = sum / static_cast<double>(segs);
+  }
+
+  // Step 2: projection plane (eq. 1).
+  Vec3d centroid = Vec3d::Zero();
+  for (NodeIdx v : B) centroid += m.position(v);
+  centroid /= static_cast<double>(n);
+  Mat3d cov = Mat3d::Zero();
+  for (NodeIdx v : B) cov += (m.position(v) - centroid) * (m.position(v) - centroid).transpose();
+  Eigen::SelfAdjointEigenSolver<Mat3d> eig(cov);
+  const Vec3d ev = eig.eigenvalues();
+  if (!(ev[2] > 0) || !(ev[1] > 1e-12 * ev[2]))
+    return fail(ErrorCode::kDegenerate, "the base curve's least-squares plane has no area (B is straight)");
+  rep.base_normal = eig.eigenvectors().col(0).normalized();
+  const Camera& cam = in.sweep_camera;
+  const Vec2d end1 = in.sweep[0].front(), end2 = capped ? in.sweep[0].back() : in.sweep[1].front();
+  const double d1 = nearest_on_base(m, cam, B, base->ring, end1, rep.p1);
+  const double d2 = nearest_on_base(m, cam, B, base->ring, end2, rep.p2);
+  if (!(d1 <= opt.pick_radius) || !(d2 <= opt.pick_radius)) {
+    std::ostringstream o;
+    o << (capped ? "the extruding stroke's " : "extruding stroke ")
+      << (!(d1 <= opt.pick_radius) ? (capped ? "first point" : "0") : (capped ? "last point" : "1"))
+      << " does not start near the base curve (" << (!(d1 <= opt.pick_radius) ? d1 : d2) << " pixels from it, at most "
+      << opt.pick_radius << ")";
+    return fail(ErrorCode::kInvalidArgument, o.str());
+  }
+  const Vec3d e_star = rep.p2 - rep.p1;
+  const double chord = e_star.norm();
+  if (!(chord > 1e-12 * (1 + centroid.norm())))
+    return fail(ErrorCode::kDegenerate, "P1* and P2* coincide: the strokes' ends meet B at one point");
+  Vec3d np = e_star.cross(rep.base_normal);
+  if (!(np.norm() > 1e-6 * chord)) return fail(ErrorCode::kDegenerate, "P1*P2* is parallel to the normal of B");
+  np.normalize();
+  const Vec3d view = cam.ray(screen(cam, rep.p1)).second;
+  if (np.dot(view) > 0) np = -np;
+  if (!(std::abs(np.dot(view)) > 1e-3))
+    return fail(ErrorCode::kDegenerate, "the projection plane is seen edge-on from the extruding strokes' camera");
+  rep.plane_normal = np;
+
+  std::vector<std::vector<Vec3d>> proj(in.sweep.size());
+  for (std::size_t k = 0; k < in.sweep.size(); ++k) {
+    for (const Vec2d& px : in.sweep[k]) {
+      auto p = cast(cam, px, rep.p1, np, "extruding stroke " + std::to_string(k));
+      if (!p) return p.status();
+      proj[k].push_back(*p);
+    }
+    // The sweep starts on B itself: the stroke's first point becomes P*.
+    proj[k].front() = k == 0 ? rep.p1 : rep.p2;
+    if (capped) proj[k].back() = rep.p2;
+    proj[k] = dedupe(std::move(proj[k]));
+  }
+
+  // Step 3: sweep (Figs. 5-6, eq. 2).
+  const std::vector<Pair> pairs = capped ? sweep_one(proj[0]) : sweep_two(proj[0], proj[1]);
+  if (pairs.empty()) return fail(ErrorCode::kDegenerate, "the extruding stroke is too short for one copy of B");
+  const Vec3d u_star = e_star / chord;
+  Mat3d f_star;
+  f_star << np, u_star, np.cross(u_star);
+  std::vector<std::vector<Vec3d>> copies;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    Vec3d e = pairs[k].right - pairs[k].left;
+    e -= e.dot(np) * np;  // the pair lies in the plane up to rounding
+    const double len = e.norm();
+    const bool apex = capped && k + 1 == pairs.size();
+    if (!apex && !(len > 1e-9 * chord))
+      return fail(ErrorCode::kDegenerate, "copy " + std::to_string(k + 1) +
+                                              " collapses to a point (the extruding strokes cross or meet early)");
+    Mat3d rot = Mat3d::Identity();
+    double scale = 0;
+    if (!apex) {
+      const Vec3d u = e / len;
+      Mat3d f;
+      f << np, u, np.cross(u);
+      rot = f * f_star.transpose();
+      scale = len / chord;
+    }
+    const Vec3d trans = pairs[k].left - scale * (rot * rep.p1);
+    rep.scales.push_back(scale);
+    rep.rotations.push_back(rot);
+    rep.translations.push_back(trans);
+    std::vector<Vec3d> row;
+    if (apex) {
+      row.push_back(pairs[k].left);
+    } else {
+      for (NodeIdx v : B) row.push_back(trans + scale * (rot * m.position(v)));
+    }
+    for (const Vec3d& p : row)
+      if (!p.allFinite()) return fail(ErrorCode::kDegenerate, "a copy of B is not finite");
+    copies.push_back(std::move(row));
+  }
+  rep.copies = copies.size();
+  if (ctx.cancelled()) return fail(ErrorCode::kCancelled, "cancelled");
+
+  // Step 4: sewing (Figs. 7-8). Snapshot which faces and nodes are old.
+  extrude_detail::Region region;
+  region.old_face.resize(m.faces.slots.capacity());
+  for (std::uint32_t f = 0; f < region.old_face.size(); ++f) region.old_face[f] = m.alive(FaceIdx{f});
+  region.fixed_node.resize(m.nodes.slots.capacity());
+  for (NodeIdx v : B) region.fixed_node[v.value] = true;
+  const std::size_t faces0 = m.num_faces(), nodes0 = m.num_nodes();
+
+  std::vector<NodeIdx> prev = B;
+  const std::size_t segs = base->ring ? n : n - 1;
+  auto tri = [&](NodeIdx a, NodeIdx b, NodeIdx c) -> Status {
+    std::array<HalfedgeIdx, 3> cyc;
+    const NodeIdx v[3] = {a, b, c};
+    for (int s = 0; s < 3; ++s) {
+      auto h = halfedge_for(m, v[s], v[(s + 1) % 3]);
+      if (!h) return h.status();
+      cyc[s] = *h;
+    }
+    (void)m.new_face(surface, cyc);
+    return {};
+  };
+  for (const auto& row : copies) {
+    std::vector<NodeIdx> cur;
+    for (const Vec3d& p : row) cur.push_back(m.new_node(surface, p));
+    for (std::size_t t = 0; t < segs; ++t) {
+      const std::size_t u = (t + 1) % n;
+      // Rule 2: prev[t] -> prev[u] is B's faceless direction (or negative
+      // in the previous strip), so it runs the same way in this face.
+      if (cur.size() == 1) {
+        if (Status s = tri(prev[t], prev[u], cur[0]); !s) return s;
+      } else {
+        if (Status s = tri(prev[t], prev[u], cur[u]); !s) return s;
+        if (Status s = tri(prev[t], cur[u], cur[t]); !s) return s;
+      }
+    }
+    prev = std::move(cur);
+  }
+  rep.swept_nodes = m.num_nodes() - nodes0;
+  rep.swept_faces = m.num_faces() - faces0;
+  m.complex_holes = count_topology(m).implied_holes();
+
+  // Step 5: optimisation (Fig. 9).
+  rep.before = extrude_detail::region_stats(m, region, rep.base_mean_edge);
+  rep.after = rep.before;
+  if (opt.optimise) {
+    std::vector<HalfedgeIdx> chain;
+    for (std::size_t t = 0; t < segs; ++t) chain.push_back(m.find_halfedge(B[t], B[(t + 1) % n]));
+    auto oc = extrude_detail::optimise_region(m, region, chain, rep.base_mean_edge, opt.optimise_passes, ctx);
+    if (!oc) return oc.status();
+    rep.splits = oc->splits;
+    rep.collapses = oc->collapses;
+    rep.swaps = oc->swaps;
+    rep.after = extrude_detail::region_stats(m, region, rep.base_mean_edge);
+  }
+  rep.nodes_added = m.num_nodes() - nodes0;
+  rep.faces_added = m.num_faces() - faces0;
+  rep.volume_change = signed_volume(m) - volume_before;
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
+    if (m.alive(NodeIdx{v}) && !m.nodes.position[v].allFinite())
+      return fail(ErrorCode::kInternal, "node " + std::to_string(v) + " has a non-finite position");
+  if (Status s = validate(m); !s) return fail(ErrorCode::kInternal, "the result does not validate: " + s.message());
+  return rep;
+}
+
+}  // namespace
+
+Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t first) {
+  std::size_t j = first;
+  while (j < file.strokes.size() && file.strokes[j].tool == StrokeTool::kExtrude) ++j;
+  if (j - first < 2 || j - first > 3)
+    return fail(ErrorCode::kInvalidArgument, "stroke " + std::to_string(first) +
+                                                 ": expected a run of 2 or 3 extrude strokes, found " +
+                                                 std::to_string(j - first));
+  ExtrudeStrokes in;
+  in.base_camera = file.strokes[first].camera.value_or(file.camera);
+  in.base = file.strokes[first].points;
+  in.sweep_camera = file.strokes[first + 1].camera.value_or(file.camera);
+  for (std::size_t k = first + 1; k < j; ++k) in.sweep.push_back(file.strokes[k].points);
+  return in;
+}
+
+Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes, const ExtrudeOptions& options,
+                                const ExecContext& ctx) {
+  Model backup = model;  // transactional: every error path restores it
+  Expected<ExtrudeReport> r = run(model, strokes, options, ctx);
+  if (!r) model = std::move(backup);
+  return r;
+}
+
+}  // namespace atelier

@@ -1,0 +1,138 @@
+// Sketch extrusion (seed 002, Wang and Yuen, "Freeform extrusion by sketched
+// input"): a base curve B on the mesh and one or two extruding strokes drawn
+// from a second camera grow a surface out of (or, drawn into the object, a
+// cavity into) the mesh.
+//
+//  1. Base curve (section 3.1). A closed base stroke (last point = first) is
+//     painted on the surface (systems/sketch/paint.h), re-triangulated and
+//     the faces inside it removed (cut_along_curves without a pick: every
+//     piece but the largest, i.e. the side the stroke encloses): B is the new
+//     boundary ring. An open base stroke selects boundary edges: the
+//     boundary node nearest on screen to each of its ends (within
+//     pick_radius pixels) and the boundary arc between them that stays
+//     within pick_radius of the stroke (the result stays manifold). A closed
+//     stroke along a whole boundary loop selects the loop (a sleeve from an
+//     armhole).
+//  2. Projection plane (eq. 1): through P1* and P2*, the points of B nearest
+//     on screen to the strokes' ends, parallel to n_B, the normal of B's
+//     least-squares plane; its normal n_p = (P2* - P1*) x n_B, turned towards
+//     the camera. Every stroke pixel's ray is cut with it.
+//  3. Sweep (Figs. 5-6, eq. 2): a left and a right point advance along the
+//     projected stroke(s); each step takes, of "left", "right" and "both",
+//     the case with the shortest new segment P1'P2' (goodness 1/l; ties to
+//     the lower case), and places a copy of B by the similarity mapping
+//     P1*P2* onto P1'P2' (frames [n_p, e, n_p x e], scale |P1'P2'|/|P1*P2*|).
+//     One stroke (a closed extrusion, B a ring): the points start at its two
+//     ends and walk towards each other; the last copy is a single vertex.
+//     Two strokes (an open extrusion): each point walks along its stroke.
+//  4. Sewing (contour stitching, Figs. 7-8): two triangles per segment of B
+//     between neighbouring copies, strip after strip from B outwards (rule
+//     1), each oriented so that the strip's edge on the previous copy is
+//     negative in it where it was positive in the previous strip (rule 2).
+//  5. Mesh optimisation (Fig. 9; the paper's [1]) of the new faces only:
+//     split edges longer than 4/3 L, collapse edges shorter than 4/5 L, swap
+//     towards valence 6 (systems/mesh/edit.h), L the mean edge length of B,
+//     then relax inner nodes tangentially and project them back onto the
+//     swept triangles (systems/spatial/body_bvh.h). B's nodes never move (B
+//     is a constraint for the collapses); every node stays on the swept
+//     triangulation.
+//
+// Counts before optimisation, K copies (report.copies): a ring of n nodes
+// with a closed extrusion adds n(K-1) + 1 nodes and n(2K-1) triangles; a
+// chain of n edges with an open extrusion (n+1)K nodes and 2nK triangles;
+// a ring of n nodes with an open extrusion nK nodes and 2nK triangles.
+//
+// Reads: the model, the strokes and cameras. Writes: nodes, edges, faces of
+// B's surface (appended; the base cut removes faces), the painted base curve
+// (kept as an attribute edge along B), model.complex_holes (recounted),
+// topology_version. B's nodes keep their indices and positions bit for bit.
+//
+// Transactional: on any error the model is unchanged (diff_tables == "").
+// Errors: kInvalidArgument (fewer than 2 distinct or non-finite stroke
+// points, a bad camera, a base stroke that selects no boundary arc, an
+// extruding stroke that does not start within pick_radius of B, one stroke
+// with an open B, more than 2 strokes), kDegenerate (B's least-squares fit has
+// no area, P1*P2* parallel to n_B, a plane seen edge-on, strokes that cross
+// so that a copy collapses to a point), kNonManifold (a boundary node with
+// several boundary arcs), those of paint_stroke and cut_along_curves, and
+// kCancelled. The single-threaded result is the result: every step runs in a
+// fixed order (ExecContext threads do not change a bit).
+#pragma once
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/model.h>
+#include <atelier/systems/sketch/retriangulate.h>
+#include <atelier/systems/view/camera.h>
+#include <atelier/systems/view/strokes.h>
+
+#include <cstddef>
+#include <vector>
+
+namespace atelier {
+
+struct ExtrudeStrokes {
+  /// The base stroke (pixels through base_camera): closed (last point =
+  /// first) paints and cuts a ring; open selects boundary edges.
+  Camera base_camera;
+  std::vector<Vec2d> base;
+  /// The extruding strokes (pixels through sweep_camera): one for a closed
+  /// extrusion (starts and ends near B), two for an open one (each starts
+  /// near B).
+  Camera sweep_camera;
+  std::vector<std::vector<Vec2d>> sweep;
+};
+
+struct ExtrudeOptions {
+  /// Surfaces the base stroke paints on / selects boundary edges of (empty: all).
+  std::vector<SurfaceIdx> surfaces;
+  /// Screen distance (pixels) within which stroke ends must lie from B, and
+  /// an open base stroke from the boundary it selects.
+  double pick_radius = 12.0;
+  /// Mesh optimisation of the new region (step 5).
+  bool optimise = true;
+  int optimise_passes = 6;
+  RetriangulateOptions retriangulate;
+};
+
+/// Edge-length statistics of the new region (edges with a new face on a
+/// side and not on B).
+struct EdgeLengthStats {
+  std::size_t edges = 0;
+  double mean = 0, min = 0, max = 0;
+  double within = 0;  // fraction within [4/5, 4/3] of the target length
+};
+
+struct ExtrudeReport {
+  bool base_ring = false;                        // B is a closed ring
+  bool capped = false;                           // closed extrusion: the last copy is one vertex
+  std::vector<NodeIdx> base;                     // B's nodes in order (along its faceless halfedges)
+  double base_mean_edge = 0;                     // L, the optimisation target
+  Vec3d base_normal = Vec3d::Zero();             // n_B (least squares)
+  Vec3d plane_normal = Vec3d::Zero();            // n_p (eq. 1), towards the camera
+  Vec3d p1 = Vec3d::Zero(), p2 = Vec3d::Zero();  // P1*, P2*
+  std::size_t copies = 0;                        // K
+  /// The similarity of each copy k = 1..K: x' = translation + scale * rotation * x.
+  std::vector<double> scales;
+  std::vector<Mat3d> rotations;
+  std::vector<Vec3d> translations;
+  std::size_t faces_removed = 0;                 // by the base cut
+  std::size_t swept_nodes = 0, swept_faces = 0;  // added by sweep and sewing
+  std::size_t splits = 0, collapses = 0, swaps = 0;
+  EdgeLengthStats before, after;                 // of the new region, around the optimisation
+  std::size_t nodes_added = 0, faces_added = 0;  // net, after optimisation
+  double volume_change = 0;                      // signed volume (of B's surface) after minus before
+};
+
+/// The extrusion held by the run of "extrude" strokes starting at stroke
+/// `first` of a stroke file (docs/strokes.md): the base stroke, then one or
+/// two extruding strokes, each through its own camera or the file's. Reads
+/// the file only. kInvalidArgument when no such run starts there.
+[[nodiscard]] Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t first = 0);
+
+/// Extrudes (see above).
+[[nodiscard]] Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes,
+                                              const ExtrudeOptions& options = {}, const ExecContext& ctx = {});
+
+}  // namespace atelier

@@ -1,0 +1,107 @@
+// `atelier extrude` on good and bad inputs (runs the built binary): a dome
+// on an open cup closes it; a stroke far from the rim exits 3 with the
+// stroke file named, writing no mesh but the --json error; usage errors exit 2.
+#include <atelier/io/obj.h>
+#include <atelier/storage/builder.h>
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/view/strokes.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "support/run_command.h"
+
+namespace fs = std::filesystem;
+using namespace atelier;
+
+namespace {
+
+constexpr int kRing = 24;
+
+struct Files {
+  fs::path dir, mesh, strokes;
+};
+
+/// An open cup (unit rings at y = 0, -0.5, -1, a bottom centre) and a dome
+/// drawn on its rim (shifted up by `lift` pixels: far from the rim).
+Files setup(const std::string& name, double lift = 0) {
+  Files f;
+  f.dir = atelier::testing::scratch_dir(name);
+  std::vector<Vec3d> p;
+  std::vector<std::uint32_t> off{0}, idx;
+  for (int r = 0; r < 3; ++r)
+    for (int i = 0; i < kRing; ++i)
+      p.push_back(Vec3d(std::cos(2 * M_PI * i / kRing), -0.5 * r, std::sin(2 * M_PI * i / kRing)));
+  p.push_back(Vec3d(0, -1, 0));
+  auto id = [](int r, int i) { return static_cast<std::uint32_t>(r * kRing + i % kRing); };
+  auto face = [&](std::initializer_list<std::uint32_t> v) {
+    idx.insert(idx.end(), v);
+    off.push_back(static_cast<std::uint32_t>(idx.size()));
+  };
+  for (int r = 0; r < 2; ++r)
+    for (int i = 0; i < kRing; ++i) {
+      face({id(r, i), id(r, i + 1), id(r + 1, i + 1)});
+      face({id(r, i), id(r + 1, i + 1), id(r + 1, i)});
+    }
+  for (int i = 0; i < kRing; ++i) face({id(2, i), id(2, i + 1), 3 * kRing});
+  Model m;
+  (void)add_polygon_surface(m, "cup", PolygonSoupView{p, off, idx}).value();
+  f.mesh = f.dir / "cup.obj";
+  write_obj(m, f.mesh);
+  StrokeFile s;
+  s.camera = Camera::orthographic(Vec3d(0, 0, 5), Vec3d::Zero(), Vec3d::UnitY(), 1.5, 800, 800);
+  auto px = [&](const Vec3d& q) { return Vec2d(s.camera.project(q).head<2>()); };
+  Stroke base, dome;
+  base.tool = dome.tool = StrokeTool::kExtrude;
+  base.points = {px(Vec3d(-1, 0, 0)), px(Vec3d(1, 0, 0)), px(Vec3d(-1, 0, 0))};
+  for (int i = 0; i <= 20; ++i) {
+    const double t = M_PI * (1 - i / 20.0);
+    dome.points.push_back(px(Vec3d(std::cos(t), std::sin(t), 0)) - Vec2d(0, lift));
+  }
+  s.strokes = {base, dome};
+  f.strokes = f.dir / "strokes.json";
+  EXPECT_TRUE(write_strokes(s, f.strokes));
+  return f;
+}
+
+std::string args(const Files& f, const fs::path& out, const std::string& extra = "") {
+  return "extrude --mesh " + f.mesh.string() + " --strokes " + f.strokes.string() + " --out " + out.string() + " " +
+         extra;
+}
+
+}  // namespace
+
+TEST(ExtrudeCli, DomeClosesTheCup) {
+  const Files f = setup("extrude-cli-ok");
+  auto r = atelier::testing::run_cli(args(f, f.dir / "out.obj", "--no-optimise --json " + (f.dir / "r.json").string()));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Model m = read_obj(f.dir / "out.obj");
+  ASSERT_TRUE(validate(m));
+  const TopologyCounts t = count_topology(m);
+  EXPECT_EQ(t.nodes - t.edges + t.faces, 2);
+  EXPECT_EQ(t.shells, 1);
+  std::ifstream in(f.dir / "r.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_TRUE(j["ok"].get<bool>());
+  const std::size_t K = j["copies"].get<std::size_t>();
+  EXPECT_EQ(j["swept_nodes"].get<std::size_t>(), kRing * (K - 1) + 1);
+  EXPECT_EQ(m.num_nodes(), std::size_t{3 * kRing + 1} + kRing * (K - 1) + 1);
+}
+
+TEST(ExtrudeCli, BadStrokesExit3AndWriteNoMesh) {
+  const Files f = setup("extrude-cli-far", 100);
+  auto r = atelier::testing::run_cli(args(f, f.dir / "out.obj", "--json " + (f.dir / "r.json").string()));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("strokes.json"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("does not start near the base curve"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(f.dir / "out.obj"));
+  std::ifstream in(f.dir / "r.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_FALSE(j["ok"].get<bool>());
+  EXPECT_EQ(atelier::testing::run_cli("extrude --mesh " + f.mesh.string()).code, 2);
+}
