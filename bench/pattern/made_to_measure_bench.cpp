@@ -116,9 +116,15 @@ void run(benchmark::State& st, bool do_regen, bool do_patterns, bool files) {
       benchmark::Counter(static_cast<double>(st.iterations() * kBodies), benchmark::Counter::kIsRate);
 }
 
-void BM_MadeToMeasure_Patterns(benchmark::State& st) { run(st, false, true, st.range(1) != 0); }
-void BM_MadeToMeasure_Regen(benchmark::State& st) { run(st, true, false, false); }
-void BM_MadeToMeasure_RegenAndPatterns(benchmark::State& st) { run(st, true, true, true); }
+void BM_MadeToMeasure_Patterns(benchmark::State& st) {
+  run(st, false, true, st.range(1) != 0);
+}
+void BM_MadeToMeasure_Regen(benchmark::State& st) {
+  run(st, true, false, false);
+}
+void BM_MadeToMeasure_RegenAndPatterns(benchmark::State& st) {
+  run(st, true, true, true);
+}
 
 }  // namespace
 

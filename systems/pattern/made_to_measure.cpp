@@ -43,8 +43,7 @@ double sew_line_width(const PatternPiece& piece, double v) noexcept {
 }
 
 Expected<MadeToMeasureReport> write_made_to_measure_pattern(const Model& garment, const MadeToMeasureOptions& opt,
-                                                            const std::filesystem::path& dir,
-                                                            const ExecContext& ctx) {
+                                                            const std::filesystem::path& dir, const ExecContext& ctx) {
   for (const NamedLine& l : opt.lines)
     if (!std::isfinite(l.fraction) || l.fraction < 0 || l.fraction > 1)
       return status_of(ErrorCode::kInvalidArgument, "named line '", l.name, "': fraction ", l.fraction,

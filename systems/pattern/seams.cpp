@@ -165,7 +165,8 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
   std::vector<std::uint8_t> seam_edge(ne, 0), seam_node(nn, 0), on_mesh_edge(nn, 0);
   for (std::uint32_t me = 0; me < m.mesh_edges.slots.capacity(); ++me)
     if (m.alive(MeshEdgeIdx{me}))
-      for (HalfedgeIdx h : m.mesh_edges.halfedges.row(me)) on_mesh_edge[m.tail(h).value] = on_mesh_edge[m.head(h).value] = 1;
+      for (HalfedgeIdx h : m.mesh_edges.halfedges.row(me))
+        on_mesh_edge[m.tail(h).value] = on_mesh_edge[m.head(h).value] = 1;
   // Given paths.
   for (std::size_t p = 0; p < opt.paths.size(); ++p) {
     const auto& path = opt.paths[p];
@@ -231,7 +232,8 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
     for (FaceIdx f : faces) {
       std::vector<std::uint32_t> ids;
       m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
-        const auto local = static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key_of(h)) - keys.begin());
+        const auto local =
+            static_cast<std::uint32_t>(std::lower_bound(keys.begin(), keys.end(), key_of(h)) - keys.begin());
         ids.push_back(local);
         corner_node[h.value] = v0 + local;
       });

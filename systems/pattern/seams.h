@@ -33,8 +33,8 @@
 // input's order (a polygon whose fan from its first corner would have a
 // degenerate triangle, as one with collinear corners at a T-junction of a
 // refined neighbour has, starts at the corner whose fan's smallest triangle
-// is largest: flattening fans polygons from their first corner), joints, no attribute nodes or edges (marks do not carry
-// over: notches come from the seam ends). `source_node` maps each node back.
+// is largest: flattening fans polygons from their first corner), joints, no attribute nodes or edges (marks do not
+// carry over: notches come from the seam ends). `source_node` maps each node back.
 //
 // Reads: the surfaces' faces, nodes.position, mesh edges and joints.
 // Errors: kStaleHandle (a dead surface), kInvalidArgument (a path node not
@@ -66,10 +66,10 @@ struct SeamOptions {
 
 struct OpenedSeams {
   Model model;
-  std::vector<NodeIdx> source_node;          // per node slot of `model`: its node in the input
-  std::vector<SurfaceIdx> surfaces;          // per input surface slot: its surface in `model` (or invalid)
-  std::vector<std::vector<NodeIdx>> paths;   // every seam opened (input nodes), given ones first
-  std::vector<JointIdx> seam_joints;         // per path: its joint in `model`
+  std::vector<NodeIdx> source_node;         // per node slot of `model`: its node in the input
+  std::vector<SurfaceIdx> surfaces;         // per input surface slot: its surface in `model` (or invalid)
+  std::vector<std::vector<NodeIdx>> paths;  // every seam opened (input nodes), given ones first
+  std::vector<JointIdx> seam_joints;        // per path: its joint in `model`
 };
 
 /// Opens the seams (see above) on a copy of `m`.

@@ -20,7 +20,9 @@ namespace {
 
 using CliRun = atelier::testing::CommandResult;
 
-CliRun run(const std::string& args) { return atelier::testing::run_cli(args); }
+CliRun run(const std::string& args) {
+  return atelier::testing::run_cli(args);
+}
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

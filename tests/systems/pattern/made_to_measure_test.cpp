@@ -153,7 +153,7 @@ TEST(MadeToMeasure, HundredSampledMannequinsFlattenWithoutFlips) {
   o.files.svg = o.files.dxf = o.csv = false;  // the pattern set only
   struct Row {
     std::size_t flipped = 0, pieces = 0;
-    double seam_mm = 0, top_seam_mm = 0;  // skirt and trousers / the top (not yet within 2 mm)
+    double seam_mm = 0, top_seam_mm = 0;                   // skirt and trousers / the top (not yet within 2 mm)
     std::vector<std::vector<std::vector<NodeIdx>>> seams;  // per template
     std::string error;
   };

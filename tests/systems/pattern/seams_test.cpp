@@ -159,8 +159,10 @@ TEST(Seams, PartitionCurvesAlongTwoGeneratorsGiveTwoRectangles) {
     const double a0 = 2 * M_PI * i / t.nu, a1 = 2 * M_PI * (i + 1) / t.nu;
     const Vec2d p0(t.r * std::sin(a0), t.r * std::cos(a0)), p1(t.r * std::sin(a1), t.r * std::cos(a1));
     const double s0 = p0.x() - x0, s1 = p1.x() - x0, len = (p1 - p0).norm();
-    if (s0 >= 0 && s1 >= 0) right += len;
-    else if (s0 <= 0 && s1 <= 0) left += len;
+    if (s0 >= 0 && s1 >= 0)
+      right += len;
+    else if (s0 <= 0 && s1 <= 0)
+      left += len;
     else {
       const double f = s0 / (s0 - s1);  // the crossing, from p0
       (s0 > 0 ? right : left) += f * len;
@@ -223,9 +225,9 @@ TEST(Seams, JointsAreCarriedOverAndCutWhereASeamCrossesThem) {
     }
   for (int j = 0; j < 2; ++j)
     for (int i = 0; i < 12; ++i) {
-      const std::uint32_t q[4] = {static_cast<std::uint32_t>(i + 12 * j), static_cast<std::uint32_t>((i + 1) % 12 + 12 * j),
-                                  static_cast<std::uint32_t>((i + 1) % 12 + 12 * (j + 1)),
-                                  static_cast<std::uint32_t>(i + 12 * (j + 1))};
+      const std::uint32_t q[4] = {
+          static_cast<std::uint32_t>(i + 12 * j), static_cast<std::uint32_t>((i + 1) % 12 + 12 * j),
+          static_cast<std::uint32_t>((i + 1) % 12 + 12 * (j + 1)), static_cast<std::uint32_t>(i + 12 * (j + 1))};
       s.add_face(q);
     }
   Model& m = a.model;
