@@ -34,6 +34,7 @@
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/pattern/made_to_measure.h>
 #include <atelier/systems/profile/project_templates.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/spatial/body_bvh.h>
@@ -400,6 +401,49 @@ std::optional<RgbImage> picture_of(std::size_t index, const std::string& name, c
   return std::move(*both);
 }
 
+/// Made-to-measure patterns of the profile templates regenerated on one
+/// body (systems/pattern/made_to_measure.h: the top's body and collar, the
+/// skirt, the trousers' three surfaces) in patterns/<body>/<template>/, with
+/// a strain map per piece as the report's pictures. Summary figures go to
+/// `summary`; a failing template is logged and left out.
+nlohmann::json pattern_pictures(const DemoOptions& opt, const DemoReference& ref, const std::string& name,
+                                std::span<const Vec3d> body, Regenerators& regen, const ExecContext& ctx, nlohmann::json& summary, Log& log) {
+  nlohmann::json pictures = nlohmann::json::array();
+  std::vector<RegenResult> profiles;
+  if (!regen.profiles(body, ctx, profiles)) return pictures;
+  MadeToMeasureOptions mo;
+  mo.files.strain_maps = true;
+  mo.files.strain_map_px_per_mm = 0.5;
+  std::size_t flipped = 0, pieces = 0;
+  double seam_mm = 0;
+  for (const RegenResult& r : profiles) {
+    const std::size_t k = static_cast<std::size_t>(&r - profiles.data());
+    const std::string& tname = ref.templates[k].name;
+    const fs::path rel = fs::path("patterns") / name / tname;
+    auto rep = write_made_to_measure_pattern(r.model, mo, opt.out / rel, ctx);
+    if (!rep) {
+      log.warn("patterns of " + tname + " on " + name + ": " + rep.status().to_string());
+      continue;
+    }
+    flipped += rep->flipped;
+    pieces += rep->files.flattening.pieces.size();
+    seam_mm = std::max(seam_mm, rep->max_seam_difference_mm);
+    for (const fs::path& f : rep->files.files) {
+      const std::string fn = f.filename().string();
+      if (fn.size() < 11 || fn.substr(fn.size() - 11) != "_strain.png") continue;
+      const std::string piece = fn.substr(0, fn.size() - 11);
+      pictures.push_back({{"title", name + ": " + tname + " pattern, piece " + piece},
+                          {"path", (rel / fn).string()},
+                          {"caption", "made-to-measure pattern (SVG and DXF beside it): principal stretch, blue "
+                                      "compression to red stretch at +-5%, sew line in black"}});
+    }
+  }
+  summary["pattern_pieces"] = pieces;
+  summary["pattern_flipped_triangles"] = flipped;
+  summary["pattern_max_seam_difference_mm"] = seam_mm;
+  return pictures;
+}
+
 /// report.html: the summary, a row per body, and pictures of a sample of
 /// bodies and of the worst body by each measure (written to pictures/).
 void write_html(const DemoOptions& opt, const DemoReference& ref, const MannequinSource& src, Regenerators& regen,
@@ -471,6 +515,16 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
     pictures.push_back({{"title", name + " (" + why + ")"},
                         {"path", file},
                         {"caption", "front and side: body, top with collar, skirt, trousers, shorts"}});
+  }
+  // Made-to-measure patterns of the first body.
+  if (!quality.empty()) {
+    BodySet one(ref.body);
+    std::vector<BodyFailure> f1;
+    for (std::size_t i = 0; i < src.size(); ++i)
+      if (src.body_name(i) == quality[0].name) src.generate(i, 1, one, f1, ctx);
+    if (one.size() == 1)
+      for (auto& p : pattern_pictures(opt, ref, quality[0].name, one.positions(0), regen, ctx, html["summary"], log))
+        pictures.push_back(std::move(p));
   }
   html["pictures"] = pictures;
   HtmlReportOptions ho;

@@ -26,6 +26,7 @@
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/profile/template_json.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/pattern/made_to_measure.h>
 
 namespace atelier::cli {
 
@@ -174,6 +175,8 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--clearance", opt.clearance, "distance kept from the body in metres (default: each template's)")
       ->check(clearance_check());
   c->add_flag("--no-resume", opt.no_resume, "recompute bodies whose outputs already exist");
+  c->add_flag("--patterns", opt.patterns,
+              "also write made-to-measure pattern sets (SVG, DXF, measurements CSV) of the profile templates");
   return c;
 }
 
@@ -242,6 +245,20 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   return job;
 }
 
+/// A body's record marks it complete; with --patterns, only a record that
+/// lists its pattern sets (or a failure) does.
+/// The made-to-measure pattern set of one regenerated template (one library
+/// call), and its figures for the body's record.
+nlohmann::json write_patterns(const Model& garment, const fs::path& dir, const ExecContext& ctx) {
+  auto rep = write_made_to_measure_pattern(garment, {}, dir, ctx);
+  if (!rep) throw Error(Status(rep.status().code(), "patterns: " + rep.status().message()));
+  double e_l = 0;
+  for (const auto& p : rep->files.flattening.pieces) e_l = std::max(e_l, p.distortion.length_error);
+  return {{"pieces", rep->files.pattern.pieces.size()},   {"seams_opened", rep->seams_opened},
+          {"flipped", rep->flipped},                     {"failed_seams", rep->failed_seams},
+          {"max_seam_difference_mm", rep->max_seam_difference_mm}, {"max_length_error", e_l}};
+}
+
 nlohmann::json garment_quality_json(const GarmentQuality& q) {
   return {{"vertices", q.vertices},         {"inside_nodes", q.inside},          {"max_depth_m", q.max_depth},
           {"min_clearance_m", q.min_clearance}, {"clearance_error_m", q.clearance_error}, {"strain_max", q.strain_max},
@@ -297,7 +314,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
     std::vector<std::uint8_t> pending(count, 1);
     bool any = false;
     for (std::size_t i = 0; i < pending.size(); ++i) {
-      if (!opt.no_resume && body_record_complete(bodies_dir / (src.body_name(first + i) + ".json"))) {
+      if (!opt.no_resume && body_record_complete(bodies_dir / (src.body_name(first + i) + ".json"), opt.patterns)) {
         pending[i] = 0;
         ++job.skipped;
       }
@@ -386,6 +403,13 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           }
         }
         rec["templates"] = per;
+        if (opt.patterns) {
+          nlohmann::json pats = nlohmann::json::object();
+          for (std::size_t k = 0; k < templates.size(); ++k)
+            pats[templates[k].name] =
+                write_patterns(regen[k].model, bodies_dir / chunk.name(b) / "patterns" / templates[k].name, inner);
+          rec["patterns"] = pats;
+        }
       } catch (const Error& e) {
         rec = {{"body", chunk.name(b)}, {"ok", false}, {"reason", e.status().to_string()}};
         errors[b] = e.status().to_string();

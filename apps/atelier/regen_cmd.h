@@ -24,6 +24,14 @@
 //       the records in body order; it holds no timings, so the same inputs
 //       and seed give byte-identical outputs for any --threads (timings go to
 //       run/timing.json).
+//   atelier regen ... --patterns
+//       also flattens each regenerated profile template into a made-to-measure
+//       pattern set (systems/pattern/made_to_measure.h): per body and
+//       template, run/bodies/<body>/patterns/<template>/ holds one SVG per
+//       piece, pattern.dxf and measurements.csv, all written before the
+//       body's record (which then lists each set's figures under
+//       "patterns"); a rerun with --patterns redoes bodies whose record has
+//       no "patterns" (complete from a run without them).
 //   mpirun -np K atelier regen ... (a build with MPI, apps/atelier/mpi_split.h)
 //       splits the body set across K ranks, chunk c to rank c mod K; each
 //       rank writes its bodies' records into the shared output folder, and
@@ -61,6 +69,7 @@ struct RegenOptions {
   int levels = -1;
   double clearance = -1;
   bool no_resume = false;
+  bool patterns = false;  // made-to-measure pattern sets per body (systems/pattern/made_to_measure.h)
 };
 CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt);
 int run_regen(const Common& common, const RegenOptions& opt, Log& log);

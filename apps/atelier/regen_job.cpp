@@ -131,11 +131,12 @@ void record_regen_job(const fs::path& out, const nlohmann::json& job) {
   write_atomically(out / "job.json", [&](AtomicFile& f) { f.write(job.dump(1)); });
 }
 
-bool body_record_complete(const fs::path& record) {
+bool body_record_complete(const fs::path& record, bool patterns) {
   std::ifstream in(record, std::ios::binary);
   if (!in) return false;
   const nlohmann::json r = nlohmann::json::parse(in, nullptr, false);
-  return !r.is_discarded() && r.is_object() && r.contains("ok") && r["ok"] == true;
+  return !r.is_discarded() && r.is_object() && r.contains("ok") && r["ok"] == true &&
+         (!patterns || r.contains("patterns"));
 }
 
 void require_finite(const std::string& name, const std::vector<Vec3d>& positions,

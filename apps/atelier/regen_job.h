@@ -48,9 +48,11 @@ inline constexpr int kRegenJobFormat = 1;
 /// Writes out/job.json (atomically) at the end of a run.
 void record_regen_job(const std::filesystem::path& out, const nlohmann::json& job);
 
-/// True when `record` (a body's <name>.json) exists and says "ok": a failed
-/// or unreadable record is computed again.
-[[nodiscard]] bool body_record_complete(const std::filesystem::path& record);
+/// True when `record` (a body's <name>.json) exists and says "ok" (and,
+/// with `patterns`, holds the body's made-to-measure patterns): a failed or
+/// unreadable record, or one written before `--patterns` was asked for, is
+/// computed again.
+[[nodiscard]] bool body_record_complete(const std::filesystem::path& record, bool patterns = false);
 
 /// Throws Error(kDegenerate) naming the template and the node when a
 /// regenerated position (of the live nodes of `model` when given) or a

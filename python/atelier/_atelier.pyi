@@ -412,6 +412,19 @@ def flatten(
 ) -> tuple[npt.NDArray[np.float64], list[dict[str, Any]]]:
     """Flattens the pieces into the plane: (uv (n, 2), pieces with distortion figures)."""
 
+def made_to_measure_pattern(
+    mesh: MeshLike,
+    out: str,
+    *,
+    lines: Optional[Sequence[tuple[str, float]]] = None,
+    svg: bool = True,
+    dxf: bool = True,
+    csv: bool = True,
+    threads: int = 0,
+    progress: Progress = None,
+) -> dict[str, Any]:
+    """The made-to-measure pattern set of one garment (SVG, DXF, measurements CSV in out): its report."""
+
 def sketch(
     mesh: MeshLike,
     strokes: Union[Path, dict[str, Any]],

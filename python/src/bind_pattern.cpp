@@ -5,9 +5,11 @@
 // and, per piece, its triangles and distortion figures.
 #include <atelier/storage/builder.h>
 #include <atelier/systems/pattern/flatten.h>
+#include <atelier/systems/pattern/made_to_measure.h>
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -110,6 +112,74 @@ the engine's column), and pieces a list of dicts, one per piece: ``name``,
 ``boundary_crossings``: the same figures as the CLI's --json) and
 ``solver``. Long call (GIL released, Ctrl-C cancels). Raises ValueError
 with the engine's message (a piece with holes, an unknown surface, ...).
+)doc");
+
+  m.def(
+      "made_to_measure_pattern",
+      [](const MeshLike& mesh, const std::string& out, const std::optional<std::vector<std::pair<std::string, double>>>& lines,
+         bool svg, bool dxf, bool csv, int threads, const Progress& progress) {
+        const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
+        Model model;
+        if (in->model)
+          model = *in->model;
+        else
+          (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+        MadeToMeasureOptions o;
+        o.files.svg = svg;
+        o.files.dxf = dxf;
+        o.csv = csv;
+        if (lines) {
+          o.lines.clear();
+          for (const auto& [name, f] : *lines) o.lines.push_back({name, f});
+        }
+        MadeToMeasureReport rep = unwrap(run_long(progress, threads, [&](const ExecContext& ctx) {
+          return write_made_to_measure_pattern(model, o, std::filesystem::path(out), ctx);
+        }));
+        py::list pieces;
+        for (std::size_t i = 0; i < rep.files.pattern.pieces.size(); ++i) {
+          const PatternPiece& p = rep.files.pattern.pieces[i];
+          const PieceMeasurements& pm = rep.measurements[i];
+          py::dict widths;
+          for (std::size_t k = 0; k < o.lines.size(); ++k) widths[py::str(o.lines[k].name)] = pm.widths_mm[k];
+          pieces.append(py::dict(py::arg("name") = p.name, py::arg("mirrored") = p.mirrored,
+                                 py::arg("area_mm2") = p.area_mm2, py::arg("height_mm") = pm.height_mm,
+                                 py::arg("widths_mm") = widths));
+        }
+        py::list seams;
+        for (const SeamCheck& c : rep.files.pattern.seams) {
+          py::list lengths;
+          for (const SeamMemberLength& ml : c.members)
+            lengths.append(py::make_tuple(ml.length_2d_mm, ml.length_3d_mm));
+          seams.append(py::dict(py::arg("joint") = c.joint.value, py::arg("lengths_mm") = lengths,
+                                py::arg("max_difference_mm") = c.max_difference_mm, py::arg("ok") = c.ok));
+        }
+        py::list files;
+        for (const auto& f : rep.files.files) files.append(f.string());
+        return py::dict(py::arg("seams_opened") = rep.seams_opened, py::arg("flipped") = rep.flipped,
+                        py::arg("failed_seams") = rep.failed_seams,
+                        py::arg("max_seam_difference_mm") = rep.max_seam_difference_mm,
+                        py::arg("max_length_error") = rep.max_length_error, py::arg("pieces") = pieces,
+                        py::arg("seams") = seams, py::arg("files") = files);
+      },
+      py::arg("mesh"), py::arg("out"), py::kw_only(), py::arg("lines") = py::none(), py::arg("svg") = true,
+      py::arg("dxf") = true, py::arg("csv") = true, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+The made-to-measure pattern set of one garment (what ``atelier regen
+--patterns`` writes per body and template; systems/pattern/made_to_measure.h).
+
+mesh: a Mesh (e.g. a regenerated template read with ``read_mesh``; one piece
+    per surface) or a (vertices, faces) pair. Tubes and pieces with several
+    boundary loops are opened along seams chosen from the topology.
+out: the folder to write (created): one SVG per piece, pattern.dxf,
+    measurements.csv.
+lines: named lines as (name, fraction of the piece's height along the
+    grain, +y); default hem 0.02, low 0.25, middle 0.5, high 0.75, top 0.98.
+
+Returns a dict: ``seams_opened``, ``flipped``, ``failed_seams``,
+``max_seam_difference_mm``, ``max_length_error``, ``pieces`` (``name``,
+``mirrored``, ``area_mm2``, ``height_mm``, ``widths_mm`` per named line),
+``seams`` (``joint``, ``lengths_mm`` (pattern, body) per member,
+``max_difference_mm``, ``ok``) and ``files``. Long call (GIL released).
+Raises ValueError with the engine's message.
 )doc");
 }
 

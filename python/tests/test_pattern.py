@@ -87,3 +87,35 @@ def test_bad_input_is_a_value_error_with_the_engines_message():
     holed = np.delete(f, 5, axis=0)
     with pytest.raises(ValueError, match="hole|boundary loop"):
         atelier.flatten((v, holed))
+
+
+def tube(r=0.1, h=0.4, nu=24, nv=4):
+    """A closed cylinder tube of quads about +y (a sleeve), faces outside."""
+    a = 2 * np.pi * np.arange(nu) / nu
+    v = np.array([[r * np.sin(t), h * j / nv, r * np.cos(t)] for j in range(nv + 1) for t in a])
+    f = np.array([[j * nu + i, j * nu + (i + 1) % nu, (j + 1) * nu + (i + 1) % nu, (j + 1) * nu + i]
+                  for j in range(nv) for i in range(nu)])
+    return v, f
+
+
+def test_made_to_measure_pattern_of_a_tube(tmp_path):
+    # A tube needs a seam: the automatic one (a generator) opens it into a
+    # rectangle as wide as the tube's girth (nu chords) at every named line.
+    r, h, nu = 0.1, 0.4, 24
+    out = tmp_path / "sleeve"
+    rep = atelier.made_to_measure_pattern(tube(r, h, nu), str(out), lines=[("elbow", 0.5), ("cuff", 0.1)])
+    assert rep["seams_opened"] == 1 and rep["flipped"] == 0 and rep["failed_seams"] == 0
+    (piece,) = rep["pieces"]
+    girth = 1000 * nu * 2 * r * np.sin(np.pi / nu)
+    assert piece["height_mm"] == pytest.approx(1000 * h, abs=1e-6)
+    assert piece["widths_mm"]["elbow"] == pytest.approx(girth, abs=1e-6)
+    assert piece["widths_mm"]["cuff"] == pytest.approx(girth, abs=1e-6)
+    (seam,) = rep["seams"]
+    assert [a for a, _ in seam["lengths_mm"]] == pytest.approx([1000 * h, 1000 * h], abs=1e-6)
+    names = sorted(p.rsplit("/", 1)[-1] for p in rep["files"])
+    assert names == ["measurements.csv", "mesh.svg", "pattern.dxf"]
+    rows = (out / "measurements.csv").read_text().splitlines()
+    assert rows[0] == "piece,kind,name,pattern_mm,body_mm"
+    assert any(row.startswith("mesh,width,elbow,") for row in rows)
+    with pytest.raises(ValueError, match="fraction"):
+        atelier.made_to_measure_pattern(tube(), str(tmp_path / "bad"), lines=[("waist", 2.0)])

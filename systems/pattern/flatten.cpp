@@ -258,6 +258,15 @@ Expected<RestState> rest_state(const std::string& label, const PieceTopology& t,
   r.stiffness.resize(t.spring.size());
   for (std::size_t i = 0; i < t.spring.size(); ++i)
     r.stiffness[i] = opt.stiffness == SpringStiffness::kUniform ? 1.0 : mean / r.length[i];
+  if (!(opt.boundary_stiffness > 0) || !std::isfinite(opt.boundary_stiffness))
+    return Status(ErrorCode::kInvalidArgument, label + ": boundary_stiffness must be positive and finite");
+  if (opt.boundary_stiffness != 1)
+    for (const auto& loop : t.loops)
+      for (std::size_t k = 0; k < loop.size(); ++k) {
+        const std::uint32_t a = loop[k], b = loop[(k + 1) % loop.size()];
+        for (std::uint32_t x = t.vs_off[a]; x < t.vs_off[a + 1]; ++x)
+          if (t.vs_other[x] == b) r.stiffness[t.vs_spring[x]] = opt.boundary_stiffness * r.stiffness[t.vs_spring[x]];
+      }
   r.area.resize(t.tri.size());
   const double floor = opt.degenerate_area * sum2 / static_cast<double>(t.spring.size());
   for (std::size_t f = 0; f < t.tri.size(); ++f) {

@@ -86,6 +86,11 @@ struct FlattenOptions {
   /// Accept pieces with more than one boundary loop (interior holes).
   bool allow_holes = false;
   SpringStiffness stiffness = SpringStiffness::kInverseLength;
+  /// C_ij of the springs along the boundary (the sew line) times this: above
+  /// 1, the strain of a doubly curved piece goes inside it and the sew line
+  /// keeps its 3D lengths, so partner seams stay as long as each other
+  /// (made_to_measure.h uses 100).
+  double boundary_stiffness = 1;
   /// Phase 1: the region relaxed where a loop closes, and its sweeps.
   int relax_rings = 1;
   int relax_sweeps = 1;

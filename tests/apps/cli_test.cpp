@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -77,6 +78,18 @@ TEST(Cli, DemoWritesAReportMeshesAndMeasurements) {
   int lines = 0;
   while (std::getline(csv, line)) ++lines;
   EXPECT_EQ(lines, 7);
+  // Made-to-measure patterns of the first body, pictured in the report: the
+  // top's body and collar, the skirt, the trousers' three surfaces.
+  for (const char* piece : {"top/top", "top/collar", "skirt/skirt", "trousers/waistband", "trousers/left_leg",
+                            "trousers/right_leg"}) {
+    const fs::path base = d / "patterns" / "mannequin-00000" / piece;
+    EXPECT_TRUE(fs::exists(base.string() + ".svg")) << base;
+    EXPECT_TRUE(fs::exists(base.string() + "_strain.png")) << base;
+  }
+  std::ifstream html_in(d / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("trousers pattern, piece waistband"), std::string::npos);
+  EXPECT_NE(html.find("top pattern, piece collar"), std::string::npos);
   // No temporary files left behind.
   for (const auto& e : fs::recursive_directory_iterator(d))
     EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
