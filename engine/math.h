@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 
@@ -12,6 +13,9 @@ namespace atelier {
 /// depth).
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline constexpr double kPi = std::numbers::pi;
+/// "No index" in uint32 index columns (no neighbour, no loop, unset). One
+/// definition: the unity build puts several sources in one unit.
+inline constexpr std::uint32_t kNone = 0xffffffffu;
 
 using Vec2d = Eigen::Vector2d;
 using Vec3d = Eigen::Vector3d;

@@ -8,6 +8,7 @@
 #include <map>
 #include <unordered_map>
 
+#include <atelier/engine/math.h>
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/mesh_arrays.h>
 
@@ -17,7 +18,6 @@ using namespace io_detail;
 
 namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 struct ObjFace {
   std::uint32_t group;

@@ -1,3 +1,4 @@
+#include <atelier/engine/math.h>
 #include <atelier/systems/curvenet/face_cycles.h>
 
 #include <Eigen/Eigenvalues>
@@ -13,7 +14,6 @@ namespace atelier {
 
 namespace {
 
-constexpr std::uint32_t kNone = 0xffffffffu;
 
 [[nodiscard]] std::uint32_t origin(const CurveGraph& g, std::uint32_t d) {
   return g.segment_nodes[d >> 1][d & 1u];

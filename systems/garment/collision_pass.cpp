@@ -1,3 +1,4 @@
+#include <atelier/engine/math.h>
 #include <atelier/systems/garment/collision_pass.h>
 
 #include <algorithm>
@@ -185,7 +186,6 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
     // nodes U whose umbrella they need (F and its neighbours). Outside F the
     // garment never moves, so its displacement from `entry` is zero and a
     // U node's umbrella sums only its free neighbours.
-    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     const std::size_t nf = free_nodes.size();
     std::vector<std::uint32_t> local(n, kNone);  // vertex -> index in U
     std::vector<std::uint32_t> u_nodes;

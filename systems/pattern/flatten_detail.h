@@ -19,7 +19,6 @@
 
 namespace atelier::pattern_detail {
 
-inline constexpr std::uint32_t kNone = 0xffffffffu;
 
 using Clock = std::chrono::steady_clock;
 [[nodiscard]] inline double ms_since(Clock::time_point t0) {

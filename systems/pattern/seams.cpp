@@ -1,3 +1,4 @@
+#include <atelier/engine/math.h>
 #include <atelier/engine/status_format.h>
 #include <atelier/storage/builder.h>
 #include <atelier/storage/union_find.h>
@@ -13,7 +14,6 @@ namespace atelier {
 
 namespace {
 
-constexpr std::uint32_t kNone = 0xffffffffu;
 
 bool interior(const Model& m, EdgeIdx e) {
   return m.face(halfedge_of(e, 0)).valid() && m.face(halfedge_of(e, 1)).valid();

@@ -1,6 +1,7 @@
 // Why this file is long: cutting and partitioning share the pieces, the
 // bookkeeping of attribute nodes, mesh edges and joints on removed or moved
 // faces, and the snapshot that makes both transactional.
+#include <atelier/engine/math.h>
 #include <atelier/engine/parallel.h>
 #include <atelier/engine/status_format.h>
 #include <atelier/storage/topology.h>
@@ -17,7 +18,6 @@ namespace atelier {
 
 namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 struct PieceData {
   SurfaceIdx surface;

@@ -214,7 +214,7 @@ struct Vertex {
   double depth = 0;  // larger = nearer
 };
 
-struct Piece {
+struct SectionPiece {
   FaceIdx face;
   std::uint32_t sector = 0;
   VKey end[2];
@@ -222,7 +222,7 @@ struct Piece {
 
 struct Section {
   std::vector<Vertex> vertices;  // sorted by key, unique
-  std::vector<Piece> pieces;
+  std::vector<SectionPiece> pieces;
   std::size_t triangles = 0;
   [[nodiscard]] std::uint32_t find(const VKey& k) const {
     auto it =
@@ -263,7 +263,7 @@ Vec3d pierce_weights(const Screen& s, const FanTri& t, const Vec2d& q) {
 
 struct ChunkOut {
   std::vector<Vertex> vertices;
-  std::vector<Piece> pieces;
+  std::vector<SectionPiece> pieces;
   std::size_t triangles = 0;
   Status status;
 };

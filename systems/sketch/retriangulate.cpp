@@ -6,6 +6,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <atelier/engine/math.h>
 #include <atelier/engine/status_format.h>
 #include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/sketch/retriangulate.h>
@@ -33,7 +34,6 @@ using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 using Cdt =
     CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 enum class LK : std::uint8_t { kNode, kEdge, kDiag, kFan };
 

@@ -1,3 +1,4 @@
+#include <atelier/engine/math.h>
 #include <atelier/systems/smooth/fairing.h>
 
 #include <algorithm>
@@ -153,7 +154,6 @@ Expected<FairPlan> make_fair_plan(const NodeAdjacency& adj, std::span<const std:
   plan.bandwidth = band;
   plan.local = std::move(slot_order);
   plan.active = static_cast<std::uint32_t>(plan.local.size());
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> to_local(n, kNone);
   for (std::uint32_t i = 0; i < plan.active; ++i) to_local[plan.local[i]] = i;
   for (std::size_t v = 0; v < n; ++v)
