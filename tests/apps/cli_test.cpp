@@ -128,10 +128,7 @@ TEST(Cli, ConvertToOffWarnsThatSurfacesAreMerged) {
 
 TEST(Cli, GlobalOptionsWorkAfterTheSubcommandAndEveryHelpListsThem) {
   const fs::path d = dir("cli_global_options");
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
+  const auto slurp = atelier::testing::read_bytes;
   // The same seed before and after the subcommand gives the same bodies;
   // the default seed gives others (so the option after it was not ignored).
   ASSERT_EQ(run("--seed 5 bodies --count 3 --out " + (d / "before").string()).code, 0);

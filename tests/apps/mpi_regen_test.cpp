@@ -20,17 +20,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using atelier::testing::encoded_templates;
+using atelier::testing::read_bytes;
+using atelier::testing::template_args;
+
 using atelier::testing::CommandResult;
 using atelier::testing::run_cli;
 using atelier::testing::run_command;
 using atelier::testing::scratch_dir;
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// Why the MPI run cannot be tested here, or "" when it can.
 std::string mpi_unavailable() {
@@ -71,7 +68,7 @@ void expect_same_tree(const fs::path& a, const fs::path& b) {
     const fs::path rel = fs::relative(e.path(), a);
     seen.insert(rel);
     ASSERT_TRUE(fs::exists(b / rel)) << rel;
-    EXPECT_EQ(slurp(e.path()), slurp(b / rel)) << rel;
+    EXPECT_EQ(read_bytes(e.path()), read_bytes(b / rel)) << rel;
   }
   for (const auto& e : fs::recursive_directory_iterator(b))
     if (e.is_regular_file()) {
@@ -95,7 +92,7 @@ TEST(MpiRegen, TwoRanksSplitTheBodiesAndMergeTheSameReport) {
   // Both ranks did their share, and said so.
   EXPECT_NE(mpi.out.find("rank 0 of 2: regenerated 3 bodies"), std::string::npos) << mpi.out;
   EXPECT_NE(mpi.out.find("rank 1 of 2: regenerated 3 bodies"), std::string::npos) << mpi.out;
-  const auto timing = nlohmann::json::parse(slurp(two / "run" / "timing.json"));
+  const auto timing = nlohmann::json::parse(read_bytes(two / "run" / "timing.json"));
   ASSERT_EQ(timing["ranks"].size(), 2u) << timing.dump();
   for (int r = 0; r < 2; ++r) {
     EXPECT_EQ(timing["ranks"][r]["rank"], r);
@@ -110,21 +107,21 @@ TEST(MpiRegen, TwoRanksSplitTheBodiesAndMergeTheSameReport) {
 
   // The merged report and every body's record and meshes: the bytes of the
   // one-process run (timing.json differs by nature and is left out).
-  EXPECT_EQ(slurp(one / "run" / "report.json"), slurp(two / "run" / "report.json"));
+  EXPECT_EQ(read_bytes(one / "run" / "report.json"), read_bytes(two / "run" / "report.json"));
   expect_same_tree(one / "run" / "bodies", two / "run" / "bodies");
-  const auto rep = nlohmann::json::parse(slurp(two / "run" / "report.json"));
+  const auto rep = nlohmann::json::parse(read_bytes(two / "run" / "report.json"));
   EXPECT_EQ(rep["summary"]["completed"], 6);
   EXPECT_EQ(rep["bodies"].size(), 6u);
 
   // Resume on another rank count: a rerun with 2 ranks finds every body
   // complete (each rank skips its own share) and merges the same report.
-  const std::string before = slurp(two / "run" / "report.json");
+  const std::string before = read_bytes(two / "run" / "report.json");
   const CommandResult again = mpirun_cli(2, args + (two / "run").string());
   ASSERT_EQ(again.code, 0) << again.out;
-  const auto timing2 = nlohmann::json::parse(slurp(two / "run" / "timing.json"));
+  const auto timing2 = nlohmann::json::parse(read_bytes(two / "run" / "timing.json"));
   EXPECT_EQ(timing2["regenerated_now"], 0) << timing2.dump();
   EXPECT_EQ(timing2["skipped_complete"], 6) << timing2.dump();
-  EXPECT_EQ(slurp(two / "run" / "report.json"), before);
+  EXPECT_EQ(read_bytes(two / "run" / "report.json"), before);
 }
 
 TEST(MpiRegen, AFailureOnOneRankSetsTheExitCodeOfTheJob) {
@@ -140,7 +137,7 @@ TEST(MpiRegen, AFailureOnOneRankSetsTheExitCodeOfTheJob) {
   ASSERT_EQ(objs.size(), 4u);
   std::sort(objs.begin(), objs.end());
   {
-    std::string text = slurp(objs[1]);
+    std::string text = read_bytes(objs[1]);
     text.resize(text.size() / 3);
     std::ofstream(objs[1], std::ios::binary) << text;
   }
@@ -152,11 +149,11 @@ TEST(MpiRegen, AFailureOnOneRankSetsTheExitCodeOfTheJob) {
   EXPECT_EQ(single.code, 1) << single.out;
   EXPECT_EQ(mpi.code, 1) << mpi.out;
   ASSERT_TRUE(fs::exists(d / "two" / "report.json")) << mpi.out;
-  EXPECT_EQ(slurp(d / "one" / "report.json"), slurp(d / "two" / "report.json"));
-  const auto rep = nlohmann::json::parse(slurp(d / "two" / "report.json"));
+  EXPECT_EQ(read_bytes(d / "one" / "report.json"), read_bytes(d / "two" / "report.json"));
+  const auto rep = nlohmann::json::parse(read_bytes(d / "two" / "report.json"));
   EXPECT_EQ(rep["summary"]["failed"], 1) << rep.dump();
   EXPECT_EQ(rep["summary"]["completed"], 3) << rep.dump();
-  const auto timing = nlohmann::json::parse(slurp(d / "two" / "timing.json"));
+  const auto timing = nlohmann::json::parse(read_bytes(d / "two" / "timing.json"));
   EXPECT_EQ(timing["ranks"][1]["regenerated_now"], 1) << timing.dump();
 }
 

@@ -22,6 +22,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using atelier::testing::encoded_templates;
+using atelier::testing::read_bytes;
+using atelier::testing::template_args;
+
 using CliRun = atelier::testing::CommandResult;
 using atelier::testing::scratch_dir;
 CliRun run(const std::string& args) {
@@ -31,39 +35,15 @@ fs::path dir(const std::string& name) {
   return scratch_dir(name);
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-const fs::path& templates() {
-  static const fs::path d = [] {
-    fs::path t = atelier::testing::process_scratch_dir("regen_templates");
-    const CliRun r = run("encode --template all --out " + t.string());
-    EXPECT_EQ(r.code, 0) << r.out;
-    return t;
-  }();
-  return d;
-}
-
-std::string template_args() {
-  std::string a;
-  for (const char* n : {"top", "skirt", "trousers"})
-    a += " --template " + (templates() / (std::string(n) + ".template.json")).string();
-  return a;
-}
-
 }  // namespace
 
 TEST(RegenCli, EncodeWritesReadableTemplates) {
   for (const char* n : {"top", "skirt", "trousers"}) {
-    const fs::path f = templates() / (std::string(n) + ".template.json");
+    const fs::path f = encoded_templates() / (std::string(n) + ".template.json");
     ASSERT_TRUE(fs::exists(f)) << f;
-    const auto j = nlohmann::json::parse(slurp(f));
+    const auto j = nlohmann::json::parse(read_bytes(f));
     EXPECT_EQ(j.value("name", ""), n);
-    EXPECT_TRUE(fs::exists(templates() / (std::string(n) + ".obj")));
+    EXPECT_TRUE(fs::exists(encoded_templates() / (std::string(n) + ".obj")));
   }
 }
 
@@ -73,18 +53,18 @@ TEST(RegenCli, ByteIdenticalForOneAndTwoThreads) {
   const CliRun r2 = run("--threads 2 --seed 5 regen" + template_args() + " --count 6 --meshes 2 --out " + b.string());
   ASSERT_EQ(r1.code, 0) << r1.out;
   ASSERT_EQ(r2.code, 0) << r2.out;
-  EXPECT_EQ(slurp(a / "report.json"), slurp(b / "report.json"));
+  EXPECT_EQ(read_bytes(a / "report.json"), read_bytes(b / "report.json"));
   std::size_t meshes = 0;
   for (const auto& e : fs::recursive_directory_iterator(a / "bodies")) {
     if (!e.is_regular_file()) continue;
     const fs::path rel = fs::relative(e.path(), a);
-    EXPECT_EQ(slurp(e.path()), slurp(b / rel)) << rel;
+    EXPECT_EQ(read_bytes(e.path()), read_bytes(b / rel)) << rel;
     meshes += e.path().extension() == ".obj";
   }
   EXPECT_EQ(meshes, 2u * 3u);
-  const auto rep = nlohmann::json::parse(slurp(a / "report.json"));
+  const auto rep = nlohmann::json::parse(read_bytes(a / "report.json"));
   // The streamed merge writes what a dump of the whole report would be.
-  EXPECT_EQ(slurp(a / "report.json"), rep.dump(1));
+  EXPECT_EQ(read_bytes(a / "report.json"), rep.dump(1));
   EXPECT_EQ(rep["summary"]["completed"], 6);
   EXPECT_EQ(rep["summary"]["inside_nodes_total"], 0);
   EXPECT_EQ(rep["summary"]["max_crack_m"], 0.0);
@@ -119,7 +99,7 @@ TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
   // temporary file is mistaken for one.
   for (const auto& e : fs::directory_iterator(out / "bodies"))
     if (e.path().extension() == ".json") {
-      EXPECT_FALSE(nlohmann::json::parse(slurp(e.path()), nullptr, false).is_discarded()) << e.path();
+      EXPECT_FALSE(nlohmann::json::parse(read_bytes(e.path()), nullptr, false).is_discarded()) << e.path();
     }
   // A temporary of the killed writer (a kill between open and rename leaves
   // one): the rerun removes it.
@@ -143,11 +123,11 @@ TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
   EXPECT_FALSE(fs::exists(stale));
   for (const auto& e : fs::recursive_directory_iterator(out))
     EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << "left behind: " << e.path();
-  const auto timing = nlohmann::json::parse(slurp(out / "timing.json"));
+  const auto timing = nlohmann::json::parse(read_bytes(out / "timing.json"));
   if (before < 60) {
     EXPECT_GE(timing["skipped_complete"].get<std::size_t>(), before);
   }
-  const auto rep = nlohmann::json::parse(slurp(out / "report.json"));
+  const auto rep = nlohmann::json::parse(read_bytes(out / "report.json"));
   EXPECT_EQ(rep["summary"]["completed"], 60);
   EXPECT_EQ(rep["bodies"].size(), 60u);
 }
@@ -160,7 +140,7 @@ TEST(RegenCli, BadInputIsReportedWithExitCodes) {
   EXPECT_NE(r.out.find("nope.template.json"), std::string::npos) << r.out;
   // A corrupted template: bad input, naming the file.
   {
-    std::string text = slurp(templates() / "skirt.template.json");
+    std::string text = read_bytes(encoded_templates() / "skirt.template.json");
     text.resize(text.size() / 2);
     std::ofstream(out / "half.template.json") << text;
   }
@@ -185,7 +165,7 @@ TEST(RegenCli, CountsClearancesAndLevelsOutOfRangeAreUsageErrors) {
   // clearance of 1e300 made one body take minutes. Each is refused before
   // any work (exit 2) with the option named.
   const fs::path out = dir("regen_ranges");
-  const std::string tpl = " --template " + (templates() / "skirt.template.json").string();
+  const std::string tpl = " --template " + (encoded_templates() / "skirt.template.json").string();
   struct Case {
     std::string args, says;
   };
@@ -211,9 +191,9 @@ TEST(RegenCli, CountsClearancesAndLevelsOutOfRangeAreUsageErrors) {
 TEST(RegenCli, TwoTemplatesOfOneNameAndAMisspeltSourceAreRefused) {
   const fs::path out = dir("regen_names");
   fs::create_directories(out / "a");
-  fs::copy_file(templates() / "skirt.template.json", out / "a" / "skirt.template.json",
+  fs::copy_file(encoded_templates() / "skirt.template.json", out / "a" / "skirt.template.json",
                 fs::copy_options::overwrite_existing);
-  CliRun r = run("regen --template " + (templates() / "skirt.template.json").string() + " --template " +
+  CliRun r = run("regen --template " + (encoded_templates() / "skirt.template.json").string() + " --template " +
                  (out / "a" / "skirt.template.json").string() + " --count 2 --out " + (out / "run").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("both named 'skirt'"), std::string::npos) << r.out;
@@ -230,7 +210,7 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
   // encoder writes) becomes a detail template (seed 001 section 6) and is
   // regenerated, then put through the collision pass, on every body.
   const fs::path d = dir("regen_garment");
-  CliRun r = run("encode --garment " + (templates() / "top.obj").string() + " --out " + (d / "g").string());
+  CliRun r = run("encode --garment " + (encoded_templates() / "top.obj").string() + " --out " + (d / "g").string());
   ASSERT_EQ(r.code, 0) << r.out;
   ASSERT_TRUE(fs::exists(d / "g" / "top.atd"));
   ASSERT_TRUE(fs::exists(d / "g" / "top.obj"));
@@ -240,8 +220,8 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
   const CliRun r2 = run("--threads 2" + args + (d / "t2").string());
   ASSERT_EQ(r1.code, 0) << r1.out;
   ASSERT_EQ(r2.code, 0) << r2.out;
-  EXPECT_EQ(slurp(d / "t1" / "report.json"), slurp(d / "t2" / "report.json"));
-  const auto rep = nlohmann::json::parse(slurp(d / "t1" / "report.json"));
+  EXPECT_EQ(read_bytes(d / "t1" / "report.json"), read_bytes(d / "t2" / "report.json"));
+  const auto rep = nlohmann::json::parse(read_bytes(d / "t1" / "report.json"));
   EXPECT_EQ(rep["summary"]["completed"], 5) << rep.dump();
   EXPECT_EQ(rep["templates"], nlohmann::json::array({"top"}));
   for (const auto& b : rep["bodies"]) {
@@ -253,7 +233,7 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
   // The first body's garment mesh, with the encoded garment's face count.
   std::size_t faces_in = 0, faces_out = 0;
   {
-    std::istringstream a(slurp(d / "g" / "top.obj")), b(slurp(d / "t1" / "bodies" / "mannequin-00000" / "top.obj"));
+    std::istringstream a(read_bytes(d / "g" / "top.obj")), b(read_bytes(d / "t1" / "bodies" / "mannequin-00000" / "top.obj"));
     for (std::string l; std::getline(a, l);) faces_in += l.rfind("f ", 0) == 0;
     for (std::string l; std::getline(b, l);) faces_out += l.rfind("f ", 0) == 0;
   }
@@ -285,7 +265,7 @@ TEST(RegenCli, ADirectoryOfMannequinBodiesKeepsTheMannequinFeatures) {
   r = run("--threads 2 regen" + template_args() + " --source " + (d / "set").string() + " --reference " +
           objs[0].string() + " --out " + (d / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;
-  const auto rep = nlohmann::json::parse(slurp(d / "run" / "report.json"));
+  const auto rep = nlohmann::json::parse(read_bytes(d / "run" / "report.json"));
   EXPECT_EQ(rep["summary"]["completed"], 3) << rep.dump();
   EXPECT_EQ(rep["summary"]["inside_nodes_total"], 0) << rep.dump();
 }

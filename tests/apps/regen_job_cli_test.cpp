@@ -20,30 +20,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using atelier::testing::encoded_templates;
+using atelier::testing::read_bytes;
+using atelier::testing::template_args;
+
 using CliRun = atelier::testing::CommandResult;
 CliRun run(const std::string& args) {
   return atelier::testing::run_cli(args);
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-const fs::path& templates() {
-  static const fs::path d = [] {
-    fs::path t = atelier::testing::process_scratch_dir("regen_job_templates");
-    const CliRun r = run("encode --template skirt --out " + t.string());
-    EXPECT_EQ(r.code, 0) << r.out;
-    return t;
-  }();
-  return d;
-}
-
 std::string skirt() {
-  return " --template " + (templates() / "skirt.template.json").string();
+  return " --template " + (encoded_templates("skirt") / "skirt.template.json").string();
 }
 
 bool has(const std::string& text, const std::string& part) {
@@ -61,10 +48,10 @@ TEST(RegenJobCli, ARerunOfAnotherJobIsRefusedNamingTheDifference) {
   CliRun r = run("--seed 1" + job);
   ASSERT_EQ(r.code, 0) << r.out;
   ASSERT_TRUE(fs::exists(s / "job.json"));
-  const std::string seed1_report = slurp(s / "report.json");
+  const std::string seed1_report = read_bytes(s / "report.json");
   // Other template contents: the skirt's file with a byte more (a blank line).
   fs::create_directories(d / "other");
-  std::ofstream(d / "other" / "skirt.template.json") << slurp(templates() / "skirt.template.json") << "\n";
+  std::ofstream(d / "other" / "skirt.template.json") << read_bytes(encoded_templates("skirt") / "skirt.template.json") << "\n";
   struct Case {
     std::string args, names;
   };
@@ -81,7 +68,7 @@ TEST(RegenJobCli, ARerunOfAnotherJobIsRefusedNamingTheDifference) {
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
     EXPECT_TRUE(has(r.out, c.names)) << c.args << "\n" << r.out;
     EXPECT_TRUE(has(r.out, "--no-resume")) << r.out;
-    EXPECT_EQ(slurp(s / "report.json"), seed1_report) << "a refused run leaves the folder as it was: " << c.args;
+    EXPECT_EQ(read_bytes(s / "report.json"), seed1_report) << "a refused run leaves the folder as it was: " << c.args;
   }
   // The same job resumes; thread count and chunk size are not part of it.
   r = run("--threads 1 --seed 1" + job + " --chunk 1");
@@ -92,9 +79,9 @@ TEST(RegenJobCli, ARerunOfAnotherJobIsRefusedNamingTheDifference) {
   ASSERT_EQ(r.code, 0) << r.out;
   r = run("--seed 2 regen" + skirt() + " --count 2 --out " + (d / "fresh2").string());
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_EQ(slurp(s / "report.json"), slurp(d / "fresh2" / "report.json"));
-  EXPECT_NE(slurp(s / "report.json"), seed1_report);
-  EXPECT_EQ(nlohmann::json::parse(slurp(s / "job.json"))["seed"], 2);
+  EXPECT_EQ(read_bytes(s / "report.json"), read_bytes(d / "fresh2" / "report.json"));
+  EXPECT_NE(read_bytes(s / "report.json"), seed1_report);
+  EXPECT_EQ(nlohmann::json::parse(read_bytes(s / "job.json"))["seed"], 2);
   // ... and the folder is now seed 2's: seed 1 is the other job.
   r = run("--seed 1" + job);
   EXPECT_EQ(r.code, 2) << r.out;
@@ -107,14 +94,14 @@ TEST(RegenJobCli, RecordsWithoutAJobAreNotTrustedAndFailedBodiesAreRetried) {
   CliRun r = run(job);
   ASSERT_EQ(r.code, 0) << r.out;
   const fs::path rec = d / "bodies" / "mannequin-00001.json";
-  const std::string good = slurp(rec);
+  const std::string good = read_bytes(rec);
   // A failed body (its record says why) is computed again by a rerun.
   std::ofstream(rec) << R"({"body": "mannequin-00001", "ok": false, "reason": "cancelled"})";
   r = run(job);
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(has(r.out, "1 now, 2 from an earlier run")) << r.out;
-  EXPECT_EQ(slurp(rec), good);
-  EXPECT_EQ(nlohmann::json::parse(slurp(d / "report.json"))["summary"]["failed"], 0);
+  EXPECT_EQ(read_bytes(rec), good);
+  EXPECT_EQ(nlohmann::json::parse(read_bytes(d / "report.json"))["summary"]["failed"], 0);
   // Records with no job.json (an older atelier, or a --no-resume run killed
   // midway) may belong to any job: refused unless --no-resume.
   fs::remove(d / "job.json");
@@ -142,7 +129,7 @@ TEST(RegenJobCli, AFileWhereTheOutputFolderShouldBeIsBadInputNamingIt) {
     EXPECT_TRUE(has(r.out, file.string() + " is a file")) << args << "\n" << r.out;
     EXPECT_FALSE(has(r.out, "internal error")) << args << "\n" << r.out;
   }
-  EXPECT_EQ(slurp(file), "not a folder\n");
+  EXPECT_EQ(read_bytes(file), "not a folder\n");
 }
 
 // Issue 27: a coordinate that overflows gave `ok: true` bodies with null
@@ -158,7 +145,7 @@ TEST(RegenJobCli, ABodysOutcomeDoesNotDependOnWhatIsWritten) {
   const fs::path far = d / "set" / "mannequin-00001.obj";
   ASSERT_TRUE(fs::exists(ref) && fs::exists(far));
   {
-    std::istringstream in(slurp(far));
+    std::istringstream in(read_bytes(far));
     std::ostringstream out;
     for (std::string line; std::getline(in, line);) {
       if (line.rfind("v ", 0) == 0) {
@@ -178,7 +165,7 @@ TEST(RegenJobCli, ABodysOutcomeDoesNotDependOnWhatIsWritten) {
     r = run("regen" + skirt() + " --source " + (d / "set").string() + " --reference " + ref.string() + " --meshes " +
             meshes + " --out " + out.string());
     EXPECT_EQ(r.code, 1) << r.out;
-    const auto rep = nlohmann::json::parse(slurp(out / "report.json"));
+    const auto rep = nlohmann::json::parse(read_bytes(out / "report.json"));
     ASSERT_EQ(rep["bodies"].size(), 2u) << rep.dump();
     EXPECT_EQ(rep["bodies"][0]["ok"], true) << rep.dump();
     EXPECT_EQ(rep["bodies"][1]["ok"], false) << rep.dump();
@@ -203,10 +190,10 @@ TEST(RegenJobCli, DemoPicksTheSamePicturesByQualityFigures) {
     for (const auto& e : fs::directory_iterator(out / "pictures")) names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     pictures.push_back(names);
-    const std::string html = slurp(out / "report.html");
+    const std::string html = read_bytes(out / "report.html");
     EXPECT_FALSE(has(html, "_ms)")) << "a picture is chosen by a timing";
     // The report without its timings.
-    nlohmann::json rep = nlohmann::json::parse(slurp(out / "report.json"));
+    nlohmann::json rep = nlohmann::json::parse(read_bytes(out / "report.json"));
     nlohmann::json flat = rep.flatten();
     for (auto it = flat.begin(); it != flat.end();) {
       const std::string k = it.key();
@@ -219,7 +206,7 @@ TEST(RegenJobCli, DemoPicksTheSamePicturesByQualityFigures) {
   EXPECT_FALSE(pictures[0].empty());
   EXPECT_EQ(pictures[0], pictures[1]);
   for (const std::string& p : pictures[0])
-    EXPECT_EQ(slurp(d / "a" / "pictures" / p), slurp(d / "b" / "pictures" / p)) << p;
+    EXPECT_EQ(read_bytes(d / "a" / "pictures" / p), read_bytes(d / "b" / "pictures" / p)) << p;
   EXPECT_EQ(reports[0], reports[1]);
 }
 
@@ -227,7 +214,7 @@ TEST(RegenJobCli, DemoPicksTheSamePicturesByQualityFigures) {
 // 2.5 GB. A picture beyond the limit is refused before any work, its cost named.
 TEST(RegenJobCli, RenderRefusesAPictureBeyondItsMemoryLimit) {
   const fs::path d = atelier::testing::scratch_dir("regen_job_render");
-  const fs::path body = templates() / "skirt.obj";
+  const fs::path body = encoded_templates("skirt") / "skirt.obj";
   CliRun r = run("render --body " + body.string() + " --view both --width 8192 --height 8192 --supersample 8 --out " +
                  (d / "big.png").string());
   EXPECT_EQ(r.code, 2) << r.out;

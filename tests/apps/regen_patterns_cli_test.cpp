@@ -18,34 +18,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using atelier::testing::encoded_templates;
+using atelier::testing::read_bytes;
+using atelier::testing::template_args;
+
 using CliRun = atelier::testing::CommandResult;
 
 CliRun run(const std::string& args) {
   return atelier::testing::run_cli(args);
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-const fs::path& templates() {
-  static const fs::path d = [] {
-    fs::path t = atelier::testing::process_scratch_dir("regen_pattern_templates");
-    const CliRun r = run("encode --template all --out " + t.string());
-    EXPECT_EQ(r.code, 0) << r.out;
-    return t;
-  }();
-  return d;
-}
-
-std::string template_args() {
-  std::string a;
-  for (const char* n : {"top", "skirt", "trousers"})
-    a += " --template " + (templates() / (std::string(n) + ".template.json")).string();
-  return a;
 }
 
 std::vector<fs::path> records(const fs::path& out) {
@@ -67,7 +47,7 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
   ASSERT_EQ(recs.size(), 1u);
   std::map<fs::path, fs::file_time_type> written;
   for (const fs::path& rec : recs) {
-    const auto j = nlohmann::json::parse(slurp(rec));
+    const auto j = nlohmann::json::parse(read_bytes(rec));
     ASSERT_TRUE(j.value("ok", false)) << j.dump();
     const fs::path sets = out / "bodies" / rec.stem() / "patterns";
     for (const auto& [name, n] : pieces) {
@@ -87,20 +67,20 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
       }
       EXPECT_EQ(svg, n);
       ASSERT_TRUE(fs::exists(sets / name / "pattern.dxf"));
-      const std::string csv = slurp(sets / name / "measurements.csv");
+      const std::string csv = read_bytes(sets / name / "measurements.csv");
       EXPECT_EQ(csv.rfind("piece,kind,name,pattern_mm,body_mm\n", 0), 0u);
       EXPECT_NE(csv.find(",width,middle,"), std::string::npos);
       EXPECT_NE(csv.find(",seam,joint"), std::string::npos);
     }
   }
   // The merged report carries the pattern figures.
-  const auto rep = nlohmann::json::parse(slurp(out / "report.json"));
+  const auto rep = nlohmann::json::parse(read_bytes(out / "report.json"));
   ASSERT_EQ(rep["bodies"].size(), 1u);
   EXPECT_TRUE(rep["bodies"][0].contains("patterns"));
   // A rerun redoes nothing: every body was complete.
   const CliRun again = run("--threads 2 regen" + template_args() + " --count 1 --patterns --out " + out.string());
   ASSERT_EQ(again.code, 0) << again.out;
-  const auto timing = nlohmann::json::parse(slurp(out / "timing.json"));
+  const auto timing = nlohmann::json::parse(read_bytes(out / "timing.json"));
   EXPECT_EQ(timing["skipped_complete"].get<std::size_t>(), 1u);
   EXPECT_EQ(timing["regenerated_now"].get<std::size_t>(), 0u);
   for (const auto& [p, t] : written) EXPECT_EQ(fs::last_write_time(p), t) << p;
@@ -108,16 +88,16 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
 
 TEST(RegenPatternsCli, PatternsAfterARunWithoutThemRedoTheBodies) {
   const fs::path out = atelier::testing::scratch_dir("regen_patterns_late");
-  const std::string skirt = " --template " + (templates() / "skirt.template.json").string();
+  const std::string skirt = " --template " + (encoded_templates() / "skirt.template.json").string();
   const CliRun a = run("regen" + skirt + " --count 2 --out " + out.string());
   ASSERT_EQ(a.code, 0) << a.out;
   EXPECT_FALSE(fs::exists(out / "bodies" / records(out)[0].stem() / "patterns"));
   const CliRun b = run("regen" + skirt + " --count 2 --patterns --out " + out.string());
   ASSERT_EQ(b.code, 0) << b.out;
-  const auto timing = nlohmann::json::parse(slurp(out / "timing.json"));
+  const auto timing = nlohmann::json::parse(read_bytes(out / "timing.json"));
   EXPECT_EQ(timing["regenerated_now"].get<std::size_t>(), 2u);
   for (const fs::path& rec : records(out)) {
-    EXPECT_TRUE(nlohmann::json::parse(slurp(rec)).contains("patterns")) << rec;
+    EXPECT_TRUE(nlohmann::json::parse(read_bytes(rec)).contains("patterns")) << rec;
     EXPECT_TRUE(fs::exists(out / "bodies" / rec.stem() / "patterns" / "skirt" / "measurements.csv"));
   }
 }

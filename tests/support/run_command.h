@@ -8,6 +8,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <sstream>
 #include <string>
 
 namespace atelier::testing {
@@ -48,6 +52,37 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
 /// parallel, so a shared name would be wiped under a running test).
 inline std::filesystem::path process_scratch_dir(const std::string& name) {
   return scratch_dir(name + "-" + std::to_string(static_cast<long>(getpid())));
+}
+
+/// The bytes of a file ("" when it cannot be read).
+inline std::string read_bytes(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// The folder of the project templates encoded once per process by
+/// `atelier encode --template <which>` (top, skirt, trousers or all).
+inline const std::filesystem::path& encoded_templates(const std::string& which = "all") {
+  static std::map<std::string, std::filesystem::path> made;
+  auto it = made.find(which);
+  if (it == made.end()) {
+    const std::filesystem::path d = process_scratch_dir("templates-" + which);
+    const CommandResult r = run_cli("encode --template " + which + " --out " + d.string());
+    if (r.code != 0) std::fprintf(stderr, "encode --template %s failed: %s\n", which.c_str(), r.out.c_str());
+    it = made.emplace(which, d).first;
+  }
+  return it->second;
+}
+
+/// " --template <folder>/<name>.template.json" for each name, the templates
+/// encoded by encoded_templates().
+inline std::string template_args(std::initializer_list<const char*> names = {"top", "skirt", "trousers"}) {
+  const std::filesystem::path& d = encoded_templates(names.size() == 1 ? *names.begin() : "all");
+  std::string a;
+  for (const char* n : names) a += " --template " + (d / (std::string(n) + ".template.json")).string();
+  return a;
 }
 
 }  // namespace atelier::testing
