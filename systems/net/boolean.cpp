@@ -389,7 +389,6 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   const auto& on_a = cut.on_a;
   const auto& on_b = cut.on_b;
   const auto& new_keys = cut.new_keys;
-  const auto& new_points = cut.new_points;
   const std::uint32_t nA = cut.nA, nB = cut.nB;
   const std::size_t n_ids = canon.size();
 

@@ -861,7 +861,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       const NodeIdx b = m.head(h);
       m.set_tail(t, x);
       const EdgeIdx e2 = m.new_edge(x, b);
-      const HalfedgeIdx g = halfedge_of(e2, 0), gt = halfedge_of(e2, 1);
+      const HalfedgeIdx g = halfedge_of(e2, 0);
       m.edges.flags[e2.value] = m.edges.flags[e];
       chain_split_edge(m, h, g);
       h = g;
