@@ -221,7 +221,7 @@ std::map<std::string, std::vector<std::uint32_t>> parse_measures(std::string_vie
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(without_bom(text));
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // parse errors, and numbers beyond a double (out_of_range 406)
     parse_error(file, 0, e.what());
   }
   std::map<std::string, std::vector<std::uint32_t>> out;
@@ -247,7 +247,7 @@ std::vector<MeasureModifier> parse_measure_modifiers(std::string_view text, cons
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(without_bom(text));
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // parse errors, and numbers beyond a double (out_of_range 406)
     parse_error(file, 0, e.what());
   }
   // Every access is checked first: nlohmann's type errors would otherwise

@@ -96,3 +96,20 @@ TEST(MakeHumanIo, ModifierJsonOfTheWrongShapeIsAParseErrorNamingThePlace) {
   expect_error([] { (void)parse_measures(R"({"measures": {"w": [1, -2]}})", "e.json", 10); }, ErrorCode::kParse,
                {"e.json", "invalid vertex index"});
 }
+
+// Found by the mh_modifiers harness: a number beyond a double made
+// nlohmann throw out_of_range (406), which escaped both JSON readers.
+TEST(MakeHumanIo, JsonNumbersBeyondADoubleAreRefusedNamingTheFile) {
+  for (const char* text : {"[{\"group\": 777E377777777777777777}]", "{\"measures\": {\"a\": [1e999]}}"}) {
+    try {
+      if (text[0] == '[')
+        (void)atelier::makehuman::parse_measure_modifiers(text, "modifiers.json");
+      else
+        (void)atelier::makehuman::parse_measures(text, "measures.json", 10);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const atelier::Error& e) {
+      EXPECT_NE(std::string(e.what()).find(text[0] == '[' ? "modifiers.json" : "measures.json"), std::string::npos)
+          << e.what();
+    }
+  }
+}
