@@ -38,6 +38,11 @@ for f in tests/data/good/* tests/data/malformed/*; do
 done
 "$B/make_seeds" "$seeds"
 
+# FUZZ_SEED: a fixed libFuzzer seed, so that a run of a fixed number of
+# executions is the same run every time (CI: a red build is reproducible
+# and never a matter of luck).
+seed=()
+[[ -n ${FUZZ_SEED:-} ]] && seed=(-seed="$FUZZ_SEED")
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 for h in "${harnesses[@]}"; do
@@ -50,7 +55,7 @@ for h in "${harnesses[@]}"; do
   start=$(date +%s)
   # -timeout: one input taking 10 s is a hang; -rss_limit_mb: a parser that
   # allocates what a header claims instead of what the bytes hold.
-  if ! "$B/${h}_fuzz" "${limit[@]}" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  if ! "$B/${h}_fuzz" "${limit[@]}" "${seed[@]}" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
        -artifact_prefix="$B/artifacts/${h}-" "$corpus" "$seed_dir" >"$log" 2>&1; then
     echo "fuzz $h: FAILED (see $log and $B/artifacts/)"
     tail -40 "$log"
