@@ -522,25 +522,35 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
   std::optional<RegenJob> job;
   nlohmann::json definition;
   int code = kExitOk;
-  try {
+  auto guarded = [&](auto&& work) {
+    try {
+      work();
+    } catch (const Error& e) {
+      if (!group.distributed()) throw;
+      log.error(who + e.what());
+      code = exit_code_of(e);
+    } catch (const std::exception& e) {
+      if (!group.distributed()) throw;
+      log.error(who + "internal error: " + e.what());
+      code = kExitInternal;
+    }
+  };
+  bool claimed = false;
+  guarded([&] {
     job.emplace(prepare_regen(common, opt));
     definition = describe_regen_job(common, opt);  // job.json: a rerun resumes only its own job
     if (const std::string refused = claim_regen_folder(opt.out, definition, opt.no_resume, group.rank() == 0);
         refused.empty()) {
-      regen_share(common, opt, group, *job, log);
+      claimed = true;
     } else {
       log.error(who + refused);
       code = kExitUsage;
     }
-  } catch (const Error& e) {
-    if (!group.distributed()) throw;
-    log.error(who + e.what());
-    code = exit_code_of(e);
-  } catch (const std::exception& e) {
-    if (!group.distributed()) throw;
-    log.error(who + "internal error: " + e.what());
-    code = kExitInternal;
-  }
+  });
+  // No rank writes a body record before every rank has checked the folder:
+  // a fast rank's first record would look like another job's to a slow one.
+  if (group.distributed()) group.barrier();
+  if (claimed) guarded([&] { regen_share(common, opt, group, *job, log); });
   if (group.distributed())
     log.info(who + "regenerated " + std::to_string(job ? job->done : 0) + " bodies, skipped " +
              std::to_string(job ? job->skipped : 0) + " complete ones");
