@@ -85,3 +85,22 @@ def small():
         "params": params,
         "bodies": bodies,
     }
+
+
+# The orthographic camera of the stroke-file tests (test_sketch, test_extrude):
+# it looks down -z from z = 5 and sees [-HALF, HALF]^2 on a SIZE x SIZE view.
+SIZE = 800
+HALF = 1.5
+
+
+def px(x, y):
+    """Pixel of a 3D point (x, y, *) seen by the camera below (y down)."""
+    return [(x / HALF + 1) / 2 * SIZE, (1 - y / HALF) / 2 * SIZE]
+
+
+def ortho_camera(n=0.1, far=10.0):
+    return {
+        "view": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -5, 0, 0, 0, 1],
+        "projection": [1 / HALF, 0, 0, 0, 0, 1 / HALF, 0, 0, 0, 0, -2 / (far - n), -(far + n) / (far - n), 0, 0, 0, 1],
+        "viewport": [SIZE, SIZE],
+    }

@@ -8,10 +8,8 @@ import numpy as np
 import pytest
 
 import atelier
-from conftest import run_cli
+from conftest import HALF, SIZE, ortho_camera, px, run_cli
 
-SIZE = 800
-HALF = 1.5
 N = 24
 
 
@@ -29,20 +27,11 @@ def cup(n=N):
     return np.array(v), f
 
 
-def px(x, y):
-    return [(x / HALF + 1) / 2 * SIZE, (1 - y / HALF) / 2 * SIZE]
-
 
 def strokes(start_y=0.0, k=10):
-    n, far = 0.1, 10.0
     arc = [px(np.cos(np.pi * (1 - i / (2 * k))), start_y + np.sin(np.pi * (1 - i / (2 * k)))) for i in range(2 * k + 1)]
     return {
-        "camera": {
-            "view": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -5, 0, 0, 0, 1],
-            "projection": [1 / HALF, 0, 0, 0, 0, 1 / HALF, 0, 0, 0, 0, -2 / (far - n), -(far + n) / (far - n), 0, 0,
-                           0, 1],
-            "viewport": [SIZE, SIZE],
-        },
+        "camera": ortho_camera(),
         "strokes": [
             # The rim seen edge-on: a closed stroke along it selects the whole boundary loop.
             {"points": [px(-1, 0), px(1, 0), px(-1, 0)], "tool": "extrude", "name": "rim"},

@@ -9,10 +9,8 @@ import numpy as np
 import pytest
 
 import atelier
-from conftest import run_cli
+from conftest import HALF, SIZE, ortho_camera, px, run_cli
 
-SIZE = 800
-HALF = 1.5  # the orthographic camera sees [-1.5, 1.5]^2
 
 
 def sphere(lon=32, lat=16):
@@ -31,20 +29,10 @@ def sphere(lon=32, lat=16):
     return np.array(v), f
 
 
-def px(x, y):
-    """Pixel of a 3D point (x, y, *) seen by the camera below (y down)."""
-    return [(x / HALF + 1) / 2 * SIZE, (1 - y / HALF) / 2 * SIZE]
-
 
 def strokes(cut_y=0.03):
-    n, far = 0.1, 10.0
     return {
-        "camera": {
-            "view": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -5, 0, 0, 0, 1],
-            "projection": [1 / HALF, 0, 0, 0, 0, 1 / HALF, 0, 0, 0, 0, -2 / (far - n), -(far + n) / (far - n), 0, 0,
-                           0, 1],
-            "viewport": [SIZE, SIZE],
-        },
+        "camera": ortho_camera(),
         "strokes": [
             {"points": [px(-1.4, cut_y), px(1.4, cut_y)], "tool": "cut", "through": True},
             {"points": [px(0.0, -0.8)], "tool": "pick"},
