@@ -185,6 +185,18 @@ void make_output_dir(const fs::path& dir) {
                                          (ec ? ec.message() : std::string("not a folder"))));
 }
 
+std::size_t remove_stale_output_temporaries(const fs::path& out) noexcept {
+  std::size_t n = remove_stale_temporaries(out);
+  std::error_code ec;
+  // Symlinks are not followed: only what this command wrote is visited.
+  fs::recursive_directory_iterator it(out, fs::directory_options::skip_permission_denied, ec), end;
+  for (; !ec && it != end; it.increment(ec)) {
+    std::error_code e2;
+    if (it->is_directory(e2) && !it->is_symlink(e2)) n += remove_stale_temporaries(it->path());
+  }
+  return n;
+}
+
 std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt) {
   const ExecContext ctx = common.context();
   std::unique_ptr<BodySource> src;
@@ -243,6 +255,7 @@ int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
     }
     log.end_progress();
   });
+  remove_stale_output_temporaries(opt.out);  // a killed earlier run's
   for (const auto& fl : failures) log.warn(fl.name + ": " + fl.status.message());
   std::printf("%zu bodies, %zu failed; measurements in %s\n", n, failures.size(),
               (opt.out / "measurements.csv").string().c_str());

@@ -53,6 +53,13 @@ void write_mesh_file(const Model& m, const std::filesystem::path& p, const Log& 
 /// "internal error" (exit 4) at the entry point.
 void make_output_dir(const std::filesystem::path& dir);
 
+/// Removes the temporaries a killed run left in `out` and every folder
+/// under it (io/atomic_file.h remove_stale_temporaries: only those whose
+/// writer is gone). Called by the commands that write a tree of outputs
+/// (regen, bodies, demo) once their own writers are done. Returns the
+/// number removed; never throws.
+std::size_t remove_stale_output_temporaries(const std::filesystem::path& out) noexcept;
+
 int run_validate(const Common& common, const std::filesystem::path& file, Log& log);
 int run_convert(const Common& common, const std::filesystem::path& in, const std::filesystem::path& out, Log& log);
 

@@ -571,6 +571,7 @@ int run_demo(const Common& common, const DemoOptions& opt, Log& log) {
   const double total_s = seconds_since(t_start);
   const auto [rep, totals] = write_report(common, opt, ref, run, total_s);
   write_html(opt, ref, src, regen, run, rep, totals, ctx, log);
+  remove_stale_output_temporaries(opt.out);  // a killed earlier run's
   print_summary(opt, ref, run, totals, total_s);
   return run.failures.empty() ? kExitOk : kExitPartial;
 }

@@ -311,10 +311,15 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
     const std::size_t count = std::min(opt.chunk, n - first);
     share_seen += count;
     // Resume: bodies whose record says ok are complete; failed ones are retried.
+    // Bodies read from files are also checked against the contents their
+    // record was made from: an edited body file is computed again.
     std::vector<std::uint8_t> pending(count, 1);
+    std::vector<nlohmann::json> inputs(count);
     bool any = false;
     for (std::size_t i = 0; i < pending.size(); ++i) {
-      if (!opt.no_resume && body_record_complete(bodies_dir / (src.body_name(first + i) + ".json"), opt.patterns)) {
+      inputs[i] = body_input_identity(src.body_file(first + i));
+      if (!opt.no_resume &&
+          body_record_complete(bodies_dir / (src.body_name(first + i) + ".json"), opt.patterns, inputs[i])) {
         pending[i] = 0;
         ++job.skipped;
       }
@@ -352,6 +357,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
       inner.cancel = ctx.cancel;
       const std::vector<Vec3d> body = chunk.positions(b);
       nlohmann::json rec = {{"body", chunk.name(b)}, {"ok", true}};
+      if (!inputs[index - first].is_null()) rec["input"] = inputs[index - first];
       try {
         std::vector<RegenResult> regen;
         if (!templates.empty()) {
@@ -567,7 +573,7 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
   if (group.rank() == 0 && code < kExitUsage) {
     try {
       // Every rank is done writing: temporaries of killed runs can go.
-      remove_stale_regen_temporaries(opt.out);
+      remove_stale_output_temporaries(opt.out);
       record_regen_job(opt.out, definition);
       const MergeCounts m = merge_report(common, opt, *job);
       const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -79,8 +79,10 @@ nlohmann::json describe_regen_job(const Common& common, const RegenOptions& opt)
     src["count"] = opt.bodies.count;
     src["data"] = absolute_text(opt.bodies.data);
   } else {
-    // A directory: its bodies by folder (their contents are not hashed: a
-    // body set may be large), the reference by contents.
+    // A directory: the folder here, each body file by contents in its own
+    // record (body_input_identity: a body set may be large, and an edited
+    // body is then computed again instead of refusing the whole folder), the
+    // reference by contents.
     src["source"] = absolute_text(opt.bodies.source);
     if (!opt.bodies.reference.empty()) src["reference"] = file_identity(opt.bodies.reference);
     src["scale"] = opt.bodies.scale;
@@ -131,12 +133,21 @@ void record_regen_job(const fs::path& out, const nlohmann::json& job) {
   write_atomically(out / "job.json", [&](AtomicFile& f) { f.write(job.dump(1)); });
 }
 
-bool body_record_complete(const fs::path& record, bool patterns) {
+nlohmann::json body_input_identity(const fs::path& file) {
+  if (file.empty()) return nullptr;
+  try {
+    return file_identity(file);
+  } catch (const Error&) {
+    return nullptr;  // unreadable: the body is computed, and its failure recorded
+  }
+}
+
+bool body_record_complete(const fs::path& record, bool patterns, const nlohmann::json& input) {
   std::ifstream in(record, std::ios::binary);
   if (!in) return false;
   const nlohmann::json r = nlohmann::json::parse(in, nullptr, false);
   return !r.is_discarded() && r.is_object() && r.contains("ok") && r["ok"] == true &&
-         (!patterns || r.contains("patterns"));
+         (!patterns || r.contains("patterns")) && (input.is_null() || (r.contains("input") && r["input"] == input));
 }
 
 void require_finite(const std::string& name, const std::vector<Vec3d>& positions,
@@ -150,17 +161,6 @@ void require_finite(const std::string& name, const std::vector<Vec3d>& positions
   for (const auto& [figure, value] : figures)
     if (!std::isfinite(value))
       throw Error(Status(ErrorCode::kDegenerate, name + ": quality figure " + figure + " is not finite"));
-}
-
-std::size_t remove_stale_regen_temporaries(const fs::path& out) {
-  std::size_t n = remove_stale_temporaries(out) + remove_stale_temporaries(out / "bodies");
-  std::error_code ec;
-  fs::directory_iterator it(out / "bodies", ec), end;
-  for (; !ec && it != end; it.increment(ec)) {
-    std::error_code e2;
-    if (it->is_directory(e2)) n += remove_stale_temporaries(it->path());
-  }
-  return n;
 }
 
 }  // namespace atelier::cli

@@ -5,7 +5,9 @@
 //   <out>/job.json   the job's definition: format version, seed, the body
 //                    source and its parameters, count, each template's file
 //                    name, size and CRC-32 of its contents, levels,
-//                    clearance, meshes. Thread count and chunk size are not
+//                    clearance, meshes. Bodies read from files are
+//                    identified by contents in their own records
+//                    (body_input_identity). Thread count and chunk size are not
 //                    part of it: they do not change any output.
 //
 // A rerun with the same definition resumes (bodies with an "ok" record are
@@ -15,8 +17,7 @@
 // --no-resume run was killed (old and new records mixed) has no job.json
 // and its records are not trusted.
 //
-// Also the per-body check of a run's results (require_finite) and the
-// clean-up of a killed run's temporary files.
+// Also the per-body check of a run's results (require_finite).
 #pragma once
 
 #include <atelier/storage/model.h>
@@ -48,11 +49,18 @@ inline constexpr int kRegenJobFormat = 1;
 /// Writes out/job.json (atomically) at the end of a run.
 void record_regen_job(const std::filesystem::path& out, const nlohmann::json& job);
 
+/// What a body read from `file` is made from (its name, size and CRC-32),
+/// kept in the body's record as "input"; null for a generated body (empty
+/// path) or an unreadable file.
+[[nodiscard]] nlohmann::json body_input_identity(const std::filesystem::path& file);
+
 /// True when `record` (a body's <name>.json) exists and says "ok" (and,
-/// with `patterns`, holds the body's made-to-measure patterns): a failed or
-/// unreadable record, or one written before `--patterns` was asked for, is
-/// computed again.
-[[nodiscard]] bool body_record_complete(const std::filesystem::path& record, bool patterns = false);
+/// with `patterns`, holds the body's made-to-measure patterns; with a
+/// non-null `input`, was made from that input): a failed or unreadable
+/// record, one written before `--patterns` was asked for, or one of a body
+/// file edited since, is computed again.
+[[nodiscard]] bool body_record_complete(const std::filesystem::path& record, bool patterns = false,
+                                        const nlohmann::json& input = nullptr);
 
 /// Throws Error(kDegenerate) naming the template and the node when a
 /// regenerated position (of the live nodes of `model` when given) or a
@@ -62,8 +70,5 @@ void record_regen_job(const std::filesystem::path& out, const nlohmann::json& jo
 void require_finite(const std::string& name, const std::vector<Vec3d>& positions,
                     std::initializer_list<std::pair<const char*, double>> figures, const Model* model = nullptr);
 
-/// Removes the temporaries a killed run left in `out`, `out/bodies` and the
-/// body folders under it (io/atomic_file.h remove_stale_temporaries).
-std::size_t remove_stale_regen_temporaries(const std::filesystem::path& out);
 
 }  // namespace atelier::cli

@@ -73,6 +73,10 @@ class BodySource {
   [[nodiscard]] virtual std::size_t size() const = 0;
   [[nodiscard]] virtual std::shared_ptr<const ReferenceBody> reference() const = 0;
   [[nodiscard]] virtual std::string body_name(std::size_t i) const = 0;
+  /// The file body `i` is read from, empty for a generated body (fully
+  /// defined by the source's parameters). A resumed job compares the file's
+  /// contents with the ones its record was made from (issue 27).
+  [[nodiscard]] virtual std::filesystem::path body_file(std::size_t /*i*/) const { return {}; }
   /// Clears `out` and fills it with bodies [first, first + count). A body
   /// that fails is appended to `failures` and skipped; the rest complete.
   virtual void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
@@ -89,6 +93,7 @@ class ObjDirectorySource final : public BodySource {
   [[nodiscard]] std::size_t size() const override { return files_.size(); }
   [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
   [[nodiscard]] std::string body_name(std::size_t i) const override { return files_[i].stem().string(); }
+  [[nodiscard]] std::filesystem::path body_file(std::size_t i) const override { return files_[i]; }
   void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                 const ExecContext& ctx) const override;
   [[nodiscard]] const std::vector<std::filesystem::path>& files() const noexcept { return files_; }

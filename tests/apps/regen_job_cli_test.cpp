@@ -2,7 +2,9 @@
 // only its own job (apps/atelier/regen_job.h), failed bodies are retried, a
 // body's outcome does not depend on what is written, an unwritable output is
 // bad input (exit 3) naming the path, `demo` picks its pictures by quality
-// figures, and `render` refuses a picture beyond its memory limit.
+// figures, `render` refuses a picture beyond its memory limit, an edited body
+// file is computed again on resume, and every command that writes a tree of
+// outputs removes a killed run's temporaries.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -173,6 +175,70 @@ TEST(RegenJobCli, ABodysOutcomeDoesNotDependOnWhatIsWritten) {
     records.push_back(rep["bodies"][1]);
   }
   EXPECT_EQ(records[0], records[1]) << "the far body's outcome and reason do not depend on --meshes";
+}
+
+// Issue 27: a directory body set was identified by its folder only, so a
+// body file edited in place resumed with the record of the old body. Each
+// record now keeps its file's size and CRC-32: the edited body (here given
+// the contents of another body of the set) is computed again, and its
+// figures become exactly those of the body it now equals.
+TEST(RegenJobCli, ABodyFileEditedInPlaceIsComputedAgainOnResume) {
+  const fs::path d = atelier::testing::scratch_dir("regen_job_edited_body");
+  CliRun r = run("--seed 3 bodies --count 3 --meshes 3 --out " + (d / "set").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const fs::path ref = d / "set" / "mannequin-00000.obj";
+  const std::string job = "regen" + skirt() + " --source " + (d / "set").string() + " --reference " + ref.string() +
+                          " --meshes 0 --out " + (d / "o").string();
+  r = run(job);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto record = [&](const char* body) {
+    return nlohmann::json::parse(read_bytes(d / "o" / "bodies" / (std::string(body) + ".json")));
+  };
+  const nlohmann::json one = record("mannequin-00001"), two = record("mannequin-00002");
+  ASSERT_TRUE(two.contains("input")) << two.dump();
+  EXPECT_NE(one["templates"], two["templates"]) << "two different bodies";
+  r = run(job);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(has(r.out, "(0 now, 3 from an earlier run)")) << r.out;
+
+  // mannequin-00002.obj now holds mannequin-00001's body.
+  std::ofstream(d / "set" / "mannequin-00002.obj", std::ios::binary | std::ios::trunc)
+      << read_bytes(d / "set" / "mannequin-00001.obj");
+  r = run(job);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(has(r.out, "(1 now, 2 from an earlier run)")) << r.out;
+  const nlohmann::json again = record("mannequin-00002");
+  EXPECT_NE(again["input"], two["input"]);
+  EXPECT_EQ(again["input"]["crc32"], one["input"]["crc32"]);
+  EXPECT_EQ(again["templates"], one["templates"]) << "the edited body's figures are those of the body it equals";
+  const auto rep = nlohmann::json::parse(read_bytes(d / "o" / "report.json"));
+  ASSERT_EQ(rep["bodies"].size(), 3u);
+  EXPECT_EQ(rep["bodies"][2]["templates"], one["templates"]) << "the report carries the new record";
+}
+
+// Issue 27: stale `*.tmp.<pid>.<n>` files of a killed run were removed by
+// `regen` only. `bodies` and `demo` remove those of dead writers anywhere
+// under their output folder and keep those of live ones.
+TEST(RegenJobCli, BodiesAndDemoRemoveTheTemporariesOfKilledRuns) {
+  const fs::path d = atelier::testing::scratch_dir("regen_job_stale");
+  const std::string dead = std::to_string(atelier::testing::dead_pid());
+  struct Case {
+    std::string args;
+    fs::path out, sub;
+  };
+  for (const Case& c : std::vector<Case>{{"bodies --count 2 --meshes 1 --out " + (d / "b").string(), d / "b", "."},
+                                         {"demo --bodies 2 --out " + (d / "demo").string(), d / "demo", "meshes"}}) {
+    fs::create_directories(c.out / c.sub);
+    const fs::path stale_top = c.out / ("measurements.csv.tmp." + dead + ".0");
+    const fs::path stale_sub = c.out / c.sub / ("mannequin-00000.obj.tmp." + dead + ".3");
+    const fs::path live = c.out / c.sub / "other.obj.tmp.1.0";  // pid 1 is always alive
+    for (const fs::path& p : {stale_top, stale_sub, live}) std::ofstream(p) << "partial";
+    const CliRun r = run(c.args);
+    ASSERT_EQ(r.code, 0) << c.args << "\n" << r.out;
+    EXPECT_FALSE(fs::exists(stale_top)) << c.args;
+    EXPECT_FALSE(fs::exists(stale_sub)) << c.args;
+    EXPECT_TRUE(fs::exists(live)) << c.args << ": a live writer's file is kept";
+  }
 }
 
 // Issue 27: one "worst body" picture was chosen by a timing (top_ms).

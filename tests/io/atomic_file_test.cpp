@@ -13,6 +13,7 @@
 #include <atelier/io/off.h>
 #include <atelier/io/ply.h>
 #include "io_test_support.h"
+#include "support/run_command.h"
 
 using namespace atelier;
 using namespace atelier::test;
@@ -118,24 +119,13 @@ TEST(AtomicFile, WriterFailingMidwayLeavesOldFileIntact) {
   EXPECT_EQ(dir.entries(), (std::vector<std::string>{"old.obj", "old.off", "old.ply"}));
 }
 
-namespace {
-/// The pid of a process that has exited (and been reaped): no process has it
-/// until the kernel reuses it, which takes a full turn of the pid space.
-pid_t dead_pid() {
-  const pid_t child = fork();
-  if (child == 0) _exit(0);
-  int st = 0;
-  waitpid(child, &st, 0);
-  return child;
-}
-}  // namespace
 
 // Issue 27: a run killed between AtomicFile's open and its rename leaves
 // `<name>.tmp.<pid>.<n>`; a later run removes those whose writer is gone
 // and keeps those of live writers (this process, another running job).
 TEST(AtomicFile, StaleTemporariesOfDeadWritersAreRemovedLiveOnesKept) {
   TempDir dir;
-  const pid_t gone = dead_pid();
+  const pid_t gone = atelier::testing::dead_pid();
   ASSERT_GT(gone, 0);
   ASSERT_NE(::kill(gone, 0), 0) << "the exited child is still a process";
   const std::string dead = std::to_string(gone);

@@ -21,6 +21,17 @@ struct CommandResult {
   std::string out;  // stdout and stderr
 };
 
+/// The pid of a process that has exited (and been reaped): no process has it
+/// until the kernel reuses it, which takes a full turn of the pid space. A
+/// temporary file named after it is one a killed writer left.
+inline pid_t dead_pid() {
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  int st = 0;
+  waitpid(child, &st, 0);
+  return child;
+}
+
 /// Runs `command` through the shell, capturing stdout and stderr.
 inline CommandResult run_command(const std::string& command) {
   CommandResult r;
