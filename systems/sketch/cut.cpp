@@ -19,7 +19,6 @@ namespace atelier {
 
 namespace {
 
-
 struct PieceData {
   SurfaceIdx surface;
   std::vector<FaceIdx> faces;  // increasing
@@ -160,7 +159,8 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, Removal& out) {
     const FaceIdx f = m.nodes.in_face[v];
     if (!f.valid() || !m.alive(NodeIdx{v})) continue;
     out.rings = true;
-    if (gone[f.value]) return status_of(ErrorCode::kUnsupported, "cut: face ", f.value, " to remove holds ring node ", v);
+    if (gone[f.value])
+      return status_of(ErrorCode::kUnsupported, "cut: face ", f.value, " to remove holds ring node ", v);
   }
   auto faceless_after = [&](HalfedgeIdx h) {
     const FaceIdx f = m.face(h);

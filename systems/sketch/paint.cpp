@@ -832,7 +832,6 @@ TracedCurve to_curve(const Section& s, const StrokeData& sd, const Run& r) {
   return c;
 }
 
-
 }  // namespace
 
 Expected<TraceResult> trace_stroke(const Model& m, const Camera& camera, std::span<const Vec2d> stroke,

@@ -1,14 +1,13 @@
 // remove_faces_bulk against the primitives it replaces: the same live rows,
 // the same free lists and generations (so later allocations and handles
 // agree too), on random face sets of a triangle grid and a closed cube.
+#include <atelier/storage/builder.h>
+#include <atelier/storage/bulk_remove.h>
+#include <atelier/storage/validate.h>
 #include <gtest/gtest.h>
 
 #include <random>
 #include <vector>
-
-#include <atelier/storage/builder.h>
-#include <atelier/storage/bulk_remove.h>
-#include <atelier/storage/validate.h>
 
 using namespace atelier;
 
@@ -22,7 +21,8 @@ Model tri_grid(int n) {
   auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
-      for (auto t : {std::array{id(i, j), id(i + 1, j), id(i + 1, j + 1)}, std::array{id(i, j), id(i + 1, j + 1), id(i, j + 1)}}) {
+      for (auto t : {std::array{id(i, j), id(i + 1, j), id(i + 1, j + 1)},
+                     std::array{id(i, j), id(i + 1, j + 1), id(i, j + 1)}}) {
         idx.insert(idx.end(), t.begin(), t.end());
         off.push_back(static_cast<std::uint32_t>(idx.size()));
       }

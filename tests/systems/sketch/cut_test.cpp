@@ -199,9 +199,9 @@ TEST(Cut, IncrementalEulerCountEqualsARecount) {
     for (int k = 0; k < 8; ++k) {
       const double y = 0.5 * U(rng), tilt = 0.2 * U(rng);
       const Model before = m;
-      auto p = paint_stroke(m, cam, project(cam, {Vec3d(-1.5, y - tilt, 0), Vec3d(0, y + 0.1 * U(rng), 0),
-                                                  Vec3d(1.5, y + tilt, 0)}),
-                            {.through = true});
+      auto p = paint_stroke(
+          m, cam, project(cam, {Vec3d(-1.5, y - tilt, 0), Vec3d(0, y + 0.1 * U(rng), 0), Vec3d(1.5, y + tilt, 0)}),
+          {.through = true});
       if (!p) continue;  // the stroke missed what is left
       const double side = U(rng) < 0 ? -0.9 : 0.9;
       auto pick = locate_pixel(m, cam, cam.project(Vec3d(0.05, side, 0.3)).head<2>());
