@@ -4,6 +4,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/parallel.h>
 #include <atelier/engine/status_format.h>
+#include <atelier/storage/bulk_remove.h>
 #include <atelier/storage/topology.h>
 #include <atelier/storage/union_find.h>
 #include <atelier/systems/sketch/cut.h>
@@ -17,7 +18,6 @@
 namespace atelier {
 
 namespace {
-
 
 struct PieceData {
   SurfaceIdx surface;
@@ -144,13 +144,22 @@ void trim_mesh_edge(Model& m, MeshEdgeIdx me, const std::vector<std::uint8_t>& e
   for (const auto& r : runs) (void)m.new_mesh_edge(s, r);
 }
 
+/// What remove_faces removed (for the Euler bookkeeping of the cut).
+struct Removal {
+  std::size_t faces = 0, edges = 0, nodes = 0;
+  std::vector<NodeIdx> survivors;  // corners of removed faces that live on, in index order
+  bool rings = false;              // the model holds ring nodes (the local count does not cover them)
+};
+
 /// Removes faces, then the edges and nodes left without faces.
-Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, std::size_t& nodes_removed) {
+Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, Removal& out) {
   std::vector<std::uint8_t> gone(m.faces.slots.capacity(), 0);
   for (FaceIdx f : rm) gone[f.value] = 1;
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v) {
     const FaceIdx f = m.nodes.in_face[v];
-    if (f.valid() && m.alive(NodeIdx{v}) && gone[f.value])
+    if (!f.valid() || !m.alive(NodeIdx{v})) continue;
+    out.rings = true;
+    if (gone[f.value])
       return status_of(ErrorCode::kUnsupported, "cut: face ", f.value, " to remove holds ring node ", v);
   }
   auto faceless_after = [&](HalfedgeIdx h) {
@@ -184,8 +193,9 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, std::size_t& nodes
     seen[v.value] = 1;
     bool all = true;
     m.for_each_outgoing(v, [&](HalfedgeIdx h) { all &= edge_dies[edge_of(h).value] != 0; });
-    if (all) dying_nodes.push_back(v);
+    (all ? dying_nodes : out.survivors).push_back(v);
   }
+  std::sort(out.survivors.begin(), out.survivors.end());
   std::vector<std::uint8_t> node_dies(m.nodes.slots.capacity(), 0);
   for (NodeIdx v : dying_nodes) node_dies[v.value] = 1;
   std::vector<AttribNodeIdx> dead_attribs;
@@ -198,26 +208,107 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, std::size_t& nodes
                                                          : node_dies[el] != 0;
     if (d) dead_attribs.push_back(AttribNodeIdx{i});
   }
-  // Apply.
-  for (FaceIdx f : rm) m.delete_face(f);
+  // Apply: mesh edges and attribute nodes first (they do not depend on the
+  // faces), then faces, edges and nodes in one bulk pass.
   for (MeshEdgeIdx me : trimmed) trim_mesh_edge(m, me, edge_dies);
   delete_attrib_nodes(m, dead_attribs);
-  for (EdgeIdx e : dying) m.delete_edge(e);
-  for (NodeIdx v : dying_nodes) m.delete_node(v);
-  nodes_removed = dying_nodes.size();
+  remove_faces_bulk(m, rm, dying, dying_nodes);
+  out.faces = rm.size();
+  out.edges = dying.size();
+  out.nodes = dying_nodes.size();
   return {};
+}
+
+/// Number of node components (over live edges) holding the given nodes:
+/// one breadth-first flood from all of them at once that stops as soon as
+/// they are all in one set. Cutting one piece off leaves its surviving
+/// corners joined along the curve, so the flood meets within a few rings of
+/// the curve; only a cut that really splits the rest explores all of it.
+std::size_t components_holding(const Model& m, const std::vector<NodeIdx>& seeds) {
+  if (seeds.size() <= 1) return seeds.size();
+  std::vector<std::uint32_t> label(m.nodes.slots.capacity(), kNone);
+  UnionFind sets(seeds.size());
+  std::size_t count = seeds.size();
+  std::vector<NodeIdx> queue(seeds.begin(), seeds.end());
+  for (std::uint32_t i = 0; i < seeds.size(); ++i) label[seeds[i].value] = i;
+  for (std::size_t q = 0; q < queue.size() && count > 1; ++q) {
+    const NodeIdx v = queue[q];
+    m.for_each_outgoing(v, [&](HalfedgeIdx h) {
+      const NodeIdx w = m.head(h);
+      std::uint32_t& lw = label[w.value];
+      if (lw == kNone) {
+        lw = label[v.value];
+        queue.push_back(w);
+      } else if (const std::uint32_t a = sets.find(lw), b = sets.find(label[v.value]); a != b) {
+        sets.unite(a, b);
+        --count;
+      }
+    });
+  }
+  return count;
+}
+
+/// Whether the face group (faces connected across edges) holding `piece`
+/// had no boundary halfedge before the cut (a closed shell, the S of the
+/// Euler-Poincare formula). `piece_open`: the piece itself has one. Cheap
+/// cases first: an open piece, or no boundary edge in the whole model (one
+/// pass over a column); otherwise the rest of the group is flooded from the
+/// piece's neighbours until a boundary halfedge shows up.
+bool group_closed(const Model& m, const std::vector<std::uint8_t>& in_piece, const std::vector<FaceIdx>& piece,
+                  bool piece_open) {
+  if (piece_open) return false;
+  bool any_boundary = false;
+  const auto& hf = m.halfedges.face;
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity() && !any_boundary; ++e)
+    any_boundary = m.alive(EdgeIdx{e}) && (hf[2 * e].valid() != hf[2 * e + 1].valid());
+  if (!any_boundary) return true;
+  std::vector<std::uint8_t> seen(m.faces.slots.capacity(), 0);
+  std::vector<FaceIdx> stack;
+  for (FaceIdx f : piece)
+    m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
+      const FaceIdx o = m.face(twin(h));
+      if (o.valid() && !in_piece[o.value] && !seen[o.value]) {
+        seen[o.value] = 1;
+        stack.push_back(o);
+      }
+    });
+  while (!stack.empty()) {
+    const FaceIdx f = stack.back();
+    stack.pop_back();
+    bool open = false;
+    m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
+      const FaceIdx o = m.face(twin(h));
+      if (!o.valid()) {
+        open = true;
+      } else if (!in_piece[o.value] && !seen[o.value]) {
+        seen[o.value] = 1;
+        stack.push_back(o);
+      }
+    });
+    if (open) return false;
+  }
+  return true;
 }
 
 void recount_holes(Model& m) {
   m.complex_holes = count_topology(m).implied_holes();
 }
 
-/// Restores the snapshot on every error path.
+/// Restores the snapshot on every error path. The caller's tables move into
+/// the snapshot (no copy) and the model is copied back into columns with
+/// headroom for the re-triangulation, so that the snapshot and the growth of
+/// the columns cost one copy of the tables instead of two.
 struct Rollback {
   Model& m;
   Model backup;
   bool armed = true;
-  explicit Rollback(Model& model) : m(model), backup(model) {}
+  explicit Rollback(Model& model) : m(model), backup(std::move(model)) {
+    m = Model{};
+    auto room = [](std::size_t n) { return n + n / 8 + 1024; };
+    m.reserve(room(backup.nodes.slots.capacity()), room(backup.edges.slots.capacity()),
+              room(backup.faces.slots.capacity()));
+    m = backup;  // std::vector's copy assignment keeps the reserved capacity
+  }
   ~Rollback() {
     if (armed) m = std::move(backup);
   }
@@ -277,10 +368,12 @@ struct OnePiece {
   std::vector<FaceIdx> faces;
   std::vector<std::uint8_t> in;  // per face slot
   double area = 0;
+  bool open = false;  // a face of the piece has a boundary halfedge
 };
 OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_t>& curve_edge) {
   OnePiece p;
-  p.in.assign(m.faces.slots.capacity(), 0);
+  const std::size_t nf = m.faces.slots.capacity();
+  p.in.assign(nf, 0);
   std::vector<FaceIdx> stack{start};
   p.in[start.value] = 1;
   while (!stack.empty()) {
@@ -293,17 +386,20 @@ OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_
     do {
       const HalfedgeIdx n = m.next(h);
       if (h != h0 && n != h0) p.area += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
-      if (!curve_edge[edge_of(h).value]) {
-        const FaceIdx o = m.face(twin(h));
-        if (o.valid() && !p.in[o.value]) {
-          p.in[o.value] = 1;
-          stack.push_back(o);
-        }
+      const FaceIdx o = m.face(twin(h));
+      p.open |= !o.valid();
+      if (!curve_edge[edge_of(h).value] && o.valid() && !p.in[o.value]) {
+        p.in[o.value] = 1;
+        stack.push_back(o);
       }
       h = n;
     } while (h != h0);
   }
-  std::sort(p.faces.begin(), p.faces.end());
+  // Face order (the removal order decides the free lists): read off the
+  // marks, which costs a byte per face slot instead of a sort.
+  std::size_t k = 0;
+  for (std::uint32_t f = 0; f < nf; ++f)
+    if (p.in[f]) p.faces[k++] = FaceIdx{f};
   return p;
 }
 
@@ -343,6 +439,7 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
   out.nodes_added = rt->nodes_added;
   out.crossings = rt->crossings;
   std::vector<FaceIdx> rm;
+  std::optional<bool> shell_closed;  // with a pick: whether the picked side's face group was a closed shell
   if (opt.pick) {
     // The picked side only: the piece holding the pick, grown across edges
     // that are not on a curve; it must meet a face of another piece across
@@ -402,6 +499,7 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
     out.pieces = {removed, kept};
     out.removed_area = removed.area;
     out.kept_area = kept.area;
+    shell_closed = group_closed(m, pc.in, pc.faces, pc.open);
     rm = pc.faces;
   } else {
     const Pieces P = find_pieces(m, *rt, ctx);
@@ -440,8 +538,25 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
   }
   out.faces_removed = rm.size();
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "cut cancelled");
-  if (Status s = remove_faces(m, rm, out.nodes_removed); !s) return s;
-  recount_holes(m);
+  Removal rem;
+  if (Status s = remove_faces(m, rm, rem); !s) return s;
+  out.nodes_removed = rem.nodes;
+  if (shell_closed && !rem.rings) {
+    // Euler bookkeeping of the removed piece instead of a recount of the
+    // model: H = C - (V - E + F - R) + S (docs/glossary.md). R is
+    // unchanged (no ring node in the model). The piece was one face-connected
+    // set, so its corners were in one component; the survivors among them
+    // tell how many components that one became. The face groups left all
+    // border the curve, so they are open: S drops by one if the group was a
+    // closed shell.
+    const auto d_chi = -static_cast<std::int64_t>(rem.nodes) + static_cast<std::int64_t>(rem.edges) -
+                       static_cast<std::int64_t>(rem.faces);
+    const auto d_c = static_cast<std::int64_t>(components_holding(m, rem.survivors)) - 1;
+    const std::int64_t d_s = *shell_closed ? -1 : 0;
+    m.complex_holes += d_c - d_chi + d_s;
+  } else {
+    recount_holes(m);
+  }
   rb.armed = false;
   return out;
 }

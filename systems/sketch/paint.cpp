@@ -78,6 +78,11 @@ struct Screen {
   std::vector<Vec2d> pixel;
   std::vector<double> w, key;
   std::vector<std::uint8_t> ok;  // alive, in front of the eye, within 2^40 pixels
+  // Where the snapped pixel lies against the stroke's box (bits: left of,
+  // right of, above, below; 16: not ok): a face whose corners' codes share a
+  // bit is off the box, found with one byte per corner.
+  std::vector<std::uint8_t> code;
+  static constexpr std::uint8_t kNotOk = 16;
 
   [[nodiscard]] double key_of(const Vec3d& x) const {
     const Vec4d c = pv * Vec4d(x.x(), x.y(), x.z(), 1.0);
@@ -85,7 +90,27 @@ struct Screen {
   }
 };
 
-Screen project_nodes(const Model& m, const Camera& cam, const ExecContext& ctx) {
+/// The screen image of one point (false when behind the eye, not finite or
+/// beyond 2^40 pixels). Painting and picking both project through here, so
+/// they see the same bits.
+struct NodeImage {
+  P2 snapped;
+  Vec2d pixel;
+  double w = 0, key = 0;
+};
+bool project_point(const Mat4d& pv, bool perspective, double W, double H, const Vec3d& x, NodeImage& out) {
+  const Vec4d c = pv * Vec4d(x.x(), x.y(), x.z(), 1.0);
+  if (!(c.w() > 0) || !c.allFinite()) return false;
+  const double px = (c.x() / c.w() + 1.0) * 0.5 * W, py = (1.0 - c.y() / c.w()) * 0.5 * H;
+  if (!(std::abs(px) < kMaxPixel) || !(std::abs(py) < kMaxPixel)) return false;
+  out.pixel = Vec2d(px, py);
+  out.snapped = {std::llround(px * kSnap), std::llround(py * kSnap)};
+  out.w = c.w();
+  out.key = perspective ? 1.0 / c.w() : -c.z() / c.w();
+  return true;
+}
+
+Screen project_nodes(const Model& m, const Camera& cam, const Box3d& box, const ExecContext& ctx) {
   Screen s;
   s.pv = cam.projection * cam.view;
   s.perspective = cam.perspective();
@@ -95,19 +120,20 @@ Screen project_nodes(const Model& m, const Camera& cam, const ExecContext& ctx) 
   s.w.resize(n);
   s.key.resize(n);
   s.ok.assign(n, 0);
+  s.code.assign(n, Screen::kNotOk);
   const double W = cam.width, H = cam.height;
   par::for_each_n(ctx, n, [&](std::size_t v) {
     if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) return;
-    const Vec3d& x = m.nodes.position[v];
-    const Vec4d c = s.pv * Vec4d(x.x(), x.y(), x.z(), 1.0);
-    if (!(c.w() > 0) || !c.allFinite()) return;
-    const double px = (c.x() / c.w() + 1.0) * 0.5 * W, py = (1.0 - c.y() / c.w()) * 0.5 * H;
-    if (!(std::abs(px) < kMaxPixel) || !(std::abs(py) < kMaxPixel)) return;
-    s.pixel[v] = Vec2d(px, py);
-    s.snapped[v] = {std::llround(px * kSnap), std::llround(py * kSnap)};
-    s.w[v] = c.w();
-    s.key[v] = s.perspective ? 1.0 / c.w() : -c.z() / c.w();
+    NodeImage im;
+    if (!project_point(s.pv, s.perspective, W, H, m.nodes.position[v], im)) return;
+    s.pixel[v] = im.pixel;
+    s.snapped[v] = im.snapped;
+    s.w[v] = im.w;
+    s.key[v] = im.key;
     s.ok[v] = 1;
+    const double x = double(im.snapped.x), y = double(im.snapped.y);
+    s.code[v] = static_cast<std::uint8_t>((x < box.lo.x()) | (x > box.hi.x()) << 1 | (y < box.lo.y()) << 2 |
+                                          (y > box.hi.y()) << 3);
   });
   return s;
 }
@@ -243,8 +269,7 @@ struct FanTri {
 
 /// Areal coordinates of pixel q in the projected triangle, corrected for
 /// perspective (divided by w) so that they weigh the 3D corners.
-Vec3d pierce_weights(const Screen& s, const FanTri& t, const Vec2d& q) {
-  const Vec2d a = s.pixel[t.n[0].value], b = s.pixel[t.n[1].value], c = s.pixel[t.n[2].value];
+Vec3d pierce_weights(const Vec2d& a, const Vec2d& b, const Vec2d& c, const double (&w)[3], const Vec2d& q) {
   const double area = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
   Vec3d beta;
   if (std::abs(area) > 1e-300 && std::isfinite(area)) {
@@ -254,11 +279,15 @@ Vec3d pierce_weights(const Screen& s, const FanTri& t, const Vec2d& q) {
   } else {
     beta = Vec3d(1.0 / 3, 1.0 / 3, 1.0 / 3);
   }
-  Vec3d l(beta[0] / s.w[t.n[0].value], beta[1] / s.w[t.n[1].value], beta[2] / s.w[t.n[2].value]);
+  Vec3d l(beta[0] / w[0], beta[1] / w[1], beta[2] / w[2]);
   l = l.cwiseMax(0.0);
   const double sum = l.sum();
   if (!(sum > 0) || !std::isfinite(sum)) return Vec3d(1.0 / 3, 1.0 / 3, 1.0 / 3);
   return l / sum;
+}
+Vec3d pierce_weights(const Screen& s, const FanTri& t, const Vec2d& q) {
+  const double w[3] = {s.w[t.n[0].value], s.w[t.n[1].value], s.w[t.n[2].value]};
+  return pierce_weights(s.pixel[t.n[0].value], s.pixel[t.n[1].value], s.pixel[t.n[2].value], w, q);
 }
 
 struct ChunkOut {
@@ -431,18 +460,13 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
       if (!m.alive(f) || !surf_mask[m.faces.surface[fi].value]) continue;
       // Cull by the face's screen box first (most faces lie away from the stroke).
       {
-        bool ok = true;
-        double lox = INFINITY, loy = INFINITY, hix = -INFINITY, hiy = -INFINITY;
+        std::uint8_t all = 0xFF, any = 0;
         m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
-          const std::uint32_t v = m.halfedges.tail[h.value].value;
-          ok &= sc.ok[v] != 0;
-          lox = std::min(lox, double(sc.snapped[v].x));
-          hix = std::max(hix, double(sc.snapped[v].x));
-          loy = std::min(loy, double(sc.snapped[v].y));
-          hiy = std::max(hiy, double(sc.snapped[v].y));
+          const std::uint8_t x = sc.code[m.halfedges.tail[h.value].value];
+          all &= x;
+          any |= x;
         });
-        if (!ok || hix < sd.box2.lo.x() || lox > sd.box2.hi.x() || hiy < sd.box2.lo.y() || loy > sd.box2.hi.y())
-          continue;
+        if ((any & Screen::kNotOk) || (all & 15)) continue;
       }
       fan_triangles(m, f, hs, tris);
       if (hs.size() > 257) {
@@ -808,23 +832,18 @@ TracedCurve to_curve(const Section& s, const StrokeData& sd, const Run& r) {
   return c;
 }
 
-Expected<Screen> checked_screen(const Model& m, const Camera& camera, const ExecContext& ctx) {
-  if (Status st = camera.check(); !st) return Status(ErrorCode::kInvalidArgument, "painting: " + st.message());
-  return project_nodes(m, camera, ctx);
-}
-
 }  // namespace
 
 Expected<TraceResult> trace_stroke(const Model& m, const Camera& camera, std::span<const Vec2d> stroke,
                                    const PaintOptions& opt, const ExecContext& ctx) {
   auto mask = surface_mask(m, opt.surfaces);
   if (!mask) return mask.status();
-  auto sc = checked_screen(m, camera, ctx);
-  if (!sc) return sc.status();
-  auto sd = prepare_stroke(camera, sc->pv, stroke);
+  if (Status st = camera.check(); !st) return Status(ErrorCode::kInvalidArgument, "painting: " + st.message());
+  auto sd = prepare_stroke(camera, camera.projection * camera.view, stroke);
   if (!sd) return sd.status();
+  const Screen sc = project_nodes(m, camera, sd->box2, ctx);
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "painting cancelled");
-  auto sec = build_section(m, *sc, *sd, *mask, ctx);
+  auto sec = build_section(m, sc, *sd, *mask, ctx);
   if (!sec) return sec.status();
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "painting cancelled");
   const Graph g = build_graph(m, *sec, *sd);
@@ -891,14 +910,26 @@ Expected<CurvePoint> locate_pixel(const Model& m, const Camera& camera, const Ve
   if (!mask) return mask.status();
   if (!pixel.allFinite() || !(std::abs(pixel.x()) < kMaxPixel) || !(std::abs(pixel.y()) < kMaxPixel))
     return Status(ErrorCode::kInvalidArgument, "pick: the pixel is not finite");
-  auto scr = checked_screen(m, camera, ctx);
-  if (!scr) return scr.status();
-  const Screen* sc = &*scr;
-  StrokeData sd;
-  sd.px = {pixel};
-  sd.snapped = {P2{std::llround(pixel.x() * kSnap), std::llround(pixel.y() * kSnap)}};
-  sd.original = {0};
-  const P2 q = sd.snapped[0];
+  if (Status st = camera.check(); !st) return Status(ErrorCode::kInvalidArgument, "painting: " + st.message());
+  const Mat4d pv = camera.projection * camera.view;
+  const bool persp = camera.perspective();
+  const double W = camera.width, H = camera.height;
+  const P2 q{std::llround(pixel.x() * kSnap), std::llround(pixel.y() * kSnap)};
+  // One byte per node instead of the painting's full screen image: on which
+  // sides of the pixel the node projects (bits: left, right, above, below;
+  // 16: not projectable). A face whose corners all lie on one side of it
+  // (the AND of their codes) cannot hold the pixel; the few faces left are
+  // projected again, corner by corner, through the same project_point.
+  constexpr std::uint8_t kNotOk = 16;
+  const std::size_t nn = m.nodes.slots.capacity();
+  std::vector<std::uint8_t> code(nn, kNotOk);
+  par::for_each_n(ctx, nn, [&](std::size_t v) {
+    NodeImage im;
+    if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)}) || !project_point(pv, persp, W, H, m.nodes.position[v], im))
+      return;
+    code[v] = static_cast<std::uint8_t>((im.snapped.x < q.x) | (im.snapped.x > q.x) << 1 | (im.snapped.y < q.y) << 2 |
+                                        (im.snapped.y > q.y) << 3);
+  });
   const std::size_t nf = m.faces.slots.capacity();
   const std::size_t chunks = (nf + kChunk - 1) / kChunk;
   std::vector<std::pair<double, CurvePoint>> best(chunks, {-INFINITY, CurvePoint{}});
@@ -913,22 +944,20 @@ Expected<CurvePoint> locate_pixel(const Model& m, const Camera& camera, const Ve
       const FaceIdx f{static_cast<std::uint32_t>(fi)};
       if (!m.alive(f) || !(*mask)[m.faces.surface[fi].value]) continue;
       {
-        bool ok = true;
-        i64 lox = INT64_MAX, loy = INT64_MAX, hix = INT64_MIN, hiy = INT64_MIN;
+        std::uint8_t all = 0xFF, any = 0;
         m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
-          const std::uint32_t v = m.halfedges.tail[h.value].value;
-          ok &= sc->ok[v] != 0;
-          lox = std::min(lox, sc->snapped[v].x);
-          hix = std::max(hix, sc->snapped[v].x);
-          loy = std::min(loy, sc->snapped[v].y);
-          hiy = std::max(hiy, sc->snapped[v].y);
+          const std::uint8_t x = code[m.halfedges.tail[h.value].value];
+          all &= x;
+          any |= x;
         });
-        if (!ok || hix < q.x || lox > q.x || hiy < q.y || loy > q.y) continue;
+        if ((any & kNotOk) || (all & 15)) continue;
       }
       fan_triangles(m, f, hs, tris);
       if (hs.size() > 257) continue;
       for (const FanTri& t : tris) {
-        const P2 cc[3] = {sc->snapped[t.n[0].value], sc->snapped[t.n[1].value], sc->snapped[t.n[2].value]};
+        NodeImage im[3];
+        for (int k = 0; k < 3; ++k) (void)project_point(pv, persp, W, H, m.position(t.n[k]), im[k]);
+        const P2 cc[3] = {im[0].snapped, im[1].snapped, im[2].snapped};
         if (std::max({cc[0].x, cc[1].x, cc[2].x}) < q.x || std::min({cc[0].x, cc[1].x, cc[2].x}) > q.x ||
             std::max({cc[0].y, cc[1].y, cc[2].y}) < q.y || std::min({cc[0].y, cc[1].y, cc[2].y}) > q.y)
           continue;  // the pixel is outside the triangle's box (the perturbed point too)
@@ -940,12 +969,14 @@ Expected<CurvePoint> locate_pixel(const Model& m, const Camera& camera, const Ve
           sg[k] = fwd ? s : -s;
         }
         if (!(sg[0] == sg[1] && sg[1] == sg[2])) continue;
-        const Vec3d l = pierce_weights(*sc, t, pixel);
+        const double w[3] = {im[0].w, im[1].w, im[2].w};
+        const Vec3d l = pierce_weights(im[0].pixel, im[1].pixel, im[2].pixel, w, pixel);
         CurvePoint p;
         p.location = {AttribNodeKind::kFace, f.value, l, static_cast<std::uint8_t>(t.fan)};
         p.surface = m.faces.surface[fi];
         p.position = l[0] * m.position(t.n[0]) + l[1] * m.position(t.n[1]) + l[2] * m.position(t.n[2]);
-        const double k = sc->key_of(p.position);
+        const Vec4d cp = pv * Vec4d(p.position.x(), p.position.y(), p.position.z(), 1.0);
+        const double k = persp ? 1.0 / cp.w() : -cp.z() / cp.w();
         if (k > best[ch].first) best[ch] = {k, p};
       }
     }

@@ -5,6 +5,8 @@
 #include <atelier/systems/sketch/paint.h>
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -147,6 +149,74 @@ TEST(Cut, ACurveThatSeparatesNothingIsRefused) {
   auto r2 = cut_along_curves(m, edges_of(*p));
   ASSERT_FALSE(r2);
   EXPECT_EQ(diff_tables(before, m), "");
+}
+
+// The cut keeps the complex-hole count H by Euler bookkeeping of the removed
+// piece (components among its surviving corners, whether its face group was
+// a closed shell) instead of recounting the model. Oracle: a full recount
+// (count_topology) after every cut of random sequences, on a closed sphere,
+// a sphere next to an open sheet (boundary elsewhere in the model: the
+// closed-shell test floods), and a band cut that leaves two components.
+TEST(Cut, IncrementalEulerCountEqualsARecount) {
+  auto sheet = [](Model& m, double y0) {
+    (void)add_polygon_surface(
+        m, "sheet", grid(6, 4, [&](double u, double v) { return Vec3d(-1 + 2 * u, y0 + v, 0.1 * u * v); }).view())
+        .value();
+  };
+  auto check = [](const Model& m, const char* what) {
+    SCOPED_TRACE(what);
+    ASSERT_TRUE(validate(m)) << validate(m).to_string();
+    EXPECT_EQ(m.complex_holes, count_topology(m).implied_holes());
+  };
+  const Camera cam = front_ortho();
+  std::mt19937 rng(20);
+  std::uniform_real_distribution<double> U(-1, 1);
+  int cuts = 0;
+  for (int model = 0; model < 3; ++model) {
+    SCOPED_TRACE(model);
+    Model m = icosphere(3);
+    if (model == 1) sheet(m, 2.0);  // open, out of the strokes' way
+    if (model == 2) {
+      // Two strokes and the band between them: the rest falls in two.
+      Model b = m;
+      std::vector<AttribEdge> both;
+      for (double y : {0.3, -0.25}) {
+        auto p = paint_stroke(b, cam, project(cam, {Vec3d(-1.5, y, 0), Vec3d(1.5, y + 0.05, 0)}), {.through = true});
+        ASSERT_TRUE(p) << p.status().to_string();
+        const auto e = edges_of(*p);
+        both.insert(both.end(), e.begin(), e.end());
+      }
+      auto pick = locate_pixel(b, cam, cam.project(Vec3d(0.1, 0.0, 0.9)).head<2>());
+      ASSERT_TRUE(pick);
+      auto r = cut_along_curves(b, both, {.pick = pick->location});
+      ASSERT_TRUE(r) << r.status().to_string();
+      check(b, "band");
+      EXPECT_EQ(count_topology(b).components, 2);
+      ++cuts;
+    }
+    // Successive random cuts: the first of a closed shell, the next ones of
+    // what is left (open).
+    for (int k = 0; k < 8; ++k) {
+      const double y = 0.5 * U(rng), tilt = 0.2 * U(rng);
+      const Model before = m;
+      auto p = paint_stroke(
+          m, cam, project(cam, {Vec3d(-1.5, y - tilt, 0), Vec3d(0, y + 0.1 * U(rng), 0), Vec3d(1.5, y + tilt, 0)}),
+          {.through = true});
+      if (!p) continue;  // the stroke missed what is left
+      const double side = U(rng) < 0 ? -0.9 : 0.9;
+      auto pick = locate_pixel(m, cam, cam.project(Vec3d(0.05, side, 0.3)).head<2>());
+      if (!pick) continue;
+      auto r = cut_along_curves(m, edges_of(*p), {.pick = pick->location});
+      if (!r) {
+        // Refused (nothing to separate on that side): nothing changed but the painted curve.
+        m = before;
+        continue;
+      }
+      check(m, "random cut");
+      ++cuts;
+    }
+  }
+  EXPECT_GE(cuts, 6);
 }
 
 TEST(Cut, OpenSurfacesAndAttributesOnTheRemovedSide) {
