@@ -207,7 +207,9 @@ Expected<MadeToMeasureReport> MadeToMeasurePatterns::write(const Model& garment,
     if (Status st = ws->build(I.opened.model, I.files.flatten); !st) return st;
   }
   Expected<FlattenReport> flat = Status(ErrorCode::kInternal, "made-to-measure patterns: not flattened");
-  if (Status st = ws->warm_from(I.reference); !st)
+  if (!I.opt.warm_start)
+    flat = ws->flatten(m.nodes.position, m.nodes.uv, false, ctx);
+  else if (Status st = ws->warm_from(I.reference); !st)
     flat = st;
   else
     flat = ws->flatten(m.nodes.position, m.nodes.uv, true, ctx);

@@ -69,6 +69,14 @@ struct MadeToMeasureOptions {
   }();
   std::vector<NamedLine> lines = {{"hem", 0.02}, {"low", 0.25}, {"middle", 0.5}, {"high", 0.75}, {"top", 0.98}};
   bool csv = true;
+  /// MadeToMeasurePatterns only: flatten each body warm from the reference
+  /// body (its pattern, seam multipliers and factor) instead of cold. Off:
+  /// measured on the project templates, warm starts from another body saved
+  /// no phase 2 iterations on the trouser legs and the top, left a leg's
+  /// seams 28 mm apart and flipped triangles on some bodies (a pattern of
+  /// another body is a poor start where the pieces are far from
+  /// developable).
+  bool warm_start = false;
 };
 
 struct PieceMeasurements {
@@ -101,13 +109,16 @@ struct MadeToMeasureReport {
 /// are opened (they depend on the topology only), every piece's flattening
 /// built (topology, springs, symbolic Cholesky analysis) and the reference
 /// garment flattened cold. write() per body then copies the opened model
-/// with the body's positions (no open_seams) and flattens it warm from the
-/// reference: its pattern (no phase 1), its seam multipliers and its
-/// Cholesky factor (kept while no spring's stiffness moved by 25%). Every
-/// body starts from the reference, never from the body before: write()'s
-/// result depends on the reference and the body only (the same bits in any
-/// order, for 1 or 2 threads), and write() may run for several bodies at
-/// once (each takes a flattening workspace from a pool).
+/// with the body's positions (no open_seams) and flattens it with a built
+/// workspace (no topology checks, springs or symbolic analysis): cold by
+/// default (the same bits as write_made_to_measure_pattern), or with
+/// MadeToMeasureOptions::warm_start from the reference: its pattern (no
+/// phase 1), its seam multipliers and its Cholesky factor (kept while no
+/// spring's stiffness moved by 25%). Every body starts from the reference,
+/// never from the body before: write()'s result depends on the reference
+/// and the body only (the same bits in any order, for 1 or 2 threads), and
+/// write() may run for several bodies at once (each takes a flattening
+/// workspace from a pool).
 /// Reads: the garments' positions (write) and topology (prepare). Writes:
 /// files in `dir` only.
 class MadeToMeasurePatterns {
