@@ -10,6 +10,11 @@
 //  * BM_MadeToMeasure_Regen: the regeneration alone (the batch job without
 //    --patterns), the reference for the ratio;
 //  * BM_MadeToMeasure_RegenAndPatterns: both, as `regen --patterns` does.
+//  * ..._Prepared: the same with MadeToMeasurePatterns (made_to_measure.h),
+//    prepared once per template on the first sampled body's garment (not
+//    timed): seams opened once, flattening built once per piece topology,
+//    every body warm-started from that reference (pattern, seam multipliers,
+//    Cholesky factor).
 // Counter bodies_per_s (items_per_second).
 #include <atelier/engine/parallel.h>
 #include <atelier/systems/body/mannequin.h>
@@ -75,6 +80,29 @@ Status patterns(const std::vector<RegenResult>& garments, bool files, const fs::
   return {};
 }
 
+const std::vector<MadeToMeasurePatterns>& prepared(bool files) {
+  static const auto make = [](bool f) {
+    MadeToMeasureOptions o;
+    o.files.svg = o.files.dxf = o.csv = f;
+    std::vector<MadeToMeasurePatterns> out(regenerated()[0].size());
+    for (std::size_t k = 0; k < out.size(); ++k)
+      if (Status st = out[k].prepare(regenerated()[0][k].model, o); !st) throw Error(st);
+    return out;
+  };
+  static const auto with = make(true), without = make(false);
+  return files ? with : without;
+}
+
+Status patterns_prepared(const std::vector<RegenResult>& garments, bool files, const fs::path& dir) {
+  const auto& p = prepared(files);
+  for (std::size_t k = 0; k < garments.size(); ++k) {
+    auto rep = p[k].write(garments[k].model, dir / std::to_string(k), ExecContext::sequential());
+    if (!rep) return rep.status();
+    if (rep->flipped) return Status(ErrorCode::kInternal, "flipped triangles");
+  }
+  return {};
+}
+
 ExecContext over_bodies(const benchmark::State& st) {
   ExecContext c;
   c.threads = static_cast<int>(st.range(0));
@@ -83,9 +111,10 @@ ExecContext over_bodies(const benchmark::State& st) {
   return c;
 }
 
-void run(benchmark::State& st, bool do_regen, bool do_patterns, bool files) {
+void run(benchmark::State& st, bool do_regen, bool do_patterns, bool files, bool reuse = false) {
   const ExecContext ctx = over_bodies(st);
   (void)regenerated();
+  if (reuse) (void)prepared(files);
   const fs::path dir = fs::temp_directory_path() / ("atelier_mtm_bench_" + std::to_string(::getpid()));
   ColliderPool pool;
   std::vector<std::string> errors(kBodies);
@@ -102,7 +131,10 @@ void run(benchmark::State& st, bool do_regen, bool do_patterns, bool files) {
         g = &*fresh;
       }
       if (do_patterns)
-        if (Status s = patterns(*g, files, dir / std::to_string(i)); !s) errors[i] = s.to_string();
+        if (Status s = reuse ? patterns_prepared(*g, files, dir / std::to_string(i))
+                             : patterns(*g, files, dir / std::to_string(i));
+            !s)
+          errors[i] = s.to_string();
     });
     for (const auto& e : errors)
       if (!e.empty()) {
@@ -126,8 +158,26 @@ void BM_MadeToMeasure_RegenAndPatterns(benchmark::State& st) {
   run(st, true, true, true);
 }
 
+void BM_MadeToMeasure_PatternsPrepared(benchmark::State& st) {
+  run(st, false, true, st.range(1) != 0, true);
+}
+void BM_MadeToMeasure_RegenAndPatternsPrepared(benchmark::State& st) {
+  run(st, true, true, true, true);
+}
+
 }  // namespace
 
+BENCHMARK(BM_MadeToMeasure_PatternsPrepared)
+    ->ArgsProduct({{1, 2}, {0, 1}})
+    ->ArgNames({"threads", "files"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_MadeToMeasure_RegenAndPatternsPrepared)
+    ->Arg(1)
+    ->Arg(2)
+    ->ArgName("threads")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_MadeToMeasure_Patterns)
     ->ArgsProduct({{1, 2}, {0, 1}})
     ->ArgNames({"threads", "files"})

@@ -1,14 +1,17 @@
 // The Model side of the flattening: a surface's checks and local topology,
 // the rest state, distortion, placement, Flattener and flatten_surfaces
 // (flatten.h). The numerics are in flatten_solver.cpp.
+// Why this file is long: the piece checks (manifold, disk, components) and
+// the Flattener / ModelFlattener plumbing share the local topology and
+// read the same Model tables; splitting them would only export more detail.
 #include <atelier/engine/parallel.h>
 #include <atelier/systems/pattern/flatten.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <mutex>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 
 #include "flatten_detail.h"
@@ -403,6 +406,7 @@ struct Flattener::Impl {
   FlattenOptions opt;
   PieceTopology topo;
   Phase2Solver solver;
+  PieceSeams seams;                // FlattenOptions::seam_lengths
   std::uint32_t seed_tri = kNone;  // from FlattenOptions::seed_faces, else chosen per flatten
   std::size_t model_nodes = 0;
   std::string label;
@@ -418,6 +422,18 @@ bool Flattener::built() const noexcept {
 }
 SurfaceIdx Flattener::surface() const noexcept {
   return impl_ ? impl_->surface : SurfaceIdx{};
+}
+
+Status Flattener::warm_from(const Flattener& other) {
+  if (!impl_ || !other.impl_) return {ErrorCode::kInvalidArgument, "Flattener::warm_from: not built"};
+  Impl& I = *impl_;
+  const Impl& O = *other.impl_;
+  if (I.topo.node != O.topo.node || I.topo.tri != O.topo.tri || I.seams.lengths.sides != O.seams.lengths.sides)
+    return {ErrorCode::kInvalidArgument,
+            "Flattener::warm_from: " + I.label + " and " + O.label + " are not the same piece topology"};
+  I.seams.lengths.lambda = O.seams.lengths.lambda;
+  I.solver.set_factor(O.solver.factor());
+  return {};
 }
 
 Status Flattener::build(const Model& m, SurfaceIdx s, const FlattenOptions& opt) {
@@ -440,6 +456,7 @@ Status Flattener::build(const Model& m, SurfaceIdx s, const FlattenOptions& opt)
     impl->seed_tri = static_cast<std::uint32_t>(it - impl->topo.tri_face.begin());
     break;
   }
+  if (opt.seam_lengths) impl->seams = collect_seams(m, s, impl->topo);
   impl->solver.analyze(impl->topo);
   impl_ = std::move(impl);
   return {};
@@ -456,6 +473,8 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
   const PieceTopology& t = I.topo;
   auto rest = rest_state(I.label, t, positions, I.opt);
   if (!rest) return rest.status();
+  if (!I.seams.lengths.sides.empty())
+    if (Status st = set_seam_targets(I.seams, positions, I.label); !st) return st;
   SolverParams prm;
   prm.relax_rings = I.opt.relax_rings;
   prm.relax_sweeps = I.opt.relax_sweeps;
@@ -487,7 +506,9 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
       stats.tutte_fallback = true;
     }
   }
-  if (!I.solver.run(t, *rest, prm, q, stats, ctx, warm))
+  // Multipliers carry over only with the pattern they belong to.
+  if (!warm) std::fill(I.seams.lengths.lambda.begin(), I.seams.lengths.lambda.end(), 0.0);
+  if (!I.solver.run(t, *rest, prm, q, stats, ctx, warm, &I.seams.lengths))
     return Status(ErrorCode::kInternal, "flatten: " + I.label + ": the spring Laplacian could not be factored");
   place(t, positions, q, I.opt.grain);
   out.distortion = distortion(t, positions, q, &out.stretch, ctx);
@@ -514,6 +535,10 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
   out.warm_started = warm;
   out.tutte_fallback = stats.tutte_fallback;
   out.reused_factor = stats.reused_factor;
+  out.seam_constraints = I.seams.lengths.size();
+  out.seam_rounds = stats.seam_rounds;
+  out.seam_projections = stats.seam_projections;
+  out.seam_residual = stats.seam_residual;
   out.phase1_ms = stats.phase1_ms;
   out.factor_ms = stats.factor_ms;
   out.phase2_ms = stats.phase2_ms;
@@ -541,6 +566,14 @@ Status ModelFlattener::build(const Model& m, const FlattenOptions& opt) {
       return st;
     }
   node_slots_ = m.nodes.slots.capacity();
+  return {};
+}
+
+Status ModelFlattener::warm_from(const ModelFlattener& other) {
+  if (pieces_.size() != other.pieces_.size() || surfaces_ != other.surfaces_)
+    return {ErrorCode::kInvalidArgument, "ModelFlattener::warm_from: the two have different pieces"};
+  for (std::size_t i = 0; i < pieces_.size(); ++i)
+    if (Status st = pieces_[i].warm_from(other.pieces_[i]); !st) return st;
   return {};
 }
 

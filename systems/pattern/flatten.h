@@ -34,6 +34,20 @@
 //  flipped triangle or a crossing boundary (strongly saddle-shaped pieces),
 //  phase 2 starts instead from Tutte's embedding with the longest boundary
 //  loop on a circle, which has neither.
+//  Seam lengths (an addition to the paper, docs/glossary.md): pieces sewn
+//  together must have partner seams of one length, which flattening each
+//  piece on its own does not give (each side takes its own share of the
+//  strain). With FlattenOptions::seam_lengths, every joint member on the
+//  piece is a constraint L_k(Q) = T_k, L_k its 2D length, T_k the mean 3D
+//  length of the joint's members. Fixing the common length at the 3D one
+//  (what the sewability check asks anyway, pattern.h) decouples the joint
+//  problem over the pieces of a seam exactly: each piece meets the same
+//  target alone, so pieces still flatten in parallel. Phase 2 minimises E
+//  subject to the constraints by an augmented Lagrangian (L-BFGS rounds,
+//  the penalty's Gauss-Newton term added to the preconditioner by
+//  Sherman-Morrison-Woodbury), then projects onto them (Newton steps in the
+//  metric of H0, under the same flip and overlap guards): partner seams
+//  come out equal to rounding, no triangle flipped.
 // Placement: the pattern is turned so its grain line (the 3D grain
 // direction's image, or the pattern's principal axis) runs along +v, and
 // moved so its bounding box starts at (0, 0). The pattern is seen from the
@@ -91,6 +105,11 @@ struct FlattenOptions {
   /// keeps its 3D lengths, so partner seams stay as long as each other
   /// (made_to_measure.h uses 100).
   double boundary_stiffness = 1;
+  /// Partner seams share their 2D length: every member of a joint that lies
+  /// on a piece (a sewn seam, or the two sides of a seam opened by
+  /// open_seams) is held, exactly, at the mean 3D length of its joint's
+  /// members: phase 2 minimises E subject to these lengths (see below).
+  bool seam_lengths = true;
   /// Phase 1: the region relaxed where a loop closes, and its sweeps.
   int relax_rings = 1;
   int relax_sweeps = 1;
@@ -137,6 +156,13 @@ struct PieceFlattening {
   bool warm_started = false;
   bool tutte_fallback = false;
   bool reused_factor = false;  // a warm start kept the previous body's factor
+  /// Seam lengths (FlattenOptions::seam_lengths): the constrained joint
+  /// members on the piece, the augmented-Lagrangian rounds and projection
+  /// steps phase 2 took, and the largest |2D length - target| left (model
+  /// units).
+  std::size_t seam_constraints = 0;
+  int seam_rounds = 0, seam_projections = 0;
+  double seam_residual = 0;
   double phase1_ms = 0, factor_ms = 0, phase2_ms = 0, total_ms = 0;
 };
 
@@ -172,6 +198,14 @@ class Flattener {
   [[nodiscard]] Expected<PieceFlattening> flatten(std::span<const Vec3d> positions, std::span<Vec2d> uv,
                                                   bool warm_start = false, const ExecContext& ctx = {});
 
+  /// The next warm start begins as `other`'s would: its seam multipliers
+  /// and its Cholesky factor (shared, immutable) are copied. With the same
+  /// pattern in `uv`, flatten() then gives the bits `other` would give,
+  /// whatever this Flattener flattened before: many bodies can start from
+  /// one reference body in any order, on any thread. Errors:
+  /// kInvalidArgument (either not built, or built on another topology).
+  [[nodiscard]] Status warm_from(const Flattener& other);
+
   [[nodiscard]] bool built() const noexcept;
   [[nodiscard]] SurfaceIdx surface() const noexcept;
 
@@ -196,6 +230,9 @@ class ModelFlattener {
   /// unchanged.
   [[nodiscard]] Expected<FlattenReport> flatten(std::span<const Vec3d> positions, std::span<Vec2d> uv,
                                                 bool warm_start = false, const ExecContext& ctx = {});
+  /// Flattener::warm_from for every piece (`other` built on the same model
+  /// topology and options).
+  [[nodiscard]] Status warm_from(const ModelFlattener& other);
   [[nodiscard]] std::span<const SurfaceIdx> surfaces() const noexcept { return surfaces_; }
 
  private:

@@ -14,17 +14,16 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
 namespace atelier::pattern_detail {
 
-
 using Clock = std::chrono::steady_clock;
 [[nodiscard]] inline double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
-
 
 /// Twice the signed area of (a, b, c): positive when counter-clockwise.
 [[nodiscard]] inline double signed_area2(const Vec2d& a, const Vec2d& b, const Vec2d& c) noexcept {
@@ -71,6 +70,38 @@ struct RestState {
   std::vector<double> area;       // 3D area per triangle
 };
 
+/// Seam-length constraints of a piece (FlattenOptions::seam_lengths): the
+/// 2D length of each chain, the sum of |Q_a - Q_b| over its sides, held at
+/// its target (the mean 3D length of its joint's members).
+struct SeamLengths {
+  std::vector<std::vector<std::array<std::uint32_t, 2>>> sides;  // per constraint: local vertex pairs
+  std::vector<double> target;                                    // per constraint (set per body)
+  std::vector<double> lambda;  // Lagrange multipliers, kept for the next body (warm start)
+  [[nodiscard]] std::size_t size() const noexcept { return sides.size(); }
+};
+
+/// The seam-length constraints of one piece and where their targets come
+/// from: every member of a joint that lies on the piece is a constraint; its
+/// target is the mean 3D length of all the joint's members (they lie at one
+/// place in 3D, so the mean is each one's length up to the joint's
+/// tolerance). Implemented in flatten_seams.cpp.
+struct PieceSeams {
+  SeamLengths lengths;
+  std::vector<std::uint32_t> joint;                                       // per constraint: index into members
+  std::vector<JointIdx> joint_id;                                         // per joint: the model's joint
+  std::vector<std::vector<std::vector<std::array<NodeIdx, 2>>>> members;  // per joint, per member: its sides
+};
+
+/// The constraints of surface s, piece t: its members that run along its
+/// boundary (sew lines). A member inside the piece (an inner-edge joint, a
+/// collar stitched on a line of the piece) is not constrained: the piece's
+/// own strain decides its length.
+[[nodiscard]] PieceSeams collect_seams(const Model& m, SurfaceIdx s, const PieceTopology& t);
+
+/// Sets the targets for `positions`. Errors: kDegenerate (a joint of
+/// non-finite or zero length), naming the joint.
+[[nodiscard]] Status set_seam_targets(PieceSeams& ps, std::span<const Vec3d> positions, const std::string& label);
+
 struct SolverParams {
   int relax_rings = 1;
   int relax_sweeps = 1;
@@ -87,6 +118,9 @@ struct SolverStats {
   int rejected_steps = 0;       // line-search halvings refused by the flip / overlap guard
   bool tutte_fallback = false;  // phase 1 left flips: phase 2 started from a Tutte embedding
   bool reused_factor = false;   // phase 2 kept the previous body's factor
+  int seam_rounds = 0;          // augmented-Lagrangian rounds (seam lengths)
+  int seam_projections = 0;     // projection steps onto the seam lengths
+  double seam_residual = 0;     // largest |L_2d - target| after phase 2
   double phase1_ms = 0, phase2_ms = 0, factor_ms = 0;
 };
 
@@ -114,10 +148,26 @@ class Phase2Solver {
   /// Symbolic analysis of the Laplacian's pattern (once per topology).
   void analyze(const PieceTopology& t);
   /// Minimises from uv (flip-free) in place. With `reuse`, the previous
-  /// factor stays when the stiffnesses are within 25% of its own. False when
+  /// factor stays when the stiffnesses are within 25% of its own. With
+  /// seam-length constraints (`seams` not null and not empty), E is
+  /// minimised subject to them (augmented Lagrangian, then a projection;
+  /// flatten_solver.cpp); their multipliers are updated in place. False when
   /// the factorization fails.
   [[nodiscard]] bool run(const PieceTopology& t, const RestState& rest, const SolverParams& prm, std::vector<Vec2d>& uv,
-                         SolverStats& stats, const ExecContext& ctx, bool reuse = false);
+                         SolverStats& stats, const ExecContext& ctx, bool reuse = false, SeamLengths* seams = nullptr);
+
+  /// The numeric factor of H0 (immutable once made, so solvers of one
+  /// topology can share it across threads).
+  struct Factor {
+    std::vector<int> outer, inner, perm;   // L's columns (the diagonal leads each) and P
+    std::vector<float> values;             // L's values as floats, for the solves
+    std::vector<double> inverse_diagonal;  // 1 / L_jj
+    std::vector<double> stiffness;         // the C_ij it was made with
+  };
+  [[nodiscard]] const std::shared_ptr<const Factor>& factor() const noexcept { return factor_; }
+  /// The factor the next `reuse` run starts from (one of a solver built on
+  /// the same topology).
+  void set_factor(std::shared_ptr<const Factor> f) noexcept { factor_ = std::move(f); }
 
  private:
   using SpMat = Eigen::SparseMatrix<double>;
@@ -126,10 +176,7 @@ class Phase2Solver {
   std::vector<std::uint32_t> value_of_diag_;
   Eigen::SimplicialLLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> llt_;
   mutable std::vector<Vec2d> work_;
-  std::vector<float> factor_values_;        // L's values as floats, for the solves
-  std::vector<double> inverse_diagonal_;    // 1 / L_jj
-  std::vector<double> factored_stiffness_;  // the C_ij of the current factor
-  bool factored_ = false;
+  std::shared_ptr<const Factor> factor_;
   bool analyzed_ = false;
   /// x = H0^-1 b for the u and v columns at once.
   void solve(std::span<const Vec2d> b, std::span<Vec2d> x) const;

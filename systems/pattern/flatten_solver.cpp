@@ -6,9 +6,11 @@
 // filtered line search, and the flip and overlap counts.
 #include <atelier/engine/parallel.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "flatten_detail.h"
@@ -21,6 +23,14 @@ namespace {
 /// triangles below this area ratio r: zero elsewhere, infinite as a triangle
 /// collapses, so the minimiser never reaches a flip.
 constexpr double kBarrierRatio = 0.1;
+
+/// Seam lengths: the initial penalty rho (times the mean stiffness), the
+/// rounds of multiplier updates at most, and the relative residual |c| / T
+/// that ends them (the projection then goes to rounding).
+constexpr double kSeamPenalty = 100;
+constexpr double kSeamPenaltyMax = 1e2;  // rho grows tenfold per slow round, up to this times its start
+constexpr int kSeamRounds = 8;
+constexpr double kSeamTolerance = 1e-9;
 
 }  // namespace
 
@@ -210,7 +220,7 @@ void Phase2Solver::analyze(const PieceTopology& t) {
   for (std::uint32_t v = 0; v < t.vertex_count(); ++v) value_of_diag_[v] = slot(v, v);
   llt_.analyzePattern(laplacian_);
   analyzed_ = true;
-  factored_ = false;
+  factor_.reset();
 }
 
 void Phase2Solver::solve(std::span<const Vec2d> b, std::span<Vec2d> x) const {
@@ -218,13 +228,13 @@ void Phase2Solver::solve(std::span<const Vec2d> b, std::span<Vec2d> x) const {
   // factor (Eigen's solve streams L once per right-hand side), its values
   // read as floats (H0 only preconditions L-BFGS: its precision sets the
   // speed of convergence, not the minimiser), sums in double.
-  const auto& L = llt_.matrixL().nestedExpression();
-  const int* outer = L.outerIndexPtr();
-  const int* inner = L.innerIndexPtr();
-  const float* val = factor_values_.data();
-  const double* inv = inverse_diagonal_.data();
-  const int* perm = llt_.permutationP().indices().data();
-  const auto n = static_cast<std::size_t>(L.cols());
+  const Factor& F = *factor_;
+  const int* outer = F.outer.data();
+  const int* inner = F.inner.data();
+  const float* val = F.values.data();
+  const double* inv = F.inverse_diagonal.data();
+  const int* perm = F.perm.data();
+  const std::size_t n = F.inverse_diagonal.size();
   Vec2d* y = work_.data();
   for (std::size_t i = 0; i < n; ++i) y[perm[i]] = b[i];
   for (std::size_t j = 0; j < n; ++j) {  // L y = b (the diagonal leads each column)
@@ -241,7 +251,7 @@ void Phase2Solver::solve(std::span<const Vec2d> b, std::span<Vec2d> x) const {
 }
 
 bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const SolverParams& prm, std::vector<Vec2d>& uv,
-                       SolverStats& stats, const ExecContext& ctx, bool reuse) {
+                       SolverStats& stats, const ExecContext& ctx, bool reuse, SeamLengths* seams) {
   if (!analyzed_) analyze(t);
   const auto t0 = Clock::now();
   const std::size_t n = t.vertex_count();
@@ -251,12 +261,13 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
   // diagonal (translations are the only null space). A factor of nearly the
   // same stiffnesses (another body of the same piece) preconditions as well:
   // it is kept when `reuse` and no stiffness moved by more than 25%.
-  bool keep = reuse && factored_ && factored_stiffness_.size() == rest.stiffness.size();
+  bool keep =
+      reuse && factor_ && factor_->stiffness.size() == rest.stiffness.size() && factor_->inverse_diagonal.size() == n;
   for (std::size_t s = 0; keep && s < rest.stiffness.size(); ++s)
-    keep = std::abs(rest.stiffness[s] / factored_stiffness_[s] - 1) <= 0.25;
+    keep = std::abs(rest.stiffness[s] / factor_->stiffness[s] - 1) <= 0.25;
   stats.reused_factor = keep;
   if (!keep) {
-    factored_ = false;
+    factor_.reset();
     double* val = laplacian_.valuePtr();
     std::fill(val, val + laplacian_.nonZeros(), 0.0);
     for (std::size_t s = 0; s < t.spring.size(); ++s) {
@@ -270,11 +281,16 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
     llt_.factorize(laplacian_);
     if (llt_.info() != Eigen::Success) return false;
     const auto& L = llt_.matrixL().nestedExpression();
-    factor_values_.assign(L.valuePtr(), L.valuePtr() + L.nonZeros());
-    inverse_diagonal_.resize(n);
-    for (std::size_t j = 0; j < n; ++j) inverse_diagonal_[j] = 1 / L.valuePtr()[L.outerIndexPtr()[j]];
-    factored_stiffness_ = rest.stiffness;
-    factored_ = true;
+    auto F = std::make_shared<Factor>();
+    F->outer.assign(L.outerIndexPtr(), L.outerIndexPtr() + n + 1);
+    F->inner.assign(L.innerIndexPtr(), L.innerIndexPtr() + L.nonZeros());
+    F->values.assign(L.valuePtr(), L.valuePtr() + L.nonZeros());
+    const int* perm = llt_.permutationP().indices().data();
+    F->perm.assign(perm, perm + n);
+    F->inverse_diagonal.resize(n);
+    for (std::size_t j = 0; j < n; ++j) F->inverse_diagonal[j] = 1 / L.valuePtr()[L.outerIndexPtr()[j]];
+    F->stiffness = rest.stiffness;
+    factor_ = std::move(F);
   }
   stats.factor_ms = ms_since(t0);
   work_.resize(n);
@@ -287,14 +303,109 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
     return Eigen::Map<const Eigen::VectorXd>(reinterpret_cast<const double*>(v.data()), 2 * n);
   };
   auto dot = [&](const Vec& a, const Vec& b) { return cflat(a).dot(cflat(b)); };
-  Vec x(uv), xt(n), g(n), gt(n), q(n), r(n), p(n), scratch, tscratch;
-  // The objective: E plus the flip barrier (zero unless a triangle is below
-  // a tenth of its rest area).
-  auto objective = [&](const Vec& at, Vec& grad) {
-    const double es = spring_energy(t, rest, at, grad, scratch, ctx);
-    return es + barrier_energy(t, rest, at, grad, tscratch, ctx);
+
+  // Seam lengths (FlattenOptions::seam_lengths): constraints
+  // c_k(Q) = L_k(Q) - T_k = 0 with L_k the chain's 2D length. E is
+  // minimised subject to them by the augmented Lagrangian
+  //   E + sum_k lambda_k c_k + rho/2 c_k^2
+  // (Nocedal, Wright, Numerical Optimization, 2nd ed., section 17.3, eq.
+  // 17.36): each round minimises it by L-BFGS, then lambda += rho c. The
+  // penalty's Gauss-Newton term rho G G^T (G = [grad c_k]) joins H0 through
+  // the Sherman-Morrison-Woodbury identity, so a stiff rho does not slow
+  // L-BFGS. A last projection x -= Z (G^T Z)^-1 c, Z = H0^-1 G (Newton on c
+  // in the metric of H0) makes the lengths exact to rounding.
+  const std::size_t kc = seams ? seams->size() : 0;
+  if (seams) seams->lambda.resize(kc, 0.0);
+  std::vector<std::vector<std::uint32_t>> seam_verts(kc);
+  for (std::size_t i = 0; i < kc; ++i) {
+    for (const auto& sd : seams->sides[i]) seam_verts[i].insert(seam_verts[i].end(), sd.begin(), sd.end());
+    std::sort(seam_verts[i].begin(), seam_verts[i].end());
+    seam_verts[i].erase(std::unique(seam_verts[i].begin(), seam_verts[i].end()), seam_verts[i].end());
+  }
+  double rho = 0;
+  if (kc) {
+    double cm = 0;
+    for (double c : rest.stiffness) cm += c;
+    rho = kSeamPenalty * cm / static_cast<double>(rest.stiffness.size());
+  }
+  const double rho0 = rho;
+  auto seam_values = [&](const Vec& at, std::vector<double>& c) {
+    c.resize(kc);
+    for (std::size_t i = 0; i < kc; ++i) {
+      double l = 0;
+      for (const auto& sd : seams->sides[i]) l += (at[sd[0]] - at[sd[1]]).norm();
+      c[i] = l - seams->target[i];
+    }
   };
-  double e = objective(x, g);
+  auto worst_relative = [&](const std::vector<double>& c) {
+    double w = 0;
+    for (std::size_t i = 0; i < kc; ++i) w = std::max(w, std::abs(c[i]) / seams->target[i]);
+    return w;
+  };
+  // w * grad L_i added into `grad` (dense).
+  auto add_seam_gradient = [&](const Vec& at, std::size_t i, double w, Vec& grad) {
+    for (const auto& sd : seams->sides[i]) {
+      const Vec2d d = at[sd[0]] - at[sd[1]];
+      const double r = d.norm();
+      if (!(r > 0)) continue;
+      const Vec2d u = (w / r) * d;
+      grad[sd[0]] += u;
+      grad[sd[1]] -= u;
+    }
+  };
+  // Woodbury data at a point: G's columns (dense), Z = H0^-1 G, and the
+  // factor of M = I/rho + G^T Z (rho = inf: the projection's G^T Z).
+  std::vector<Vec> G(kc), Z(kc);
+  Eigen::LDLT<Eigen::MatrixXd> M;
+  auto refresh = [&](const Vec& at, double penalty) {
+    Eigen::MatrixXd A(kc, kc);
+    for (std::size_t i = 0; i < kc; ++i) {
+      G[i].assign(n, Vec2d::Zero());
+      add_seam_gradient(at, i, 1.0, G[i]);
+      Z[i].resize(n);
+      solve(G[i], Z[i]);
+    }
+    for (std::size_t i = 0; i < kc; ++i)
+      for (std::size_t j = 0; j < kc; ++j) {
+        double g = 0;
+        for (std::uint32_t v : seam_verts[i]) g += G[i][v].dot(Z[j][v]);
+        A(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = g;
+      }
+    A = 0.5 * (A + A.transpose()).eval();
+    if (std::isfinite(penalty)) A.diagonal().array() += 1 / penalty;
+    M.compute(A);
+  };
+  // r = (H0 + rho G G^T)^-1 q.
+  Eigen::VectorXd ky(static_cast<Eigen::Index>(kc));
+  auto precondition = [&](const Vec& q, Vec& r) {
+    solve(q, r);
+    if (!kc) return;
+    for (std::size_t i = 0; i < kc; ++i) {
+      double g = 0;
+      for (std::uint32_t v : seam_verts[i]) g += G[i][v].dot(r[v]);
+      ky[static_cast<Eigen::Index>(i)] = g;
+    }
+    const Eigen::VectorXd z = M.solve(ky);
+    for (std::size_t i = 0; i < kc; ++i) flat(r) -= z[static_cast<Eigen::Index>(i)] * cflat(Z[i]);
+  };
+
+  Vec x(uv), xt(n), g(n), gt(n), q(n), r(n), p(n), scratch, tscratch;
+  std::vector<double> cv;
+  // The objective: E plus the flip barrier (zero unless a triangle is below
+  // a tenth of its rest area), plus the seam terms.
+  auto objective = [&](const Vec& at, Vec& grad) {
+    double e = spring_energy(t, rest, at, grad, scratch, ctx);
+    e += barrier_energy(t, rest, at, grad, tscratch, ctx);
+    if (kc && std::isfinite(e)) {
+      seam_values(at, cv);
+      for (std::size_t i = 0; i < kc; ++i) {
+        const double c = cv[i], l = seams->lambda[i];
+        e += l * c + 0.5 * rho * c * c;
+        add_seam_gradient(at, i, l + rho * c, grad);
+      }
+    }
+    return e;
+  };
   stats.energy_phase1 = spring_energy(t, rest, x, {}, scratch, ctx);
   const std::size_t overlaps0 = count_boundary_crossings(t, x);
   // Below this E a length error of 1e-14 relative is reached: nothing is
@@ -302,83 +413,138 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
   double scale = 0;
   for (std::size_t s = 0; s < t.spring.size(); ++s) scale += 0.5 * rest.stiffness[s] * rest.length[s] * rest.length[s];
   const double tiny = 1e-28 * scale;
-  std::vector<Vec> S, Y;
-  std::vector<double> rho, alpha;
-  int it = 0, small = 0;
-  for (; it < prm.max_iterations && e > tiny && std::isfinite(e); ++it) {
-    if (ctx.cancelled()) break;
-    // Two-loop recursion with H0^-1 applied by the Cholesky factor.
-    q = g;
-    alpha.assign(S.size(), 0);
-    for (std::size_t i = S.size(); i-- > 0;) {
-      alpha[i] = rho[i] * dot(S[i], q);
-      flat(q) -= alpha[i] * cflat(Y[i]);
-    }
-    solve(q, r);
-    for (std::size_t i = 0; i < S.size(); ++i) {
-      const double beta = rho[i] * dot(Y[i], r);
-      flat(r) += (alpha[i] - beta) * cflat(S[i]);
-    }
-    flat(p) = -cflat(r);
-    double slope = dot(g, p);
-    if (!(slope < 0)) {
-      S.clear(), Y.clear(), rho.clear();
-      solve(g, p);
-      flat(p) = -cflat(p);
-      slope = dot(g, p);
-      if (!(slope < 0)) break;
-    }
-    // Filtered line search: start below the largest step that keeps every
-    // triangle CCW, then backtrack (Armijo). The overlap guard refuses a
-    // step that makes the boundary cross itself more than at the start.
-    const double limit = max_feasible_step(t, x, p, ctx);
-    double step = std::min(1.0, 0.9 * limit);
-    if (step < 1) ++stats.rejected_steps;
-    bool accepted = false;
-    double et = 0;
-    for (int tries = 0; tries < 40; ++tries, step *= 0.5) {
-      flat(xt) = cflat(x) + step * cflat(p);
-      et = objective(xt, gt);
-      if (!(et <= e + 1e-4 * step * slope)) continue;
-      if (count_boundary_crossings(t, xt) > overlaps0) {
-        ++stats.rejected_steps;
+
+  // L-BFGS from x for at most `budget` iterations; returns those done.
+  auto lbfgs = [&](int budget) {
+    double e = objective(x, g);
+    std::vector<Vec> S, Y;
+    std::vector<double> rho_k, alpha;
+    int it = 0, small = 0;
+    for (; it < budget && e > tiny && std::isfinite(e); ++it) {
+      if (ctx.cancelled()) break;
+      // Two-loop recursion with H0^-1 applied by the Cholesky factor.
+      q = g;
+      alpha.assign(S.size(), 0);
+      for (std::size_t i = S.size(); i-- > 0;) {
+        alpha[i] = rho_k[i] * dot(S[i], q);
+        flat(q) -= alpha[i] * cflat(Y[i]);
+      }
+      precondition(q, r);
+      for (std::size_t i = 0; i < S.size(); ++i) {
+        const double beta = rho_k[i] * dot(Y[i], r);
+        flat(r) += (alpha[i] - beta) * cflat(S[i]);
+      }
+      flat(p) = -cflat(r);
+      double slope = dot(g, p);
+      if (!(slope < 0)) {
+        S.clear(), Y.clear(), rho_k.clear();
+        precondition(g, p);
+        flat(p) = -cflat(p);
+        slope = dot(g, p);
+        if (!(slope < 0)) break;
+      }
+      // Filtered line search: start below the largest step that keeps every
+      // triangle CCW, then backtrack (Armijo). The overlap guard refuses a
+      // step that makes the boundary cross itself more than at the start.
+      const double limit = max_feasible_step(t, x, p, ctx);
+      double step = std::min(1.0, 0.9 * limit);
+      if (step < 1) ++stats.rejected_steps;
+      bool accepted = false;
+      double et = 0;
+      for (int tries = 0; tries < 40; ++tries, step *= 0.5) {
+        flat(xt) = cflat(x) + step * cflat(p);
+        et = objective(xt, gt);
+        if (!(et <= e + 1e-4 * step * slope)) continue;
+        if (count_boundary_crossings(t, xt) > overlaps0) {
+          ++stats.rejected_steps;
+          continue;
+        }
+        accepted = true;
+        break;
+      }
+      if (!accepted) {
+        if (S.empty()) break;
+        S.clear(), Y.clear(), rho_k.clear();
         continue;
       }
-      accepted = true;
-      break;
+      // Curvature pair (s, y); the oldest pair's storage is reused.
+      Vec sk, yk;
+      if (static_cast<int>(S.size()) == prm.memory) {
+        sk = std::move(S.front()), yk = std::move(Y.front());
+        S.erase(S.begin()), Y.erase(Y.begin()), rho_k.erase(rho_k.begin());
+      }
+      sk.resize(n), yk.resize(n);
+      flat(sk) = cflat(xt) - cflat(x);
+      flat(yk) = cflat(gt) - cflat(g);
+      const double sy = dot(sk, yk);
+      if (sy > 1e-300) S.push_back(std::move(sk)), Y.push_back(std::move(yk)), rho_k.push_back(1 / sy);
+      const double decrease = e - et;
+      std::swap(x, xt);
+      std::swap(g, gt);
+      e = et;
+      // Converged after two iterations in a row that release less than
+      // `tolerance` of E.
+      small = decrease <= prm.tolerance * std::abs(e) ? small + 1 : 0;
+      if (small == 2) {
+        ++it;
+        break;
+      }
     }
-    if (!accepted) {
-      if (S.empty()) break;
-      S.clear(), Y.clear(), rho.clear();
-      continue;
+    return it;
+  };
+
+  int used = 0;
+  if (!kc) {
+    used = lbfgs(prm.max_iterations);
+  } else {
+    double previous = std::numeric_limits<double>::infinity();
+    for (int round = 0; round < kSeamRounds && used < prm.max_iterations; ++round) {
+      refresh(x, rho);
+      used += lbfgs(prm.max_iterations - used);
+      ++stats.seam_rounds;
+      seam_values(x, cv);
+      const double worst = worst_relative(cv);
+      if (worst <= kSeamTolerance) break;
+      for (std::size_t i = 0; i < kc; ++i) seams->lambda[i] += rho * cv[i];
+      if (worst > 0.25 * previous && rho < kSeamPenaltyMax * rho0) rho *= 10;
+      previous = worst;
     }
-    // Curvature pair (s, y); the oldest pair's storage is reused.
-    Vec sk, yk;
-    if (static_cast<int>(S.size()) == prm.memory) {
-      sk = std::move(S.front()), yk = std::move(Y.front());
-      S.erase(S.begin()), Y.erase(Y.begin()), rho.erase(rho.begin());
+    // Projection onto the constraints (a Newton step on c in the metric of
+    // H0), guarded like the line search; repeated while it gains.
+    seam_values(x, cv);
+    double worst = worst_relative(cv);
+    for (int it = 0; it < 8 && worst > 1e-14; ++it) {
+      refresh(x, std::numeric_limits<double>::infinity());
+      Eigen::VectorXd c(static_cast<Eigen::Index>(kc));
+      for (std::size_t i = 0; i < kc; ++i) c[static_cast<Eigen::Index>(i)] = cv[i];
+      const Eigen::VectorXd mu = M.solve(c);
+      flat(p).setZero();
+      for (std::size_t i = 0; i < kc; ++i) flat(p) -= mu[static_cast<Eigen::Index>(i)] * cflat(Z[i]);
+      if (!p.empty() && !cflat(p).allFinite()) break;
+      double step = std::min(1.0, 0.9 * max_feasible_step(t, x, p, ctx));
+      const double barrier_now = barrier_energy(t, rest, x, {}, tscratch, ctx);
+      bool accepted = false;
+      std::vector<double> ct;
+      for (int tries = 0; tries < 20 && !accepted; ++tries, step *= 0.5) {
+        flat(xt) = cflat(x) + step * cflat(p);
+        seam_values(xt, ct);
+        // No triangle pushed into (or deeper into) the flip barrier's zone.
+        accepted = worst_relative(ct) < worst && count_flipped(t, xt, ctx) == 0 &&
+                   barrier_energy(t, rest, xt, {}, tscratch, ctx) <= barrier_now &&
+                   count_boundary_crossings(t, xt) <= overlaps0;
+      }
+      if (!accepted) break;
+      std::swap(x, xt);
+      cv = ct;
+      worst = worst_relative(cv);
+      ++stats.seam_projections;
     }
-    sk.resize(n), yk.resize(n);
-    flat(sk) = cflat(xt) - cflat(x);
-    flat(yk) = cflat(gt) - cflat(g);
-    const double sy = dot(sk, yk);
-    if (sy > 1e-300) S.push_back(std::move(sk)), Y.push_back(std::move(yk)), rho.push_back(1 / sy);
-    const double decrease = e - et;
-    std::swap(x, xt);
-    std::swap(g, gt);
-    e = et;
-    // Converged after two iterations in a row that release less than
-    // `tolerance` of E.
-    small = decrease <= prm.tolerance * e ? small + 1 : 0;
-    if (small == 2) {
-      ++it;
-      break;
-    }
+    for (std::size_t i = 0; i < kc; ++i) stats.seam_residual = std::max(stats.seam_residual, std::abs(cv[i]));
   }
-  e = spring_energy(t, rest, x, {}, scratch, ctx);
+  const double e = spring_energy(t, rest, x, {}, scratch, ctx);
   uv = x;
   stats.energy = e;
-  stats.iterations = it;
+  stats.iterations = used;
   stats.phase2_ms = ms_since(t0);
   return true;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <mutex>
 
 namespace atelier {
 
@@ -42,29 +43,32 @@ double sew_line_width(const PatternPiece& piece, double v) noexcept {
   return w;
 }
 
-Expected<MadeToMeasureReport> write_made_to_measure_pattern(const Model& garment, const MadeToMeasureOptions& opt,
-                                                            const std::filesystem::path& dir, const ExecContext& ctx) {
+namespace {
+
+Status check_lines(const MadeToMeasureOptions& opt) {
   for (const NamedLine& l : opt.lines)
     if (!std::isfinite(l.fraction) || l.fraction < 0 || l.fraction > 1)
       return status_of(ErrorCode::kInvalidArgument, "named line '", l.name, "': fraction ", l.fraction,
                        " is not in [0, 1]");
-  auto opened = open_seams(garment, opt.seams, ctx);
-  if (!opened) return opened.status();
-  MadeToMeasureReport rep;
-  rep.seams_opened = opened->paths.size();
+  return {};
+}
+
+/// The file options for the opened model: surfaces named by the caller are
+/// the garment's, mapped to the opened model's.
+PatternFileOptions opened_options(const MadeToMeasureOptions& opt, const OpenedSeams& opened) {
   PatternFileOptions fo = opt.files;
-  // Surfaces named by the caller are the garment's: map them to the opened model.
   auto remap = [&](std::vector<SurfaceIdx>& v) {
-    for (SurfaceIdx& s : v) s = s.value < opened->surfaces.size() ? opened->surfaces[s.value] : SurfaceIdx{};
+    for (SurfaceIdx& s : v) s = s.value < opened.surfaces.size() ? opened.surfaces[s.value] : SurfaceIdx{};
   };
   remap(fo.flatten.surfaces);
   remap(fo.pattern.mirror);
   fo.flatten.seed_faces.clear();  // face indices do not carry over; pieces start at their largest triangle
   fo.pattern.seam_allowances.clear();
-  Model& m = opened->model;
-  auto files = write_pattern_files(m, fo, dir, ctx);
-  if (!files) return files.status();
-  rep.files = std::move(*files);
+  return fo;
+}
+
+/// The summary, the measurements and the CSV of a written pattern set.
+void finish(MadeToMeasureReport& rep, const MadeToMeasureOptions& opt, const std::filesystem::path& dir) {
   for (const PieceFlattening& p : rep.files.flattening.pieces) {
     rep.flipped += p.distortion.flipped;
     rep.max_length_error = std::max(rep.max_length_error, p.distortion.length_error);
@@ -110,6 +114,116 @@ Expected<MadeToMeasureReport> write_made_to_measure_pattern(const Model& garment
     rep.files.files.push_back(dir / "measurements.csv");
     write_atomically(rep.files.files.back(), [&](AtomicFile& f) { f.write(csv); });
   }
+}
+
+/// The topology write() compares with prepare()'s: node slots, and per live
+/// face its surface and nodes.
+std::vector<std::uint32_t> fingerprint(const Model& m) {
+  std::vector<std::uint32_t> fp{m.nodes.slots.capacity(), m.faces.slots.capacity()};
+  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
+    if (!m.alive(FaceIdx{f})) continue;
+    fp.push_back(f);
+    fp.push_back(m.faces.surface[f].value);
+    m.for_each_face_halfedge(FaceIdx{f}, [&](HalfedgeIdx h) { fp.push_back(m.tail(h).value); });
+  }
+  return fp;
+}
+
+}  // namespace
+
+Expected<MadeToMeasureReport> write_made_to_measure_pattern(const Model& garment, const MadeToMeasureOptions& opt,
+                                                            const std::filesystem::path& dir, const ExecContext& ctx) {
+  if (Status st = check_lines(opt); !st) return st;
+  auto opened = open_seams(garment, opt.seams, ctx);
+  if (!opened) return opened.status();
+  MadeToMeasureReport rep;
+  rep.seams_opened = opened->paths.size();
+  auto files = write_pattern_files(opened->model, opened_options(opt, *opened), dir, ctx);
+  if (!files) return files.status();
+  rep.files = std::move(*files);
+  finish(rep, opt, dir);
+  return rep;
+}
+
+// ------------------------------------------------------ MadeToMeasurePatterns
+
+struct MadeToMeasurePatterns::Impl {
+  MadeToMeasureOptions opt;
+  PatternFileOptions files;
+  OpenedSeams opened;  // the reference's, its pattern in model.nodes.uv
+  ModelFlattener reference;
+  std::vector<std::uint32_t> topology;
+  mutable std::mutex pool_mutex;
+  mutable std::vector<std::unique_ptr<ModelFlattener>> pool;  // idle workspaces
+};
+
+MadeToMeasurePatterns::MadeToMeasurePatterns() = default;
+MadeToMeasurePatterns::~MadeToMeasurePatterns() = default;
+MadeToMeasurePatterns::MadeToMeasurePatterns(MadeToMeasurePatterns&&) noexcept = default;
+MadeToMeasurePatterns& MadeToMeasurePatterns::operator=(MadeToMeasurePatterns&&) noexcept = default;
+
+Status MadeToMeasurePatterns::prepare(const Model& reference, const MadeToMeasureOptions& opt, const ExecContext& ctx) {
+  impl_.reset();
+  if (Status st = check_lines(opt); !st) return st;
+  auto impl = std::make_unique<Impl>();
+  impl->opt = opt;
+  auto opened = open_seams(reference, opt.seams, ctx);
+  if (!opened) return opened.status();
+  impl->opened = std::move(*opened);
+  impl->files = opened_options(opt, impl->opened);
+  Model& m = impl->opened.model;
+  if (Status st = impl->reference.build(m, impl->files.flatten); !st) return st;
+  std::vector<Vec2d> uv(m.nodes.slots.capacity(), Vec2d::Zero());
+  auto flat = impl->reference.flatten(m.nodes.position, uv, false, ctx);
+  if (!flat) return flat.status();
+  m.nodes.uv = std::move(uv);
+  impl->topology = fingerprint(reference);
+  impl_ = std::move(impl);
+  return {};
+}
+
+Expected<MadeToMeasureReport> MadeToMeasurePatterns::write(const Model& garment, const std::filesystem::path& dir,
+                                                           const ExecContext& ctx) const {
+  if (!impl_) return Status(ErrorCode::kInvalidArgument, "made-to-measure patterns: prepare() was not called");
+  const Impl& I = *impl_;
+  if (fingerprint(garment) != I.topology)
+    return Status(ErrorCode::kInvalidArgument,
+                  "made-to-measure patterns: the garment does not have the topology of the reference they were "
+                  "prepared for");
+  // The opened model with this body's positions.
+  Model m = I.opened.model;
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
+    if (m.alive(NodeIdx{v})) m.nodes.position[v] = garment.nodes.position[I.opened.source_node[v].value];
+  std::unique_ptr<ModelFlattener> ws;
+  {
+    const std::lock_guard<std::mutex> lock(I.pool_mutex);
+    if (!I.pool.empty()) {
+      ws = std::move(I.pool.back());
+      I.pool.pop_back();
+    }
+  }
+  if (!ws) {
+    ws = std::make_unique<ModelFlattener>();
+    if (Status st = ws->build(I.opened.model, I.files.flatten); !st) return st;
+  }
+  Expected<FlattenReport> flat = Status(ErrorCode::kInternal, "made-to-measure patterns: not flattened");
+  if (!I.opt.warm_start)
+    flat = ws->flatten(m.nodes.position, m.nodes.uv, false, ctx);
+  else if (Status st = ws->warm_from(I.reference); !st)
+    flat = st;
+  else
+    flat = ws->flatten(m.nodes.position, m.nodes.uv, true, ctx);
+  {
+    const std::lock_guard<std::mutex> lock(I.pool_mutex);
+    I.pool.push_back(std::move(ws));
+  }
+  if (!flat) return flat.status();
+  MadeToMeasureReport rep;
+  rep.seams_opened = I.opened.paths.size();
+  auto files = write_pattern_files(m, std::move(*flat), I.files, dir);
+  if (!files) return files.status();
+  rep.files = std::move(*files);
+  finish(rep, I.opt, dir);
   return rep;
 }
 

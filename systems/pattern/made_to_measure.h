@@ -41,6 +41,7 @@
 #include <atelier/systems/pattern/seams.h>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,14 @@ struct MadeToMeasureOptions {
   }();
   std::vector<NamedLine> lines = {{"hem", 0.02}, {"low", 0.25}, {"middle", 0.5}, {"high", 0.75}, {"top", 0.98}};
   bool csv = true;
+  /// MadeToMeasurePatterns only: flatten each body warm from the reference
+  /// body (its pattern, seam multipliers and factor) instead of cold. Off:
+  /// measured on the project templates, warm starts from another body saved
+  /// no phase 2 iterations on the trouser legs and the top, left a leg's
+  /// seams 28 mm apart and flipped triangles on some bodies (a pattern of
+  /// another body is a poor start where the pieces are far from
+  /// developable).
+  bool warm_start = false;
 };
 
 struct PieceMeasurements {
@@ -93,6 +102,47 @@ struct MadeToMeasureReport {
                                                                           const MadeToMeasureOptions& opt,
                                                                           const std::filesystem::path& dir,
                                                                           const ExecContext& ctx = {});
+
+/// Made-to-measure patterns of one garment topology (a template) for many
+/// bodies: the batch form of write_made_to_measure_pattern, same files and
+/// report. prepare() once with the garment on a reference body: the seams
+/// are opened (they depend on the topology only), every piece's flattening
+/// built (topology, springs, symbolic Cholesky analysis) and the reference
+/// garment flattened cold. write() per body then copies the opened model
+/// with the body's positions (no open_seams) and flattens it with a built
+/// workspace (no topology checks, springs or symbolic analysis): cold by
+/// default (the same bits as write_made_to_measure_pattern), or with
+/// MadeToMeasureOptions::warm_start from the reference: its pattern (no
+/// phase 1), its seam multipliers and its Cholesky factor (kept while no
+/// spring's stiffness moved by 25%). Every body starts from the reference,
+/// never from the body before: write()'s result depends on the reference
+/// and the body only (the same bits in any order, for 1 or 2 threads), and
+/// write() may run for several bodies at once (each takes a flattening
+/// workspace from a pool).
+/// Reads: the garments' positions (write) and topology (prepare). Writes:
+/// files in `dir` only.
+class MadeToMeasurePatterns {
+ public:
+  MadeToMeasurePatterns();
+  ~MadeToMeasurePatterns();
+  MadeToMeasurePatterns(MadeToMeasurePatterns&&) noexcept;
+  MadeToMeasurePatterns& operator=(MadeToMeasurePatterns&&) noexcept;
+
+  /// Errors: as write_made_to_measure_pattern's (the reference's).
+  [[nodiscard]] Status prepare(const Model& reference, const MadeToMeasureOptions& opt = {},
+                               const ExecContext& ctx = {});
+  /// The pattern set of `garment` (the reference's topology, other
+  /// positions) into `dir`. Errors: kInvalidArgument (not prepared, or a
+  /// garment of another topology), and those of the flattening and
+  /// make_pattern; file-system failures throw Error(kIo).
+  [[nodiscard]] Expected<MadeToMeasureReport> write(const Model& garment, const std::filesystem::path& dir,
+                                                    const ExecContext& ctx = {}) const;
+  [[nodiscard]] bool prepared() const noexcept { return impl_ != nullptr; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// The width of a piece's sew line at height v (mm, pattern coordinates):
 /// the total length of the line v = const inside it (even-odd over loops).

@@ -402,10 +402,17 @@ Expected<PatternFilesReport> write_pattern_files(Model& m, const PatternFileOpti
                                                  const std::filesystem::path& dir, const ExecContext& ctx) {
   if (!(opt.strain_map_px_per_mm > 0) || !(opt.strain_map_range > 0))
     return Status(ErrorCode::kInvalidArgument, "pattern files: strain-map resolution and range must be positive");
-  PatternFilesReport rep;
   auto flat = flatten_surfaces(m, opt.flatten, ctx);
   if (!flat) return flat.status();
-  rep.flattening = std::move(*flat);
+  return write_pattern_files(m, std::move(*flat), opt, dir);
+}
+
+Expected<PatternFilesReport> write_pattern_files(const Model& m, FlattenReport flattening,
+                                                 const PatternFileOptions& opt, const std::filesystem::path& dir) {
+  if (!(opt.strain_map_px_per_mm > 0) || !(opt.strain_map_range > 0))
+    return Status(ErrorCode::kInvalidArgument, "pattern files: strain-map resolution and range must be positive");
+  PatternFilesReport rep;
+  rep.flattening = std::move(flattening);
   std::vector<SurfaceIdx> pieces;
   for (const PieceFlattening& p : rep.flattening.pieces) pieces.push_back(p.surface);
   auto pat = make_pattern(m, pieces, opt.pattern);

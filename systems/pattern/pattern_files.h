@@ -83,4 +83,11 @@ struct PatternFilesReport {
                                                                const std::filesystem::path& dir,
                                                                const ExecContext& ctx = {});
 
+/// The same for a model already flattened (its pattern in nodes.uv,
+/// `flattening` the report of that flattening; opt.flatten is not read):
+/// the pattern and the files only. Reads m; writes files in `dir` only.
+[[nodiscard]] Expected<PatternFilesReport> write_pattern_files(const Model& m, FlattenReport flattening,
+                                                               const PatternFileOptions& opt,
+                                                               const std::filesystem::path& dir);
+
 }  // namespace atelier

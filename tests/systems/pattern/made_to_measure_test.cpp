@@ -13,6 +13,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -145,6 +146,80 @@ TEST(MadeToMeasure, BadNamedLineIsRefused) {
   EXPECT_NE(rep.status().message().find("waist"), std::string::npos);
 }
 
+TEST(MadeToMeasure, PreparedPatternsGiveTheSameBitsInAnyOrderAndThreadCount) {
+  // The batch form: prepared once on one body's skirt, then written for two
+  // other bodies in either order and with 1 or 2 threads: the same bits,
+  // and the same as the one-shot's; sewable and flip-free. Then with warm
+  // starts from the reference: still the same bits in any order.
+  const auto& f = testing::template_fixture();
+  std::size_t skirt = 0;
+  while (f.templates[skirt].name != "skirt") ++skirt;
+  const auto params = sample_mannequins(3, 2026);
+  std::vector<Model> garments;
+  for (const auto& p : params) garments.push_back(regen_on(p)[skirt].model);
+  MadeToMeasureOptions o;
+  o.files.svg = o.files.dxf = o.csv = false;
+  MadeToMeasurePatterns mtm;
+  ASSERT_TRUE(mtm.prepare(garments[0], o));
+  const fs::path dir = fresh_dir("prepared");
+  auto uv_of = [](const MadeToMeasureReport& r) {
+    std::vector<Vec2d> out;
+    for (const PatternPiece& p : r.files.pattern.pieces)
+      for (const auto& loop : p.sew_line) out.insert(out.end(), loop.begin(), loop.end());
+    return out;
+  };
+  std::vector<std::vector<Vec2d>> first(3), again(3);
+  for (std::size_t b : {1u, 2u}) {
+    auto r = mtm.write(garments[b], dir, ExecContext::sequential());
+    ASSERT_TRUE(r) << r.status().to_string();
+    EXPECT_EQ(r->flipped, 0u);
+    EXPECT_LT(r->max_seam_difference_mm, 1e-6);
+    EXPECT_FALSE(r->files.flattening.pieces[0].warm_started);
+    first[b] = uv_of(*r);
+    // The one-shot flattening gives the same pattern, bit for bit.
+    auto cold = write_made_to_measure_pattern(garments[b], o, dir);
+    ASSERT_TRUE(cold);
+    const auto one_shot = uv_of(*cold);
+    ASSERT_EQ(one_shot.size(), first[b].size());
+    EXPECT_EQ(0, std::memcmp(one_shot.data(), first[b].data(), one_shot.size() * sizeof(Vec2d)));
+  }
+  // Reverse order, two bodies at once on 2 threads.
+  ExecContext two;
+  two.threads = 2;
+  two.sequential_threshold = 1;
+  two.grain = 1;
+  std::vector<Expected<MadeToMeasureReport>> rs(3, Status(ErrorCode::kCancelled, "not run"));
+  par::for_each_n(two, 2,
+                  [&](std::size_t i) { rs[2 - i] = mtm.write(garments[2 - i], dir, ExecContext::sequential()); });
+  for (std::size_t b : {1u, 2u}) {
+    ASSERT_TRUE(rs[b]) << rs[b].status().to_string();
+    again[b] = uv_of(*rs[b]);
+    ASSERT_EQ(first[b].size(), again[b].size());
+    EXPECT_EQ(0, std::memcmp(first[b].data(), again[b].data(), first[b].size() * sizeof(Vec2d))) << "body " << b;
+  }
+  // Warm starts from the reference: the same bits in either order too.
+  o.warm_start = true;
+  MadeToMeasurePatterns warm;
+  ASSERT_TRUE(warm.prepare(garments[0], o));
+  std::vector<std::vector<Vec2d>> w(3);
+  for (std::size_t b : {1u, 2u, 1u}) {
+    auto r = warm.write(garments[b], dir, ExecContext::sequential());
+    ASSERT_TRUE(r) << r.status().to_string();
+    EXPECT_TRUE(r->files.flattening.pieces[0].warm_started);
+    EXPECT_EQ(r->flipped, 0u);
+    if (w[b].empty())
+      w[b] = uv_of(*r);
+    else
+      EXPECT_EQ(0, std::memcmp(w[b].data(), uv_of(*r).data(), w[b].size() * sizeof(Vec2d)));
+  }
+  // Another topology is refused, naming the cause.
+  auto other = mtm.write(f.templates[(skirt + 1) % f.templates.size()].model, dir);
+  ASSERT_FALSE(other);
+  EXPECT_EQ(other.status().code(), ErrorCode::kInvalidArgument);
+  EXPECT_NE(other.status().message().find("topology"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(MadeToMeasure, HundredSampledMannequinsFlattenWithoutFlips) {
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "ATELIER_SKIP_LONG_TESTS is set";
   const auto params = sample_mannequins(100, 2026);
@@ -174,21 +249,27 @@ TEST(MadeToMeasure, HundredSampledMannequinsFlattenWithoutFlips) {
       rows[i].error = e.status().to_string();
     }
   });
-  constexpr double kAchievedSeamMm = 35.0;  // measured worst 30.1 mm (body 42)
+  // Issue 22: partner seams within 2 mm on every body. Met by the skirt and
+  // the trousers (seam lengths held in the flattening, flatten.h). The top
+  // is not: its collar is sewn on an inner line of the top (an inner-edge
+  // joint), whose length the top's own strain decides, and the one-piece
+  // top opened by three automatic seams is too far from developable (E_L
+  // near 0.1, Tutte starts, phase 2 at its iteration cap) for that line to
+  // keep its length; still open. Its bound only guards what is achieved:
+  // measured worst 110.0 mm (body 12; 86 mm before the seam lengths, whose
+  // constraints on the top's opened seams move its strain elsewhere).
+  constexpr double kTopAchievedMm = 120.0;
   std::size_t within = 0;
   double worst = 0, worst_top = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    worst_top = std::max(worst_top, rows[i].top_seam_mm);
     ASSERT_TRUE(rows[i].error.empty()) << "body " << i << ": " << rows[i].error;
     EXPECT_EQ(rows[i].flipped, 0u) << "body " << i;
     EXPECT_EQ(rows[i].pieces, 6u) << "body " << i;
-    // Issue 22 asks for partner seams within 2 mm on every body: met on the
-    // first sampled body (the test above) but not on most (6 of 100 bodies
-    // for the skirt and trousers; the worst 30 mm, the top's 86 mm): still
-    // open. This bound only guards what is achieved.
-    EXPECT_LT(rows[i].seam_mm, kAchievedSeamMm) << "body " << i;
+    EXPECT_LT(rows[i].seam_mm, 2.0) << "body " << i;
+    EXPECT_LT(rows[i].top_seam_mm, kTopAchievedMm) << "body " << i;
     within += rows[i].seam_mm < 2.0;
     worst = std::max(worst, rows[i].seam_mm);
+    worst_top = std::max(worst_top, rows[i].top_seam_mm);
   }
   std::printf("  skirt and trousers: %zu of %zu bodies with every partner seam within 2 mm\n", within, rows.size());
   std::printf("  100 bodies x %zu templates: worst partner-seam difference %.3f mm (skirt, trousers), %.3f mm (top)\n",
