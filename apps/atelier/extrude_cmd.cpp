@@ -13,8 +13,8 @@ namespace atelier::cli {
 namespace {
 
 nlohmann::json stats_json(const EdgeLengthStats& s) {
-  return {{"edges", s.edges},   {"mean", s.mean},     {"min", s.min},
-          {"max", s.max},       {"within", s.within}, {"outside", s.outside}};
+  return {{"edges", s.edges}, {"mean", s.mean},     {"min", s.min},
+          {"max", s.max},     {"within", s.within}, {"outside", s.outside}};
 }
 
 nlohmann::json report_json(const ExtrudeCmdOptions& opt, const ExtrudeReport* r, const Status& st) {
@@ -95,7 +95,8 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
     body_model = read_mesh_file(opt.body);
     auto tris = fan_triangulate(body_model);
     if (!tris) throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + tris.status().message()));
-    auto topo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body_model.nodes.slots.capacity()));
+    auto topo =
+        CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body_model.nodes.slots.capacity()));
     if (!topo) throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + topo.status().message()));
     if (Status s = body.build(*topo, body_model.nodes.position); !s)
       throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + s.message()));

@@ -5,10 +5,10 @@
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/cut.h>
-#include <atelier/systems/spatial/collision_body.h>
 #include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/optimise_region.h>
 #include <atelier/systems/sketch/paint.h>
+#include <atelier/systems/spatial/collision_body.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -17,7 +17,6 @@
 #include <limits>
 #include <sstream>
 #include <string>
-
 
 namespace atelier {
 

@@ -591,7 +591,8 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
   // The fixed chain held by a temporary mesh edge: edge_collapse keeps ends on it.
   MeshEdgeIdx temp;
   bool free = !chain.empty();
-  for (HalfedgeIdx h : chain) free = free && h.valid() && m.alive(edge_of(h)) && !m.edges.mesh_edge[edge_of(h).value].valid();
+  for (HalfedgeIdx h : chain)
+    free = free && h.valid() && m.alive(edge_of(h)) && !m.edges.mesh_edge[edge_of(h).value].valid();
   if (free && edits) temp = m.new_mesh_edge(m.nodes.surface[m.tail(chain[0]).value], chain);
   Status s = opt.rounds(ctx);
   if (s && o.repair_budget > 0) s = opt.repair(ctx);

@@ -47,23 +47,23 @@ namespace atelier {
 struct EdgeLengthStats {
   std::size_t edges = 0;
   double mean = 0, min = 0, max = 0;
-  double within = 0;           // fraction within [low, high] of the target length
-  std::size_t outside = 0;     // edges outside [low, high] of the target length
+  double within = 0;        // fraction within [low, high] of the target length
+  std::size_t outside = 0;  // edges outside [low, high] of the target length
 };
 
 struct RegionOptimiseOptions {
-  double target = 0;           // L (required)
-  double low = 4.0 / 5.0;      // bounds, fractions of L (Botsch-Kobbelt's)
+  double target = 0;       // L (required)
+  double low = 4.0 / 5.0;  // bounds, fractions of L (Botsch-Kobbelt's)
   double high = 4.0 / 3.0;
-  int passes = 4;              // rounds of step 1
-  int repair_budget = 8;       // step 2 operations per region edge, at most
-  bool relax = true;           // tangential relaxation + projection
+  int passes = 4;         // rounds of step 1
+  int repair_budget = 8;  // step 2 operations per region edge, at most
+  bool relax = true;      // tangential relaxation + projection
 };
 
 struct RegionOptimiseReport {
   std::size_t splits = 0, collapses = 0, swaps = 0, relaxed = 0;
   EdgeLengthStats before, after;
-  double max_deviation = 0;    // largest distance of a region node to the region on entry
+  double max_deviation = 0;      // largest distance of a region node to the region on entry
   std::size_t region_faces = 0;  // after
 };
 

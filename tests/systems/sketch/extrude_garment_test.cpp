@@ -80,8 +80,8 @@ DressResult dress_on(const ReferenceBody& body, const ProfileTemplate& top, cons
                      const Box3d& roi) {
   DressResult out;
   const ProfileTemplate one[] = {top};
-  auto regen = regenerate_on_body(one, reference, skin_positions(body), roi, {}, {.use_grid = false},
-                                  ExecContext::sequential());
+  auto regen =
+      regenerate_on_body(one, reference, skin_positions(body), roi, {}, {.use_grid = false}, ExecContext::sequential());
   if (!regen) return {regen.status().to_string()};
   Model m = std::move((*regen)[0].model);
   const std::vector<NodeIdx> hem = lowest_loop(m, SurfaceIdx{0});
@@ -165,7 +165,9 @@ void run_bodies(std::size_t n) {
 
 }  // namespace
 
-TEST(ExtrudeGarment, DressFromTheTopsHemOutsideTheBodyOnAFewMannequins) { run_bodies(3); }
+TEST(ExtrudeGarment, DressFromTheTopsHemOutsideTheBodyOnAFewMannequins) {
+  run_bodies(3);
+}
 
 TEST(ExtrudeGarment, DressFromTheTopsHemOutsideTheBodyOn100Mannequins) {
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "100 regenerations (long under sanitizers)";

@@ -5,19 +5,19 @@
 #include <atelier/storage/validate.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
-#include <atelier/systems/spatial/body_bvh.h>
-#include <atelier/systems/spatial/collision_body.h>
 #include <atelier/systems/sketch/optimise_region.h>
 #include <atelier/systems/sketch/sketch.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/spatial/collision_body.h>
 #include <atelier/systems/view/strokes.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
-#include <limits>
 
 #include "systems/sketch/sketch_fixtures.h"
 
@@ -401,7 +401,8 @@ TEST(OptimiseRegion, FlatRegionReachesTheBoundsAndKeepsItsOutline) {
   // 0.05: long thin triangles), all of it optimised towards L = 0.09. Its
   // border is free along itself; the four corners stay.
   Model m;
-  auto g = grid(12, 24, [](double u, double v) { return Vec3d(1.2 * u, 1.2 * v, 0); }, true);
+  auto g = grid(
+      12, 24, [](double u, double v) { return Vec3d(1.2 * u, 1.2 * v, 0); }, true);
   (void)add_polygon_surface(m, "plane", g.view()).value();
   std::vector<FaceIdx> region;
   for (std::uint32_t i = 0; i < m.faces.slots.capacity(); ++i)
@@ -714,7 +715,8 @@ TEST(Extrude, HemisphericalCavityInABox) {
   ExtrudeStrokes in;
   in.base_camera = front_ortho();
   std::vector<Vec3d> ring;
-  for (int k = 0; k <= 96; ++k) ring.push_back(Vec3d(r * std::cos(2 * M_PI * k / 96), r * std::sin(2 * M_PI * k / 96), 1));
+  for (int k = 0; k <= 96; ++k)
+    ring.push_back(Vec3d(r * std::cos(2 * M_PI * k / 96), r * std::sin(2 * M_PI * k / 96), 1));
   in.base = project(in.base_camera, ring);
   in.base.back() = in.base.front();
   in.sweep_camera = side();
