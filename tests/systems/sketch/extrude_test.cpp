@@ -1,6 +1,10 @@
 // Sketch extrusion (seed 002): counts, analytic shapes (sphere, cylinder),
 // similarity of the copies (Procrustes), topology and orientation, cavities,
 // the optimisation's bounds and refusals that leave the model unchanged.
+//
+// Why this file is long: the shared fixtures (cup, half shell, strokes,
+// Procrustes, brute-force edge checks) serve every extrusion test, and the
+// optimisation, body and joint tests reuse them.
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
