@@ -1,7 +1,9 @@
 #include "extrude_cmd.h"
 
 #include <atelier/io/atomic_file.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/spatial/collision_body.h>
 
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -11,7 +13,8 @@ namespace atelier::cli {
 namespace {
 
 nlohmann::json stats_json(const EdgeLengthStats& s) {
-  return {{"edges", s.edges}, {"mean", s.mean}, {"min", s.min}, {"max", s.max}, {"within", s.within}};
+  return {{"edges", s.edges}, {"mean", s.mean},     {"min", s.min},
+          {"max", s.max},     {"within", s.within}, {"outside", s.outside}};
 }
 
 nlohmann::json report_json(const ExtrudeCmdOptions& opt, const ExtrudeReport* r, const Status& st) {
@@ -42,6 +45,16 @@ nlohmann::json report_json(const ExtrudeCmdOptions& opt, const ExtrudeReport* r,
   j["nodes_added"] = r->nodes_added;
   j["faces_added"] = r->faces_added;
   j["volume_change"] = r->volume_change;
+  j["max_deviation"] = r->max_deviation;
+  if (!opt.body.empty()) {
+    j["pushed"] = r->pushed;
+    j["inside_after"] = r->inside_after;
+    j["min_body_distance"] = r->min_body_distance;
+  }
+  if (opt.as_surface) {
+    j["part_surface"] = r->part_surface.value;
+    j["joints"] = r->joints.size();
+  }
   return j;
 }
 
@@ -57,6 +70,10 @@ CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
   c->add_option("--pick-radius", opt.pick_radius, "pixels within which strokes must start near the base curve")
       ->check(CLI::PositiveNumber);
   c->add_flag("--no-optimise", opt.no_optimise, "skip the mesh optimisation of the new region");
+  c->add_flag("--as-surface", opt.as_surface, "make the extruded part its own surface joined along B (write .atm)");
+  c->add_option("--body", opt.body, "closed body mesh (OBJ, PLY, OFF or .atm) the extruded part is kept outside of");
+  c->add_option("--clearance", opt.clearance, "with --body: distance kept from the body (model units)")
+      ->check(CLI::NonNegativeNumber);
   return c;
 }
 
@@ -69,6 +86,22 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
   ExtrudeOptions eo;
   eo.pick_radius = opt.pick_radius;
   eo.optimise = !opt.no_optimise;
+  eo.as_surface = opt.as_surface;
+  eo.clearance = opt.clearance;
+  // The body: its triangles as a collision body (the garment family's query).
+  Model body_model;
+  CollisionBody body;
+  if (!opt.body.empty()) {
+    body_model = read_mesh_file(opt.body);
+    auto tris = fan_triangulate(body_model);
+    if (!tris) throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + tris.status().message()));
+    auto topo =
+        CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body_model.nodes.slots.capacity()));
+    if (!topo) throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + topo.status().message()));
+    if (Status s = body.build(*topo, body_model.nodes.position); !s)
+      throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + s.message()));
+    eo.body = &body;
+  }
   Expected<ExtrudeReport> r = in ? extrude(m, *in, eo, common.context()) : Expected<ExtrudeReport>(in.status());
   const Status st = r ? Status{} : r.status();
   if (!opt.json.empty()) {
@@ -82,6 +115,11 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
       r->copies, r->base_ring ? "ring" : "chain", r->base.size(), r->nodes_added, r->faces_added, r->splits,
       r->collapses, r->swaps, r->volume_change);
   write_mesh_file(m, opt.out, log);
+  if (eo.body && r->inside_after > 0) {
+    std::printf("extrude: %zu new nodes are still inside the body %s (deepest %.6g)\n", r->inside_after,
+                opt.body.string().c_str(), -r->min_body_distance);
+    return kExitPartial;
+  }
   return kExitOk;
 }
 

@@ -2,6 +2,7 @@
 // (docs/strokes.md: a run of "extrude" strokes, the base stroke then one or
 // two extruding strokes, each through its own camera or the file's), e.g.
 //   atelier extrude --mesh cup.obj --strokes dome.json --out dome.obj --json report.json
+//   atelier extrude --mesh top.atm --strokes sleeve.json --out top.atm --as-surface --body body.obj
 // Thin over extrude (systems/sketch/extrude.h). Exit codes: 0 ok, 2 usage,
 // 3 bad input (mesh, stroke file, or strokes the extrusion refuses on this
 // mesh: no mesh is written, the --json report holds the error), 4 internal.
@@ -20,6 +21,9 @@ struct ExtrudeCmdOptions {
   std::size_t first = 0;  // index of the run's first (base) stroke
   double pick_radius = 12.0;
   bool no_optimise = false;
+  bool as_surface = false;
+  std::filesystem::path body;  // a closed mesh the extruded part is kept outside of
+  double clearance = 0.002;
 };
 
 CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt);

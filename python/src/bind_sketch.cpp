@@ -155,7 +155,7 @@ void def_extrude(py::module_& m) {
   m.def(
       "extrude",
       [](const MeshLike& mesh, const Strokes& strokes, std::size_t first, double pick_radius, bool optimise,
-         int threads, const Progress& progress) {
+         bool as_surface, int threads, const Progress& progress) {
         const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
         Model model;
         if (in->model)
@@ -167,11 +167,12 @@ void def_extrude(py::module_& m) {
         ExtrudeOptions eo;
         eo.pick_radius = pick_radius;
         eo.optimise = optimise;
+        eo.as_surface = as_surface;
         const ExtrudeReport r =
             unwrap(run_long(progress, threads, [&](const ExecContext& ctx) { return extrude(model, es, eo, ctx); }));
         auto stats = [](const EdgeLengthStats& s) {
           return py::dict(py::arg("edges") = s.edges, py::arg("mean") = s.mean, py::arg("min") = s.min,
-                          py::arg("max") = s.max, py::arg("within") = s.within);
+                          py::arg("max") = s.max, py::arg("within") = s.within, py::arg("outside") = s.outside);
         };
         py::dict rep;
         rep["base_ring"] = r.base_ring;
@@ -191,11 +192,14 @@ void def_extrude(py::module_& m) {
         rep["nodes_added"] = r.nodes_added;
         rep["faces_added"] = r.faces_added;
         rep["volume_change"] = r.volume_change;
+        rep["max_deviation"] = r.max_deviation;
+        if (as_surface) rep["joints"] = r.joints.size();
         (void)model.compact();
         return py::make_tuple(mesh_of(std::move(model)), rep);
       },
       py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("first") = 0, py::arg("pick_radius") = 12.0,
-      py::arg("optimise") = true, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("threads") = 0,
+      py::arg("progress") = py::none(), R"doc(
 Extrudes a surface or a cavity from a mesh by sketched strokes (``atelier extrude``; seed 002).
 
 mesh: a Mesh (``read_mesh``) or a (vertices, faces) pair.
@@ -206,7 +210,9 @@ strokes: a stroke file path, or a dict of the same JSON, holding a run of
     the file's (docs/strokes.md).
 pick_radius: pixels within which the strokes must start near the base curve.
 optimise: run the mesh optimisation of the new region (towards B's mean
-    edge length, B fixed).
+    edge length, B fixed; every new edge within [4/5, 4/3] of it).
+as_surface: the extruded part as its own surface joined to the base along
+    B by a joint (``face_surface`` of the Mesh tells them apart).
 
 Returns (mesh, report): the result as a Mesh and the dict the CLI's --json
 writes (``copies``, ``swept_nodes``, ``swept_faces``, ``splits``,

@@ -89,3 +89,15 @@ def test_bad_strokes_raise_with_the_engines_message():
     del lone["strokes"][1]
     with pytest.raises(ValueError, match="run of 2 or 3 extrude strokes"):
         atelier.extrude((v, f), lone)
+
+
+def test_optimised_edges_within_bounds_and_as_surface():
+    v, f = cup()
+    mesh, rep = atelier.extrude((v, f), strokes(), as_surface=True)
+    assert rep["after"]["outside"] == 0 and rep["after"]["within"] == 1.0
+    assert rep["max_deviation"] < 0.1 * rep["base_mean_edge"]
+    assert rep["joints"] == 1
+    # The cup's faces and the dome's in two surfaces.
+    fs = np.asarray(mesh.face_surface)
+    assert sorted(np.unique(fs).tolist()) == [0, 1]
+    assert np.count_nonzero(fs == fs[0]) == len(f)

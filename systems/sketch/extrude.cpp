@@ -1,8 +1,14 @@
+// Why this file is long: the five steps of seed 002 (base curve, plane, sweep,
+// sewing, optimisation call) and the two additions beyond the paper (the
+// body push, the part as its own surface) share one transactional run();
+// the optimisation itself lives in optimise_region.cpp.
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/cut.h>
 #include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/sketch/optimise_region.h>
 #include <atelier/systems/sketch/paint.h>
+#include <atelier/systems/spatial/collision_body.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -11,8 +17,6 @@
 #include <limits>
 #include <sstream>
 #include <string>
-
-#include "extrude_detail.h"
 
 namespace atelier {
 
@@ -295,6 +299,63 @@ double signed_volume(const Model& m) {
   return v;
 }
 
+/// Nodes that are not old (by slot) and alive.
+std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old) {
+  std::vector<NodeIdx> out;
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
+    if (m.alive(NodeIdx{v}) && !(v < old.size() && old[v])) out.push_back(NodeIdx{v});
+  return out;
+}
+
+/// The push of the collision pass (systems/garment/collision_pass.h step 3)
+/// on the new nodes: closer than c (or inside) -> closest body point + c n.
+void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
+              std::vector<char>& pushed) {
+  const std::vector<NodeIdx> nodes = new_nodes(m, old);
+  for (int r = 0; r < rounds; ++r) {
+    bool any = false;
+    for (NodeIdx v : nodes) {
+      const BodyDistance d = body.query(m.position(v));
+      if (d.triangle == kNoTriangle || !(d.distance < c * (1 - 1e-9))) continue;
+      const Vec3d q = d.closest + c * d.normal;
+      if (!q.allFinite()) continue;
+      m.nodes.position[v.value] = q;
+      if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
+      pushed[v.value] = 1;
+      any = true;
+    }
+    if (!any) break;
+  }
+}
+
+/// The extruded part as its own surface: partition along B (an attribute
+/// edge on B's nodes, removed again unless it is the painted base curve).
+Status split_off(Model& m, const std::vector<NodeIdx>& B, bool ring, ExtrudeReport& rep, const ExecContext& ctx) {
+  const SurfaceIdx s = m.nodes.surface[B[0].value];
+  std::vector<AttribNodeIdx> an;
+  for (std::size_t i = 0; i <= B.size() - (ring ? 0 : 1); ++i) {
+    const NodeIdx v = B[i % B.size()];
+    an.push_back(m.new_attrib_node(s, AttribNodeKind::kVertex, v.value, Vec3d::Zero(), m.position(v)));
+  }
+  const AttribEdge curve = m.handle(m.new_attrib_edge(s, -1, an));
+  // The part: the faces on the side of B's halfedges that had none.
+  const FaceIdx part_face = m.face(m.find_halfedge(B[0], B[1]));
+  auto pr = partition_along_curves(m, std::span<const AttribEdge>(&curve, 1), {}, ctx);
+  if (!pr) return fail(pr.status().code(), "as a surface: " + pr.status().message());
+  if (pr->joints.empty()) return fail(ErrorCode::kInternal, "as a surface: the partition made no joint along B");
+  rep.joints = pr->joints;
+  rep.part_surface = m.faces.surface[part_face.value];
+  // The helper curve goes again: it was only the partition's input.
+  if (m.alive(curve)) {
+    const auto row = m.attrib_edges.nodes.row(curve.idx.value);
+    const std::vector<AttribNodeIdx> nodes(row.begin(), row.end());
+    m.delete_attrib_edge(curve.idx);
+    for (AttribNodeIdx a : nodes)
+      if (m.alive(a)) m.delete_attrib_node(a);
+  }
+  return {};
+}
+
 Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
   HalfedgeIdx h = m.find_halfedge(a, b);
   if (!h.valid()) h = halfedge_of(m.new_edge(a, b), 0);
@@ -316,6 +377,9 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
                     std::to_string(in.sweep.size()));
   for (std::size_t k = 0; k < in.sweep.size(); ++k)
     if (Status s = check_stroke(in.sweep[k], "extruding stroke " + std::to_string(k)); !s) return s;
+  if (opt.body && (!(opt.clearance >= 0) || !std::isfinite(opt.clearance) || opt.push_rounds < 1))
+    return fail(ErrorCode::kInvalidArgument, "the clearance must be finite and >= 0, push_rounds >= 1");
+  if (opt.body && opt.body->empty()) return fail(ErrorCode::kInvalidArgument, "the body is empty");
   for (SurfaceIdx s : opt.surfaces)
     if (!m.alive(s)) return fail(ErrorCode::kStaleHandle, "surface " + std::to_string(s.value) + " is dead");
 
@@ -434,14 +498,11 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   rep.copies = copies.size();
   if (ctx.cancelled()) return fail(ErrorCode::kCancelled, "cancelled");
 
-  // Step 4: sewing (Figs. 7-8). Snapshot which faces and nodes are old.
-  extrude_detail::Region region;
-  region.old_face.resize(m.faces.slots.capacity());
-  for (std::uint32_t f = 0; f < region.old_face.size(); ++f) region.old_face[f] = m.alive(FaceIdx{f});
-  region.fixed_node.resize(m.nodes.slots.capacity());
-  for (NodeIdx v : B) region.fixed_node[v.value] = true;
+  // Step 4: sewing (Figs. 7-8).
   const std::size_t faces0 = m.num_faces(), nodes0 = m.num_nodes();
-
+  std::vector<char> old_node(m.nodes.slots.capacity());
+  for (std::uint32_t v = 0; v < old_node.size(); ++v) old_node[v] = m.alive(NodeIdx{v});
+  std::vector<FaceIdx> swept;
   std::vector<NodeIdx> prev = B;
   const std::size_t segs = base->ring ? n : n - 1;
   auto tri = [&](NodeIdx a, NodeIdx b, NodeIdx c) -> Status {
@@ -452,7 +513,7 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
       if (!h) return h.status();
       cyc[s] = *h;
     }
-    (void)m.new_face(surface, cyc);
+    swept.push_back(m.new_face(surface, cyc));
     return {};
   };
   for (const auto& row : copies) {
@@ -475,22 +536,38 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   rep.swept_faces = m.num_faces() - faces0;
   m.complex_holes = count_topology(m).implied_holes();
 
+  std::vector<char> pushed;
+  if (opt.body) push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
+
   // Step 5: optimisation (Fig. 9).
-  rep.before = extrude_detail::region_stats(m, region, rep.base_mean_edge);
-  rep.after = rep.before;
-  if (opt.optimise) {
-    std::vector<HalfedgeIdx> chain;
-    for (std::size_t t = 0; t < segs; ++t) chain.push_back(m.find_halfedge(B[t], B[(t + 1) % n]));
-    auto oc = extrude_detail::optimise_region(m, region, chain, rep.base_mean_edge, opt.optimise_passes, ctx);
-    if (!oc) return oc.status();
-    rep.splits = oc->splits;
-    rep.collapses = oc->collapses;
-    rep.swaps = oc->swaps;
-    rep.after = extrude_detail::region_stats(m, region, rep.base_mean_edge);
+  std::vector<HalfedgeIdx> chain;
+  for (std::size_t t = 0; t < segs; ++t) chain.push_back(m.find_halfedge(B[t], B[(t + 1) % n]));
+  RegionOptimiseOptions oo = opt.optimisation;
+  oo.target = rep.base_mean_edge;
+  if (!opt.optimise) oo.passes = 0, oo.repair_budget = 0, oo.relax = false;
+  auto oc = optimise_region(m, swept, B, chain, oo, ctx);
+  if (!oc) return fail(oc.status().code(), oc.status().message());
+  rep.splits = oc->splits;
+  rep.collapses = oc->collapses;
+  rep.swaps = oc->swaps;
+  rep.before = oc->before;
+  rep.after = opt.optimise ? oc->after : oc->before;
+  rep.max_deviation = oc->max_deviation;
+  if (opt.body) {
+    push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
+    rep.min_body_distance = std::numeric_limits<double>::infinity();
+    for (NodeIdx v : new_nodes(m, old_node)) {
+      rep.pushed += v.value < pushed.size() && pushed[v.value];
+      const double d = opt.body->query(m.position(v)).distance;
+      rep.min_body_distance = std::min(rep.min_body_distance, d);
+      rep.inside_after += d < 0;
+    }
   }
   rep.nodes_added = m.num_nodes() - nodes0;
   rep.faces_added = m.num_faces() - faces0;
   rep.volume_change = signed_volume(m) - volume_before;
+  if (opt.as_surface)
+    if (Status s = split_off(m, B, base->ring, rep, ctx); !s) return s;
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
     if (m.alive(NodeIdx{v}) && !m.nodes.position[v].allFinite())
       return fail(ErrorCode::kInternal, "node " + std::to_string(v) + " has a non-finite position");

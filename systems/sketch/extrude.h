@@ -30,12 +30,10 @@
 //     1), each oriented so that the strip's edge on the previous copy is
 //     negative in it where it was positive in the previous strip (rule 2).
 //  5. Mesh optimisation (Fig. 9; the paper's [1]) of the new faces only:
-//     split edges longer than 4/3 L, collapse edges shorter than 4/5 L, swap
-//     towards valence 6 (systems/mesh/edit.h), L the mean edge length of B,
-//     then relax inner nodes tangentially and project them back onto the
-//     swept triangles (systems/spatial/body_bvh.h). B's nodes never move (B
-//     is a constraint for the collapses); every node stays on the swept
-//     triangulation.
+//     optimise_region (systems/sketch/optimise_region.h) towards L, the mean
+//     edge length of B, B fixed: split, collapse, swap with the edit
+//     operators, tangential relaxation projected onto the swept triangles,
+//     then a local repair until every new edge is within [4/5 L, 4/3 L].
 //
 // Counts before optimisation, K copies (report.copies): a ring of n nodes
 // with a closed extrusion adds n(K-1) + 1 nodes and n(2K-1) triangles; a
@@ -47,11 +45,16 @@
 // (kept as an attribute edge along B), model.complex_holes (recounted),
 // topology_version. B's nodes keep their indices and positions bit for bit.
 //
+// With options.body: new nodes pushed out of the body (see ExtrudeOptions).
+// With options.as_surface: the extruded part in its own surface, joined to
+// B's surface along B by a MESHJOINT (B's nodes stay with the base).
+//
 // Transactional: on any error the model is unchanged (diff_tables == "").
 // Errors: kInvalidArgument (fewer than 2 distinct or non-finite stroke
 // points, a bad camera, a base stroke that selects no boundary arc, an
 // extruding stroke that does not start within pick_radius of B, one stroke
-// with an open B, more than 2 strokes), kDegenerate (B's least-squares fit has
+// with an open B, more than 2 strokes, a negative or non-finite
+// clearance), kDegenerate (B's least-squares fit has
 // no area, P1*P2* parallel to n_B, a plane seen edge-on, strokes that cross
 // so that a copy collapses to a point), kNonManifold (a boundary node with
 // several boundary arcs), those of paint_stroke and cut_along_curves, and
@@ -63,7 +66,9 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+#include <atelier/systems/sketch/optimise_region.h>
 #include <atelier/systems/sketch/retriangulate.h>
+#include <atelier/systems/spatial/collision_body.h>
 #include <atelier/systems/view/camera.h>
 #include <atelier/systems/view/strokes.h>
 
@@ -90,18 +95,27 @@ struct ExtrudeOptions {
   /// Screen distance (pixels) within which stroke ends must lie from B, and
   /// an open base stroke from the boundary it selects.
   double pick_radius = 12.0;
-  /// Mesh optimisation of the new region (step 5).
+  /// Mesh optimisation of the new region (step 5, optimise_region.h):
+  /// optimisation.target is set to L, B's mean edge length; B is fixed.
   bool optimise = true;
-  int optimise_passes = 6;
+  RegionOptimiseOptions optimisation;
+  /// Beyond the paper (which lists collision as future work): a body the
+  /// extruded part is kept outside of, e.g. a sleeve grown from a garment on
+  /// a mannequin. Not owned; it must outlive the call. Every new node closer
+  /// than `clearance` to it (or inside) moves to its closest body point plus
+  /// `clearance` along the outward normal (the push of the garment family's
+  /// collision pass, systems/garment/collision_pass.h step 3, on the same
+  /// CollisionBody queries), before the optimisation (whose projection then
+  /// keeps the pushed surface) and again after it, up to push_rounds times.
+  const CollisionBody* body = nullptr;
+  double clearance = 0.002;
+  int push_rounds = 4;
+  /// Beyond the paper: the extruded part becomes its own MESHSURFACE joined
+  /// to the base along B by a MESHJOINT (partition_along_curves along B,
+  /// systems/sketch/cut.h: B's nodes and edges duplicated, one mesh edge
+  /// per side), instead of being merged into B's surface.
+  bool as_surface = false;
   RetriangulateOptions retriangulate;
-};
-
-/// Edge-length statistics of the new region (edges with a new face on a
-/// side and not on B).
-struct EdgeLengthStats {
-  std::size_t edges = 0;
-  double mean = 0, min = 0, max = 0;
-  double within = 0;  // fraction within [4/5, 4/3] of the target length
 };
 
 struct ExtrudeReport {
@@ -121,8 +135,17 @@ struct ExtrudeReport {
   std::size_t swept_nodes = 0, swept_faces = 0;  // added by sweep and sewing
   std::size_t splits = 0, collapses = 0, swaps = 0;
   EdgeLengthStats before, after;                 // of the new region, around the optimisation
+  double max_deviation = 0;                      // of the optimised nodes from the swept surface
   std::size_t nodes_added = 0, faces_added = 0;  // net, after optimisation
   double volume_change = 0;                      // signed volume (of B's surface) after minus before
+  /// With a body: new nodes pushed (counting each once) and new nodes still
+  /// inside it (signed distance < 0) at the end; the smallest signed
+  /// distance of a new node to it at the end.
+  std::size_t pushed = 0, inside_after = 0;
+  double min_body_distance = 0;
+  /// With as_surface: the extruded part's surface and the joint(s) along B.
+  SurfaceIdx part_surface;
+  std::vector<Joint> joints;
 };
 
 /// The extrusion held by the run of "extrude" strokes starting at stroke

@@ -1,6 +1,7 @@
 // `atelier extrude` on good and bad inputs (runs the built binary): a dome
 // on an open cup closes it; a stroke far from the rim exits 3 with the
 // stroke file named, writing no mesh but the --json error; usage errors exit 2.
+#include <atelier/io/native.h>
 #include <atelier/io/obj.h>
 #include <atelier/storage/builder.h>
 #include <atelier/storage/topology.h>
@@ -104,4 +105,37 @@ TEST(ExtrudeCli, BadStrokesExit3AndWriteNoMesh) {
   const auto j = nlohmann::json::parse(in);
   EXPECT_FALSE(j["ok"].get<bool>());
   EXPECT_EQ(atelier::testing::run_cli("extrude --mesh " + f.mesh.string()).code, 2);
+}
+
+TEST(ExtrudeCli, AsSurfaceOutsideABody) {
+  const Files f = setup("extrude-cli-joint");
+  // A closed box |x|, |z| <= 0.3, 0.6 <= y <= 1.2 that the dome's top enters.
+  std::vector<Vec3d> p;
+  for (int k = 0; k < 8; ++k) p.push_back(Vec3d(k & 1 ? 0.3 : -0.3, k & 2 ? 1.2 : 0.6, k & 4 ? 0.3 : -0.3));
+  const std::vector<std::uint32_t> idx{0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5, 0, 1, 5, 0, 5, 4,
+                                       2, 6, 7, 2, 7, 3, 0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6};
+  std::vector<std::uint32_t> off;
+  for (std::uint32_t i = 0; i <= 12; ++i) off.push_back(3 * i);
+  Model box;
+  ASSERT_TRUE(add_polygon_surface(box, "box", PolygonSoupView{p, off, idx}));
+  write_obj(box, f.dir / "box.obj");
+  auto r = atelier::testing::run_cli(args(f, f.dir / "out.atm",
+                                          "--as-surface --body " + (f.dir / "box.obj").string() +
+                                              " --clearance 0.01 --json " + (f.dir / "r.json").string()));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Model m = read_model(f.dir / "out.atm");
+  ASSERT_TRUE(validate(m)) << validate(m).to_string();
+  EXPECT_EQ(m.num_surfaces(), 2u);
+  EXPECT_EQ(m.num_joints(), 1u);
+  std::ifstream in(f.dir / "r.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_GT(j["pushed"].get<std::size_t>(), 0u);
+  EXPECT_EQ(j["inside_after"].get<std::size_t>(), 0u);
+  EXPECT_EQ(j["joints"].get<std::size_t>(), 1u);
+  // Independently: no node inside the box.
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v) {
+    if (!m.alive(NodeIdx{v})) continue;
+    const Vec3d q = m.position(NodeIdx{v});
+    EXPECT_FALSE(std::abs(q.x()) < 0.3 && std::abs(q.z()) < 0.3 && q.y() > 0.6 && q.y() < 1.2) << "node " << v;
+  }
 }
