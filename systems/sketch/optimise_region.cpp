@@ -20,7 +20,7 @@ namespace atelier {
 
 namespace {
 
-Status fail(ErrorCode c, const std::string& what) {
+Status region_error(ErrorCode c, const std::string& what) {
   return Status(c, "optimise_region: " + what);
 }
 
@@ -42,9 +42,9 @@ class Optimiser {
     std::vector<char> in(m_.faces.slots.capacity(), 0);
     for (FaceIdx f : region) {
       if (!f.valid() || f.value >= in.size() || !m_.alive(f))
-        return fail(ErrorCode::kInvalidArgument, "region face " + std::to_string(f.value) + " is dead");
+        return region_error(ErrorCode::kInvalidArgument, "region face " + std::to_string(f.value) + " is dead");
       if (m_.face_degree(f) != 3)
-        return fail(ErrorCode::kInvalidArgument, "region face " + std::to_string(f.value) + " is not a triangle");
+        return region_error(ErrorCode::kInvalidArgument, "region face " + std::to_string(f.value) + " is not a triangle");
       in[f.value] = 1;
     }
     outside_.assign(in.size(), 0);
@@ -56,7 +56,7 @@ class Optimiser {
     }
     for (NodeIdx v : fixed) {
       if (!v.valid() || v.value >= fixed_.size() || !m_.alive(v))
-        return fail(ErrorCode::kInvalidArgument, "fixed node " + std::to_string(v.value) + " is dead");
+        return region_error(ErrorCode::kInvalidArgument, "fixed node " + std::to_string(v.value) + " is dead");
       fixed_[v.value] = 1;
     }
     eo_.check_ring_nodes = false;
@@ -196,7 +196,7 @@ class Optimiser {
     if (!res) return NodeIdx{};
     const NodeIdx kept = res->kept.at(0).idx;
     if (fixed(keep) && (kept != keep || m_.position(kept) != keep_pos))
-      return fail(ErrorCode::kInternal, "a collapse moved fixed node " + std::to_string(keep.value));
+      return region_error(ErrorCode::kInternal, "a collapse moved fixed node " + std::to_string(keep.value));
     ++rep_.collapses;
     return kept;
   }
@@ -433,7 +433,7 @@ class Optimiser {
     for (int pass = 0; pass < o_.passes; ++pass) {
       // The last round collapses only within hi (nothing splits after it).
       collapse_limit_ = pass + 1 < o_.passes ? std::max(hi_, 2 * lo_) : hi_;
-      if (ctx.cancelled()) return fail(ErrorCode::kCancelled, "cancelled");
+      if (ctx.cancelled()) return region_error(ErrorCode::kCancelled, "cancelled");
       const std::size_t before = rep_.splits + rep_.collapses + rep_.swaps;
       for (EdgeIdx e : region_edges())
         if (editable(e) && length(e) > hi_) (void)split(e);
@@ -467,7 +467,7 @@ class Optimiser {
     std::size_t budget = static_cast<std::size_t>(std::max(1, o_.repair_budget)) * (q.size() + 16);
     std::size_t ops = 0;
     while (!q.empty() && ops < budget) {
-      if ((ops & 1023) == 0 && ctx.cancelled()) return fail(ErrorCode::kCancelled, "cancelled");
+      if ((ops & 1023) == 0 && ctx.cancelled()) return region_error(ErrorCode::kCancelled, "cancelled");
       const EdgeIdx e = q.front();
       q.pop_front();
       if (!editable(e)) continue;
@@ -580,10 +580,10 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
                                    std::span<const HalfedgeIdx> chain, const RegionOptimiseOptions& o,
                                    const ExecContext& ctx) {
   if (!(o.target > 0) || !std::isfinite(o.target))
-    return fail(ErrorCode::kInvalidArgument, "the target length must be positive and finite");
+    return region_error(ErrorCode::kInvalidArgument, "the target length must be positive and finite");
   if (!(o.low > 0 && o.low < 1 && o.high > 1) || !std::isfinite(o.high))
-    return fail(ErrorCode::kInvalidArgument, "the bounds must satisfy 0 < low < 1 < high");
-  if (o.passes < 0 || o.repair_budget < 0) return fail(ErrorCode::kInvalidArgument, "negative passes or budget");
+    return region_error(ErrorCode::kInvalidArgument, "the bounds must satisfy 0 < low < 1 < high");
+  if (o.passes < 0 || o.repair_budget < 0) return region_error(ErrorCode::kInvalidArgument, "negative passes or budget");
   Optimiser opt(m, o);
   const bool edits = o.passes > 0 || o.repair_budget > 0;
   if (Status s = opt.init(region, fixed, edits); !s) return s;
