@@ -368,6 +368,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
     src.generate(first, pending.size(), chunk, failures, ctx);
     for (std::size_t f = failures_before; f < failures.size(); ++f) {  // unreadable bodies: record them too
       nlohmann::json rec = {{"body", failures[f].name}, {"ok", false}, {"reason", failures[f].status.to_string()}};
+      log.warn(failures[f].name + ": " + failures[f].status.message());  // e.g. a member of another topology
       write_atomically(bodies_dir / (failures[f].name + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
     }
     double garment_ms_per_body = 0;

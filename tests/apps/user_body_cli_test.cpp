@@ -64,24 +64,32 @@ std::vector<P> vertices(const fs::path& obj) {
 // Metres, Y-up (X, Y, Z) is centimetres, Z-up (X, -Z, Y).
 P to_cm_z(const P& p) { return {100 * p[0], -100 * p[2], 100 * p[1]}; }
 P identity(const P& p) { return p; }
+/// Garment files are read in float precision: on a grid of 2^-16 m, a
+/// coordinate and 100 times it are both floats, so both frames give the
+/// engine the same bits.
+P grid(const P& p) {
+  P q;
+  for (int k = 0; k < 3; ++k) q[k] = std::round(p[k] * 65536) / 65536;
+  return q;
+}
 
 }  // namespace
 
 TEST(UserBodyCli, AMannequinFamilyInCentimetresZUpEncodesAndRegeneratesAsInMetresYUp) {
   const fs::path d = scratch_dir("user_body_cli");
-  auto r = run_cli("--seed 3 bodies --count 3 --meshes 3 --out " + (d / "bodies").string());
+  auto r = run_cli("--seed 3 bodies --count 2 --meshes 2 --out " + (d / "bodies").string());
   ASSERT_EQ(r.code, 0) << r.out;
   std::vector<fs::path> objs;
   for (const auto& e : fs::directory_iterator(d / "bodies"))
     if (e.path().extension() == ".obj") objs.push_back(e.path());
   std::sort(objs.begin(), objs.end());
-  ASSERT_EQ(objs.size(), 3u);
+  ASSERT_EQ(objs.size(), 2u);
   const fs::path garment = encoded_templates() / "top.obj";  // a garment on the mannequin
   for (const auto& [frame, map] : {std::pair{"m", &identity}, std::pair{"cm", &to_cm_z}}) {
     fs::create_directories(d / frame / "set");
     for (const fs::path& o : objs) rewrite_obj(o, d / frame / "set" / o.filename(), map);
     rewrite_obj(objs[0], d / frame / "ref.obj", map);
-    rewrite_obj(garment, d / frame / "top.obj", map);
+    rewrite_obj(garment, d / frame / "top.obj", [&](const P& p) { return map(grid(p)); });
   }
   const std::string cm = " --scale 0.01 --up z";
   for (const std::string frame : {"m", "cm"}) {
@@ -92,20 +100,21 @@ TEST(UserBodyCli, AMannequinFamilyInCentimetresZUpEncodesAndRegeneratesAsInMetre
     ASSERT_TRUE(fs::exists(d / frame / "tpl" / "top.atd")) << r.out;
     r = run_cli("regen --template " + (d / frame / "tpl" / "top.atd").string() + " --source " +
                 (d / frame / "set").string() + " --reference " + (d / frame / "ref.obj").string() + opts +
-                " --meshes 3 --out " + (d / frame / "run").string());
+                " --meshes 2 --out " + (d / frame / "run").string());
     ASSERT_EQ(r.code, 0) << r.out;
   }
-  // The template pair is in metres and Y-up whatever the files' frame.
-  const auto tm = vertices(d / "m" / "tpl" / "top.obj"), tc = vertices(d / "cm" / "tpl" / "top.obj");
-  ASSERT_EQ(tm.size(), tc.size());
-  for (std::size_t v = 0; v < tm.size(); ++v)
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(tc[v][k], tm[v][k], 1e-6 * (1 + std::abs(tm[v][k]))) << v;
+  // The template pair is in metres and Y-up whatever the files' frame: the
+  // same bytes (bodies written by `bodies` are floats: 100 times them is
+  // exact, and dividing by 100 gives them back).
+  EXPECT_EQ(read_bytes(d / "m" / "tpl" / "top.atd"), read_bytes(d / "cm" / "tpl" / "top.atd"));
+  EXPECT_EQ(read_bytes(d / "m" / "tpl" / "top.obj"), read_bytes(d / "cm" / "tpl" / "top.obj"));
+  const auto tm = vertices(d / "m" / "tpl" / "top.obj");
   // Each body's garment: in the files' frame, the metres/Y-up result mapped
   // (the meshes are written in float: relative 1e-6).
   const auto rep_m = nlohmann::json::parse(read_bytes(d / "m" / "run" / "report.json"));
   const auto rep_c = nlohmann::json::parse(read_bytes(d / "cm" / "run" / "report.json"));
-  ASSERT_EQ(rep_m["summary"]["completed"], 3) << rep_m.dump();
-  ASSERT_EQ(rep_c["summary"]["completed"], 3) << rep_c.dump();
+  ASSERT_EQ(rep_m["summary"]["completed"], 2) << rep_m.dump();
+  ASSERT_EQ(rep_c["summary"]["completed"], 2) << rep_c.dump();
   for (const fs::path& o : objs) {
     const std::string body = o.stem().string();
     const auto gm = vertices(d / "m" / "run" / "bodies" / body / "top.obj");
@@ -121,13 +130,11 @@ TEST(UserBodyCli, AMannequinFamilyInCentimetresZUpEncodesAndRegeneratesAsInMetre
     EXPECT_LE(worst, 1e-6) << body;
     if (body != objs[0].stem().string()) EXPECT_GT(moved, 1e-3) << body << ": the garment followed the body";
   }
-  for (std::size_t b = 0; b < 3; ++b) {
+  for (std::size_t b = 0; b < 2; ++b) {
     const auto& qm = rep_m["bodies"][b]["templates"]["top"];
-    const auto& qc = rep_c["bodies"][b]["templates"]["top"];
     EXPECT_EQ(qm["inside_nodes"], 0);
-    EXPECT_EQ(qc["inside_nodes"], qm["inside_nodes"]);
-    EXPECT_NEAR(qc["min_clearance_m"].get<double>(), qm["min_clearance_m"].get<double>(), 1e-6);
-    EXPECT_NEAR(qc["strain_max"].get<double>(), qm["strain_max"].get<double>(), 1e-6);
+    // The engine saw the same bits: the same figures, to the last digit.
+    EXPECT_EQ(rep_c["bodies"][b]["templates"], rep_m["bodies"][b]["templates"]);
   }
 }
 
@@ -169,6 +176,9 @@ TEST(UserBodyCli, OpenBodiesWrongTopologyMembersAndProfileTemplatesAreExplained)
   EXPECT_EQ(r.code, 1) << r.out;  // the other members complete
   EXPECT_NE(r.out.find("b.obj"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("topology differs"), std::string::npos) << r.out;
+  const auto rec = nlohmann::json::parse(read_bytes(d / "run" / "bodies" / "b.json"));
+  EXPECT_EQ(rec["ok"], false);
+  EXPECT_NE(rec["reason"].get<std::string>().find("b.obj"), std::string::npos) << rec.dump();
   // An up axis that is not y or z is a usage error.
   r = run_cli("encode --garment " + (d / "shell.obj").string() + " --reference " + (d / "tet.obj").string() +
               " --up x --out " + (d / "tpl").string());
