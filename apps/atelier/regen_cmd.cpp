@@ -1,3 +1,9 @@
+// `atelier encode` and `atelier regen` (regen_cmd.h).
+//
+// Why this file is long: the two subcommands share the reference tags and
+// quality records that tie a template to the body set it regenerates on;
+// `regen` itself is one rank's set-up, its share of bodies, the streamed
+// merge of the records and the MPI verdict, each short.
 #include "regen_cmd.h"
 
 #include <algorithm>
@@ -183,8 +189,9 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
   }
   log.info("encoded " + std::to_string(written) + " template(s) on the " + opt.reference + " reference body");
   if (user_body && written > 0)
-    log.info("the template pair is in metres and Y up (the engine's frame); `atelier regen` with the same --scale "
-             "and --up writes its results back in the body files' units and axes");
+    log.info(
+        "the template pair is in metres and Y up (the engine's frame); `atelier regen` with the same --scale "
+        "and --up writes its results back in the body files' units and axes");
   return kExitOk;
 }
 
@@ -199,7 +206,8 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)")->check(body_count_check());
   c->add_option("--data", opt.bodies.data, "the shared data folder (for makehuman)");
   c->add_option("--reference", opt.bodies.reference, "reference body OBJ (directory sources)");
-  c->add_option("--scale", opt.bodies.scale, "file units to metres (directory sources); outputs are written back in them");
+  c->add_option("--scale", opt.bodies.scale,
+                "file units to metres (directory sources); outputs are written back in them");
   c->add_option("--up", opt.bodies.up, "the files' up axis, y or z (directory sources); outputs are written back in it")
       ->check(CLI::IsMember({"y", "z"}));
   c->add_option("--out", opt.out, "output folder");

@@ -3,10 +3,10 @@
 // body measurements as dicts or structured arrays.
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/builder.h>
+#include <atelier/systems/body/body_file.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/measure.h>
-#include <atelier/systems/body/body_file.h>
 #include <atelier/systems/garment/makehuman_binding.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <pybind11/stl.h>

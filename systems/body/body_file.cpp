@@ -1,4 +1,7 @@
+#include <atelier/io/obj.h>
 #include <atelier/systems/body/body_file.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/body/mannequin.h>
 
 #include <algorithm>
 #include <cctype>
@@ -6,10 +9,6 @@
 #include <sstream>
 #include <string>
 #include <unordered_map>
-
-#include <atelier/io/obj.h>
-#include <atelier/systems/body/makehuman_body.h>
-#include <atelier/systems/body/mannequin.h>
 
 namespace atelier {
 
@@ -112,10 +111,10 @@ Status check_closed_oriented(const Model& m, std::string_view what) {
                 " edges are used by one face or by more than two (the first: the edge between " +
                 edge_text(first_open) + "); a reference body must be a closed surface (fill its holes)"};
   if (flipped > 0)
-    return {ErrorCode::kDegenerate,
-            std::string(what) + ": the body is not consistently oriented: " + std::to_string(flipped) +
-                " edges are used twice in the same direction (the first: the edge between " +
-                edge_text(first_flipped) + "); its faces' corners must all turn the same way"};
+    return {ErrorCode::kDegenerate, std::string(what) +
+                                        ": the body is not consistently oriented: " + std::to_string(flipped) +
+                                        " edges are used twice in the same direction (the first: the edge between " +
+                                        edge_text(first_flipped) + "); its faces' corners must all turn the same way"};
   if (!(volume6 > 0))
     return {ErrorCode::kDegenerate, std::string(what) +
                                         ": the body's faces point inward (its signed volume is not positive); "

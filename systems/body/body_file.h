@@ -12,16 +12,16 @@
 // Reads: the OBJ file. Writes: a new ReferenceBody.
 #pragma once
 
-#include <filesystem>
-#include <span>
-#include <string_view>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/systems/body/reference_body.h>
+
+#include <filesystem>
+#include <span>
+#include <string_view>
+#include <vector>
 
 namespace atelier {
 

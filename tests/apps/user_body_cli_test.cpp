@@ -62,8 +62,12 @@ std::vector<P> vertices(const fs::path& obj) {
 }
 
 // Metres, Y-up (X, Y, Z) is centimetres, Z-up (X, -Z, Y).
-P to_cm_z(const P& p) { return {100 * p[0], -100 * p[2], 100 * p[1]}; }
-P identity(const P& p) { return p; }
+P to_cm_z(const P& p) {
+  return {100 * p[0], -100 * p[2], 100 * p[1]};
+}
+P identity(const P& p) {
+  return p;
+}
 /// Garment files are read in float precision: on a grid of 2^-16 m, a
 /// coordinate and 100 times it are both floats, so both frames give the
 /// engine the same bits.

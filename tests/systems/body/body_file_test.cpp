@@ -1,8 +1,9 @@
 // A user's own reference body from a file (systems/body/body_file.h): the
 // frame's maps, the closed/oriented check on broken bodies, and a body set
 // in another frame (issue 26, "any reference body").
+#include <atelier/storage/validate.h>
 #include <atelier/systems/body/body_file.h>
-
+#include <atelier/systems/body/body_set.h>
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -12,8 +13,6 @@
 #include <string>
 
 #include "support/shapes.h"
-#include <atelier/storage/validate.h>
-#include <atelier/systems/body/body_set.h>
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -136,8 +135,8 @@ TEST(BodyFile, OpenFlippedInwardAndWrongTopologyBodiesAreNamedWithTheReason) {
     const char* file;
     const char* says;
   };
-  for (const Case& c : {Case{"open.obj", "not closed"}, Case{"flip.obj", "orient"},
-                        Case{"inward.obj", "point inward"}, Case{"missing.obj", "no such file"}}) {
+  for (const Case& c : {Case{"open.obj", "not closed"}, Case{"flip.obj", "orient"}, Case{"inward.obj", "point inward"},
+                        Case{"missing.obj", "no such file"}}) {
     auto r = read_reference_body(d / c.file);
     ASSERT_FALSE(r) << c.file;
     EXPECT_NE(r.status().message().find(c.file), std::string::npos) << r.status().message();

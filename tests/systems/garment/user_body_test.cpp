@@ -2,8 +2,9 @@
 // family of bodies of an unknown topology (no feature curves), written in
 // centimetres and Z-up, encodes and regenerates a garment to the same
 // result as the same family in metres and Y-up.
+#include <atelier/storage/validate.h>
+#include <atelier/systems/body/body_file.h>
 #include <atelier/systems/garment/regenerate_garment.h>
-
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -12,8 +13,6 @@
 #include <string>
 
 #include "support/shapes.h"
-#include <atelier/storage/validate.h>
-#include <atelier/systems/body/body_file.h>
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -76,9 +75,13 @@ shapes::Soup band(double a, double b, double c) {
   return g;
 }
 
-Vec3d identity(const Vec3d& p) { return p; }
+Vec3d identity(const Vec3d& p) {
+  return p;
+}
 // Engine (X, Y, Z) in metres is file (X, -Z, Y) in centimetres.
-Vec3d cm_z_up(const Vec3d& p) { return Vec3d(100 * p.x(), -100 * p.z(), 100 * p.y()); }
+Vec3d cm_z_up(const Vec3d& p) {
+  return Vec3d(100 * p.x(), -100 * p.z(), 100 * p.y());
+}
 
 struct FamilyRun {
   std::vector<std::vector<Vec3d>> positions;  // per body, engine frame
@@ -180,4 +183,3 @@ TEST(UserBody, AGarmentFileInABadFrameOrOnAnOpenBodyIsRefusedNamingTheFile) {
   ASSERT_FALSE(none);
   EXPECT_NE(none.status().message().find("none.obj"), std::string::npos) << none.status().message();
 }
-
