@@ -77,7 +77,9 @@ CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
                 "reference body: mannequin, makehuman, or a closed body OBJ file (garments only unless it has the "
                 "topology of one of those)")
       ->check([](const std::string& r) -> std::string {
-        if (r == "mannequin" || r == "makehuman" || fs::is_regular_file(r)) return {};
+        // A missing .obj is bad input (exit 3, named by read_reference_body), not a usage error.
+        if (r == "mannequin" || r == "makehuman" || fs::path(r).extension() == ".obj" || fs::is_regular_file(r))
+          return {};
         return "'" + r + "': neither mannequin, makehuman nor a body OBJ file";
       });
   c->add_option("--data", opt.data, "the shared data folder (for makehuman)");

@@ -183,6 +183,11 @@ TEST(UserBodyCli, OpenBodiesWrongTopologyMembersAndProfileTemplatesAreExplained)
   const auto rec = nlohmann::json::parse(read_bytes(d / "run" / "bodies" / "b.json"));
   EXPECT_EQ(rec["ok"], false);
   EXPECT_NE(rec["reason"].get<std::string>().find("b.obj"), std::string::npos) << rec.dump();
+  // A body file that is not there: bad input naming it.
+  r = run_cli("encode --garment " + (d / "shell.obj").string() + " --reference " + (d / "nobody.obj").string() +
+              " --out " + (d / "tpl").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("nobody.obj: no such file"), std::string::npos) << r.out;
   // An up axis that is not y or z is a usage error.
   r = run_cli("encode --garment " + (d / "shell.obj").string() + " --reference " + (d / "tet.obj").string() +
               " --up x --out " + (d / "tpl").string());
