@@ -12,6 +12,7 @@
 #include <atelier/io/ply.h>
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
+#include <atelier/systems/body/body_file.h>
 #include <atelier/systems/body/body_set.h>
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/body/makehuman_body.h>
@@ -88,34 +89,12 @@ int run_convert(const Common&, const fs::path& in, const fs::path& out, Log& log
   return kExitOk;
 }
 
-static ReferenceBody reference_from_obj(const fs::path& file, double scale, const fs::path& data, const ExecContext& ctx) {
-  ReferenceBody rb;
-  rb.model = read_obj(file);
-  for (auto& p : rb.model.nodes.position) p *= scale;
-  rb.skin = SurfaceIdx{0};
-  // Features are not in an OBJ file. A body with the topology of a known
-  // reference (the mannequin, or MakeHuman's base mesh when its data is
-  // there) takes that reference's features: its feature points and curves
-  // sit on nodes, edges and faces, so they follow the OBJ's positions.
-  const std::uint64_t hash = BodyPolygons::from_model(rb.model).topology_hash;
-  const std::vector<Vec3d> positions = rb.model.nodes.position;
-  auto adopt = [&](const ReferenceBody& known) -> bool {
-    if (known.model.nodes.slots.capacity() != positions.size() ||
-        BodyPolygons::from_model(known.model).topology_hash != hash)
-      return false;
-    auto moved = with_positions(known, positions);
-    if (!moved) throw Error(Status(moved.status().code(), file.string() + ": " + moved.status().message()));
-    rb = std::move(*moved);
-    return true;
-  };
-  if (auto topo = make_mannequin_topology(); topo) {
-    if (auto ref = make_mannequin(MannequinParams{}, *topo); ref && adopt(*ref)) return rb;
-  }
-  if (positions.size() > 10000 && fs::exists(data / "makehuman")) {
-    const auto lib = makehuman::HumanLibrary::load(data / "makehuman", ctx);
-    if (adopt(makehuman::make_reference_body(lib))) return rb;
-  }
-  return rb;  // no features: profile templates refuse it, detail templates work
+BodyFrame body_frame(double scale, const std::string& up) {
+  auto axis = parse_up_axis(up);
+  if (!axis) throw Error(Status(ErrorCode::kInvalidArgument, "--up " + axis.status().message()));
+  const BodyFrame frame{scale, *axis};
+  if (Status s = frame.check(); !s) throw Error(Status(s.code(), "--scale: " + s.message()));
+  return frame;
 }
 
 CLI::Validator body_count_check() {
@@ -220,9 +199,11 @@ std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesO
                                                           "': neither mannequin, makehuman nor a directory of OBJ bodies"));
     if (opt.reference.empty())
       throw Error(Status(ErrorCode::kInvalidArgument, "--reference is required with a directory source"));
-    src = std::make_unique<ObjDirectorySource>(
-        opt.source, std::make_shared<const ReferenceBody>(reference_from_obj(opt.reference, opt.scale, opt.data, ctx)),
-        opt.scale);
+    const BodyFrame frame = body_frame(opt.scale, opt.up);
+    auto ref = read_reference_body(opt.reference, {.frame = frame, .makehuman_data = opt.data}, ctx);
+    if (!ref) throw Error(ref.status());
+    src = std::make_unique<ObjDirectorySource>(opt.source, std::make_shared<const ReferenceBody>(std::move(*ref)),
+                                               frame);
   }
   return src;
 }
@@ -248,6 +229,7 @@ int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
       for (std::size_t b = 0; b < chunk.size() && written < opt.meshes; ++b, ++written) {
         Model m = ref->model;
         chunk.positions(b, m.nodes.position);
+        src->frame().to_file(m.nodes.position);  // back in the files' units and axes
         write_obj(m, opt.out / (chunk.name(b) + ".obj"));
       }
       done += chunk.size();

@@ -95,9 +95,13 @@ struct BodiesOptions {
   std::filesystem::path out = "out/bodies";
   std::filesystem::path data = "../shared/data";
   std::filesystem::path reference;   // OBJ of the reference body (directory sources)
-  double scale = 1.0;
+  double scale = 1.0;                // file units to metres (directory sources)
+  std::string up = "y";              // the files' up axis (directory sources): y | z
 };
 int run_bodies(const Common& common, const BodiesOptions& opt, Log& log);
+/// `--scale S --up y|z` as a BodyFrame; throws Error(kInvalidArgument)
+/// naming the option.
+[[nodiscard]] BodyFrame body_frame(double scale, const std::string& up);
 /// The body source named by opt.source (mannequin, makehuman, or a directory
 /// of OBJ files with opt.reference); throws Error on bad input.
 [[nodiscard]] std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt);

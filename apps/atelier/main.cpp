@@ -63,6 +63,8 @@ int main(int argc, char** argv) {
   bodies_cmd->add_option("--data", bodies.data, "the shared data folder (for makehuman)");
   bodies_cmd->add_option("--reference", bodies.reference, "reference body OBJ (directory sources)");
   bodies_cmd->add_option("--scale", bodies.scale, "file units to metres (directory sources)");
+  bodies_cmd->add_option("--up", bodies.up, "the files' up axis, y or z (directory sources)")
+      ->check(CLI::IsMember({"y", "z"}));
 
   RenderOptions render_opt;
   auto* render_cmd = add_render_subcommand(app, render_opt);

@@ -1,3 +1,9 @@
+// `atelier encode` and `atelier regen` (regen_cmd.h).
+//
+// Why this file is long: the two subcommands share the reference tags and
+// quality records that tie a template to the body set it regenerates on;
+// `regen` itself is one rank's set-up, its share of bodies, the streamed
+// merge of the records and the MPI verdict, each short.
 #include "regen_cmd.h"
 
 #include <algorithm>
@@ -20,6 +26,7 @@
 #include <atelier/io/obj.h>
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/regenerate_garment.h>
+#include <atelier/systems/body/body_file.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/profile/project_templates.h>
@@ -63,9 +70,18 @@ CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
   c->add_option("--template", opt.name, "top, skirt, trousers or all (default: all, none with --garment)")
       ->check(CLI::IsMember({"top", "skirt", "trousers", "all"}));
   c->add_option("--garment", opt.garment, "a garment on the reference body: .obj, or .mhclo (--reference makehuman)");
-  c->add_option("--scale", opt.scale, "garment OBJ units to metres")->check(CLI::PositiveNumber);
-  c->add_option("--reference", opt.reference, "reference body: mannequin or makehuman")
-      ->check(CLI::IsMember({"mannequin", "makehuman"}));
+  c->add_option("--scale", opt.scale, "garment (and reference body file) units to metres, e.g. 0.01 for cm")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--up", opt.up, "garment (and reference body file) up axis: y or z")->check(CLI::IsMember({"y", "z"}));
+  c->add_option("--reference", opt.reference,
+                "reference body: mannequin, makehuman, or a closed body OBJ file (garments only unless it has the "
+                "topology of one of those)")
+      ->check([](const std::string& r) -> std::string {
+        // A missing .obj is bad input (exit 3, named by read_reference_body), not a usage error.
+        if (r == "mannequin" || r == "makehuman" || fs::path(r).extension() == ".obj" || fs::is_regular_file(r))
+          return {};
+        return "'" + r + "': neither mannequin, makehuman nor a body OBJ file";
+      });
   c->add_option("--data", opt.data, "the shared data folder (for makehuman)");
   c->add_option("--out", opt.out, "output folder");
   return c;
@@ -83,22 +99,27 @@ void encode_garment_files(const Common& common, const EncodeOptions& opt, const 
   const std::string ext = file.extension().string();
   Expected<PolygonSoup> g = Status(ErrorCode::kInvalidArgument,
                                    file.string() + ": unknown garment format (use .obj or .mhclo)");
+  if (ext != ".obj" && ext != ".mhclo") throw Error(g.status());
   if (ext == ".mhclo") {
     if (!lib)
       throw Error(Status(ErrorCode::kInvalidArgument,
                          file.string() + ": a .mhclo garment is bound to the MakeHuman base mesh: use --reference "
                                          "makehuman (or give the garment as an OBJ on the mannequin)"));
     g = makehuman::fitted_garment(*lib, file);
-  } else if (ext == ".obj") {
-    g = read_garment_mesh(file, opt.scale);
   }
-  if (!g) throw Error(g.status());
-  // Float precision, as the .obj beside the template stores it.
-  for (Vec3d& p : g->positions) p = round_to_float(p);
-  auto family = GarmentFamily::of(ref);
-  if (!family) throw Error(family.status());
-  auto t = encode_garment(*family, file.stem().string(), std::move(*g), {}, ctx);
-  if (!t) throw Error(Status(t.status().code(), file.string() + ": " + t.status().message()));
+  Expected<GarmentTemplate> t = Status(ErrorCode::kInternal, "not encoded");
+  if (ext == ".obj") {
+    // One library call: read, mapped to metres and Y up, encoded.
+    t = encode_garment_file(ref, file, {.frame = body_frame(opt.scale, opt.up)}, ctx);
+  } else {
+    if (!g) throw Error(g.status());
+    for (Vec3d& p : g->positions) p = round_to_float(p);  // float, as the .obj beside the template stores it
+    auto family = GarmentFamily::of(ref);
+    if (!family) throw Error(family.status());
+    t = encode_garment(*family, file.stem().string(), std::move(*g), {}, ctx);
+    if (!t) t = Status(t.status().code(), file.string() + ": " + t.status().message());
+  }
+  if (!t) throw Error(t.status());
   std::size_t inside = 0;
   double min_c = std::numeric_limits<double>::infinity();
   for (float c : t->clearance.clearance) {
@@ -123,13 +144,20 @@ void encode_garment_files(const Common& common, const EncodeOptions& opt, const 
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
   ReferenceBody ref;
   std::optional<makehuman::HumanLibrary> lib;
+  const bool user_body = opt.reference != "mannequin" && opt.reference != "makehuman";
   if (opt.reference == "mannequin") {
     auto r = make_mannequin();
     if (!r) throw Error(r.status());
     ref = std::move(*r);
-  } else {
+  } else if (opt.reference == "makehuman") {
     lib.emplace(makehuman::HumanLibrary::load(opt.data / "makehuman", common.context()));
     ref = makehuman::make_reference_body(*lib);
+  } else {
+    // A user's body: in the file's units and axes, mapped at the door.
+    auto r = read_reference_body(opt.reference, {.frame = body_frame(opt.scale, opt.up), .makehuman_data = opt.data},
+                                 common.context());
+    if (!r) throw Error(r.status());
+    ref = std::move(*r);
   }
   make_output_dir(opt.out);
   int written = 0;
@@ -138,6 +166,16 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
     ++written;
   }
   const std::string which = opt.name.empty() ? (opt.garment.empty() ? "all" : "") : opt.name;
+  if (user_body && !which.empty() && ref.curves.empty()) {
+    // Profile templates are built from feature curves an OBJ file has not.
+    const std::string why = opt.reference +
+                            ": the body has no feature curves, so only detail templates apply: encode a garment with "
+                            "--garment (profile templates need the mannequin's or MakeHuman's topology; "
+                            "docs/body-files.md)";
+    if (written == 0) throw Error(Status(ErrorCode::kInvalidArgument, why));
+    log.warn(why + "; the garment was encoded, no profile template");
+    return kExitPartial;
+  }
   for (auto [name, make] : {std::pair{"top", &make_top_template}, std::pair{"skirt", &make_skirt_template},
                             std::pair{"trousers", &make_trousers_template}}) {
     if (which != "all" && which != name) continue;
@@ -152,6 +190,10 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
     ++written;
   }
   log.info("encoded " + std::to_string(written) + " template(s) on the " + opt.reference + " reference body");
+  if (user_body && written > 0)
+    log.info(
+        "the template pair is in metres and Y up (the engine's frame); `atelier regen` with the same --scale "
+        "and --up writes its results back in the body files' units and axes");
   return kExitOk;
 }
 
@@ -166,7 +208,10 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)")->check(body_count_check());
   c->add_option("--data", opt.bodies.data, "the shared data folder (for makehuman)");
   c->add_option("--reference", opt.bodies.reference, "reference body OBJ (directory sources)");
-  c->add_option("--scale", opt.bodies.scale, "file units to metres (directory sources)");
+  c->add_option("--scale", opt.bodies.scale,
+                "file units to metres (directory sources); outputs are written back in them");
+  c->add_option("--up", opt.bodies.up, "the files' up axis, y or z (directory sources); outputs are written back in it")
+      ->check(CLI::IsMember({"y", "z"}));
   c->add_option("--out", opt.out, "output folder");
   c->add_option("--meshes", opt.meshes, "write OBJ meshes of the first N bodies");
   c->add_option("--chunk", opt.chunk, "bodies per chunk (bounds memory)")->check(CLI::PositiveNumber);
@@ -333,6 +378,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
     src.generate(first, pending.size(), chunk, failures, ctx);
     for (std::size_t f = failures_before; f < failures.size(); ++f) {  // unreadable bodies: record them too
       nlohmann::json rec = {{"body", failures[f].name}, {"ok", false}, {"reason", failures[f].status.to_string()}};
+      log.warn(failures[f].name + ": " + failures[f].status.message());  // e.g. a member of another topology
       write_atomically(bodies_dir / (failures[f].name + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
     }
     double garment_ms_per_body = 0;
@@ -384,7 +430,9 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           per[d.name] = garment_quality_json(g.quality);
           if (index < opt.meshes) {
             make_output_dir(bodies_dir / chunk.name(b));
-            write_garment_mesh(d.mesh, g.positions, bodies_dir / chunk.name(b) / (d.name + ".obj"));
+            std::vector<Vec3d> p = g.positions;
+            src.frame().to_file(p);  // back in the body files' units and axes
+            write_garment_mesh(d.mesh, p, bodies_dir / chunk.name(b) / (d.name + ".obj"));
           }
         }
         for (std::size_t k = 0; k < templates.size(); ++k) {
@@ -405,7 +453,13 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           per[t.name] = quality_json(r.quality);
           if (index < opt.meshes) {
             make_output_dir(bodies_dir / chunk.name(b));
-            write_obj(r.model, bodies_dir / chunk.name(b) / (t.name + ".obj"));
+            if (src.frame().identity()) {
+              write_obj(r.model, bodies_dir / chunk.name(b) / (t.name + ".obj"));
+            } else {
+              Model m = r.model;
+              src.frame().to_file(m.nodes.position);  // back in the body files' units and axes
+              write_obj(m, bodies_dir / chunk.name(b) / (t.name + ".obj"));
+            }
           }
         }
         rec["templates"] = per;

@@ -9,6 +9,13 @@
 //       systems/detail_template.h): templates/shorts.atd and, beside it,
 //       templates/shorts.obj, the garment on the reference body (its faces,
 //       and the clearance the collision pass restores, systems/collision_pass.h);
+//   atelier encode --garment coat.obj --reference my_body.obj --scale 0.01 --up z
+//       the same on a user's own reference body (any closed, consistently
+//       oriented OBJ; systems/body/body_file.h): the body and the garment
+//       are in the file's units and axes, mapped to metres and Y up at the
+//       door; the template pair written is in metres and Y up. Profile
+//       templates need the body's feature curves: only garments encode on
+//       a body without them (docs/body-files.md);
 //   atelier regen --template templates/top.template.json --source mannequin
 //       --count 1000 --out run/
 //       regenerates every template on every body of a body set, streamed in
@@ -51,11 +58,12 @@ namespace atelier::cli {
 
 struct EncodeOptions {
   std::string name;                         // top | skirt | trousers | all ("" = all, or none with --garment)
-  std::string reference = "mannequin";      // mannequin | makehuman
+  std::string reference = "mannequin";      // mannequin | makehuman | a body OBJ file
   std::filesystem::path data = "../shared/data";
   std::filesystem::path out = "templates";
   std::filesystem::path garment;            // .obj or .mhclo: encode as a detail template
-  double scale = 1.0;                       // garment OBJ units to metres
+  double scale = 1.0;                       // garment (and body file) units to metres
+  std::string up = "y";                     // garment (and body file) up axis: y | z
 };
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt);
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log);

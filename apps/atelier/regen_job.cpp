@@ -86,6 +86,7 @@ nlohmann::json describe_regen_job(const Common& common, const RegenOptions& opt)
     src["source"] = absolute_text(opt.bodies.source);
     if (!opt.bodies.reference.empty()) src["reference"] = file_identity(opt.bodies.reference);
     src["scale"] = opt.bodies.scale;
+    if (opt.bodies.up != "y") src["up"] = opt.bodies.up;  // absent for Y up: earlier jobs' job.json stays valid
   }
   nlohmann::json templates = nlohmann::json::array();
   for (const fs::path& t : opt.templates) templates.push_back(file_identity(t));

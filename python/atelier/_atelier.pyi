@@ -73,6 +73,8 @@ class Body:
 
     @staticmethod
     def from_arrays(vertices: FloatArray, faces: Faces) -> Body: ...
+    @staticmethod
+    def read(path: Path, *, scale: float = 1.0, up: str = "y", data: Optional[Path] = None) -> Body: ...
     @property
     def vertices(self) -> npt.NDArray[np.float64]: ...
     @property
@@ -182,6 +184,7 @@ def encode_garment(
     z_depth: int = 0,
     polygons_per_vertex: int = 0,
     scale: float = 1.0,
+    up: str = "y",
     threads: int = 0,
     progress: Progress = None,
 ) -> GarmentTemplate: ...
@@ -196,6 +199,7 @@ def encode_garment(
     z_depth: int = 0,
     polygons_per_vertex: int = 0,
     scale: float = 1.0,
+    up: str = "y",
     threads: int = 0,
     progress: Progress = None,
 ) -> GarmentTemplate: ...

@@ -3,6 +3,7 @@
 // body measurements as dicts or structured arrays.
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/builder.h>
+#include <atelier/systems/body/body_file.h>
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/measure.h>
@@ -303,6 +304,32 @@ A body from arrays (a user's own scan or model): vertices (n, 3), faces
 nothing and profile templates refuse it; garments encode and regenerate on
 it when its skin is closed and consistently oriented. One copy. Raises
 ValueError for bad arrays or a mesh the engine's model refuses.
+)doc")
+      .def_static(
+          "read",
+          [](const fs::path& path, double scale, const std::string& up, std::optional<fs::path> data) {
+            auto axis = parse_up_axis(up);
+            if (!axis) value_error("up: " + axis.status().message());
+            if (!fs::exists(path)) {
+              PyErr_SetObject(PyExc_FileNotFoundError,
+                              py::make_tuple(ENOENT, path.string() + ": no such file", path.string()).ptr());
+              throw py::error_already_set();
+            }
+            BodyFileOptions o{.frame = {scale, *axis}, .makehuman_data = data ? *data : fs::path()};
+            py::gil_scoped_release release;
+            return Body::of(std::make_shared<const ReferenceBody>(unwrap(read_reference_body(path, o))));
+          },
+          py::arg("path"), py::kw_only(), py::arg("scale") = 1.0, py::arg("up") = "y", py::arg("data") = py::none(),
+          R"doc(
+A user's reference body from an OBJ file (systems/body/body_file.h,
+docs/body-files.md): one closed, consistently oriented, outward-facing
+surface in the file's units (``scale``: to metres, 0.01 for centimetres) and
+up axis (``up``: "y" or "z"), mapped to metres and Y up. A body with the
+mannequin's topology (or MakeHuman's, with the shared ``data`` folder)
+takes its feature curves; any other has none: garments encode and
+regenerate on it, profile templates refuse it. Raises FileNotFoundError,
+ValueError naming the file and the reason (not closed, not consistently
+oriented, facing inward, malformed).
 )doc")
       .def_property_readonly(
           "vertices",

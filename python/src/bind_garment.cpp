@@ -129,7 +129,7 @@ vertices reads back identical.
       "encode_garment",
       [](std::shared_ptr<Family> family, const GarmentSource& garment, const OptFaces& faces,
          std::optional<std::string> name, const OptArray& edges, int z_depth, std::size_t polygons_per_vertex,
-         double scale, int threads, const Progress& progress) {
+         double scale, const std::string& up, int threads, const Progress& progress) {
         PolygonSoup soup;
         std::string default_name = "garment";
         if (py::isinstance<py::str>(garment) || py::hasattr(garment, "__fspath__")) {
@@ -141,7 +141,9 @@ vertices reads back identical.
                             py::make_tuple(ENOENT, path.string() + ": no such file", path.string()).ptr());
             throw py::error_already_set();
           }
-          soup = unwrap(read_garment_mesh(path, scale));
+          auto axis = parse_up_axis(up);
+          if (!axis) value_error("up: " + axis.status().message());
+          soup = unwrap(read_garment_mesh(path, BodyFrame{scale, *axis}));
           default_name = path.stem().string();
         } else if (faces.is_none()) {
           const auto mesh = mesh_from(garment, "garment");
@@ -178,7 +180,7 @@ vertices reads back identical.
       },
       py::arg("family"), py::arg("garment"), py::arg("faces") = py::none(), py::kw_only(), py::arg("name") = py::none(),
       py::arg("edges") = py::none(), py::arg("z_depth") = 0, py::arg("polygons_per_vertex") = 0, py::arg("scale") = 1.0,
-      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("up") = "y", py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Encodes a garment on a body family: its detail template (seed 001 section
 6), the clearance it keeps on the reference body and the edge transfer.
 
@@ -186,7 +188,8 @@ garment: the garment on the family's reference body, as
     - vertices (m, 3) with ``faces`` ((F, k) or a list of polygons),
     - a Mesh (e.g. ``MakeHuman.garment(path)``, ``skin_band_garment``), or
     - the path of an OBJ file (every vertex and every face of every group;
-      positions times ``scale``; the name defaults to the file's stem).
+      positions times ``scale``, and with ``up="z"`` a Z-up file turned Y-up
+      as ``Body.read`` turns its body; the name defaults to the file's stem).
 name: the garment's name (files, errors, reports).
 edges: (E, 2) edges in the caller's order (the edge transfer's sums follow
     it); default: the faces' edges, sorted.

@@ -65,6 +65,11 @@ std::vector<Vec3d> BodySet::positions(std::size_t b) const {
 // ------------------------------------------------------------ OBJ directory
 
 Expected<std::vector<Vec3d>> read_body_obj(const std::filesystem::path& file, const ReferenceBody& ref, double scale) {
+  return read_body_obj(file, ref, BodyFrame{scale, UpAxis::kY});
+}
+
+Expected<std::vector<Vec3d>> read_body_obj(const std::filesystem::path& file, const ReferenceBody& ref,
+                                           const BodyFrame& frame) {
   Model m;
   try {
     m = read_obj(file);
@@ -114,14 +119,19 @@ Expected<std::vector<Vec3d>> read_body_obj(const std::filesystem::path& file, co
   }
   std::vector<Vec3d> pos(r.nodes.slots.capacity(), Vec3d::Zero());
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-    if (m.alive(NodeIdx{v})) pos[file_to_ref[v]] = scale * m.position(NodeIdx{v});
+    if (m.alive(NodeIdx{v})) pos[file_to_ref[v]] = frame.to_engine(m.position(NodeIdx{v}));
   return pos;
 }
 
 ObjDirectorySource::ObjDirectorySource(std::filesystem::path dir, std::shared_ptr<const ReferenceBody> reference,
                                        double scale)
-    : dir_(std::move(dir)), reference_(std::move(reference)), scale_(scale) {
+    : ObjDirectorySource(std::move(dir), std::move(reference), BodyFrame{scale, UpAxis::kY}) {}
+
+ObjDirectorySource::ObjDirectorySource(std::filesystem::path dir, std::shared_ptr<const ReferenceBody> reference,
+                                       BodyFrame frame)
+    : dir_(std::move(dir)), reference_(std::move(reference)), frame_(frame) {
   namespace fs = std::filesystem;
+  if (Status s = frame_.check(); !s) throw Error(Status(s.code(), dir_.string() + ": " + s.message()));
   if (!fs::is_directory(dir_)) throw Error(Status(ErrorCode::kIo, dir_.string() + ": not a directory"));
   for (const auto& e : fs::directory_iterator(dir_)) {
     std::string ext = e.path().extension().string();
@@ -140,7 +150,7 @@ void ObjDirectorySource::generate(std::size_t first, std::size_t count, BodySet&
   ExecContext c = ctx;
   c.sequential_threshold = 2;
   c.grain = 1;
-  par::for_each_n(c, end - first, [&](std::size_t k) { loaded[k] = read_body_obj(files_[first + k], *reference_, scale_); });
+  par::for_each_n(c, end - first, [&](std::size_t k) { loaded[k] = read_body_obj(files_[first + k], *reference_, frame_); });
   for (std::size_t k = 0; k < loaded.size(); ++k) {
     const std::size_t i = first + k;
     Status s = loaded[k] ? out.add(body_name(i), std::span<const Vec3d>(*loaded[k])) : loaded[k].status();

@@ -17,6 +17,7 @@
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
+#include <atelier/systems/body/body_file.h>
 #include <atelier/systems/body/reference_body.h>
 
 namespace atelier {
@@ -77,6 +78,9 @@ class BodySource {
   /// defined by the source's parameters). A resumed job compares the file's
   /// contents with the ones its record was made from (issue 27).
   [[nodiscard]] virtual std::filesystem::path body_file(std::size_t /*i*/) const { return {}; }
+  /// The units and axes of the source's files (bodies are generated in the
+  /// engine's, metres and Y up): what a body's outputs are written back in.
+  [[nodiscard]] virtual BodyFrame frame() const { return {}; }
   /// Clears `out` and fills it with bodies [first, first + count). A body
   /// that fails is appended to `failures` and skipped; the rest complete.
   virtual void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
@@ -86,14 +90,17 @@ class BodySource {
 /// Bodies from OBJ files in a directory (sorted by file name) that share the
 /// reference body's topology: same node count and the same faces. A file with
 /// another topology, or a malformed one, is reported by name as a failure.
-/// `scale` converts file units to metres.
+/// `frame` maps file units and axes to the engine's (metres, Y up; see
+/// body_file.h); a plain `scale` converts file units to metres.
 class ObjDirectorySource final : public BodySource {
  public:
   ObjDirectorySource(std::filesystem::path dir, std::shared_ptr<const ReferenceBody> reference, double scale = 1.0);
+  ObjDirectorySource(std::filesystem::path dir, std::shared_ptr<const ReferenceBody> reference, BodyFrame frame);
   [[nodiscard]] std::size_t size() const override { return files_.size(); }
   [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
   [[nodiscard]] std::string body_name(std::size_t i) const override { return files_[i].stem().string(); }
   [[nodiscard]] std::filesystem::path body_file(std::size_t i) const override { return files_[i]; }
+  [[nodiscard]] BodyFrame frame() const override { return frame_; }
   void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                 const ExecContext& ctx) const override;
   [[nodiscard]] const std::vector<std::filesystem::path>& files() const noexcept { return files_; }
@@ -101,7 +108,7 @@ class ObjDirectorySource final : public BodySource {
  private:
   std::filesystem::path dir_;
   std::shared_ptr<const ReferenceBody> reference_;
-  double scale_;
+  BodyFrame frame_;
   std::vector<std::filesystem::path> files_;
 };
 
@@ -110,5 +117,8 @@ class ObjDirectorySource final : public BodySource {
 /// mismatch (node count, face count, or the first differing face).
 [[nodiscard]] Expected<std::vector<Vec3d>> read_body_obj(const std::filesystem::path& file, const ReferenceBody& ref,
                                                          double scale = 1.0);
+/// The same with the file's units and axes mapped to the engine's.
+[[nodiscard]] Expected<std::vector<Vec3d>> read_body_obj(const std::filesystem::path& file, const ReferenceBody& ref,
+                                                         const BodyFrame& frame);
 
 }  // namespace atelier

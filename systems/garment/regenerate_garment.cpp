@@ -274,6 +274,37 @@ Expected<GarmentTemplate> read_garment_template(const GarmentFamily& family, con
   return g;
 }
 
+Expected<PolygonSoup> read_garment_mesh(const fs::path& file, const BodyFrame& frame) {
+  if (Status s = frame.check(); !s) return Status(s.code(), file.string() + ": " + s.message());
+  auto mesh = read_garment_mesh(file);
+  if (!mesh) return mesh;
+  // At the door: file units and axes to metres and Y up.
+  for (std::size_t v = 0; v < mesh->positions.size(); ++v) {
+    mesh->positions[v] = frame.to_engine(mesh->positions[v]);
+    if (!mesh->positions[v].allFinite())
+      return Status(ErrorCode::kDegenerate,
+                    file.string() + ": vertex " + std::to_string(v + 1) + " is not finite in metres");
+  }
+  return mesh;
+}
+
+Expected<GarmentTemplate> encode_garment_file(const ReferenceBody& reference, const fs::path& garment,
+                                              const GarmentFileOptions& options, const ExecContext& ctx) {
+  const std::string file = garment.string();
+  if (Status s = options.frame.check(); !s) return Status(s.code(), file + ": " + s.message());
+  std::error_code ec;
+  if (!fs::is_regular_file(garment, ec)) return Status(ErrorCode::kIo, file + ": no such file");
+  auto mesh = read_garment_mesh(garment, options.frame);
+  if (!mesh) return mesh.status();
+  // Float, as the template's .obj keeps it.
+  for (Vec3d& p : mesh->positions) p = round_to_float(p);
+  auto family = GarmentFamily::of(reference);
+  if (!family) return Status(family.status().code(), file + ": " + family.status().message());
+  auto t = encode_garment(*family, garment.stem().string(), std::move(*mesh), options.encode, ctx);
+  if (!t) return Status(t.status().code(), file + ": " + t.status().message());
+  return t;
+}
+
 void write_garment_template(const GarmentTemplate& garment, const fs::path& dir) {
   fs::create_directories(dir);
   write_garment_mesh(garment.mesh, garment.mesh.positions, dir / (garment.name + ".obj"));

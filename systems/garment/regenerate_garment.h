@@ -94,6 +94,26 @@ struct GarmentEncodeOptions {
                                                        const GarmentEncodeOptions& options = {},
                                                        const ExecContext& ctx = {});
 
+struct GarmentFileOptions {
+  /// The garment file's units and axes (those of the body it was made on):
+  /// mapped to metres and Y up at the door (systems/body/body_file.h).
+  BodyFrame frame;
+  GarmentEncodeOptions encode;
+};
+
+/// Encodes the garment in an OBJ file on `reference` (in the engine's
+/// frame, e.g. from read_reference_body with the same BodyFrame): reads it
+/// (read_garment_mesh), maps it to metres and Y up, rounds it to float (what
+/// the template's .obj stores, so a template read back is the one encoded)
+/// and encodes it (encode_garment), named after the file's stem. The
+/// template is in metres and Y up. Errors name the file: those of
+/// read_garment_mesh, a bad frame, a reference whose skin is not closed and
+/// consistently oriented, and those of encode_garment.
+[[nodiscard]] Expected<GarmentTemplate> encode_garment_file(const ReferenceBody& reference,
+                                                            const std::filesystem::path& garment,
+                                                            const GarmentFileOptions& options = {},
+                                                            const ExecContext& ctx = {});
+
 /// A garment file pair: `<stem>.atd` (the detail encoding) and `<stem>.obj`
 /// beside it (the garment on the reference body), as `atelier encode
 /// --garment` writes them. Errors name the file.
@@ -109,6 +129,10 @@ void write_garment_template(const GarmentTemplate& garment, const std::filesyste
 /// are often not manifold), and the texture coordinates of every corner
 /// (corner_uv) when every corner has a `vt`. Errors name the file and line.
 [[nodiscard]] Expected<PolygonSoup> read_garment_mesh(const std::filesystem::path& file, double scale = 1.0);
+/// The same in a file's units and axes, mapped to metres and Y up
+/// (systems/body/body_file.h). Errors also: a bad frame, a vertex that is
+/// not finite once mapped.
+[[nodiscard]] Expected<PolygonSoup> read_garment_mesh(const std::filesystem::path& file, const BodyFrame& frame);
 /// Writes the soup with `positions` in float precision (what
 /// read_garment_mesh gives back), with its corner_uv as `vt` (one per
 /// distinct value, seams kept), atomically. Regeneration moves positions
