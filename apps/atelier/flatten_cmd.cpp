@@ -66,6 +66,8 @@ CLI::App* add_flatten_subcommand(CLI::App& app, FlattenCmdOptions& opt) {
   c->add_flag("--dxf", opt.dxf, "also write pattern.dxf (ASTM D6673 / AAMA layers)");
   c->add_flag("--allow-holes", opt.allow_holes, "accept pieces with interior holes (more than one boundary loop)");
   c->add_flag("--no-strain-maps", opt.no_strain_maps, "do not write the strain-map PNGs");
+  c->add_flag("--free-seams", opt.free_seams,
+              "flatten each piece on its own: sewn edges are not held to their 3D length (mismatches are reported)");
   c->add_option("--json", opt.json, "also write the distortion per piece and the seam checks as JSON");
   return c;
 }
@@ -76,6 +78,7 @@ int run_flatten(const Common& common, const FlattenCmdOptions& opt, Log& log) {
   po.dxf = opt.dxf;
   po.strain_maps = !opt.no_strain_maps;
   po.flatten.allow_holes = opt.allow_holes;
+  po.flatten.seam_lengths = !opt.free_seams;
   if (opt.grain.size() == 3) po.flatten.grain = Vec3d(opt.grain[0], opt.grain[1], opt.grain[2]);
   for (const std::string& s : opt.surfaces) po.flatten.surfaces.push_back(surface_named(m, s, opt.mesh));
   for (const std::string& s : opt.mirror) po.pattern.mirror.push_back(surface_named(m, s, opt.mesh));

@@ -27,6 +27,7 @@ struct FlattenCmdOptions {
   bool dxf = false;
   bool allow_holes = false;
   bool no_strain_maps = false;
+  bool free_seams = false;  // FlattenOptions::seam_lengths off
   std::vector<std::string> surfaces;  // pieces by surface name (default: all with faces)
   std::vector<std::string> mirror;    // pieces also written mirrored
   std::vector<double> grain;          // 3D grain direction x y z

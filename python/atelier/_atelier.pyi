@@ -411,6 +411,7 @@ def flatten(
     surfaces: Optional[Sequence[str]] = None,
     grain: Optional[FloatArray] = None,
     allow_holes: bool = False,
+    free_seams: bool = False,
     threads: int = 0,
     progress: Progress = None,
 ) -> tuple[npt.NDArray[np.float64], list[dict[str, Any]]]:

@@ -35,7 +35,7 @@ void bind_pattern(py::module_& m) {
   m.def(
       "flatten",
       [](const MeshLike& mesh, const std::optional<std::vector<std::string>>& surfaces, const OptArray& grain,
-         bool allow_holes, int threads, const Progress& progress) {
+         bool allow_holes, bool free_seams, int threads, const Progress& progress) {
         const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
         Model model;
         if (in->model)
@@ -44,6 +44,7 @@ void bind_pattern(py::module_& m) {
           (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
         FlattenOptions o;
         o.allow_holes = allow_holes;
+        o.seam_lengths = !free_seams;
         if (surfaces)
           for (const std::string& s : *surfaces) o.surfaces.push_back(surface_named(model, s));
         if (!grain.is_none()) {
@@ -92,7 +93,8 @@ void bind_pattern(py::module_& m) {
         return py::make_tuple(adopt(std::move(uv), {n, 2}), pieces);
       },
       py::arg("mesh"), py::kw_only(), py::arg("surfaces") = py::none(), py::arg("grain") = py::none(),
-      py::arg("allow_holes") = false, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("allow_holes") = false, py::arg("free_seams") = false, py::arg("threads") = 0,
+      py::arg("progress") = py::none(), R"doc(
 Flattens a model's pieces into the plane (the flattening of ``atelier flatten``).
 
 mesh: a Mesh (``read_mesh``: one piece per surface, i.e. OBJ group) or a
@@ -101,6 +103,9 @@ mesh: a Mesh (``read_mesh``: one piece per surface, i.e. OBJ group) or a
 surfaces: flatten only the surfaces of these names (default: all).
 grain: 3D grain direction (x, y, z); default each pattern's principal axis.
 allow_holes: accept pieces with interior holes.
+free_seams: flatten each piece on its own; by default every sewn edge of a
+    piece's boundary is held to its 3D length so that seams sew
+    (``atelier flatten --free-seams``).
 
 Returns (uv, pieces): uv is an (n, 2) float64 array, the planar position of
 every mesh vertex (zeros for vertices of pieces not flattened; one copy of
