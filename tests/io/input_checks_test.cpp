@@ -88,3 +88,30 @@ TEST(InputChecks, TextOrBytesWithNoGeometryAreRefused) {
   EXPECT_EQ(cloud.num_nodes(), 2u);
   EXPECT_TRUE(validate(cloud));
 }
+
+// Found by the ply fuzz harness (a 10^7-execution run): an element with no
+// properties and a count of 3.5e15 made the reader loop that many times over
+// nothing (a hang). It holds no data whatever its count: the file reads as
+// the same file without it, in ASCII and binary alike.
+TEST(InputChecks, PlyElementWithoutPropertiesAndAHugeCountIsNotAHang) {
+  const std::string vertex = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string face = "element face 1\nproperty list uchar int vertex_indices\n";
+  const std::string empty = "element vex 3555555555555555\n";
+  const std::string data = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const Model plain = read_ply_from_string("ply\nformat ascii 1.0\n" + vertex + face + "end_header\n" + data, "a.ply");
+  for (const std::string& head : {"ply\nformat ascii 1.0\n" + empty + vertex + face,
+                                  "ply\nformat ascii 1.0\n" + vertex + empty + face,
+                                  "ply\nformat ascii 1.0\n" + vertex + face + empty}) {
+    const Model m = read_ply_from_string(head + "end_header\n" + data, "e.ply");
+    EXPECT_EQ(m.nodes.position, plain.nodes.position);
+    EXPECT_EQ(m.num_faces(), plain.num_faces());
+    EXPECT_TRUE(validate(m));
+  }
+  std::string bin = "ply\nformat binary_little_endian 1.0\n" + empty + vertex + face + "end_header\n";
+  for (float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) bin.append(reinterpret_cast<const char*>(&v), 4);
+  bin.push_back(3);
+  for (std::int32_t i : {0, 1, 2}) bin.append(reinterpret_cast<const char*>(&i), 4);
+  const Model b = read_ply_from_string(bin, "b.ply");
+  EXPECT_EQ(b.nodes.position, plain.nodes.position);
+  EXPECT_EQ(b.num_faces(), plain.num_faces());
+}
