@@ -119,7 +119,8 @@ void finish(MadeToMeasureReport& rep, const MadeToMeasureOptions& opt, const std
 /// The topology write() compares with prepare()'s: node slots, and per live
 /// face its surface and nodes.
 std::vector<std::uint32_t> fingerprint(const Model& m) {
-  std::vector<std::uint32_t> fp{m.nodes.slots.capacity(), m.faces.slots.capacity()};
+  std::vector<std::uint32_t> fp{static_cast<std::uint32_t>(m.nodes.slots.capacity()),
+                                static_cast<std::uint32_t>(m.faces.slots.capacity())};
   for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
     if (!m.alive(FaceIdx{f})) continue;
     fp.push_back(f);
