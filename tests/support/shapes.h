@@ -3,6 +3,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <memory>
 #include <vector>
@@ -22,6 +25,24 @@ struct Soup {
   }
   [[nodiscard]] PolygonSoupView arrays() const { return {p, off, idx}; }
 };
+
+/// Writes the soup as OBJ text with every double exactly (%.17g), each
+/// vertex mapped by `map` first.
+template <class Map>
+void write_soup_obj(const Soup& s, const std::filesystem::path& file, Map map) {
+  std::ofstream f(file);
+  char line[128];
+  for (const Vec3d& p : s.p) {
+    const Vec3d q = map(p);
+    std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", q.x(), q.y(), q.z());
+    f << line;
+  }
+  for (std::size_t k = 0; k + 1 < s.off.size(); ++k) {
+    f << 'f';
+    for (std::uint32_t i = s.off[k]; i < s.off[k + 1]; ++i) f << ' ' << s.idx[i] + 1;
+    f << '\n';
+  }
+}
 
 /// Closed UV sphere of radius r: quads with triangle fans at the poles,
 /// outward orientation. Vertex 0 is the north pole (+z).

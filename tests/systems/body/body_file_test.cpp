@@ -12,40 +12,11 @@
 #include <random>
 #include <string>
 
+#include "support/run_command.h"
 #include "support/shapes.h"
 
 using namespace atelier;
 namespace fs = std::filesystem;
-
-namespace {
-
-fs::path fresh_dir(const std::string& name) {
-  const char* env = std::getenv("ATELIER_TMP");
-  fs::path d = (env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests") / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-/// Writes the soup as OBJ text with every double exactly (%.17g), each
-/// vertex mapped by `map` first.
-template <class Map>
-void write_soup(const shapes::Soup& s, const fs::path& file, Map map) {
-  std::ofstream f(file);
-  char line[128];
-  for (const Vec3d& p : s.p) {
-    const Vec3d q = map(p);
-    std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", q.x(), q.y(), q.z());
-    f << line;
-  }
-  for (std::size_t k = 0; k + 1 < s.off.size(); ++k) {
-    f << 'f';
-    for (std::uint32_t i = s.off[k]; i < s.off[k + 1]; ++i) f << ' ' << s.idx[i] + 1;
-    f << '\n';
-  }
-}
-
-}  // namespace
 
 TEST(BodyFile, FrameMapsAreInverseRotationsAndZUpBecomesYUp) {
   const BodyFrame cm_z{0.01, UpAxis::kZ};
@@ -69,11 +40,11 @@ TEST(BodyFile, FrameMapsAreInverseRotationsAndZUpBecomesYUp) {
 }
 
 TEST(BodyFile, AClosedBodyInCentimetresZUpIsTheBodyInMetresYUp) {
-  const fs::path d = fresh_dir("body_file_frame");
+  const fs::path d = atelier::testing::scratch_dir("body_file_frame");
   const shapes::Soup s = shapes::uv_sphere(16, 10, 0.2, Vec3d(0.1, 0.9, 0.05));
-  write_soup(s, d / "m.obj", [](const Vec3d& p) { return p; });
+  shapes::write_soup_obj(s, d / "m.obj", [](const Vec3d& p) { return p; });
   // Engine (X, Y, Z) in metres is file (X, -Z, Y) in centimetres.
-  write_soup(s, d / "cm.obj", [](const Vec3d& p) { return Vec3d(100 * p.x(), -100 * p.z(), 100 * p.y()); });
+  shapes::write_soup_obj(s, d / "cm.obj", [](const Vec3d& p) { return Vec3d(100 * p.x(), -100 * p.z(), 100 * p.y()); });
   auto m = read_reference_body(d / "m.obj");
   auto c = read_reference_body(d / "cm.obj", {.frame = {0.01, UpAxis::kZ}});
   ASSERT_TRUE(m) << m.status().message();
@@ -89,7 +60,7 @@ TEST(BodyFile, AClosedBodyInCentimetresZUpIsTheBodyInMetresYUp) {
   }
   // A family member in the same frame, read by the directory source.
   fs::create_directories(d / "set");
-  write_soup(s, d / "set" / "b.obj",
+  shapes::write_soup_obj(s, d / "set" / "b.obj",
              [](const Vec3d& p) { return Vec3d(100 * 1.1 * p.x(), -100 * p.z(), 100 * p.y()); });
   ObjDirectorySource src(d / "set", std::make_shared<const ReferenceBody>(std::move(*c)), BodyFrame{0.01, UpAxis::kZ});
   BodySet set(src.reference());
@@ -105,9 +76,9 @@ TEST(BodyFile, AClosedBodyInCentimetresZUpIsTheBodyInMetresYUp) {
 }
 
 TEST(BodyFile, OpenFlippedInwardAndWrongTopologyBodiesAreNamedWithTheReason) {
-  const fs::path d = fresh_dir("body_file_bad");
+  const fs::path d = atelier::testing::scratch_dir("body_file_bad");
   shapes::Soup s = shapes::uv_sphere(12, 8, 0.3);
-  write_soup(s, d / "good.obj", [](const Vec3d& p) { return p; });
+  shapes::write_soup_obj(s, d / "good.obj", [](const Vec3d& p) { return p; });
   // Open: the north cap's fan removed.
   {
     shapes::Soup open;
@@ -116,20 +87,20 @@ TEST(BodyFile, OpenFlippedInwardAndWrongTopologyBodiesAreNamedWithTheReason) {
       open.idx.insert(open.idx.end(), s.idx.begin() + s.off[k], s.idx.begin() + s.off[k + 1]);
       open.off.push_back(static_cast<std::uint32_t>(open.idx.size()));
     }
-    write_soup(open, d / "open.obj", [](const Vec3d& p) { return p; });
+    shapes::write_soup_obj(open, d / "open.obj", [](const Vec3d& p) { return p; });
   }
   // One face turned the other way (read_obj names the two faces and their lines).
   {
     shapes::Soup flip = s;
     std::reverse(flip.idx.begin() + flip.off[20], flip.idx.begin() + flip.off[21]);
-    write_soup(flip, d / "flip.obj", [](const Vec3d& p) { return p; });
+    shapes::write_soup_obj(flip, d / "flip.obj", [](const Vec3d& p) { return p; });
   }
   // Every face turned: closed and consistent, but facing inward.
   {
     shapes::Soup in = s;
     for (std::size_t k = 0; k + 1 < in.off.size(); ++k)
       std::reverse(in.idx.begin() + in.off[k], in.idx.begin() + in.off[k + 1]);
-    write_soup(in, d / "inward.obj", [](const Vec3d& p) { return p; });
+    shapes::write_soup_obj(in, d / "inward.obj", [](const Vec3d& p) { return p; });
   }
   struct Case {
     const char* file;
@@ -149,7 +120,7 @@ TEST(BodyFile, OpenFlippedInwardAndWrongTopologyBodiesAreNamedWithTheReason) {
   ASSERT_TRUE(ref) << ref.status().message();
   fs::create_directories(d / "set");
   fs::copy_file(d / "good.obj", d / "set" / "a.obj");
-  write_soup(shapes::uv_sphere(10, 8, 0.3), d / "set" / "b.obj", [](const Vec3d& p) { return p; });
+  shapes::write_soup_obj(shapes::uv_sphere(10, 8, 0.3), d / "set" / "b.obj", [](const Vec3d& p) { return p; });
   ObjDirectorySource src(d / "set", std::make_shared<const ReferenceBody>(std::move(*ref)), BodyFrame{});
   BodySet set(src.reference());
   std::vector<BodyFailure> failures;

@@ -12,36 +12,13 @@
 #include <fstream>
 #include <string>
 
+#include "support/run_command.h"
 #include "support/shapes.h"
 
 using namespace atelier;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path fresh_dir(const std::string& name) {
-  const char* env = std::getenv("ATELIER_TMP");
-  fs::path d = (env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests") / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-template <class Map>
-void write_soup(const shapes::Soup& s, const fs::path& file, Map map) {
-  std::ofstream f(file);
-  char line[128];
-  for (const Vec3d& p : s.p) {
-    const Vec3d q = map(p);
-    std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", q.x(), q.y(), q.z());
-    f << line;
-  }
-  for (std::size_t k = 0; k + 1 < s.off.size(); ++k) {
-    f << 'f';
-    for (std::uint32_t i = s.off[k]; i < s.off[k + 1]; ++i) f << ' ' << s.idx[i] + 1;
-    f << '\n';
-  }
-}
 
 constexpr int kNu = 24, kNv = 16;
 
@@ -120,16 +97,16 @@ FamilyRun encode_and_regenerate(const fs::path& dir, const BodyFrame& frame) {
 }  // namespace
 
 TEST(UserBody, AFamilyInCentimetresZUpRegeneratesAsInMetresYUp) {
-  const fs::path root = fresh_dir("user_body_family");
+  const fs::path root = atelier::testing::scratch_dir("user_body_family");
   const double a = 0.17, b = 0.12, c = 0.85;
   for (const auto& [name, map] : {std::pair{"m", &identity}, std::pair{"cm", &cm_z_up}}) {
     const fs::path d = root / name;
     fs::create_directories(d / "set");
-    write_soup(body(a, b, c), d / "ref.obj", map);
-    write_soup(band(a, b, c), d / "band.obj", map);
+    shapes::write_soup_obj(body(a, b, c), d / "ref.obj", map);
+    shapes::write_soup_obj(band(a, b, c), d / "band.obj", map);
     // The family: wider, deeper and taller bodies of the same topology.
     for (int k = 0; k < 4; ++k)
-      write_soup(body(a * (1 + 0.06 * k), b * (1 + 0.09 * (3 - k)), c * (1 + 0.02 * k)),
+      shapes::write_soup_obj(body(a * (1 + 0.06 * k), b * (1 + 0.09 * (3 - k)), c * (1 + 0.02 * k)),
                  d / "set" / ("b" + std::to_string(k) + ".obj"), map);
   }
   const BodyFrame cm{0.01, UpAxis::kZ};
@@ -166,14 +143,14 @@ TEST(UserBody, AFamilyInCentimetresZUpRegeneratesAsInMetresYUp) {
 }
 
 TEST(UserBody, AGarmentFileInABadFrameOrOnAnOpenBodyIsRefusedNamingTheFile) {
-  const fs::path d = fresh_dir("user_body_bad");
-  write_soup(band(0.17, 0.12, 0.85), d / "band.obj", identity);
+  const fs::path d = atelier::testing::scratch_dir("user_body_bad");
+  shapes::write_soup_obj(band(0.17, 0.12, 0.85), d / "band.obj", identity);
   // The band itself is open: as a reference body it is refused.
   auto open = read_reference_body(d / "band.obj");
   ASSERT_FALSE(open);
   EXPECT_NE(open.status().message().find("band.obj"), std::string::npos);
   EXPECT_NE(open.status().message().find("not closed"), std::string::npos) << open.status().message();
-  write_soup(body(0.17, 0.12, 0.85), d / "ref.obj", identity);
+  shapes::write_soup_obj(body(0.17, 0.12, 0.85), d / "ref.obj", identity);
   auto ref = read_reference_body(d / "ref.obj");
   ASSERT_TRUE(ref) << ref.status().message();
   auto g = encode_garment_file(*ref, d / "band.obj", {.frame = {0.0, UpAxis::kY}});
