@@ -104,6 +104,18 @@ ExtrudeStrokes dome_strokes(int k = 10) {
   return in;
 }
 
+/// The ring swept along two parallel vertical strokes: a straight tube.
+ExtrudeStrokes tube_strokes() {
+  ExtrudeStrokes in = dome_strokes();
+  std::vector<Vec3d> s0, s1;
+  for (int k = 0; k <= 5; ++k) {
+    s0.push_back(Vec3d(-1, 0.3 * k, 0));
+    s1.push_back(Vec3d(1, 0.3 * k, 0));
+  }
+  in.sweep = {project(in.sweep_camera, s0), project(in.sweep_camera, s1)};
+  return in;
+}
+
 /// Every edge has a face on each side using it in opposite directions
 /// (rule 2, Fig. 8), and V - E + F.
 void expect_closed_oriented(const Model& m, std::int64_t chi) {
@@ -231,13 +243,7 @@ TEST(Extrude, ParallelStrokesFromAnArcGiveACylinder) {
 TEST(Extrude, RingWithTwoStrokesGivesATube) {
   Model m = cup();
   const std::size_t v0 = m.num_nodes(), f0 = m.num_faces();
-  ExtrudeStrokes in = dome_strokes();
-  std::vector<Vec3d> s0, s1;
-  for (int k = 0; k <= 5; ++k) {
-    s0.push_back(Vec3d(-1, 0.3 * k, 0));
-    s1.push_back(Vec3d(1, 0.3 * k, 0));
-  }
-  in.sweep = {project(in.sweep_camera, s0), project(in.sweep_camera, s1)};
+  const ExtrudeStrokes in = tube_strokes();
   ExtrudeOptions opt;
   opt.optimise = false;
   auto r = extrude(m, in, opt);
@@ -540,15 +546,7 @@ TEST(Extrude, AsSurfaceJoinsThePartAlongB) {
     Model m = cup();
     const Model before = m;
     const SurfaceIdx cup_surface = m.nodes.surface[0];
-    ExtrudeStrokes in = dome_strokes();
-    if (tube) {
-      std::vector<Vec3d> s0, s1;
-      for (int k = 0; k <= 5; ++k) {
-        s0.push_back(Vec3d(-1, 0.3 * k, 0));
-        s1.push_back(Vec3d(1, 0.3 * k, 0));
-      }
-      in.sweep = {project(in.sweep_camera, s0), project(in.sweep_camera, s1)};
-    }
+    const ExtrudeStrokes in = tube ? tube_strokes() : dome_strokes();
     ExtrudeOptions o;
     o.as_surface = true;
     auto r = extrude(m, in, o);
