@@ -414,18 +414,8 @@ class Optimiser {
       }
     // Jacobi: targets from the old positions; re-checked against the
     // neighbours' new positions so that no face turns over.
-    for (const auto& [v, q] : moves) {
-      bool ok = true;
-      const Vec3d p = m_.position(v);
-      m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
-        if (!ok || !m_.face(h).valid()) return;
-        const Vec3d& a = m_.position(m_.head(h));
-        const Vec3d& b = m_.position(m_.head(m_.next(h)));
-        const Vec3d n0 = tri_normal(p, a, b), n1 = tri_normal(q, a, b);
-        ok = n0.dot(n1) > 0.2 * n0.norm() * n1.norm();
-      });
-      if (ok) m_.nodes.position[v.value] = q, ++rep_.relaxed;
-    }
+    for (const auto& [v, q] : moves)
+      if (no_flip(v, q, 0.2)) m_.nodes.position[v.value] = q, ++rep_.relaxed;
   }
 
   // ---------------------------------------------------------- step 1
