@@ -10,6 +10,12 @@
 //  * BM_RegenJob/bodies: `atelier regen` of the skirt template (2 levels) on
 //    1,000 and 10,000 mannequins in chunks of 64: the peak memory must not
 //    grow with the number of bodies.
+//  * BM_RegenOutfitJob/garments/bodies (issue 26): `atelier regen` of detail
+//    garments (the encoder's trousers, skirt and top meshes encoded with
+//    `encode --garment`) on mannequins: one garment (the skirt) beside the
+//    three as one outfit (layers, inter-garment penetration count). Child CPU
+//    time (user + system, from wait4) beside the wall time: the machine is
+//    shared, so compare cpu_s.
 #include <benchmark/benchmark.h>
 #include <fcntl.h>
 #include <spawn.h>
@@ -32,6 +38,7 @@ struct ChildRun {
   int code = -1;
   double seconds = 0;
   double peak_rss_mb = 0;
+  double cpu_s = 0;  // user + system of the child
 };
 
 // Runs argv with stdout and stderr sent to /dev/null.
@@ -57,6 +64,8 @@ ChildRun run_child(const std::vector<std::string>& args) {
   posix_spawn_file_actions_destroy(&fa);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.peak_rss_mb = static_cast<double>(ru.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
+  r.cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+            1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
   return r;
 }
 
@@ -122,5 +131,46 @@ void BM_RegenJob(benchmark::State& st) {
   st.SetLabel("atelier regen, skirt (2 levels), chunks of 64, 2 threads");
 }
 BENCHMARK(BM_RegenJob)->Arg(1000)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+
+void BM_RegenOutfitJob(benchmark::State& st) {
+  const long garments = st.range(0), bodies = st.range(1);
+  const fs::path dir = scratch("regen_outfit_templates");
+  if (run_child({ATELIER_CLI, "--quiet", "encode", "--out", (dir / "profile").string()}).code != 0) {
+    st.SkipWithError("atelier encode failed");
+    return;
+  }
+  std::vector<std::string> args = {ATELIER_CLI, "--threads", "2", "--quiet", "regen"};
+  const std::vector<std::string> names =
+      garments == 1 ? std::vector<std::string>{"skirt"} : std::vector<std::string>{"trousers", "skirt", "top"};
+  for (const auto& g : names) {
+    if (run_child({ATELIER_CLI, "--quiet", "encode", "--garment", (dir / "profile" / (g + ".obj")).string(), "--out",
+                   (dir / "garments").string()})
+            .code != 0) {
+      st.SkipWithError("atelier encode --garment failed");
+      return;
+    }
+    args.insert(args.end(), {"--template", (dir / "garments" / (g + ".atd")).string()});
+  }
+  args.insert(args.end(), {"--count", std::to_string(bodies), "--chunk", "64", "--out"});
+  ChildRun r;
+  for (auto _ : st) {
+    const fs::path out = scratch("regen_outfit");
+    std::vector<std::string> a = args;
+    a.push_back(out.string());
+    r = run_child(a);
+    if (r.code != 0) {
+      st.SkipWithError("atelier regen failed");
+      return;
+    }
+    st.SetIterationTime(r.seconds);
+  }
+  st.counters["bodies_per_s"] = static_cast<double>(bodies) / r.seconds;
+  st.counters["cpu_s"] = r.cpu_s;
+  st.counters["cpu_ms_per_body"] = 1e3 * r.cpu_s / static_cast<double>(bodies);
+  st.counters["peak_rss_MB"] = r.peak_rss_mb;
+  st.SetLabel(garments == 1 ? "atelier regen, skirt as a detail garment, 2 threads"
+                            : "atelier regen, trousers + skirt + top as one outfit, 2 threads");
+}
+BENCHMARK(BM_RegenOutfitJob)->Args({1, 400})->Args({3, 400})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
 }  // namespace
