@@ -1,5 +1,6 @@
 // Honest bodies (issue 26): a body source says what each body was made
-// from, and the mannequin stands on the documented floor (y = 0, Y up).
+// from, and the mannequin stands on the documented floor (y = 0, Y up:
+// the person's soles; the headless form itself ends at 0.03 H).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,13 +32,14 @@ TEST(BodyParameters, SampledMannequinsStandOnTheFloorAndReportTheirPerson) {
       lo = std::min(lo, x.y());
       hi = std::max(hi, x.y());
     }
-    // The floor: the lowest skin point at y = 0 (float storage).
-    EXPECT_NEAR(lo, 0.0, 1e-6) << "body " << b;
     const auto params = src.parameters(b);
     ASSERT_GE(params.size(), 3u);
     EXPECT_EQ(params[0].first, "sampled_sex");
     EXPECT_EQ(params[1].first, "sampled_stature_m");
     const MannequinParams mp = src.params(b);
+    // The floor the person stands on is y = 0 (mannequin.h): the form ends
+    // in caps below the ankles whose lowest point is 0.03 H above it.
+    EXPECT_NEAR(lo, 0.03 * mp.height, 0.002) << "body " << b;
     EXPECT_NEAR(std::stod(params[1].second), mp.height, 1e-4);  // printed to 0.1 mm
     // The form is headless: well short of the person's stature.
     EXPECT_LT(hi, 0.92 * mp.height) << "body " << b;
