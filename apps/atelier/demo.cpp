@@ -11,6 +11,10 @@
 // measurements), write_report (report.json), write_html (report.html and
 // its pictures) and print_summary. The algorithms are library calls
 // (systems/garment/regenerate_garment.h, systems/profile/regenerate.h).
+//
+// Why this file is long: the demo is the one command that shows every
+// stage at once, and each stage (set-up, bodies, report, pictures,
+// patterns) writes its own outputs; they share the reference's structures.
 #include <algorithm>
 #include <array>
 #include <chrono>

@@ -1,16 +1,16 @@
 // `atelier regen --report` (regen_report.h).
 #include "regen_report.h"
 
+#include <atelier/io/png.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/view/render.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-
-#include <atelier/io/png.h>
-#include <atelier/systems/mesh/fan_triangulation.h>
-#include <atelier/systems/view/render.h>
 
 #include "commands.h"
 #include "html_report.h"
@@ -183,9 +183,8 @@ void write_regen_html(const RegenReportInput& in, const ExecContext& ctx, Log& l
     if (!picture) continue;
     const std::string file = "pictures/" + names[row] + ".png";
     write_png(*picture, in.out / file);
-    pictures.push_back({{"title", names[row] + " (" + why + ")"},
-                        {"path", file},
-                        {"caption", "front and side: " + outfit}});
+    pictures.push_back(
+        {{"title", names[row] + " (" + why + ")"}, {"path", file}, {"caption", "front and side: " + outfit}});
   }
   html["pictures"] = pictures;
   HtmlReportOptions ho;

@@ -63,10 +63,10 @@ TEST(OutfitCli, ThreeGarmentsAreLayeredReportedPicturedAndWrittenBesideTheBody) 
 
   // The layer order is part of the job: another order in the same folder is
   // refused (that the layers matter is shown by the library test Outfit.*).
-  const auto other = run_cli("--threads 1 --seed 9 regen" + std::string(" --template ") +
-                             (d / "g" / "skirt.atd").string() + " --template " + (d / "g" / "trousers.atd").string() +
-                             " --template " + (d / "g" / "top.atd").string() + " --count 2 --meshes 1 --chunk 2 --out " +
-                             (d / "t2").string());
+  const auto other =
+      run_cli("--threads 1 --seed 9 regen" + std::string(" --template ") + (d / "g" / "skirt.atd").string() +
+              " --template " + (d / "g" / "trousers.atd").string() + " --template " + (d / "g" / "top.atd").string() +
+              " --count 2 --meshes 1 --chunk 2 --out " + (d / "t2").string());
   EXPECT_EQ(other.code, 2) << "another layer order is another job: " << other.out;
   EXPECT_NE(other.out.find("templates"), std::string::npos) << other.out;
 

@@ -1,6 +1,8 @@
 // Honest bodies (issue 26): a body source says what each body was made
 // from, and the mannequin stands on the documented floor (y = 0, Y up:
 // the person's soles; the headless form itself ends at 0.03 H).
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/body/mannequin_source.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,14 +10,12 @@
 #include <limits>
 #include <string>
 
-#include <atelier/systems/body/mannequin.h>
-#include <atelier/systems/body/mannequin_source.h>
-
 namespace atelier {
 namespace {
 
 TEST(BodyParameters, SampledMannequinsStandOnTheFloorAndReportTheirPerson) {
-  auto topo = std::make_shared<const MannequinTopology>(make_mannequin_topology(MannequinResolution::from_level(2)).value());
+  auto topo =
+      std::make_shared<const MannequinTopology>(make_mannequin_topology(MannequinResolution::from_level(2)).value());
   auto ref = std::make_shared<const ReferenceBody>(make_mannequin(MannequinParams{}, *topo).value());
   const MannequinSource src(topo, 60, 31, ref);
   EXPECT_FALSE(src.whole_person());  // headless: its extent is not a stature

@@ -4,11 +4,6 @@
 // body the pass and its counters use) and, on a few bodies, by the brute
 // force generalized winding number; the garment side by a brute-force ray
 // against every triangle of the inner garment (Moller-Trumbore in double).
-#include <gtest/gtest.h>
-
-#include <cstdlib>
-#include <memory>
-
 #include <atelier/storage/builder.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/body/mannequin_source.h>
@@ -16,6 +11,10 @@
 #include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/spatial/body_bvh.h>
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <memory>
 
 namespace atelier {
 namespace {
@@ -36,7 +35,8 @@ struct Outfit {
 const Outfit& outfit(bool crotch = false) {
   auto make = [](bool c) {
     Outfit r;
-    r.topo = std::make_shared<const MannequinTopology>(make_mannequin_topology(MannequinResolution::from_level(3)).value());
+    r.topo =
+        std::make_shared<const MannequinTopology>(make_mannequin_topology(MannequinResolution::from_level(3)).value());
     r.ref = std::make_shared<const ReferenceBody>(make_mannequin(MannequinParams{}, *r.topo).value());
     r.family = std::make_shared<const GarmentFamily>(GarmentFamily::of(*r.ref).value());
     struct Band {
@@ -102,8 +102,8 @@ double first_hit(const Vec3d& o, const Vec3d& d, std::span<const Vec3d> p, std::
 /// Per garment, the vertices inside a lower layer by the definition of
 /// count_inside_layer, computed by brute force; body distances from the
 /// spatial family's BVH.
-std::vector<std::size_t> independent_layer_count(const Outfit& o, const BodyBvh& bvh,
-                                                 const BodyGarments& g, std::size_t& inside_body) {
+std::vector<std::size_t> independent_layer_count(const Outfit& o, const BodyBvh& bvh, const BodyGarments& g,
+                                                 std::size_t& inside_body) {
   const double probe = LayerPenetrationParams{}.probe, tolerance = LayerPenetrationParams{}.tolerance;
   std::vector<std::size_t> count(o.layers.size(), 0);
   std::vector<std::vector<Triangle>> tris;
@@ -161,7 +161,9 @@ void check_outfit(std::size_t n, std::uint64_t seed) {
   EXPECT_GT(crossed_alone, 10 * n) << "the unlayered garments should cross on every body";
 }
 
-TEST(Outfit, ThreeLayersOnTenBodiesStayOutsideTheBodyAndEachOther) { check_outfit(10, 5); }
+TEST(Outfit, ThreeLayersOnTenBodiesStayOutsideTheBodyAndEachOther) {
+  check_outfit(10, 5);
+}
 
 TEST(Outfit, ThreeLayersOnAHundredBodiesStayOutsideTheBodyAndEachOther) {
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "long: 100 bodies with brute-force checks";
