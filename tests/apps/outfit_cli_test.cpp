@@ -152,3 +152,39 @@ TEST(BodiesCli, MannequinsExportThePersonsStatureAndSampledParametersBesideTheMe
   // The sampled sex is the one the stature was drawn for: women are shorter on average.
   EXPECT_LT(female_stature / static_cast<double>(female), male_stature / static_cast<double>(rows - female));
 }
+
+// `regen --report` opened as a user would: headless Chromium decodes every
+// picture (the page sets data-images-decoded, html_report.h) and shows the
+// tables with the labels and units.
+TEST(OutfitCli, TheRegenReportDecodesItsPicturesInHeadlessChromium) {
+  std::string chromium;
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
+    const auto r = atelier::testing::run_command(std::string("command -v ") + name);
+    if (r.code == 0 && !r.out.empty()) {
+      chromium = r.out.substr(0, r.out.find_first_of("\r\n"));
+      break;
+    }
+  }
+  if (chromium.empty()) GTEST_SKIP() << "chromium not found (HtmlReport.HeadlessChromium* installs it)";
+  const fs::path d = scratch_dir("outfit_cli_chromium");
+  auto r = run_cli("encode --garment " + (encoded_templates() / "skirt.obj").string() + " --out " + (d / "g").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = run_cli("regen --template " + (d / "g" / "skirt.atd").string() + " --count 3 --report --out " +
+              (d / "o").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string html = read_bytes(d / "o" / "report.html");
+  std::size_t pictures = 0;
+  for (auto at = html.find("data:image/png;base64,"); at != std::string::npos;
+       at = html.find("data:image/png;base64,", at + 1))
+    ++pictures;
+  ASSERT_GE(pictures, 2u);
+  const auto dom = atelier::testing::run_command(
+      "timeout 90 " + chromium + " --headless --disable-gpu --no-sandbox --user-data-dir=" + (d / "profile").string() +
+      " --dump-dom file://" + (d / "o" / "report.html").string() + " 2>/dev/null");
+  ASSERT_EQ(dom.code, 0) << dom.out.substr(0, 2000);
+  EXPECT_NE(dom.out.find("data-images-decoded=\"" + std::to_string(pictures) + "\""), std::string::npos)
+      << dom.out.substr(0, 2000);
+  EXPECT_NE(dom.out.find("garment vertices inside a lower layer (all bodies)"), std::string::npos);
+  EXPECT_NE(dom.out.find("<th>skirt_min_clearance_mm</th>"), std::string::npos);
+  EXPECT_NE(dom.out.find("<td>mannequin-00002</td>"), std::string::npos);
+}
