@@ -214,7 +214,7 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--up", opt.bodies.up, "the files' up axis, y or z (directory sources); outputs are written back in it")
       ->check(CLI::IsMember({"y", "z"}));
   c->add_option("--out", opt.out, "output folder");
-  c->add_option("--meshes", opt.meshes, "write OBJ meshes of the first N bodies");
+  c->add_option("--meshes", opt.meshes, "write OBJ meshes of the first N bodies: body.obj beside their garments");
   c->add_option("--chunk", opt.chunk, "bodies per chunk (bounds memory)")->check(CLI::PositiveNumber);
   c->add_option("--levels", opt.levels, "refinement levels (default: each template's)")
       ->check(CLI::Range(0, kMaxTemplateLevels));
