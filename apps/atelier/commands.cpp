@@ -221,11 +221,30 @@ int run_bodies(const Common& common, const BodiesOptions& opt, Log& log) {
     std::size_t done = 0;
     for (std::size_t first = 0; first < n; first += 64) {
       src->generate(first, 64, chunk, failures, ctx);
+      if (first == 0) {
+        // What each body was made from beside what is measured on it; the
+        // headless mannequin's vertical extent is the form's, not a stature.
+        std::string header = "body";
+        for (const auto& [name, v] : src->parameters(0)) header += "," + name;
+        for (const std::string& c : measurement_columns(*ref))
+          header += "," + (c == "stature" && !src->whole_person() ? std::string("form_height") : c);
+        f.write(header + "\n");
+      }
       std::ostringstream rows;
       Status s = measurements_csv(
-          rows, *ref, chunk.size(), [&](std::size_t i) { return chunk.positions(i); }, ctx, first == 0, first);
+          rows, *ref, chunk.size(), [&](std::size_t i) { return chunk.positions(i); }, ctx, false, first);
       if (!s) throw Error(s);
-      f.write(rows.str());
+      std::istringstream lines(rows.str());
+      std::size_t b = 0;
+      for (std::string line; std::getline(lines, line); ++b) {
+        std::size_t index = first + b;  // the body's index in the source, by name (a failed body is skipped)
+        for (std::size_t i = first; i < std::min(n, first + 64); ++i)
+          if (b < chunk.size() && src->body_name(i) == chunk.name(b)) index = i;
+        const std::size_t comma = line.find(',');
+        std::string params;
+        for (const auto& [name, v] : src->parameters(index)) params += "," + v;
+        f.write(line.substr(0, comma) + params + line.substr(comma) + "\n");
+      }
       for (std::size_t b = 0; b < chunk.size() && written < opt.meshes; ++b, ++written) {
         Model m = ref->model;
         chunk.positions(b, m.nodes.position);

@@ -19,6 +19,7 @@
 
 #include "mpi_split.h"
 #include "regen_job.h"
+#include "regen_report.h"
 #include <atelier/engine/parallel.h>
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/makehuman/makehuman.h>
@@ -213,13 +214,15 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--up", opt.bodies.up, "the files' up axis, y or z (directory sources); outputs are written back in it")
       ->check(CLI::IsMember({"y", "z"}));
   c->add_option("--out", opt.out, "output folder");
-  c->add_option("--meshes", opt.meshes, "write OBJ meshes of the first N bodies");
+  c->add_option("--meshes", opt.meshes, "write OBJ meshes of the first N bodies: body.obj beside their garments");
   c->add_option("--chunk", opt.chunk, "bodies per chunk (bounds memory)")->check(CLI::PositiveNumber);
   c->add_option("--levels", opt.levels, "refinement levels (default: each template's)")
       ->check(CLI::Range(0, kMaxTemplateLevels));
   c->add_option("--clearance", opt.clearance, "distance kept from the body in metres (default: each template's)")
       ->check(clearance_check());
   c->add_flag("--no-resume", opt.no_resume, "recompute bodies whose outputs already exist");
+  c->add_flag("--report", opt.report,
+              "also write report.html: summary, a row per body, pictures of sample and worst bodies with their outfit");
   c->add_flag("--patterns", opt.patterns,
               "also write made-to-measure pattern sets (SVG, DXF, measurements CSV) of the profile templates");
   return c;
@@ -261,12 +264,16 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
     for (const fs::path& f : detail_files) {
       auto d = read_garment_template(*job.family, f, ctx);
       if (!d) throw Error(d.status());
+      // An outfit: the garments are layers in the order of the --template
+      // options, the first nearest the skin (the order is part of job.json).
+      d->z_depth = static_cast<int>(job.details.size());
       job.details.push_back(std::make_shared<const GarmentTemplate>(std::move(*d)));
     }
   }
   // Outputs are named after the templates: two of one name would overwrite
   // each other's meshes and records.
   std::map<std::string, fs::path> named;
+  named.emplace("body", "(the body's own mesh, --meshes)");  // <body>/body.obj
   auto claim = [&](const std::string& name, const fs::path& file) {
     const auto [it, fresh] = named.emplace(name, file);
     if (!fresh)
@@ -307,7 +314,7 @@ nlohmann::json write_patterns(const Model& garment, const fs::path& dir, const E
 nlohmann::json garment_quality_json(const GarmentQuality& q) {
   return {{"vertices", q.vertices},         {"inside_nodes", q.inside},          {"max_depth_m", q.max_depth},
           {"min_clearance_m", q.min_clearance}, {"clearance_error_m", q.clearance_error}, {"strain_max", q.strain_max},
-          {"strain_p95", q.strain_p95},     {"pushed", q.pushed}};
+          {"strain_p95", q.strain_p95},     {"pushed", q.pushed}, {"layer_inside_vertices", q.layer_inside}};
 }
 
 /// Regenerates the bodies of this rank's chunks (mpi::regen_share) that have
@@ -462,6 +469,13 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
             }
           }
         }
+        if (index < opt.meshes) {  // the body beside its garments, in the body files' units and axes
+          make_output_dir(bodies_dir / chunk.name(b));
+          Model bm = ref->model;
+          chunk.positions(b, bm.nodes.position);
+          if (!src.frame().identity()) src.frame().to_file(bm.nodes.position);
+          write_obj(bm, bodies_dir / chunk.name(b) / "body.obj");
+        }
         rec["templates"] = per;
         if (opt.patterns) {
           nlohmann::json pats = nlohmann::json::object();
@@ -495,6 +509,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
 
 struct MergeCounts {
   std::size_t ok = 0, failed = 0, inside = 0;
+  std::size_t layer_inside = 0;  // garment vertices inside a lower layer of the outfit
   double crack = 0;
 };
 
@@ -523,6 +538,7 @@ MergeCounts merge_report(const Common& common, const RegenOptions& opt, const Re
         ++m.ok;
         for (const auto& [k, q] : r["templates"].items()) {
           m.inside += q.value("inside_nodes", std::size_t{0});
+          m.layer_inside += q.value("layer_inside_vertices", std::size_t{0});
           m.crack = std::max(m.crack, q.value("crack_m", 0.0));
         }
       } else {
@@ -550,6 +566,7 @@ MergeCounts merge_report(const Common& common, const RegenOptions& opt, const Re
                        {"completed", m.ok},
                        {"failed", m.failed},
                        {"inside_nodes_total", m.inside},
+                       {"layer_inside_vertices_total", m.layer_inside},
                        {"max_crack_m", m.crack}};
     // rest's dump(1) without its braces: the remaining members, in order.
     const std::string tail = rest.dump(1);
@@ -650,13 +667,26 @@ int run_regen(const Common& common, const RegenOptions& opt, Log& log) {
                                {"threads", common.threads},
                                {"ranks", ranks}};
       write_atomically(opt.out / "timing.json", [&](AtomicFile& f) { f.write(timing.dump(1)); });
+      if (opt.report) {
+        RegenParams rp;
+        rp.levels = opt.levels;
+        rp.clearance = opt.clearance;
+        write_regen_html({.templates = job->templates,
+                          .details = job->details,
+                          .family = job->family,
+                          .source = job->src.get(),
+                          .params = rp,
+                          .out = opt.out},
+                         common.context(), log);
+      }
       const std::size_t n = job->src->size();
       std::printf(
           "atelier regen: %zu bodies x %zu templates: %zu complete (%zu now, %zu from an earlier run), %zu "
-          "failed; %zu nodes inside, max crack %.1e m; %.1f s",
-          n, job->templates.size() + job->details.size(), m.ok, done, skipped, m.failed, m.inside, m.crack, total_s);
+          "failed; %zu nodes inside, %zu inside a lower layer, max crack %.1e m; %.1f s",
+          n, job->templates.size() + job->details.size(), m.ok, done, skipped, m.failed, m.inside, m.layer_inside,
+          m.crack, total_s);
       if (group.distributed()) std::printf(" on %d ranks", group.size());
-      std::printf("\n  report: %s\n", fs::absolute(opt.out / "report.json").string().c_str());
+      std::printf("\n  report: %s\n", fs::absolute(opt.out / (opt.report ? "report.html" : "report.json")).string().c_str());
       std::fflush(stdout);
       code = std::max(code, m.failed == 0 ? int{kExitOk} : int{kExitPartial});
     } catch (const Error& e) {

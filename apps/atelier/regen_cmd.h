@@ -77,6 +77,7 @@ struct RegenOptions {
   int levels = -1;
   double clearance = -1;
   bool no_resume = false;
+  bool report = false;    // report.html with pictures (regen_report.h)
   bool patterns = false;  // made-to-measure pattern sets per body (systems/pattern/made_to_measure.h)
 };
 CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt);

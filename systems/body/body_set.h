@@ -12,6 +12,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <atelier/engine/exec_context.h>
@@ -81,6 +82,17 @@ class BodySource {
   /// The units and axes of the source's files (bodies are generated in the
   /// engine's, metres and Y up): what a body's outputs are written back in.
   [[nodiscard]] virtual BodyFrame frame() const { return {}; }
+  /// What body `i` was made from (issue 26: measurements say what they
+  /// are): the sampled or given parameters as (column name with its unit,
+  /// value as text), the same names for every body of the source; empty for
+  /// bodies read from files. Names never collide with measured columns.
+  [[nodiscard]] virtual std::vector<std::pair<std::string, std::string>> parameters(std::size_t /*i*/) const {
+    return {};
+  }
+  /// True when the skin is a whole person, soles to crown, so that its
+  /// measured vertical extent is the stature; false for a headless form
+  /// (the mannequin), whose extent is only the form's height.
+  [[nodiscard]] virtual bool whole_person() const { return true; }
   /// Clears `out` and fills it with bodies [first, first + count). A body
   /// that fails is appended to `failures` and skipped; the rest complete.
   virtual void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <iomanip>
 #include <optional>
@@ -486,6 +487,20 @@ std::string MakeHumanSource::body_name(std::size_t i) const {
   std::ostringstream s;
   s << "makehuman-" << std::setw(5) << std::setfill('0') << i;
   return s.str();
+}
+
+std::vector<std::pair<std::string, std::string>> MakeHumanSource::parameters(std::size_t i) const {
+  const MacroParams p = params(i);
+  std::vector<std::pair<std::string, std::string>> out;
+  out.emplace_back("sampled_sex", p.gender < 0.5 ? "female" : "male");
+  for (const auto& [name, v] : {std::pair{"gender", p.gender}, std::pair{"age", p.age}, std::pair{"muscle", p.muscle},
+                                std::pair{"weight", p.weight}, std::pair{"height", p.height},
+                                std::pair{"proportions", p.proportions}}) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4f", v);
+    out.emplace_back(std::string("sampled_") + name + "_slider", b);
+  }
+  return out;
 }
 
 std::vector<Vec3d> MakeHumanSource::skin_positions(std::size_t i) const {

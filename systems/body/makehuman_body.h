@@ -119,6 +119,9 @@ class MakeHumanSource final : public BodySource {
   [[nodiscard]] MacroParams params(std::size_t i) const { return sampled_ ? sample_adult(seed_, i) : params_[i]; }
   [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
   [[nodiscard]] std::string body_name(std::size_t i) const override;
+  /// The macro sliders of body i (MacroParams, each in [0, 1]) and the sex
+  /// they make (gender below 0.5: female).
+  [[nodiscard]] std::vector<std::pair<std::string, std::string>> parameters(std::size_t i) const override;
   void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                 const ExecContext& ctx) const override;
   /// Skin positions (metres, indexed by node) of body i.

@@ -156,6 +156,9 @@ struct MannequinTopology : PolygonSoup {  // the faces; positions unused (manneq
 /// Body `index` of sample_mannequins(n, seed) for any n > index, drawn on
 /// its own (O(1), no draws of the bodies before it).
 [[nodiscard]] MannequinParams sample_mannequin(std::uint64_t seed, std::size_t index);
+/// The sex drawn for body `index` of sample_mannequins (its stream's first
+/// draw), which MannequinParams does not keep: true for female.
+[[nodiscard]] bool sample_mannequin_female(std::uint64_t seed, std::size_t index);
 
 /// Girth the mannequin was asked for on a closed feature curve (NaN when the
 /// curve has no requested girth, e.g. armholes).

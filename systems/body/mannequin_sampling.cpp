@@ -66,16 +66,25 @@ double clampz(double z) {
   return std::clamp(z, -2.5, 2.5);
 }
 
-}  // namespace
-
-MannequinParams sample_mannequin(std::uint64_t seed, std::size_t index) {
-  // Body `index` has its own stream, its seed a splitmix64 finalisation of
-  // (seed, index): any body is drawn without the ones before it, so a body
-  // source holds no per-body state.
+/// Body `index` has its own stream, its seed a splitmix64 finalisation of
+/// (seed, index): any body is drawn without the ones before it, so a body
+/// source holds no per-body state.
+Xoshiro256 body_stream(std::uint64_t seed, std::size_t index) {
   std::uint64_t z = seed + (static_cast<std::uint64_t>(index) + 1) * 0x9E3779B97F4A7C15ull;
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  Xoshiro256 rng(z ^ (z >> 31));
+  return Xoshiro256(z ^ (z >> 31));
+}
+
+}  // namespace
+
+bool sample_mannequin_female(std::uint64_t seed, std::size_t index) {
+  Xoshiro256 rng = body_stream(seed, index);
+  return rng.uniform() < 0.5;  // the first draw of sample_mannequin
+}
+
+MannequinParams sample_mannequin(std::uint64_t seed, std::size_t index) {
+  Xoshiro256 rng = body_stream(seed, index);
   {
     const bool female = rng.uniform() < 0.5;
     // Latent factors: stature and size (adiposity/build). Girths grow weakly

@@ -1,5 +1,6 @@
 #include <atelier/systems/body/mannequin_source.h>
 
+#include <cstdio>
 #include <iomanip>
 #include <map>
 #include <sstream>
@@ -21,6 +22,29 @@ std::string MannequinSource::body_name(std::size_t i) const {
   std::ostringstream s;
   s << "mannequin-" << std::setw(5) << std::setfill('0') << i;
   return s.str();
+}
+
+std::vector<std::pair<std::string, std::string>> MannequinSource::parameters(std::size_t i) const {
+  const MannequinParams p = params(i);
+  auto m = [](double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4f", v);  // 0.1 mm
+    return std::string(b);
+  };
+  std::vector<std::pair<std::string, std::string>> out;
+  out.emplace_back("sampled_sex",
+                   sampled_ ? (sample_mannequin_female(seed_, i) ? std::string("female") : std::string("male"))
+                            : std::string());
+  out.emplace_back("sampled_stature_m", m(p.height));
+  for (const auto& [name, v] : {std::pair{"neck_girth", p.neck_girth}, std::pair{"bust_girth", p.bust_girth},
+                                std::pair{"underbust_girth", p.underbust_girth}, std::pair{"waist_girth", p.waist_girth},
+                                std::pair{"hip_girth", p.hip_girth}, std::pair{"thigh_girth", p.thigh_girth},
+                                std::pair{"knee_girth", p.knee_girth}, std::pair{"ankle_girth", p.ankle_girth},
+                                std::pair{"upper_arm_girth", p.upper_arm_girth},
+                                std::pair{"shoulder_width", p.shoulder_width}, std::pair{"back_length", p.back_length},
+                                std::pair{"inseam", p.inseam}})
+    out.emplace_back(std::string("sampled_") + name + "_m", m(v));
+  return out;
 }
 
 void MannequinSource::generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,

@@ -25,6 +25,11 @@ class MannequinSource final : public BodySource {
   [[nodiscard]] std::string body_name(std::size_t i) const override;
   void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                 const ExecContext& ctx) const override;
+  /// The person the form is cut from: sex (sampled bodies only), stature
+  /// and every girth and length of MannequinParams, in metres.
+  [[nodiscard]] std::vector<std::pair<std::string, std::string>> parameters(std::size_t i) const override;
+  /// The mannequin is headless: its vertical extent is not the stature.
+  [[nodiscard]] bool whole_person() const override { return false; }
   [[nodiscard]] MannequinParams params(std::size_t i) const {
     return sampled_ ? sample_mannequin(seed_, i) : params_[i];
   }

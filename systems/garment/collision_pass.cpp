@@ -121,7 +121,11 @@ Expected<CollisionReport> resolve_impl(std::span<Vec3d> g, const NodeAdjacency& 
   par::for_each_n(qctx, n, [&](std::size_t v) {
     queries[v] = 1;
     target[v] = std::clamp(static_cast<double>(enc.clearance[v]), prm.min_clearance, prm.max_clearance);
-    if (!floor.empty()) target[v] = std::max(target[v], floor_at(floor, body, d[v]) + prm.layer_gap);
+    // The tolerance is added to the layer target: the pass leaves vertices
+    // up to `tolerance` below their target, and an outer layer left there
+    // would lie on, or under, the inner one (issue 26, outfit_test.cpp).
+    if (!floor.empty())
+      target[v] = std::max(target[v], floor_at(floor, body, d[v]) + prm.layer_gap + prm.tolerance);
   });
   std::vector<std::uint8_t> moved(n, 0);
   const std::vector<Vec3d> entry(g.begin(), g.end());  // the fairing smooths displacements from here

@@ -37,7 +37,9 @@
 //     pre-fairing distance returns to its pushed position.
 //  4. Layers: garments are resolved in z_depth order (inner first); each
 //     resolved layer leaves a clearance floor on the body vertices under it
-//     and outer layers keep at least that floor plus `layer_gap`.
+//     and outer layers keep at least that floor plus `layer_gap` (their
+//     target is floor + layer_gap + tolerance, so that the pass's tolerance
+//     cannot leave them on the inner layer).
 //
 // Reads: body positions and triangles, garment positions and adjacency.
 // Writes: garment positions (in place) and the report.

@@ -118,4 +118,29 @@ Expected<FitMeasure> measure_fit(const FitInput& in, const FitMeasureParams& par
   return m;
 }
 
+Expected<std::size_t> count_inside_layer(std::span<const Vec3d> outer, std::span<const BodyDistance> on_body,
+                                         const BodyBvh& inner, const LayerPenetrationParams& params,
+                                         std::vector<std::uint8_t>* inside) {
+  if (outer.size() != on_body.size())
+    return Status(ErrorCode::kMismatch, "layer penetration: " + std::to_string(outer.size()) + " vertices, " +
+                                            std::to_string(on_body.size()) + " body distances");
+  if (inner.empty()) return Status(ErrorCode::kInvalidArgument, "layer penetration: the inner garment has no triangles");
+  if (!(params.probe > 0) || !std::isfinite(params.probe) || !(params.tolerance >= 0) ||
+      !(params.tolerance < params.probe))
+    return Status(ErrorCode::kInvalidArgument,
+                  "layer penetration: need a positive probe and 0 <= tolerance < probe");
+  if (inside) inside->assign(outer.size(), 0);
+  std::size_t n = 0;
+  for (std::size_t v = 0; v < outer.size(); ++v) {
+    const BodyDistance& b = on_body[v];
+    if (!(b.distance > 0) || !b.closest.allFinite() || !b.normal.allFinite() || b.normal.squaredNorm() == 0) continue;
+    const RayHit h = inner.ray_first_hit(b.closest, b.normal.normalized(), b.distance + params.probe);
+    if (h.hit && h.t > b.distance + params.tolerance) {
+      ++n;
+      if (inside) (*inside)[v] = 1;
+    }
+  }
+  return n;
+}
+
 }  // namespace atelier

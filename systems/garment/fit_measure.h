@@ -31,6 +31,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/spatial/collision_body.h>
 
 namespace atelier {
 
@@ -73,5 +74,34 @@ struct FitInput {
 /// p-quantile by the nearest-rank rule used by every report (index
 /// floor(q n), clamped); 0 for an empty array. Sorts its argument.
 [[nodiscard]] double quantile_in_place(std::vector<double>& v, double q);
+
+/// Inter-garment penetration (issue 26, outfits): an outer garment's vertex
+/// p is "inside" an inner garment G when G passes above it: the ray from p's
+/// closest body point x along the body's outward normal n there (the ray
+/// through p, since p = x + d n for d > 0) meets G first at a distance t
+/// with d + tolerance < t <= d + probe. A G met below p (t <= d) covers the spot under
+/// p, so p is outside it; a G met more than `probe` above p is another part
+/// of the outfit (the other leg, an arm), not the layer under p. Vertices
+/// inside the body (d <= 0) are the body's penetration, not counted here.
+/// The tolerance, like issue 7's "more than 1 mm inside" the body, keeps
+/// the figure off the knife edge of a crease's medial axis (the crotch),
+/// where the closest body point, and so the ray, jumps from one side to
+/// the other.
+struct LayerPenetrationParams {
+  double probe = 0.01;       // m: how far above a vertex an inner layer still counts as the one over it
+  double tolerance = 0.001;  // m: a lower layer less than this above the vertex is not counted
+};
+
+/// The number of vertices of `outer` inside the garment whose triangles
+/// `inner` holds (a BodyBvh built over the inner garment: open meshes are
+/// fine, only rays are cast), with `on_body` each outer vertex's exact
+/// signed distance to the body (CollisionBody::query or the collision
+/// pass's final_distance). Sequential (callers parallelise over bodies).
+/// When `inside` is given it gets one flag per outer vertex. Errors: sizes
+/// that differ, an empty inner BVH, a bad probe.
+[[nodiscard]] Expected<std::size_t> count_inside_layer(std::span<const Vec3d> outer,
+                                                       std::span<const BodyDistance> on_body, const BodyBvh& inner,
+                                                       const LayerPenetrationParams& params = {},
+                                                       std::vector<std::uint8_t>* inside = nullptr);
 
 }  // namespace atelier

@@ -53,6 +53,94 @@ GarmentQuality quality_of(const GarmentTemplate& g, std::span<const Vec3d> x, st
   return q;
 }
 
+/// Garments in layer order (z_depth, ties in the order given).
+std::vector<std::size_t> layer_order(std::span<const GarmentTemplate* const> garments) {
+  std::vector<std::size_t> order(garments.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return garments[a]->z_depth < garments[b]->z_depth; });
+  return order;
+}
+
+std::vector<Triangle> fan_faces(const PolygonSoup& m) {
+  std::vector<Triangle> tris;
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto face = m.face(f);
+    for (std::size_t c = 1; c + 1 < face.size(); ++c) tris.push_back({face[0], face[c], face[c + 1]});
+  }
+  return tris;
+}
+
+/// After resolve_layers: its floor is the inner layers' clearance at their
+/// vertices, and in a concave crease (the crotch) an inner garment's faces
+/// span the crease farther out than its vertices, so an outer vertex can
+/// end under them. Each such vertex (the test of count_inside_layer) is
+/// lifted along the body normal to layer_gap above the lower garment's
+/// surface, layers inner first, then its body distance is queried again.
+Status lift_over_lower_layers(std::span<const GarmentTemplate* const> garments, const GarmentRegenOptions& options,
+                              std::span<std::vector<Vec3d>> positions, std::span<std::vector<BodyDistance>> fin,
+                              const CollisionBody& body) {
+  const std::vector<std::size_t> order = layer_order(garments);
+  const double probe = options.layer_penetration.probe, gap = options.collision.layer_gap;
+  std::vector<BodyBvh> lower(order.size());
+  for (std::size_t l = 1; l < order.size(); ++l) {
+    const std::size_t i = order[l];
+    const std::size_t j = order[l - 1];  // final now: its BVH serves every layer above it
+    if (Status s = lower[l - 1].build(positions[j], fan_faces(garments[j]->mesh), {}, ExecContext::sequential()); !s)
+      return named(garments[j]->name, s);
+    // A lift moves the closest body point (in a crease, to the other side),
+    // so a vertex is tested again until no lower layer is over it (a few
+    // rounds; what is left is counted by count_layer_penetration).
+    for (int round = 0; round < 8; ++round) {
+      std::size_t lifted = 0;
+      for (std::size_t k = 0; k < l; ++k)
+        for (std::size_t v = 0; v < positions[i].size(); ++v) {
+          BodyDistance& b = fin[i][v];
+          if (!(b.distance > 0) || b.normal.squaredNorm() == 0) continue;
+          const Vec3d n = b.normal.normalized();
+          const RayHit h = lower[k].ray_first_hit(b.closest, n, b.distance + probe);
+          if (!h.hit || h.t <= b.distance) continue;
+          positions[i][v] = b.closest + (h.t + gap) * n;
+          b = body.query(positions[i][v], b.triangle);
+          ++lifted;
+        }
+      if (lifted == 0) break;
+    }
+  }
+  return {};
+}
+
+/// Each garment's vertices inside a garment of a lower layer (z_depth
+/// order, ties in the order given, as resolve_layers orders them): one BVH
+/// over each inner garment's triangles (faces fanned), rays from the outer
+/// vertices' closest body points (count_inside_layer).
+Status count_layer_penetration(std::span<const GarmentTemplate* const> garments, const GarmentRegenOptions& options,
+                               std::span<const std::vector<Vec3d>> positions, std::vector<GarmentResult>& results,
+                               std::span<const std::vector<BodyDistance>> fin, const ExecContext& ctx) {
+  const std::size_t ng = garments.size();
+  const std::vector<std::size_t> order = layer_order(garments);
+  std::vector<std::vector<std::uint8_t>> flags(ng);
+  for (std::size_t k = 0; k < ng; ++k) flags[order[k]].assign(positions[order[k]].size(), 0);
+  std::vector<std::uint8_t> inside;
+  for (std::size_t k = 0; k + 1 < ng; ++k) {
+    const std::size_t j = order[k];  // an inner layer
+    BodyBvh bvh;
+    if (Status s = bvh.build(positions[j], fan_faces(garments[j]->mesh), {}, ExecContext::sequential()); !s)
+      return named(garments[j]->name, s);
+    for (std::size_t l = k + 1; l < ng; ++l) {  // every layer above it
+      const std::size_t i = order[l];
+      auto n = count_inside_layer(positions[i], fin[i], bvh, options.layer_penetration, &inside);
+      if (!n) return named(garments[i]->name, n.status());
+      for (std::size_t v = 0; v < inside.size(); ++v) flags[i][v] |= inside[v];
+    }
+    if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "garment regeneration: cancelled");
+  }
+  for (std::size_t i = 0; i < ng; ++i)
+    results[i].quality.layer_inside =
+        static_cast<std::size_t>(std::count(flags[i].begin(), flags[i].end(), std::uint8_t{1}));
+  return {};
+}
+
 /// Edge transfer, collision pass (with layers) and fit figures of one
 /// body's decoded garments; sequential (the caller parallelises over bodies).
 BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTemplate* const> garments,
@@ -101,6 +189,10 @@ BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTempla
       return out;
     }
     reports = std::move(*pass);
+    if (Status s = lift_over_lower_layers(garments, options, decoded, fin, cb); !s) {
+      out.status = s;
+      return out;
+    }
   }
   out.garments.resize(ng);
   for (std::size_t i = 0; i < ng; ++i) {
@@ -114,8 +206,14 @@ BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTempla
     r.quality = quality_of(*garments[i], decoded[i], fin[i], options.collision);
     r.quality.pass = reports[i];
     r.quality.pushed = reports[i].pushed;
-    r.positions = std::move(decoded[i]);
   }
+  if (options.layers && ng > 1)
+    if (Status s = count_layer_penetration(garments, options, decoded, out.garments, fin, ctx); !s) {
+      out.status = s;
+      out.garments.clear();
+      return out;
+    }
+  for (std::size_t i = 0; i < ng; ++i) out.garments[i].positions = std::move(decoded[i]);
   return out;
 }
 

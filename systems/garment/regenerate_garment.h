@@ -39,6 +39,7 @@
 #include <atelier/systems/garment/collision_pass.h>
 #include <atelier/systems/garment/detail_template.h>
 #include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/garment/fit_measure.h>
 #include <atelier/systems/spatial/collision_body.h>
 
 namespace atelier {
@@ -143,8 +144,11 @@ struct GarmentRegenOptions {
   CollisionParams collision;
   bool edge_transfer = true;
   bool collision_pass = true;
-  /// Several garments on one body are resolved as layers (z_depth order).
+  /// Several garments on one body are resolved as layers (z_depth order,
+  /// ties in the order given) and each garment's vertices inside a garment
+  /// of a lower layer are counted (GarmentQuality::layer_inside).
   bool layers = true;
+  LayerPenetrationParams layer_penetration;
   /// Widest decoding kernel (kAuto: the widest this CPU runs).
   DecodeKernel kernel = DecodeKernel::kAuto;
 };
@@ -161,6 +165,10 @@ struct GarmentQuality {
   double strain_max = 0;        // max |l / l_reference - 1| over edges
   double strain_p95 = 0;        // its 95th percentile (quantile_in_place)
   std::size_t pushed = 0;       // vertices the collision pass moved
+  /// Vertices inside a garment of a lower layer of the same outfit
+  /// (count_inside_layer, systems/garment/fit_measure.h; each vertex once);
+  /// 0 for the innermost layer and when the garments are not layered.
+  std::size_t layer_inside = 0;
   CollisionReport pass;
 };
 

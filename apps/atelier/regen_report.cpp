@@ -1,0 +1,195 @@
+// `atelier regen --report` (regen_report.h).
+#include "regen_report.h"
+
+#include <atelier/io/png.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/view/render.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "commands.h"
+#include "html_report.h"
+
+namespace atelier::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<Triangle> fan(const PolygonSoup& m) {
+  std::vector<Triangle> t;
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto face = m.face(f);
+    for (std::size_t c = 1; c + 1 < face.size(); ++c) t.push_back({face[0], face[c], face[c + 1]});
+  }
+  return t;
+}
+
+/// One row of the HTML table from a body's record: per template the fit
+/// figures in mm and %, named with their unit.
+nlohmann::json row_of(const nlohmann::json& rec, const RegenReportInput& in) {
+  nlohmann::json row = {{"body", rec.value("body", std::string())}};
+  if (!rec.value("ok", false)) return row;
+  const nlohmann::json& per = rec["templates"];
+  for (const auto& d : in.details) {
+    if (!per.contains(d->name)) continue;
+    const nlohmann::json& q = per[d->name];
+    row[d->name + "_inside"] = q.value("inside_nodes", 0);
+    row[d->name + "_in_lower_layer"] = q.value("layer_inside_vertices", 0);
+    row[d->name + "_min_clearance_mm"] = 1000 * q.value("min_clearance_m", 0.0);
+    row[d->name + "_strain_p95_pct"] = 100 * q.value("strain_p95", 0.0);
+  }
+  for (const auto& t : in.templates) {
+    if (!per.contains(t.name)) continue;
+    const nlohmann::json& q = per[t.name];
+    row[t.name + "_inside"] = q.value("inside_nodes", 0);
+    row[t.name + "_min_distance_mm"] = 1000 * q.value("min_distance_m", 0.0);
+    row[t.name + "_crack_mm"] = 1000 * q.value("crack_m", 0.0);
+  }
+  return row;
+}
+
+/// Front and side pictures of body `index` with its whole outfit
+/// regenerated again; nothing when a step fails (logged).
+std::optional<RgbImage> picture_of(std::size_t index, const RegenReportInput& in,
+                                   std::optional<GarmentRegenerator>& regen, ColliderPool& colliders,
+                                   const ExecContext& ctx, Log& log) {
+  const auto ref = in.source->reference();
+  BodySet one(ref);
+  std::vector<BodyFailure> failed;
+  in.source->generate(index, 1, one, failed, ctx);
+  if (one.size() != 1) return std::nullopt;
+  const std::vector<Vec3d> body = one.positions(0);
+  const std::string name = one.name(0);
+  std::vector<RegenResult> profiles;
+  if (!in.templates.empty()) {
+    Box3d roi;
+    for (const auto& t : in.templates)
+      for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) roi.extend(t.model.nodes.position[v]);
+    auto r = regenerate_on_body(in.templates, *ref, body, roi, in.params, {.use_grid = false}, ctx, colliders);
+    if (!r) {
+      log.warn("picture of " + name + ": " + r.status().to_string());
+      return std::nullopt;
+    }
+    profiles = std::move(*r);
+  }
+  std::vector<BodyGarments> fit;
+  if (regen) {
+    if (Status st = regen->run(one, 0, 1, fit, ctx); !st || !fit[0].status) {
+      log.warn("picture of " + name + ": " + (st ? fit[0].status : st).to_string());
+      return std::nullopt;
+    }
+  }
+  auto body_tris = fan_triangulate(ref->model);
+  if (!body_tris) return std::nullopt;
+  std::vector<std::vector<Triangle>> tris;  // kept alive for the scene's spans
+  std::vector<RenderTriangles> scene;
+  scene.push_back({body, body_tris->triangles, body_colour()});
+  for (std::size_t k = 0; k < in.details.size(); ++k) tris.push_back(fan(in.details[k]->mesh));
+  for (const auto& r : profiles) {
+    auto t = fan_triangulate(r.model);
+    if (t) tris.push_back(std::move(t->triangles));
+  }
+  std::size_t colour = 0;
+  for (std::size_t k = 0; k < in.details.size(); ++k)
+    scene.push_back({fit[0].garments[k].positions, tris[k], garment_colour(colour++)});
+  for (std::size_t k = 0; k < profiles.size() && in.details.size() + k < tris.size(); ++k)
+    scene.push_back({profiles[k].model.nodes.position, tris[in.details.size() + k], garment_colour(colour++)});
+  std::vector<RgbImage> views;
+  for (View view : {View::kFront, View::kSide}) {
+    RenderParams rp;
+    rp.view = view;
+    rp.width = 360;
+    rp.height = 560;
+    rp.outlines = true;
+    auto img = render_scene(scene, rp, ctx);
+    if (img) views.push_back(std::move(img->image));
+  }
+  if (views.size() != 2) return std::nullopt;
+  auto both = side_by_side(views);
+  if (!both) return std::nullopt;
+  return std::move(*both);
+}
+
+}  // namespace
+
+void write_regen_html(const RegenReportInput& in, const ExecContext& ctx, Log& log) {
+  std::ifstream f(in.out / "report.json");
+  const nlohmann::json rep = nlohmann::json::parse(f, nullptr, false);
+  if (rep.is_discarded())
+    throw Error(Status(ErrorCode::kParse, (in.out / "report.json").string() + ": not valid JSON"));
+  nlohmann::json html;
+  const std::size_t n = rep["bodies"].size();
+  html["title"] = "atelier regen: " + std::to_string(n) + " bodies";
+  const nlohmann::json& s = rep["summary"];
+  // Labels with their units; lengths in mm.
+  html["summary"] = {{"bodies", s.value("bodies", 0)},
+                     {"completed", s.value("completed", 0)},
+                     {"failed", s.value("failed", 0)},
+                     {"garment vertices inside the body (all bodies)", s.value("inside_nodes_total", 0)},
+                     {"garment vertices inside a lower layer (all bodies)", s.value("layer_inside_vertices_total", 0)},
+                     {"largest profile-template crack (mm)", 1000 * s.value("max_crack_m", 0.0)}};
+  nlohmann::json rows = nlohmann::json::array();
+  std::vector<std::string> names;  // body names by row
+  for (const auto& rec : rep["bodies"]) {
+    rows.push_back(row_of(rec, in));
+    names.push_back(rec.value("body", std::string()));
+  }
+  html["rows"] = rows;
+  // Which bodies to picture: a sample, then the worst by each figure (quality
+  // only, never a timing: the same run pictures the same bodies).
+  std::vector<std::pair<std::size_t, std::string>> picks;
+  for (std::size_t i = 0; i < std::min(in.samples, rows.size()); ++i) picks.emplace_back(i, "sample");
+  auto worst = [&](const std::string& column, bool largest) {
+    auto w = worst_rows(html, column, 1, largest);
+    if (!w.empty()) picks.emplace_back(w[0], std::string(largest ? "highest " : "lowest ") + column);
+  };
+  for (const auto& d : in.details) {
+    worst(d->name + "_min_clearance_mm", false);
+    worst(d->name + "_strain_p95_pct", true);
+    worst(d->name + "_in_lower_layer", true);
+  }
+  for (const auto& t : in.templates) worst(t.name + "_min_distance_mm", false);
+  std::optional<GarmentRegenerator> regen;
+  if (!in.details.empty()) {
+    auto r = GarmentRegenerator::create(
+        in.family, std::vector<std::shared_ptr<const GarmentTemplate>>(in.details.begin(), in.details.end()), {}, ctx);
+    if (!r) throw Error(r.status());
+    regen = std::move(*r);
+  }
+  ColliderPool colliders;
+  nlohmann::json pictures = nlohmann::json::array();
+  make_output_dir(in.out / "pictures");
+  std::vector<std::size_t> done;
+  std::string outfit = "body";
+  for (const auto& d : in.details) outfit += ", " + d->name;
+  for (const auto& t : in.templates) outfit += ", " + t.name;
+  for (const auto& [row, why] : picks) {
+    if (std::find(done.begin(), done.end(), row) != done.end()) continue;
+    done.push_back(row);
+    std::size_t index = in.source->size();
+    for (std::size_t i = 0; i < in.source->size(); ++i)
+      if (in.source->body_name(i) == names[row]) {
+        index = i;
+        break;
+      }
+    if (index == in.source->size()) continue;
+    const std::optional<RgbImage> picture = picture_of(index, in, regen, colliders, ctx, log);
+    if (!picture) continue;
+    const std::string file = "pictures/" + names[row] + ".png";
+    write_png(*picture, in.out / file);
+    pictures.push_back(
+        {{"title", names[row] + " (" + why + ")"}, {"path", file}, {"caption", "front and side: " + outfit}});
+  }
+  html["pictures"] = pictures;
+  HtmlReportOptions ho;
+  ho.picture_dir = in.out;
+  write_html_report(html, in.out / "report.html", ho);
+}
+
+}  // namespace atelier::cli
