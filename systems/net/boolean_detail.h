@@ -90,16 +90,18 @@ struct TriMesh {
                                     bool open = false);
 
 /// Bounding-volume hierarchy over triangle boxes (median split, leaves of
-/// up to 4 triangles): node i has children or a triangle range.
+/// up to 4 triangles): node i has children or not (a leaf), and the range
+/// of `order` below it.
 struct Bvh {
   struct Node {
     std::array<double, 6> box;
     std::uint32_t left = kNil;  // inner: left child (right = left + 1); leaf: kNil
-    std::uint32_t first = 0;    // leaf: first index into order
-    std::uint32_t count = 0;    // leaf: triangle count
+    std::uint32_t first = 0;    // first index into order
+    std::uint32_t count = 0;    // triangles below the node
   };
   std::vector<Node> nodes;
-  std::vector<std::uint32_t> order;  // triangle indices, leaves' ranges
+  std::vector<std::uint32_t> order;             // triangle indices, leaves' ranges
+  std::vector<std::array<double, 6>> box;       // box of triangle order[i]
 };
 void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
 

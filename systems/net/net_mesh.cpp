@@ -268,11 +268,11 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
   while (!stack.empty()) {
     const Job j = stack.back();
     stack.pop_back();
-    if (j.count <= 4) {
-      out.nodes[j.node].first = j.first;
-      out.nodes[j.node].count = j.count;
-      continue;
-    }
+    // Inner nodes keep their range too: the pair traversal splits the node
+    // holding more triangles.
+    out.nodes[j.node].first = j.first;
+    out.nodes[j.node].count = j.count;
+    if (j.count <= 4) continue;
     const std::uint32_t half = j.count / 2;
     const auto left = static_cast<std::uint32_t>(out.nodes.size());
     out.nodes[j.node].left = left;
@@ -281,12 +281,15 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
     stack.push_back({left, j.first, half});
     stack.push_back({left + 1, j.first + half, j.count - half});
   }
+  // Triangle boxes in leaf order: the pair tests read them contiguously.
+  out.box.resize(nt);
+  for (std::size_t i = 0; i < nt; ++i) out.box[i] = m.box[out.order[i]];
   // Boxes bottom-up: children always come after their parent.
   for (std::size_t n = out.nodes.size(); n-- > 0;) {
     Bvh::Node& node = out.nodes[n];
     if (node.left == kNil) {
-      node.box = m.box[out.order[node.first]];
-      for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i) merge_box(node.box, m.box[out.order[i]]);
+      node.box = out.box[node.first];
+      for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i) merge_box(node.box, out.box[i]);
     } else {
       node.box = out.nodes[node.left].box;
       merge_box(node.box, out.nodes[node.left + 1].box);
@@ -321,7 +324,9 @@ void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb
       push({x.left + 1, x.left + 1});
       return;
     }
-    const bool split_x = !leaf(x) && (leaf(y) || x.count == 0);
+    // Split the node holding more triangles (a leaf never): halves the
+    // boxes on both sides alike, so fewer node pairs overlap.
+    const bool split_x = !leaf(x) && (leaf(y) || x.count >= y.count);
     if (split_x) {
       push({x.left, np[1]});
       push({x.left + 1, np[1]});
@@ -333,16 +338,15 @@ void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb
   auto leaf_pairs = [&](const NodePair& np, std::size_t task) {
     const Bvh::Node& x = ba.nodes[np[0]];
     const Bvh::Node& y = bb.nodes[np[1]];
-    for (std::uint32_t i = x.first; i < x.first + x.count; ++i)
-      for (std::uint32_t j = y.first; j < y.first + y.count; ++j) {
+    for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
+      const std::uint32_t j0 = self && np[0] == np[1] ? i + 1 : y.first;  // each unordered pair once in a leaf
+      for (std::uint32_t j = j0; j < y.first + y.count; ++j) {
+        if (!overlap(ba.box[i], bb.box[j])) continue;
         std::uint32_t ti = ba.order[i], tj = bb.order[j];
-        if (self) {
-          if (ti == tj) continue;
-          if (np[0] == np[1] && i > j) continue;  // each unordered pair once inside one leaf
-          if (ti > tj) std::swap(ti, tj);
-        }
-        if (overlap(a.box[ti], b.box[tj])) visit(task, ti, tj);
+        if (self && ti > tj) std::swap(ti, tj);
+        visit(task, ti, tj);
       }
+    }
   };
   auto both_leaves = [&](const NodePair& np) { return leaf(ba.nodes[np[0]]) && leaf(bb.nodes[np[1]]); };
   // Breadth-first frontier.
