@@ -62,12 +62,10 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
       half.push_back({edge_key(u, v), f, k, u < v});
     }
   }
-  // Sorted (key, halfedge) pairs: one flat array, no indirection in the sort.
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> by_key(half.size());
-  for (std::uint32_t h = 0; h < half.size(); ++h) by_key[h] = {half[h].key, h};
-  std::sort(by_key.begin(), by_key.end());
-  std::vector<std::uint32_t> id(half.size());
-  for (std::size_t i = 0; i < id.size(); ++i) id[i] = by_key[i].second;
+  std::vector<std::uint64_t> keys(half.size());
+  for (std::size_t h = 0; h < half.size(); ++h) keys[h] = half[h].key;
+  std::vector<std::uint32_t> id;
+  sort_edge_keys(keys, out.positions.size(), id);
   std::vector<std::uint32_t> twin(half.size(), kNil);
   bool pinched = false;
   for (std::size_t i = 0; i < id.size();) {

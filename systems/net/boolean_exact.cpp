@@ -19,6 +19,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <atelier/engine/parallel.h>
+
 #include "boolean_detail.h"
 
 namespace atelier::net_detail {
@@ -199,6 +201,37 @@ Ke::Point_3 exact_point(const TriMesh& a, const TriMesh& b, const PointKey& k) {
     return point_of(CGAL::intersection(line(b, k.b), plane(a, k.a)));
   return point_of(CGAL::intersection(line(a, k.a), line(b, k.b)));
 }
+
+}  // namespace
+
+struct ExactPoints {
+  std::vector<Ke::Point_3> p;
+  std::vector<std::uint8_t> ok;  // 0: no construction (exact_point throws again where it is used)
+  std::uint32_t first_id = 0;  // global id of p[0] (nA + nB)
+};
+
+void ExactPointsDeleter::operator()(ExactPoints* p) const noexcept {
+  delete p;
+}
+
+ExactPointsPtr make_exact_points(const TriMesh& a, const TriMesh& b, std::span<const PointKey> keys,
+                                 const ExecContext& ctx) {
+  ExactPointsPtr out(new ExactPoints);
+  out->first_id = static_cast<std::uint32_t>(a.p.size() + b.p.size());
+  out->p.resize(keys.size());
+  out->ok.assign(keys.size(), 0);
+  par::for_each_n(ctx, keys.size(), [&](std::size_t i) {
+    try {
+      out->p[i] = exact_point(a, b, keys[i]);
+      out->ok[i] = 1;
+    } catch (const Error&) {
+      // Left out: the triangle using the point reports the error.
+    }
+  });
+  return out;
+}
+
+namespace {
 
 // ------------------------------------------------------------ ray parity
 
@@ -402,7 +435,7 @@ std::uint32_t PointIds::find(const PointKey& k) const {
 
 Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t, std::span<const PointKey> points,
                        std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
-                       std::vector<std::array<std::uint32_t, 3>>& out) {
+                       const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out) {
   using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Ke>;
   using Fb = CGAL::Constrained_triangulation_face_base_2<Ke>;
   using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
@@ -448,7 +481,10 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
       if (dim_of(s) == kDimEdge)
         for (std::size_t q = 0; q < 3; ++q)
           if (m.tri_edge[t][q] == idx_of(s)) slot = q;
-      (slot < 3 ? on_edge[slot] : inside).emplace_back(exact_point(a, b, k), k);
+      const std::uint32_t id = ids.find(k);
+      const bool shared =
+          id != kNil && id >= exact.first_id && id - exact.first_id < exact.p.size() && exact.ok[id - exact.first_id];
+      (slot < 3 ? on_edge[slot] : inside).emplace_back(shared ? exact.p[id - exact.first_id] : exact_point(a, b, k), k);
     }
     auto add = [&](Ct::Vertex_handle h, const PointKey& k) -> Status {
       const std::uint32_t id = ids.find(k);
@@ -526,7 +562,8 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
   return {};
 }
 
-Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k) {
+Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const ExactPoints& exact,
+                        std::size_t index) {
   // A value is kept when its enclosing interval is at most four ulps wide
   // (the same bits on every run; within 2 ulps of the exact value), else
   // the exact value is rounded.
@@ -572,7 +609,7 @@ Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k) {
       if (ok) return x;
     }
   }
-  const Ke::Point_3 pt = exact_point(a, b, k);
+  const Ke::Point_3 pt = index < exact.p.size() && exact.ok[index] ? exact.p[index] : exact_point(a, b, k);
   auto coord = [&](const Ke::FT& x) {
     const std::pair<double, double> iv = CGAL::to_interval(x);
     if (pinned(iv.first, iv.second)) return iv.first + 0.5 * (iv.second - iv.first);

@@ -38,6 +38,29 @@ void merge_box(std::array<double, 6>& into, const std::array<double, 6>& b) noex
 
 }  // namespace
 
+void sort_edge_keys(std::span<const std::uint64_t> key, std::size_t n_vertices, std::vector<std::uint32_t>& order) {
+  const std::size_t n = key.size();
+  std::vector<std::uint32_t> start(n_vertices + 1, 0);
+  for (std::uint64_t k : key) ++start[static_cast<std::size_t>(k >> 32) + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) start[v + 1] += start[v];
+  order.resize(n);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t i = 0; i < n; ++i) order[fill[static_cast<std::size_t>(key[i] >> 32)]++] = i;
+  }
+  // Within a vertex: by key, then index (the indices went in increasing).
+  auto before = [&](std::uint32_t x, std::uint32_t y) { return key[x] != key[y] ? key[x] < key[y] : x < y; };
+  for (std::size_t v = 0; v < n_vertices; ++v) {
+    const auto b = order.begin() + start[v], e = order.begin() + start[v + 1];
+    if (e - b > 32) {
+      std::sort(b, e, before);
+      continue;
+    }
+    for (auto i = b + 1; i < e; ++i)
+      for (auto j = i; j != b && before(*j, *(j - 1)); --j) std::iter_swap(j, j - 1);
+  }
+}
+
 Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx, bool open) {
   out = TriMesh{};
   out.name = std::move(name);
@@ -149,9 +172,16 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
                          u < v};
     }
   });
-  par::sort(ctx, half.begin(), half.end(), [](const Half& x, const Half& y) {
-    return x.key != y.key ? x.key < y.key : (x.tri != y.tri ? x.tri < y.tri : x.k < y.k);
-  });
+  {
+    // By (key, tri, k): halves were made in (tri, k) order.
+    std::vector<std::uint64_t> keys(half.size());
+    for (std::size_t i = 0; i < half.size(); ++i) keys[i] = half[i].key;
+    std::vector<std::uint32_t> order;
+    sort_edge_keys(keys, out.p.size(), order);
+    std::vector<Half> sorted(half.size());
+    for (std::size_t i = 0; i < half.size(); ++i) sorted[i] = half[order[i]];
+    half = std::move(sorted);
+  }
   out.tri_edge.assign(nt, {kNil, kNil, kNil});
   out.edge.reserve(3 * nt / 2);
   out.edge_tri.reserve(3 * nt / 2);
