@@ -97,7 +97,7 @@ struct TriMesh {
 void sort_edge_keys(std::span<const std::uint64_t> key, std::size_t n_vertices, std::vector<std::uint32_t>& order);
 
 /// Bounding-volume hierarchy over triangle boxes (median split, leaves of
-/// up to 4 triangles): node i has children or not (a leaf), and the range
+/// up to 8 triangles): node i has children or not (a leaf), and the range
 /// of `order` below it.
 struct Bvh {
   struct Node {
