@@ -24,9 +24,6 @@ namespace {
 
 using Tri3 = std::array<std::uint32_t, 3>;
 
-/// Below this many polygons (both nets) a Boolean runs on one thread.
-constexpr std::size_t kSequentialFaces = 4096;
-
 double tri_volume(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   return a.dot(b.cross(c)) / 6.0;
 }
@@ -350,11 +347,11 @@ PolygonSoup net_polygons(const Model& m) {
 Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoupView& sb, const BooleanOptions& opt,
                                     const ExecContext& ctx_in) {
   BooleanReport rep;
-  // Small pairs run on the calling thread: below a few thousand polygons
-  // the start-up of parallel tasks costs more than the work (a CAD pair of
-  // 200 triangles takes about a millisecond).
+  // Small pairs run on the calling thread: below ctx.sequential_threshold
+  // polygons (10^4 by default) the start-up of parallel tasks costs more
+  // than the work (a CAD pair of 200 triangles takes a few milliseconds).
   ExecContext ctx = ctx_in;
-  if (sa.face_count() + sb.face_count() < kSequentialFaces) ctx.threads = 1;
+  if (sa.face_count() + sb.face_count() < ctx.sequential_threshold) ctx.threads = 1;
   // The two nets are built, checked and given their hierarchies side by
   // side (two tasks; each is parallel inside). A's error is reported first.
   TriMesh A, B;
