@@ -14,8 +14,8 @@
 #include <cstdint>
 #include <memory>
 #include <numeric>
-#include <sstream>
 #include <span>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -107,8 +107,8 @@ struct Bvh {
     std::uint32_t count = 0;    // triangles below the node
   };
   std::vector<Node> nodes;
-  std::vector<std::uint32_t> order;             // triangle indices, leaves' ranges
-  std::vector<std::array<double, 6>> box;       // box of triangle order[i]
+  std::vector<std::uint32_t> order;        // triangle indices, leaves' ranges
+  std::vector<std::array<double, 6>> box;  // box of triangle order[i]
 };
 void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
 
@@ -175,8 +175,8 @@ using ExactPointsPtr = std::unique_ptr<ExactPoints, ExactPointsDeleter>;
                                      const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out);
 
 /// Coordinates of a new intersection point, rounded from its exact value.
-[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k,
-                                      const ExactPoints& exact, std::size_t index);
+[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const ExactPoints& exact,
+                                      std::size_t index);
 
 /// Winding number of the closed net m about a point: a double point not on
 /// m, or the centroid of three intersection points / vertices (exact), by an

@@ -9,17 +9,20 @@
 // Why not CGAL's corefinement: it runs every vertex of both nets through the
 // exact kernel; here only the triangles that meet the other net see it, the
 // rest stays plain doubles (docs/glossary.md, net Booleans).
+//
+// Why this file is long: it is the only file that sees CGAL (the exact
+// kernel stays behind boolean_detail.h), so every exact predicate,
+// construction and triangulation of the net operations lives here.
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/intersections.h>
+#include <atelier/engine/parallel.h>
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-
-#include <atelier/engine/parallel.h>
 
 #include "boolean_detail.h"
 
@@ -207,7 +210,7 @@ Ke::Point_3 exact_point(const TriMesh& a, const TriMesh& b, const PointKey& k) {
 struct ExactPoints {
   std::vector<Ke::Point_3> p;
   std::vector<std::uint8_t> ok;  // 0: no construction (exact_point throws again where it is used)
-  std::uint32_t first_id = 0;  // global id of p[0] (nA + nB)
+  std::uint32_t first_id = 0;    // global id of p[0] (nA + nB)
 };
 
 void ExactPointsDeleter::operator()(ExactPoints* p) const noexcept {

@@ -179,8 +179,8 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
       if (!st) return st;
   }
   std::vector<Vec3d> new_points(new_keys.size());
-  par::for_each_n(ctx, new_keys.size(), [&](std::size_t i) { new_points[i] = point_coordinates(A, B, new_keys[i], *exact, i);
-  });
+  par::for_each_n(ctx, new_keys.size(),
+                  [&](std::size_t i) { new_points[i] = point_coordinates(A, B, new_keys[i], *exact, i); });
 
   // ---- pieces, coplanar overlaps, components
   for (CutSide& s : sides) {
