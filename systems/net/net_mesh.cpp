@@ -342,8 +342,7 @@ namespace {
 constexpr std::size_t kMaxTasks = 1024;
 
 template <class Visit>
-void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb, bool self, const ExecContext& ctx,
-                std::size_t& tasks, Visit&& visit) {
+void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx, std::size_t& tasks, Visit&& visit) {
   tasks = 0;
   if (ba.nodes.empty() || bb.nodes.empty()) return;
   using NodePair = std::array<std::uint32_t, 2>;
@@ -423,12 +422,14 @@ void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb
 
 }  // namespace
 
-std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
-                                                            const Bvh& bvh_b, const ExecContext& ctx) {
+std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& /*a*/, const Bvh& bvh_a,
+                                                            const TriMesh& /*b*/, const Bvh& bvh_b,
+                                                            const ExecContext& ctx) {
+  // The hierarchies hold the triangle boxes (in leaf order).
   // One list per task (each task writes only its own).
   std::vector<std::vector<std::array<std::uint32_t, 2>>> lists(kMaxTasks);
   std::size_t tasks = 0;
-  dual_visit(a, bvh_a, b, bvh_b, false, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+  dual_visit(bvh_a, bvh_b, false, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
     lists[task].push_back({i, j});
   });
   std::vector<std::array<std::uint32_t, 2>> pairs;
@@ -441,7 +442,7 @@ std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, co
 std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
   std::vector<std::array<std::uint32_t, 2>> first(kMaxTasks, {kNil, kNil});
   std::size_t tasks = 0;
-  dual_visit(m, bvh, m, bvh, true, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+  dual_visit(bvh, bvh, true, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
     if (std::array<std::uint32_t, 2>{i, j} < first[task] && triangles_cross(m, i, j)) first[task] = {i, j};
   });
   // The smallest crossing pair over all tasks: the same for any thread count.
