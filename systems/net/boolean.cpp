@@ -59,11 +59,10 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
       half.push_back({edge_key(u, v), f, k, u < v});
     }
   }
-  std::vector<std::uint32_t> id(half.size());
-  std::iota(id.begin(), id.end(), 0u);
-  std::sort(id.begin(), id.end(), [&](std::uint32_t x, std::uint32_t y) {
-    return half[x].key != half[y].key ? half[x].key < half[y].key : x < y;
-  });
+  std::vector<std::uint64_t> keys(half.size());
+  for (std::size_t h = 0; h < half.size(); ++h) keys[h] = half[h].key;
+  std::vector<std::uint32_t> id;
+  sort_edge_keys(keys, out.positions.size(), id);
   std::vector<std::uint32_t> twin(half.size(), kNil);
   bool pinched = false;
   for (std::size_t i = 0; i < id.size();) {
@@ -346,11 +345,34 @@ PolygonSoup net_polygons(const Model& m) {
 }
 
 Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoupView& sb, const BooleanOptions& opt,
-                                    const ExecContext& ctx) {
+                                    const ExecContext& ctx_in) {
   BooleanReport rep;
+  // Small pairs run on the calling thread: below ctx.sequential_threshold
+  // polygons (10^4 by default) the start-up of parallel tasks costs more
+  // than the work (a CAD pair of 200 triangles takes a few milliseconds).
+  ExecContext ctx = ctx_in;
+  if (sa.face_count() + sb.face_count() < ctx.sequential_threshold) ctx.threads = 1;
+  // The two nets are built, checked and given their hierarchies side by
+  // side (two tasks; each is parallel inside). A's error is reported first.
   TriMesh A, B;
-  if (Status s = build_tri_mesh(sa, "A", A, ctx); !s) return s;
-  if (Status s = build_tri_mesh(sb, "B", B, ctx); !s) return s;
+  Bvh bvh_a, bvh_b;
+  std::array<Status, 2> built;
+  std::array<std::array<std::uint32_t, 2>, 2> crossing{{{kNil, kNil}, {kNil, kNil}}};
+  {
+    ExecContext two = ctx;
+    two.sequential_threshold = 2;
+    two.grain = 1;
+    par::for_each_n(two, 2, [&](std::size_t k) {
+      TriMesh& m = k == 0 ? A : B;
+      Bvh& bvh = k == 0 ? bvh_a : bvh_b;
+      built[k] = build_tri_mesh(k == 0 ? sa : sb, k == 0 ? "A" : "B", m, ctx);
+      if (!built[k]) return;
+      build_bvh(m, bvh, ctx);
+      if (opt.check_self_intersection && mesh_volume(m) > 0) crossing[k] = first_self_crossing(m, bvh, ctx);
+    });
+  }
+  for (const Status& s : built)
+    if (!s) return s;
   // Five stages reported to ctx.progress, each ending in a cancellation check.
   constexpr std::size_t kStages = 5;
   if (Status s = stage_done(ctx, "boolean: input", 1, kStages); !s) return s;
@@ -362,16 +384,13 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     if (!(mesh_volume(*m) > 0))
       return fail(ErrorCode::kTopology, "net ", m->name,
                   " encloses no volume or is oriented inwards (signed volume <= 0): reverse its faces");
-  Bvh bvh_a, bvh_b;
-  build_bvh(A, bvh_a, ctx);
-  build_bvh(B, bvh_b, ctx);
-
   if (opt.check_self_intersection) {
-    for (auto [m, bvh] : {std::pair{&A, &bvh_a}, std::pair{&B, &bvh_b}}) {
-      const auto bad = first_self_crossing(*m, *bvh, ctx);
+    for (int k = 0; k < 2; ++k) {
+      const TriMesh& m = k == 0 ? A : B;
+      const auto& bad = crossing[static_cast<std::size_t>(k)];
       if (bad[0] != kNil)
-        return fail(ErrorCode::kTopology, "net ", m->name, " intersects itself: faces ", m->face_of[bad[0]], " and ",
-                    m->face_of[bad[1]], " cross");
+        return fail(ErrorCode::kTopology, "net ", m.name, " intersects itself: faces ", m.face_of[bad[0]], " and ",
+                    m.face_of[bad[1]], " cross");
     }
   }
 

@@ -12,9 +12,10 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <numeric>
-#include <sstream>
 #include <span>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -89,17 +90,25 @@ struct TriMesh {
 [[nodiscard]] Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx,
                                     bool open = false);
 
+/// Indices of `key` (undirected edges (min << 32) | max over vertices
+/// below n_vertices) in order of (key, index): a counting sort on the
+/// smaller vertex, then each vertex's few edges sorted in place. Linear in
+/// the edges for meshes of bounded valence, instead of a comparison sort.
+void sort_edge_keys(std::span<const std::uint64_t> key, std::size_t n_vertices, std::vector<std::uint32_t>& order);
+
 /// Bounding-volume hierarchy over triangle boxes (median split, leaves of
-/// up to 4 triangles): node i has children or a triangle range.
+/// up to 8 triangles): node i has children or not (a leaf), and the range
+/// of `order` below it.
 struct Bvh {
   struct Node {
     std::array<double, 6> box;
     std::uint32_t left = kNil;  // inner: left child (right = left + 1); leaf: kNil
-    std::uint32_t first = 0;    // leaf: first index into order
-    std::uint32_t count = 0;    // leaf: triangle count
+    std::uint32_t first = 0;    // first index into order
+    std::uint32_t count = 0;    // triangles below the node
   };
   std::vector<Node> nodes;
-  std::vector<std::uint32_t> order;  // triangle indices, leaves' ranges
+  std::vector<std::uint32_t> order;        // triangle indices, leaves' ranges
+  std::vector<std::array<double, 6>> box;  // box of triangle order[i]
 };
 void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
 
@@ -144,6 +153,18 @@ struct PointIds {
   [[nodiscard]] std::uint32_t find(const PointKey& k) const;
 };
 
+/// The lazy exact points of the new intersection points (in the order of
+/// `keys`), made once and shared by every triangle holding one, so a point's
+/// exact value is computed at most once (the lazy kernel caches it; its
+/// evaluation is thread-safe). Opaque: CGAL stays in boolean_exact.cpp.
+struct ExactPoints;
+struct ExactPointsDeleter {
+  void operator()(ExactPoints* p) const noexcept;
+};
+using ExactPointsPtr = std::unique_ptr<ExactPoints, ExactPointsDeleter>;
+[[nodiscard]] ExactPointsPtr make_exact_points(const TriMesh& a, const TriMesh& b, std::span<const PointKey> keys,
+                                               const ExecContext& ctx);
+
 /// Refines triangle t of one side (0: A, 1: B) by the given intersection
 /// points (keys whose simplex on this side lies in the triangle's closure)
 /// and constraint segments, by a constrained triangulation in exact
@@ -151,10 +172,11 @@ struct PointIds {
 [[nodiscard]] Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
                                      std::span<const PointKey> points,
                                      std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
-                                     std::vector<std::array<std::uint32_t, 3>>& out);
+                                     const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out);
 
 /// Coordinates of a new intersection point, rounded from its exact value.
-[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k);
+[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const ExactPoints& exact,
+                                      std::size_t index);
 
 /// Winding number of the closed net m about a point: a double point not on
 /// m, or the centroid of three intersection points / vertices (exact), by an

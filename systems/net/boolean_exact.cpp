@@ -9,11 +9,16 @@
 // Why not CGAL's corefinement: it runs every vertex of both nets through the
 // exact kernel; here only the triangles that meet the other net see it, the
 // rest stays plain doubles (docs/glossary.md, net Booleans).
+//
+// Why this file is long: it is the only file that sees CGAL (the exact
+// kernel stays behind boolean_detail.h), so every exact predicate,
+// construction and triangulation of the net operations lives here.
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/intersections.h>
+#include <atelier/engine/parallel.h>
 
 #include <algorithm>
 #include <cmath>
@@ -199,6 +204,37 @@ Ke::Point_3 exact_point(const TriMesh& a, const TriMesh& b, const PointKey& k) {
     return point_of(CGAL::intersection(line(b, k.b), plane(a, k.a)));
   return point_of(CGAL::intersection(line(a, k.a), line(b, k.b)));
 }
+
+}  // namespace
+
+struct ExactPoints {
+  std::vector<Ke::Point_3> p;
+  std::vector<std::uint8_t> ok;  // 0: no construction (exact_point throws again where it is used)
+  std::uint32_t first_id = 0;    // global id of p[0] (nA + nB)
+};
+
+void ExactPointsDeleter::operator()(ExactPoints* p) const noexcept {
+  delete p;
+}
+
+ExactPointsPtr make_exact_points(const TriMesh& a, const TriMesh& b, std::span<const PointKey> keys,
+                                 const ExecContext& ctx) {
+  ExactPointsPtr out(new ExactPoints);
+  out->first_id = static_cast<std::uint32_t>(a.p.size() + b.p.size());
+  out->p.resize(keys.size());
+  out->ok.assign(keys.size(), 0);
+  par::for_each_n(ctx, keys.size(), [&](std::size_t i) {
+    try {
+      out->p[i] = exact_point(a, b, keys[i]);
+      out->ok[i] = 1;
+    } catch (const Error&) {
+      // Left out: the triangle using the point reports the error.
+    }
+  });
+  return out;
+}
+
+namespace {
 
 // ------------------------------------------------------------ ray parity
 
@@ -402,7 +438,7 @@ std::uint32_t PointIds::find(const PointKey& k) const {
 
 Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t, std::span<const PointKey> points,
                        std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
-                       std::vector<std::array<std::uint32_t, 3>>& out) {
+                       const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out) {
   using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Ke>;
   using Fb = CGAL::Constrained_triangulation_face_base_2<Ke>;
   using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
@@ -448,7 +484,10 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
       if (dim_of(s) == kDimEdge)
         for (std::size_t q = 0; q < 3; ++q)
           if (m.tri_edge[t][q] == idx_of(s)) slot = q;
-      (slot < 3 ? on_edge[slot] : inside).emplace_back(exact_point(a, b, k), k);
+      const std::uint32_t id = ids.find(k);
+      const bool shared =
+          id != kNil && id >= exact.first_id && id - exact.first_id < exact.p.size() && exact.ok[id - exact.first_id];
+      (slot < 3 ? on_edge[slot] : inside).emplace_back(shared ? exact.p[id - exact.first_id] : exact_point(a, b, k), k);
     }
     auto add = [&](Ct::Vertex_handle h, const PointKey& k) -> Status {
       const std::uint32_t id = ids.find(k);
@@ -526,18 +565,60 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
   return {};
 }
 
-Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k) {
-  const Ke::Point_3 p = exact_point(a, b, k);
-  // The interval approximation when it pins the value within two ulps (the
-  // common case; the same bits on every run), else the exact value rounded.
-  auto coord = [](const Ke::FT& x) {
+Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const ExactPoints& exact,
+                        std::size_t index) {
+  // A value is kept when its enclosing interval is at most four ulps wide
+  // (the same bits on every run; within 2 ulps of the exact value), else
+  // the exact value is rounded.
+  auto pinned = [](double lo, double hi) {
+    if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
+    for (int i = 0; i < 4 && lo < hi; ++i) lo = std::nextafter(lo, hi);
+    return lo >= hi;
+  };
+  // An edge through a triangle (the common point of a cut): x = p + t (q -
+  // p) with t = o_p / (o_p - o_q), o the orientations of the edge's ends
+  // against the triangle, in interval arithmetic from the triangle's corner
+  // (no constructed plane, whose offset cancels): decides almost every
+  // point without the lazy kernel's exact fallback.
+  const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
+  if (edge_face || (dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) {
+    using I = CGAL::Interval_nt<true>;
+    const TriMesh& me = edge_face ? a : b;
+    const TriMesh& mf = edge_face ? b : a;
+    const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
+    const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
+    const Vec3d &p = me.p[ev[0]], &q = me.p[ev[1]];
+    const Vec3d &c0 = mf.p[tv[0]], &c1 = mf.p[tv[1]], &c2 = mf.p[tv[2]];
+    std::array<I, 3> u, v, wp, wq;
+    for (int j = 0; j < 3; ++j) {
+      u[static_cast<std::size_t>(j)] = I(c1[j]) - I(c0[j]);
+      v[static_cast<std::size_t>(j)] = I(c2[j]) - I(c0[j]);
+      wp[static_cast<std::size_t>(j)] = I(p[j]) - I(c0[j]);
+      wq[static_cast<std::size_t>(j)] = I(q[j]) - I(c0[j]);
+    }
+    const I n0 = u[1] * v[2] - u[2] * v[1], n1 = u[2] * v[0] - u[0] * v[2], n2 = u[0] * v[1] - u[1] * v[0];
+    const I op = n0 * wp[0] + n1 * wp[1] + n2 * wp[2];
+    const I oq = n0 * wq[0] + n1 * wq[1] + n2 * wq[2];
+    const I den = op - oq;
+    if (den.inf() > 0 || den.sup() < 0) {
+      const I t = op / den;
+      Vec3d x;
+      bool ok = true;
+      for (int j = 0; j < 3 && ok; ++j) {
+        const I xj = I(p[j]) + t * (I(q[j]) - I(p[j]));
+        ok = pinned(xj.inf(), xj.sup());
+        x[j] = xj.inf() + 0.5 * (xj.sup() - xj.inf());
+      }
+      if (ok) return x;
+    }
+  }
+  const Ke::Point_3 pt = index < exact.p.size() && exact.ok[index] ? exact.p[index] : exact_point(a, b, k);
+  auto coord = [&](const Ke::FT& x) {
     const std::pair<double, double> iv = CGAL::to_interval(x);
-    if (std::isfinite(iv.first) && std::isfinite(iv.second) &&
-        std::nextafter(std::nextafter(iv.first, iv.second), iv.second) >= iv.second)
-      return iv.first + 0.5 * (iv.second - iv.first);
+    if (pinned(iv.first, iv.second)) return iv.first + 0.5 * (iv.second - iv.first);
     return CGAL::to_double(CGAL::exact(x));
   };
-  return {coord(p.x()), coord(p.y()), coord(p.z())};
+  return {coord(pt.x()), coord(pt.y()), coord(pt.z())};
 }
 
 int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q) {

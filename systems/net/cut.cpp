@@ -149,6 +149,7 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
   }
 
   // ---- re-triangulate the cut triangles (exact), in parallel
+  const ExactPointsPtr exact = make_exact_points(A, B, new_keys, ctx);
   for (CutSide& s : sides) {
     if (ctx.cancelled()) return {ErrorCode::kCancelled, "cut: cancelled"};
     std::vector<Status> status(s.cut.size());
@@ -169,7 +170,7 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
         const auto& v = s.m->tri[t];
         out.push_back({v[0] + s.offset, v[1] + s.offset, v[2] + s.offset});
       } else {
-        status[c] = refine_triangle(A, B, s.side, t, pts, seg, ids, out);
+        status[c] = refine_triangle(A, B, s.side, t, pts, seg, ids, *exact, out);
       }
       for (auto& tri : out)
         for (auto& v : tri) v = canon[v];
@@ -178,7 +179,8 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
       if (!st) return st;
   }
   std::vector<Vec3d> new_points(new_keys.size());
-  par::for_each_n(ctx, new_keys.size(), [&](std::size_t i) { new_points[i] = point_coordinates(A, B, new_keys[i]); });
+  par::for_each_n(ctx, new_keys.size(),
+                  [&](std::size_t i) { new_points[i] = point_coordinates(A, B, new_keys[i], *exact, i); });
 
   // ---- pieces, coplanar overlaps, components
   for (CutSide& s : sides) {

@@ -38,6 +38,29 @@ void merge_box(std::array<double, 6>& into, const std::array<double, 6>& b) noex
 
 }  // namespace
 
+void sort_edge_keys(std::span<const std::uint64_t> key, std::size_t n_vertices, std::vector<std::uint32_t>& order) {
+  const std::size_t n = key.size();
+  std::vector<std::uint32_t> start(n_vertices + 1, 0);
+  for (std::uint64_t k : key) ++start[static_cast<std::size_t>(k >> 32) + 1];
+  for (std::size_t v = 0; v < n_vertices; ++v) start[v + 1] += start[v];
+  order.resize(n);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t i = 0; i < n; ++i) order[fill[static_cast<std::size_t>(key[i] >> 32)]++] = i;
+  }
+  // Within a vertex: by key, then index (the indices went in increasing).
+  auto before = [&](std::uint32_t x, std::uint32_t y) { return key[x] != key[y] ? key[x] < key[y] : x < y; };
+  for (std::size_t v = 0; v < n_vertices; ++v) {
+    const auto b = order.begin() + start[v], e = order.begin() + start[v + 1];
+    if (e - b > 32) {
+      std::sort(b, e, before);
+      continue;
+    }
+    for (auto i = b + 1; i < e; ++i)
+      for (auto j = i; j != b && before(*j, *(j - 1)); --j) std::iter_swap(j, j - 1);
+  }
+}
+
 Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx, bool open) {
   out = TriMesh{};
   out.name = std::move(name);
@@ -149,9 +172,16 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
                          u < v};
     }
   });
-  par::sort(ctx, half.begin(), half.end(), [](const Half& x, const Half& y) {
-    return x.key != y.key ? x.key < y.key : (x.tri != y.tri ? x.tri < y.tri : x.k < y.k);
-  });
+  {
+    // By (key, tri, k): halves were made in (tri, k) order.
+    std::vector<std::uint64_t> keys(half.size());
+    for (std::size_t i = 0; i < half.size(); ++i) keys[i] = half[i].key;
+    std::vector<std::uint32_t> order;
+    sort_edge_keys(keys, out.p.size(), order);
+    std::vector<Half> sorted(half.size());
+    for (std::size_t i = 0; i < half.size(); ++i) sorted[i] = half[order[i]];
+    half = std::move(sorted);
+  }
   out.tri_edge.assign(nt, {kNil, kNil, kNil});
   out.edge.reserve(3 * nt / 2);
   out.edge_tri.reserve(3 * nt / 2);
@@ -223,6 +253,10 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
   return {};
 }
 
+/// Leaf size of the box hierarchy: 8 triangles (their boxes are tested
+/// contiguously, cheaper than the node pairs that smaller leaves make).
+constexpr std::uint32_t kLeafSize = 8;
+
 void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
   // Triangles in Morton order of their box centres, then ranges halved: a
   // linear BVH (one parallel sort instead of a median search per level).
@@ -268,11 +302,11 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
   while (!stack.empty()) {
     const Job j = stack.back();
     stack.pop_back();
-    if (j.count <= 4) {
-      out.nodes[j.node].first = j.first;
-      out.nodes[j.node].count = j.count;
-      continue;
-    }
+    // Inner nodes keep their range too: the pair traversal splits the node
+    // holding more triangles.
+    out.nodes[j.node].first = j.first;
+    out.nodes[j.node].count = j.count;
+    if (j.count <= kLeafSize) continue;
     const std::uint32_t half = j.count / 2;
     const auto left = static_cast<std::uint32_t>(out.nodes.size());
     out.nodes[j.node].left = left;
@@ -281,12 +315,15 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
     stack.push_back({left, j.first, half});
     stack.push_back({left + 1, j.first + half, j.count - half});
   }
+  // Triangle boxes in leaf order: the pair tests read them contiguously.
+  out.box.resize(nt);
+  for (std::size_t i = 0; i < nt; ++i) out.box[i] = m.box[out.order[i]];
   // Boxes bottom-up: children always come after their parent.
   for (std::size_t n = out.nodes.size(); n-- > 0;) {
     Bvh::Node& node = out.nodes[n];
     if (node.left == kNil) {
-      node.box = m.box[out.order[node.first]];
-      for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i) merge_box(node.box, m.box[out.order[i]]);
+      node.box = out.box[node.first];
+      for (std::uint32_t i = node.first + 1; i < node.first + node.count; ++i) merge_box(node.box, out.box[i]);
     } else {
       node.box = out.nodes[node.left].box;
       merge_box(node.box, out.nodes[node.left + 1].box);
@@ -305,8 +342,7 @@ namespace {
 constexpr std::size_t kMaxTasks = 1024;
 
 template <class Visit>
-void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb, bool self, const ExecContext& ctx,
-                std::size_t& tasks, Visit&& visit) {
+void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx, std::size_t& tasks, Visit&& visit) {
   tasks = 0;
   if (ba.nodes.empty() || bb.nodes.empty()) return;
   using NodePair = std::array<std::uint32_t, 2>;
@@ -321,7 +357,9 @@ void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb
       push({x.left + 1, x.left + 1});
       return;
     }
-    const bool split_x = !leaf(x) && (leaf(y) || x.count == 0);
+    // Split the node holding more triangles (a leaf never): halves the
+    // boxes on both sides alike, so fewer node pairs overlap.
+    const bool split_x = !leaf(x) && (leaf(y) || x.count >= y.count);
     if (split_x) {
       push({x.left, np[1]});
       push({x.left + 1, np[1]});
@@ -333,16 +371,15 @@ void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb
   auto leaf_pairs = [&](const NodePair& np, std::size_t task) {
     const Bvh::Node& x = ba.nodes[np[0]];
     const Bvh::Node& y = bb.nodes[np[1]];
-    for (std::uint32_t i = x.first; i < x.first + x.count; ++i)
-      for (std::uint32_t j = y.first; j < y.first + y.count; ++j) {
+    for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
+      const std::uint32_t j0 = self && np[0] == np[1] ? i + 1 : y.first;  // each unordered pair once in a leaf
+      for (std::uint32_t j = j0; j < y.first + y.count; ++j) {
+        if (!overlap(ba.box[i], bb.box[j])) continue;
         std::uint32_t ti = ba.order[i], tj = bb.order[j];
-        if (self) {
-          if (ti == tj) continue;
-          if (np[0] == np[1] && i > j) continue;  // each unordered pair once inside one leaf
-          if (ti > tj) std::swap(ti, tj);
-        }
-        if (overlap(a.box[ti], b.box[tj])) visit(task, ti, tj);
+        if (self && ti > tj) std::swap(ti, tj);
+        visit(task, ti, tj);
       }
+    }
   };
   auto both_leaves = [&](const NodePair& np) { return leaf(ba.nodes[np[0]]) && leaf(bb.nodes[np[1]]); };
   // Breadth-first frontier.
@@ -385,12 +422,14 @@ void dual_visit(const TriMesh& a, const Bvh& ba, const TriMesh& b, const Bvh& bb
 
 }  // namespace
 
-std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
-                                                            const Bvh& bvh_b, const ExecContext& ctx) {
+std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& /*a*/, const Bvh& bvh_a,
+                                                            const TriMesh& /*b*/, const Bvh& bvh_b,
+                                                            const ExecContext& ctx) {
+  // The hierarchies hold the triangle boxes (in leaf order).
   // One list per task (each task writes only its own).
   std::vector<std::vector<std::array<std::uint32_t, 2>>> lists(kMaxTasks);
   std::size_t tasks = 0;
-  dual_visit(a, bvh_a, b, bvh_b, false, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+  dual_visit(bvh_a, bvh_b, false, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
     lists[task].push_back({i, j});
   });
   std::vector<std::array<std::uint32_t, 2>> pairs;
@@ -403,7 +442,7 @@ std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& a, co
 std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
   std::vector<std::array<std::uint32_t, 2>> first(kMaxTasks, {kNil, kNil});
   std::size_t tasks = 0;
-  dual_visit(m, bvh, m, bvh, true, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+  dual_visit(bvh, bvh, true, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
     if (std::array<std::uint32_t, 2>{i, j} < first[task] && triangles_cross(m, i, j)) first[task] = {i, j};
   });
   // The smallest crossing pair over all tasks: the same for any thread count.

@@ -121,6 +121,24 @@ TEST(NetBoolean, SameBitsForAnyThreadCount) {
   EXPECT_EQ(r1.result.face_offsets, r2.result.face_offsets);
 }
 
+// Above ExecContext::sequential_threshold polygons (10^4) the default
+// context runs the parallel paths as they are used in practice (grain and
+// threshold untouched): two level-4 icospheres, 10,240 triangles in all.
+TEST(NetBoolean, SameBitsForAnyThreadCountAtDefaultSettings) {
+  const PolygonSoup a = net_test::icosphere(4, 1.0, {0, 0, 0});
+  const PolygonSoup b = net_test::icosphere(4, 1.0, {0.61, 0.23, 0.17});
+  ASSERT_GE(a.face_count() + b.face_count(), ExecContext{}.sequential_threshold);
+  ExecContext two;
+  two.threads = 2;
+  const BooleanReport r1 = run(a, b, BooleanOp::kAMinusB, ExecContext::sequential());
+  const BooleanReport r2 = run(a, b, BooleanOp::kAMinusB, two);
+  ASSERT_EQ(r1.result.positions.size(), r2.result.positions.size());
+  EXPECT_EQ(0, std::memcmp(r1.result.positions.data(), r2.result.positions.data(),
+                           r1.result.positions.size() * sizeof(Vec3d)));
+  EXPECT_EQ(r1.result.face_nodes, r2.result.face_nodes);
+  EXPECT_GT(r1.intersection_points, 0u);
+}
+
 TEST(NetBoolean, TouchingAndNestedCases) {
   const auto a = box({0, 0, 0}, {1, 1, 1});
   // Face to face from outside: the union is one box, the shared face goes.
