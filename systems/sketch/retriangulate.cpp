@@ -90,6 +90,8 @@ struct Plan {
 class Planner {
  public:
   Planner(const Model& m, double snap) : m_(m), snap_(snap) {}
+  bool chords_without_cdt = true;  // RetriangulateOptions::chords_without_cdt
+  std::size_t fans_without_cdt = 0;
 
   const std::vector<HalfedgeIdx>& hs(FaceIdx f) {
     auto it = P.face_hs.find(f.value);
@@ -521,7 +523,10 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
   fp.c2[2] = Vec2d(e2.dot(ux), e2.dot(uy));
   std::vector<std::uint32_t> boundary;
   const std::uint32_t cpt[3] = {P.node_pt.at(fp.n[0]), P.node_pt.at(fp.n[1]), P.node_pt.at(fp.n[2])};
-  if (chord_only(pl, fp, cons, inner, side, cpt)) return {};
+  if (pl.chords_without_cdt && chord_only(pl, fp, cons, inner, side, cpt)) {
+    ++pl.fans_without_cdt;
+    return {};
+  }
   for (int k = 0; k < 3; ++k) {
     boundary.push_back(cpt[k]);
     boundary.insert(boundary.end(), side[k].begin(), side[k].end());
@@ -610,6 +615,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       if (cur[i] == cur[j])
         return status_of(ErrorCode::kInvalidArgument, "retriangulate: curve ", cur[i].value, " given twice");
   Planner pl(m, opt.snap);
+  pl.chords_without_cdt = opt.chords_without_cdt;
   Plan& P = pl.P;
   // 1. Curve points and segments.
   std::vector<std::vector<std::uint32_t>> row_pid(cur.size());
@@ -872,6 +878,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   // ---------------------------------------------------------------- apply
   RetriangulationResult out;
   out.crossings = P.crossings;
+  out.fans_without_cdt = pl.fans_without_cdt;
   out.faces_removed = faces.size();
   out.edges_split = P.edge_pts.size();
   std::vector<std::uint8_t> face_flags(faces.size());
