@@ -418,15 +418,17 @@ OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_
   return p;
 }
 
-/// Area and face count of the live faces of the given surfaces (parallel,
-/// summed in a fixed order).
+/// Area and face count of the live faces of the given surfaces outside
+/// `skip` (the removed piece, already measured: its faces' cycles are not
+/// read again), parallel, summed in a fixed order.
 std::pair<double, std::size_t> surface_totals(const Model& m, const std::vector<std::uint8_t>& touched,
-                                              const ExecContext& ctx) {
+                                              const std::vector<std::uint8_t>& skip, const ExecContext& ctx) {
   using Acc = std::pair<double, std::size_t>;
   return par::transform_reduce(
       ctx, m.faces.slots.capacity(), Acc{0.0, 0},
       [&](std::size_t f) -> Acc {
-        if (!m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value]) return {0.0, 0};
+        if (skip[f] || !m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value])
+          return {0.0, 0};
         const HalfedgeIdx h0 = m.faces.halfedge[f];
         const Vec3d& p0 = m.position(m.tail(h0));
         HalfedgeIdx h = m.next(h0);
@@ -510,11 +512,11 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
     out.removed_area = removed.area;
     if (opt.kept_totals) {
       // The one pass over every face of the cut: on request only.
-      const auto [total_area, total_faces] = surface_totals(m, touched, ctx);
+      const auto [kept_area, kept_faces] = surface_totals(m, touched, pc.in, ctx);
       Piece kept;  // everything else of the surfaces the curves cross
       kept.surface = removed.surface;
-      kept.faces = total_faces - pc.faces.size();
-      kept.area = total_area - pc.area;
+      kept.faces = kept_faces;
+      kept.area = kept_area;
       out.pieces.push_back(kept);
       out.kept_area = kept.area;
     }
