@@ -123,38 +123,41 @@ std::vector<AttribEdge> edges_of(const PaintResult& p) {
   return e;
 }
 
-/// Our cut: penetrated painting, the pick, cut.
-Expected<CutResult> ours(Model& m, const Case& c, const ExecContext& ctx) {
+/// Our cut: penetrated painting, the pick, cut; `totals`: also the kept
+/// side's area and face count.
+Expected<CutResult> ours(Model& m, const Case& c, const ExecContext& ctx, bool totals = true) {
   auto p = paint_stroke(m, c.camera, c.stroke, {.through = true}, ctx);
   if (!p) return p.status();
   auto pick = locate_pixel(m, c.camera, c.pick, {}, ctx);
   if (!pick) return pick.status();
-  return cut_along_curves(m, edges_of(*p), {.pick = pick->location}, ctx);
+  return cut_along_curves(m, edges_of(*p), {.pick = pick->location, .kept_totals = totals}, ctx);
 }
 
-/// The CGAL user's cut; returns the removed component's area and the
-/// areas of the components left.
+/// The CGAL user's cut; returns the removed component's area and, with
+/// `totals`, the areas of the components left (what ours reports with
+/// CutOptions::kept_totals: both sides measure the same things).
 struct TheirCut {
   double removed = 0;
   std::vector<double> left;
 };
-TheirCut theirs(CMesh& tm, CMesh& sheet, const K::Ray_3& ray) {
+TheirCut theirs(CMesh& tm, CMesh& sheet, const K::Ray_3& ray, bool totals = true) {
   PMP::split(tm, sheet);
   auto cc = tm.add_property_map<CMesh::Face_index, std::size_t>("f:cc", 0).first;
   const std::size_t n = PMP::connected_components(tm, cc);
-  std::vector<double> area(n, 0.0);
-  for (auto f : tm.faces()) area[cc[f]] += PMP::face_area(f, tm);
   using Primitive = CGAL::AABB_face_graph_triangle_primitive<CMesh>;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
   Tree tree(faces(tm).first, faces(tm).second, tm);
   const auto hit = tree.first_intersection(ray);
-  TheirCut out;
   const std::size_t dropped = hit ? cc[hit->second] : n;
+  std::vector<double> area(n, 0.0);
+  for (auto f : tm.faces())
+    if (totals || cc[f] == dropped) area[cc[f]] += PMP::face_area(f, tm);
+  TheirCut out;
   if (hit) {
     PMP::remove_connected_components(tm, std::vector<std::size_t>{dropped}, cc);
     out.removed = area[dropped];
   }
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < n && totals; ++i)
     if (i != dropped) out.left.push_back(area[i]);
   return out;
 }
@@ -191,6 +194,13 @@ void prepare(Case& c, Model m, std::vector<Vec3d> line, const Vec3d& pick) {
     return;
   }
   c.area_diff = std::max(std::abs(r->removed_area - t.removed) / t.removed, std::abs(r->kept_area - left) / left);
+  // Without the kept side's totals both cuts remove the same piece as well.
+  Model mine2 = c.model;
+  auto r2 = ours(mine2, c, ExecContext::sequential(), false);
+  CMesh tm2 = c.cgal, sh2 = c.sheet;
+  const TheirCut t2 = theirs(tm2, sh2, c.pick_ray, false);
+  if (!r2 || r2->removed_area != r->removed_area || diff_tables(mine, mine2) != "" || t2.removed != t.removed)
+    c.error = "the cuts without totals differ from the cuts with them";
 }
 
 /// A 200-point wavy line across `box` at height fraction `h`, in the z = centre plane.
@@ -269,11 +279,12 @@ void BM_SketchCut(benchmark::State& st) {
   }
   ExecContext ctx;
   ctx.threads = static_cast<int>(st.range(1));
+  const bool totals = st.range(2) != 0;
   for (auto _ : st) {
     st.PauseTiming();
     Model m = c.model;
     st.ResumeTiming();
-    auto r = ours(m, c, ctx);
+    auto r = ours(m, c, ctx, totals);
     if (!r) st.SkipWithError(r.status().to_string().c_str());
     st.PauseTiming();
     { Model sink = std::move(m); }
@@ -281,12 +292,18 @@ void BM_SketchCut(benchmark::State& st) {
   }
   counters(st, c);
 }
+// totals: 1 = both sides also measure the kept side (every face's area),
+// 0 = both report the removed piece only.
 BENCHMARK(BM_SketchCut)
-    ->ArgNames({"mesh", "threads"})
-    ->Args({0, 1})
-    ->Args({0, 2})
-    ->Args({1, 1})
-    ->Args({1, 2})
+    ->ArgNames({"mesh", "threads", "totals"})
+    ->Args({0, 1, 1})
+    ->Args({0, 2, 1})
+    ->Args({0, 1, 0})
+    ->Args({0, 2, 0})
+    ->Args({1, 1, 1})
+    ->Args({1, 2, 1})
+    ->Args({1, 1, 0})
+    ->Args({1, 2, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
@@ -296,11 +313,12 @@ void BM_SketchCut_CgalSplit(benchmark::State& st) {
     st.SkipWithError(c.error.c_str());
     return;
   }
+  const bool totals = st.range(2) != 0;
   for (auto _ : st) {
     st.PauseTiming();
     CMesh tm = c.cgal, sh = c.sheet;
     st.ResumeTiming();
-    benchmark::DoNotOptimize(theirs(tm, sh, c.pick_ray));
+    benchmark::DoNotOptimize(theirs(tm, sh, c.pick_ray, totals));
     st.PauseTiming();
     { CMesh a = std::move(tm), b = std::move(sh); }
     st.ResumeTiming();
@@ -308,9 +326,11 @@ void BM_SketchCut_CgalSplit(benchmark::State& st) {
   counters(st, c);
 }
 BENCHMARK(BM_SketchCut_CgalSplit)
-    ->ArgNames({"mesh", "threads"})
-    ->Args({0, 1})
-    ->Args({1, 1})
+    ->ArgNames({"mesh", "threads", "totals"})
+    ->Args({0, 1, 1})
+    ->Args({0, 1, 0})
+    ->Args({1, 1, 1})
+    ->Args({1, 1, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -186,14 +186,22 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, Removal& out) {
                        me.value, " in joint ", j.value, " (a seam to another surface); cut elsewhere or partition");
     trimmed.insert(me);
   }
+  // A corner dies when all its edges die. Which nodes keep an edge: one
+  // pass over the halfedge columns in memory order, instead of a walk round
+  // every corner's ring (random reads, most of the removal's own time).
+  std::vector<std::uint8_t> keeps(m.nodes.slots.capacity(), 0);
+  {
+    const auto& tail = m.halfedges.tail;
+    const std::size_t ne = m.edges.slots.capacity();
+    for (std::size_t h = 0; h < 2 * ne; ++h)
+      if (!edge_dies[h >> 1] && m.alive(EdgeIdx{static_cast<std::uint32_t>(h >> 1)})) keeps[tail[h].value] = 1;
+  }
   std::vector<NodeIdx> dying_nodes;
   std::vector<std::uint8_t> seen(m.nodes.slots.capacity(), 0);
   for (NodeIdx v : corners) {
     if (seen[v.value]) continue;
     seen[v.value] = 1;
-    bool all = true;
-    m.for_each_outgoing(v, [&](HalfedgeIdx h) { all &= edge_dies[edge_of(h).value] != 0; });
-    (all ? dying_nodes : out.survivors).push_back(v);
+    (keeps[v.value] ? out.survivors : dying_nodes).push_back(v);
   }
   std::sort(out.survivors.begin(), out.survivors.end());
   std::vector<std::uint8_t> node_dies(m.nodes.slots.capacity(), 0);
@@ -376,42 +384,51 @@ OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_
   p.in.assign(nf, 0);
   std::vector<FaceIdx> stack{start};
   p.in[start.value] = 1;
+  std::size_t count = 0;
   while (!stack.empty()) {
     const FaceIdx f = stack.back();
     stack.pop_back();
-    p.faces.push_back(f);
+    ++count;
     const HalfedgeIdx h0 = m.faces.halfedge[f.value];
-    const Vec3d& p0 = m.position(m.tail(h0));
     HalfedgeIdx h = h0;
     do {
-      const HalfedgeIdx n = m.next(h);
-      if (h != h0 && n != h0) p.area += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
       const FaceIdx o = m.face(twin(h));
       p.open |= !o.valid();
       if (!curve_edge[edge_of(h).value] && o.valid() && !p.in[o.value]) {
         p.in[o.value] = 1;
         stack.push_back(o);
       }
-      h = n;
+      h = m.next(h);
     } while (h != h0);
   }
   // Face order (the removal order decides the free lists): read off the
-  // marks, which costs a byte per face slot instead of a sort.
-  std::size_t k = 0;
-  for (std::uint32_t f = 0; f < nf; ++f)
-    if (p.in[f]) p.faces[k++] = FaceIdx{f};
+  // marks, which costs a byte per face slot instead of a sort. The area is
+  // summed here, in face order, rather than in the flood's order: the
+  // corners are then read nearly in memory order.
+  p.faces.reserve(count);
+  for (std::uint32_t f = 0; f < nf; ++f) {
+    if (!p.in[f]) continue;
+    p.faces.push_back(FaceIdx{f});
+    const HalfedgeIdx h0 = m.faces.halfedge[f];
+    const Vec3d& p0 = m.position(m.tail(h0));
+    HalfedgeIdx h = m.next(h0);
+    for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
+      p.area += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
+  }
   return p;
 }
 
-/// Area and face count of the live faces of the given surfaces (parallel,
-/// summed in a fixed order).
+/// Area and face count of the live faces of the given surfaces outside
+/// `skip` (the removed piece, already measured: its faces' cycles are not
+/// read again), parallel, summed in a fixed order.
 std::pair<double, std::size_t> surface_totals(const Model& m, const std::vector<std::uint8_t>& touched,
-                                              const ExecContext& ctx) {
+                                              const std::vector<std::uint8_t>& skip, const ExecContext& ctx) {
   using Acc = std::pair<double, std::size_t>;
   return par::transform_reduce(
       ctx, m.faces.slots.capacity(), Acc{0.0, 0},
       [&](std::size_t f) -> Acc {
-        if (!m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value]) return {0.0, 0};
+        if (skip[f] || !m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value])
+          return {0.0, 0};
         const HalfedgeIdx h0 = m.faces.halfedge[f];
         const Vec3d& p0 = m.position(m.tail(h0));
         HalfedgeIdx h = m.next(h0);
@@ -486,19 +503,23 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
       return Status(ErrorCode::kInvalidArgument,
                     "cut: the curve does not separate the surface (the picked side is all of it); a cut all the "
                     "way round a closed body or a tube needs penetrated painting (\"through\": true)");
-    const auto [total_area, total_faces] = surface_totals(m, touched, ctx);
     Piece removed;
     removed.surface = m.handle(m.faces.surface[f.value]);
     removed.faces = pc.faces.size();
     removed.area = pc.area;
     removed.removed = true;
-    Piece kept;  // everything else of the surfaces the curves cross
-    kept.surface = removed.surface;
-    kept.faces = total_faces - pc.faces.size();
-    kept.area = total_area - pc.area;
-    out.pieces = {removed, kept};
+    out.pieces = {removed};
     out.removed_area = removed.area;
-    out.kept_area = kept.area;
+    if (opt.kept_totals) {
+      // The one pass over every face of the cut: on request only.
+      const auto [kept_area, kept_faces] = surface_totals(m, touched, pc.in, ctx);
+      Piece kept;  // everything else of the surfaces the curves cross
+      kept.surface = removed.surface;
+      kept.faces = kept_faces;
+      kept.area = kept_area;
+      out.pieces.push_back(kept);
+      out.kept_area = kept.area;
+    }
     shell_closed = group_closed(m, pc.in, pc.faces, pc.open);
     rm = pc.faces;
   } else {

@@ -61,13 +61,19 @@ struct CutOptions {
   /// model as it is before the cut. Without it, every piece of each crossed
   /// component but the largest is removed.
   std::optional<SurfaceLocation> pick;
+  /// With a pick: also sum the area and face count of the side kept (one
+  /// pass over every face of the surfaces the curves cross). Off, the result
+  /// holds only the removed piece and kept_area is 0; the removed piece's
+  /// area costs nothing extra (it is summed while the piece is grown).
+  /// Without a pick every piece is measured anyway and this is ignored.
+  bool kept_totals = true;
   RetriangulateOptions retriangulate;
 };
 
 struct CutResult {
   /// With a pick: the removed piece, then the rest of the surfaces the
   /// curves cross (one entry: the picked side is grown, the rest is not
-  /// split into pieces). Without: every piece of the crossed components,
+  /// split into pieces; left out when options.kept_totals is false). Without: every piece of the crossed components,
   /// removed ones included.
   std::vector<Piece> pieces;
   double removed_area = 0, kept_area = 0;

@@ -98,11 +98,32 @@ struct NodeImage {
   Vec2d pixel;
   double w = 0, key = 0;
 };
-bool project_point(const Mat4d& pv, bool perspective, double W, double H, const Vec3d& x, NodeImage& out) {
-  const Vec4d c = pv * Vec4d(x.x(), x.y(), x.z(), 1.0);
+/// The first half of project_point (the same bits): clip coordinates and
+/// pixel, false exactly when project_point fails.
+bool project_xy(const Mat4d& pv, double W, double H, const Vec3d& x, Vec4d& c, double& px, double& py) {
+  c = pv * Vec4d(x.x(), x.y(), x.z(), 1.0);
   if (!(c.w() > 0) || !c.allFinite()) return false;
-  const double px = (c.x() / c.w() + 1.0) * 0.5 * W, py = (1.0 - c.y() / c.w()) * 0.5 * H;
-  if (!(std::abs(px) < kMaxPixel) || !(std::abs(py) < kMaxPixel)) return false;
+  px = (c.x() / c.w() + 1.0) * 0.5 * W;
+  py = (1.0 - c.y() / c.w()) * 0.5 * H;
+  return std::abs(px) < kMaxPixel && std::abs(py) < kMaxPixel;
+}
+
+/// Where the snapped pixel llround(p * kSnap) lies against the snapped box
+/// [lo, hi] (bits: left of, right of, above, below), each bit set only where
+/// it holds whatever the rounding, so no llround is needed: a bit set here
+/// is set in the exact code, and a cull by these bits culls nothing the
+/// exact code would keep. The margin covers the rounding of llround (1/2)
+/// and of the thresholds themselves (below 2^56 in magnitude).
+std::uint8_t sure_code(double px, double py, double lox, double hix, double loy, double hiy) {
+  auto below = [](double x, double lo) { return x * kSnap < lo - 1.0 - std::abs(lo) * 1e-15; };
+  auto above = [](double x, double hi) { return x * kSnap > hi + 1.0 + std::abs(hi) * 1e-15; };
+  return static_cast<std::uint8_t>(below(px, lox) | above(px, hix) << 1 | below(py, loy) << 2 | above(py, hiy) << 3);
+}
+
+bool project_point(const Mat4d& pv, bool perspective, double W, double H, const Vec3d& x, NodeImage& out) {
+  Vec4d c;
+  double px = 0, py = 0;
+  if (!project_xy(pv, W, H, x, c, px, py)) return false;
   out.pixel = Vec2d(px, py);
   out.snapped = {std::llround(px * kSnap), std::llround(py * kSnap)};
   out.w = c.w();
@@ -418,6 +439,28 @@ Expected<std::vector<std::uint8_t>> surface_mask(const Model& m, std::span<const
   return mask;
 }
 
+/// Per face slot, 1 when the face is culled: its corners' codes share an
+/// outside bit (15) or one is not projectable (`not_ok`). One pass over the
+/// halfedge columns in memory order: walking each face's cycle reads them
+/// at random, which was most of the time of a cull (the codes and the
+/// result are a byte per node and per face and stay in cache). The same
+/// halfedges as the face's cycle (halfedge face column), so the same result.
+std::vector<std::uint8_t> culled_faces(const Model& m, std::span<const std::uint8_t> code, std::uint8_t not_ok) {
+  const std::size_t nf = m.faces.slots.capacity(), ne = m.edges.slots.capacity();
+  std::vector<std::uint8_t> all(nf, 0xFF), any(nf, 0);
+  const auto& tail = m.halfedges.tail;
+  const auto& face = m.halfedges.face;
+  for (std::size_t h = 0; h < 2 * ne; ++h) {
+    const FaceIdx f = face[h];
+    if (!f.valid() || !m.alive(EdgeIdx{static_cast<std::uint32_t>(h >> 1)})) continue;
+    const std::uint8_t c = code[tail[h].value];
+    all[f.value] &= c;
+    any[f.value] |= c;
+  }
+  for (std::size_t f = 0; f < nf; ++f) all[f] = (any[f] & not_ok) || (all[f] & 15) ? 1 : 0;
+  return all;
+}
+
 /// Fan triangles of face f in `tris` (sides classified).
 void fan_triangles(const Model& m, FaceIdx f, std::vector<HalfedgeIdx>& hs, std::vector<FanTri>& tris) {
   m.face_halfedges(f, hs);
@@ -444,6 +487,8 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
                                 std::span<const std::uint8_t> surf_mask, const ExecContext& ctx) {
   const SegmentGrid grid(sd);
   const std::size_t nf = m.faces.slots.capacity();
+  // Cull by the faces' screen boxes first (most faces lie away from the stroke).
+  const std::vector<std::uint8_t> culled = culled_faces(m, sc.code, Screen::kNotOk);
   const std::size_t chunks = (nf + kChunk - 1) / kChunk;
   std::vector<ChunkOut> outs(chunks);
   ExecContext c = ctx;
@@ -457,17 +502,7 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
     const std::size_t end = std::min(nf, (ch + 1) * kChunk);
     for (std::size_t fi = ch * kChunk; fi < end && out.status; ++fi) {
       const FaceIdx f{static_cast<std::uint32_t>(fi)};
-      if (!m.alive(f) || !surf_mask[m.faces.surface[fi].value]) continue;
-      // Cull by the face's screen box first (most faces lie away from the stroke).
-      {
-        std::uint8_t all = 0xFF, any = 0;
-        m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
-          const std::uint8_t x = sc.code[m.halfedges.tail[h.value].value];
-          all &= x;
-          any |= x;
-        });
-        if ((any & Screen::kNotOk) || (all & 15)) continue;
-      }
+      if (!m.alive(f) || culled[fi] || !surf_mask[m.faces.surface[fi].value]) continue;
       fan_triangles(m, f, hs, tris);
       if (hs.size() > 257) {
         out.status =
@@ -923,14 +958,18 @@ Expected<CurvePoint> locate_pixel(const Model& m, const Camera& camera, const Ve
   constexpr std::uint8_t kNotOk = 16;
   const std::size_t nn = m.nodes.slots.capacity();
   std::vector<std::uint8_t> code(nn, kNotOk);
+  // The codes are the sure bits of sure_code (no rounding): a face is
+  // culled only when the exact codes would cull it too.
+  const double qx = double(q.x), qy = double(q.y);
   par::for_each_n(ctx, nn, [&](std::size_t v) {
-    NodeImage im;
-    if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)}) || !project_point(pv, persp, W, H, m.nodes.position[v], im))
+    Vec4d cl;
+    double px = 0, py = 0;
+    if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)}) || !project_xy(pv, W, H, m.nodes.position[v], cl, px, py))
       return;
-    code[v] = static_cast<std::uint8_t>((im.snapped.x < q.x) | (im.snapped.x > q.x) << 1 | (im.snapped.y < q.y) << 2 |
-                                        (im.snapped.y > q.y) << 3);
+    code[v] = sure_code(px, py, qx, qx, qy, qy);
   });
   const std::size_t nf = m.faces.slots.capacity();
+  const std::vector<std::uint8_t> culled = culled_faces(m, code, kNotOk);
   const std::size_t chunks = (nf + kChunk - 1) / kChunk;
   std::vector<std::pair<double, CurvePoint>> best(chunks, {-INFINITY, CurvePoint{}});
   ExecContext c = ctx;
@@ -942,16 +981,7 @@ Expected<CurvePoint> locate_pixel(const Model& m, const Camera& camera, const Ve
     const std::size_t end = std::min(nf, (ch + 1) * kChunk);
     for (std::size_t fi = ch * kChunk; fi < end; ++fi) {
       const FaceIdx f{static_cast<std::uint32_t>(fi)};
-      if (!m.alive(f) || !(*mask)[m.faces.surface[fi].value]) continue;
-      {
-        std::uint8_t all = 0xFF, any = 0;
-        m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
-          const std::uint8_t x = code[m.halfedges.tail[h.value].value];
-          all &= x;
-          any |= x;
-        });
-        if ((any & kNotOk) || (all & 15)) continue;
-      }
+      if (!m.alive(f) || culled[fi] || !(*mask)[m.faces.surface[fi].value]) continue;
       fan_triangles(m, f, hs, tris);
       if (hs.size() > 257) continue;
       for (const FanTri& t : tris) {

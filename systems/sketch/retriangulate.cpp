@@ -90,6 +90,8 @@ struct Plan {
 class Planner {
  public:
   Planner(const Model& m, double snap) : m_(m), snap_(snap) {}
+  bool chords_without_cdt = true;  // RetriangulateOptions::chords_without_cdt
+  std::size_t fans_without_cdt = 0;
 
   const std::vector<HalfedgeIdx>& hs(FaceIdx f) {
     auto it = P.face_hs.find(f.value);
@@ -456,6 +458,55 @@ Status cross_segments(Planner& pl, const FanKey& fk, const std::vector<std::uint
   return {};
 }
 
+/// The commonest fan triangle without building a CDT: one curve segment
+/// p-q across it from one side to the next and no other point. The segment
+/// cuts off the triangle (p, X, q) at the corner X the two sides share; the
+/// quadrilateral left (q, Z, a, p) takes the diagonal that the constrained
+/// Delaunay triangulation would take: q-a unless p lies strictly inside the
+/// circle through q, Z, a (the empty-circle test, exact predicates; on a tie
+/// both diagonals are Delaunay and q-a is taken). Only when both cells are
+/// strictly convex by exact orientation tests, so that the CDT's answer is
+/// this one; anything else (false) goes to the CDT, which also reports the
+/// degenerate cases.
+bool chord_only(Planner& pl, FanPlan& fp, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& cons,
+                const std::vector<std::uint32_t>& inner, const std::array<std::vector<std::uint32_t>, 3>& side,
+                const std::uint32_t (&cpt)[3]) {
+  if (!inner.empty() || cons.size() != 1) return false;
+  int k = -1;
+  for (int s = 0; s < 3; ++s)
+    if (side[s].size() == 1 && side[(s + 1) % 3].size() == 1 && side[(s + 2) % 3].empty()) k = s;
+  if (k < 0) return false;
+  const std::uint32_t p = side[k][0], q = side[(k + 1) % 3][0];
+  if (!((cons[0].first == p && cons[0].second == q) || (cons[0].first == q && cons[0].second == p))) return false;
+  const std::uint32_t a = cpt[k], x = cpt[(k + 1) % 3], z = cpt[(k + 2) % 3];
+  // The same plane coordinates as the CDT's points.
+  auto at = [&](std::uint32_t pid) {
+    const Vec3d b = pl.bary_in(pid, fp.fan);
+    const Vec2d v = b[0] * fp.c2[0] + b[1] * fp.c2[1] + b[2] * fp.c2[2];
+    return K::Point_2(v.x(), v.y());
+  };
+  const K::Point_2 P2 = at(p), Q2 = at(q), A2 = at(a), X2 = at(x), Z2 = at(z);
+  auto left = [](const K::Point_2& u, const K::Point_2& v, const K::Point_2& w) {
+    return CGAL::orientation(u, v, w) == CGAL::LEFT_TURN;
+  };
+  // The cut-off triangle and the quadrilateral, each strictly convex (p and
+  // q may lie off their sides by rounding, either way: the CDT then still
+  // has these two cells, bounded by constraints).
+  if (!left(P2, X2, Q2) || !left(Q2, Z2, A2) || !left(Z2, A2, P2) || !left(A2, P2, Q2) || !left(P2, Q2, Z2))
+    return false;
+  fp.tris.push_back({p, x, q});
+  if (CGAL::side_of_oriented_circle(Q2, Z2, A2, P2) == CGAL::ON_POSITIVE_SIDE) {
+    fp.tris.push_back({q, z, p});
+    fp.tris.push_back({z, a, p});
+  } else {
+    fp.tris.push_back({q, z, a});
+    fp.tris.push_back({q, a, p});
+  }
+  for (auto& t : fp.tris) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  std::sort(fp.tris.begin(), fp.tris.end());
+  return true;
+}
+
 /// The constrained Delaunay triangulation of one fan triangle.
 Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& cons,
                        const std::vector<std::uint32_t>& inner, const std::array<std::vector<std::uint32_t>, 3>& side,
@@ -472,6 +523,10 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
   fp.c2[2] = Vec2d(e2.dot(ux), e2.dot(uy));
   std::vector<std::uint32_t> boundary;
   const std::uint32_t cpt[3] = {P.node_pt.at(fp.n[0]), P.node_pt.at(fp.n[1]), P.node_pt.at(fp.n[2])};
+  if (pl.chords_without_cdt && chord_only(pl, fp, cons, inner, side, cpt)) {
+    ++pl.fans_without_cdt;
+    return {};
+  }
   for (int k = 0; k < 3; ++k) {
     boundary.push_back(cpt[k]);
     boundary.insert(boundary.end(), side[k].begin(), side[k].end());
@@ -560,6 +615,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       if (cur[i] == cur[j])
         return status_of(ErrorCode::kInvalidArgument, "retriangulate: curve ", cur[i].value, " given twice");
   Planner pl(m, opt.snap);
+  pl.chords_without_cdt = opt.chords_without_cdt;
   Plan& P = pl.P;
   // 1. Curve points and segments.
   std::vector<std::vector<std::uint32_t>> row_pid(cur.size());
@@ -822,6 +878,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   // ---------------------------------------------------------------- apply
   RetriangulationResult out;
   out.crossings = P.crossings;
+  out.fans_without_cdt = pl.fans_without_cdt;
   out.faces_removed = faces.size();
   out.edges_split = P.edge_pts.size();
   std::vector<std::uint8_t> face_flags(faces.size());

@@ -55,6 +55,12 @@ struct RetriangulateOptions {
   /// Surface locations (in the model before the call) to follow through
   /// the re-triangulation, e.g. the pick of a cut; see probes below.
   std::vector<SurfaceLocation> probes;
+  /// A fan triangle crossed by one curve segment from side to side and
+  /// holding no other point is split directly (the two triangles of the
+  /// constrained Delaunay triangulation, chosen by exact predicates) instead
+  /// of building a CDT. False sends every fan through the CDT (the tests
+  /// show both give the same tables).
+  bool chords_without_cdt = true;
 };
 
 struct RetriangulationResult {
@@ -73,6 +79,7 @@ struct RetriangulationResult {
   std::size_t edges_split = 0;    // edges cut into pieces
   std::size_t faces_removed = 0;  // faces replaced
   std::size_t faces_added = 0;
+  std::size_t fans_without_cdt = 0;  // fan triangles split directly (see chords_without_cdt)
 };
 
 /// Makes the curves mesh edges (see above).

@@ -119,6 +119,60 @@ TEST(Retriangulate, CurvesBecomeEdgesOldNodesStayAreaIsKept) {
   }
 }
 
+// Fan triangles crossed by one chord are split without a CDT; the oracle
+// is CGAL's CDT itself: the same curves re-triangulated with every fan
+// through the CDT must give the same tables, on triangles (a sphere, two
+// crossing strokes, perspective and orthographic) and on non-planar quads
+// (chords across fan diagonals).
+TEST(Retriangulate, ChordsWithoutACdtGiveTheCdtsTriangles) {
+  std::vector<std::pair<const char*, Model>> cases;
+  cases.emplace_back("icosphere", icosphere(4));
+  {
+    Model q;
+    (void)add_polygon_surface(q, "saddle",
+                              grid(13, 11,
+                                   [](double u, double v) {
+                                     const double x = -1 + 2 * u, y = -1 + 2 * v;
+                                     return Vec3d(x, y, 0.3 * x * y);
+                                   })
+                                  .view())
+        .value();
+    cases.emplace_back("saddle", std::move(q));
+  }
+  for (auto& [name, model] : cases) {
+    SCOPED_TRACE(name);
+    for (const bool persp : {false, true}) {
+      Model m = model;
+      const Camera cam = persp ? front_persp() : front_ortho();
+      std::vector<Vec3d> wave, slant;
+      for (int k = 0; k <= 40; ++k) {
+        const double t = k / 40.0;
+        wave.push_back(Vec3d(-1.3 + 2.6 * t, 0.3 * std::sin(7.0 * t), 0));
+        slant.push_back(Vec3d(-0.8 + 1.5 * t, -1.2 + 2.5 * t + 0.05 * std::cos(9.0 * t), 0));
+      }
+      std::vector<AttribEdge> curves;
+      for (const auto& line : {wave, slant}) {
+        auto p = paint_stroke(m, cam, project(cam, line), {.through = true});
+        ASSERT_TRUE(p) << p.status().to_string();
+        const auto e = edges_of(*p);
+        curves.insert(curves.end(), e.begin(), e.end());
+      }
+      Model direct = m, cdt = m;
+      auto a = retriangulate_curves(direct, curves);
+      auto b = retriangulate_curves(cdt, curves, {.chords_without_cdt = false});
+      ASSERT_TRUE(a) << a.status().to_string();
+      ASSERT_TRUE(b) << b.status().to_string();
+      EXPECT_GT(a->fans_without_cdt, 0u);
+      EXPECT_EQ(b->fans_without_cdt, 0u);
+      EXPECT_GT(a->crossings, 0u);
+      EXPECT_EQ(a->faces_added, b->faces_added);
+      EXPECT_EQ(a->chains, b->chains);
+      EXPECT_EQ(diff_tables(direct, cdt), "");
+      expect_clean(m, direct, *a, curves);
+    }
+  }
+}
+
 TEST(Retriangulate, TwoCrossingCurvesShareOneNode) {
   Model m = icosphere(3);
   const Camera cam = front_persp();
