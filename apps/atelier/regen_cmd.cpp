@@ -225,6 +225,8 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
               "also write report.html: summary, a row per body, pictures of sample and worst bodies with their outfit");
   c->add_flag("--patterns", opt.patterns,
               "also write made-to-measure pattern sets (SVG, DXF, measurements CSV) of the profile templates");
+  c->add_flag("--no-marked-seams", opt.no_marked_seams,
+              "with --patterns: ignore the seams the templates mark (pieces are cut along them by default)");
   return c;
 }
 
@@ -301,8 +303,10 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
 /// lists its pattern sets (or a failure) does.
 /// The made-to-measure pattern set of one regenerated template (one library
 /// call), and its figures for the body's record.
-nlohmann::json write_patterns(const Model& garment, const fs::path& dir, const ExecContext& ctx) {
-  auto rep = write_made_to_measure_pattern(garment, {}, dir, ctx);
+nlohmann::json write_patterns(const Model& garment, const fs::path& dir, bool marked_seams, const ExecContext& ctx) {
+  MadeToMeasureOptions o;
+  o.seams.marked = marked_seams;
+  auto rep = write_made_to_measure_pattern(garment, o, dir, ctx);
   if (!rep) throw Error(Status(rep.status().code(), "patterns: " + rep.status().message()));
   double e_l = 0;
   for (const auto& p : rep->files.flattening.pieces) e_l = std::max(e_l, p.distortion.length_error);
@@ -481,7 +485,8 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           nlohmann::json pats = nlohmann::json::object();
           for (std::size_t k = 0; k < templates.size(); ++k)
             pats[templates[k].name] =
-                write_patterns(regen[k].model, bodies_dir / chunk.name(b) / "patterns" / templates[k].name, inner);
+                write_patterns(regen[k].model, bodies_dir / chunk.name(b) / "patterns" / templates[k].name,
+                               !opt.no_marked_seams, inner);
           rec["patterns"] = pats;
         }
       } catch (const Error& e) {

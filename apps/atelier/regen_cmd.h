@@ -38,7 +38,9 @@
 //       piece, pattern.dxf and measurements.csv, all written before the
 //       body's record (which then lists each set's figures under
 //       "patterns"); a rerun with --patterns redoes bodies whose record has
-//       no "patterns" (complete from a run without them).
+//       no "patterns" (complete from a run without them). Pieces are cut
+//       along the seams the templates mark (the top: front and back body
+//       and yoke); --no-marked-seams ignores the marks.
 //   mpirun -np K atelier regen ... (a build with MPI, apps/atelier/mpi_split.h)
 //       splits the body set across K ranks, chunk c to rank c mod K; each
 //       rank writes its bodies' records into the shared output folder, and
@@ -79,6 +81,7 @@ struct RegenOptions {
   bool no_resume = false;
   bool report = false;    // report.html with pictures (regen_report.h)
   bool patterns = false;  // made-to-measure pattern sets per body (systems/pattern/made_to_measure.h)
+  bool no_marked_seams = false;  // --patterns without cutting along the templates' seam marks
 };
 CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt);
 int run_regen(const Common& common, const RegenOptions& opt, Log& log);

@@ -1,6 +1,7 @@
 // Made-to-measure patterns (issue 22): bodies per second of the pattern sets
-// of the project templates (the top's body and collar, the skirt, the
-// trousers' three surfaces: 6 pieces per body), what `atelier regen
+// of the project templates (the top's front and back bodies and yokes, cut
+// along its marked seams, and its collar; the skirt; the trousers' three
+// surfaces: 9 pieces per body), what `atelier regen
 // --patterns` adds per body, over 8 sampled mannequins in parallel over
 // bodies (one task per body, as the batch job runs), 1 or 2 threads.
 //  * BM_MadeToMeasure_Patterns: write_made_to_measure_pattern on the

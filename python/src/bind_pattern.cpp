@@ -122,7 +122,7 @@ with the engine's message (a piece with holes, an unknown surface, ...).
   m.def(
       "made_to_measure_pattern",
       [](const MeshLike& mesh, const std::string& out, const std::optional<std::vector<std::pair<std::string, double>>>& lines,
-         bool svg, bool dxf, bool csv, int threads, const Progress& progress) {
+         bool svg, bool dxf, bool csv, bool marked_seams, int threads, const Progress& progress) {
         const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
         Model model;
         if (in->model)
@@ -133,6 +133,7 @@ with the engine's message (a piece with holes, an unknown surface, ...).
         o.files.svg = svg;
         o.files.dxf = dxf;
         o.csv = csv;
+        o.seams.marked = marked_seams;
         if (lines) {
           o.lines.clear();
           for (const auto& [name, f] : *lines) o.lines.push_back({name, f});
@@ -167,17 +168,22 @@ with the engine's message (a piece with holes, an unknown surface, ...).
                         py::arg("seams") = seams, py::arg("files") = files);
       },
       py::arg("mesh"), py::arg("out"), py::kw_only(), py::arg("lines") = py::none(), py::arg("svg") = true,
-      py::arg("dxf") = true, py::arg("csv") = true, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("dxf") = true, py::arg("csv") = true, py::arg("marked_seams") = true, py::arg("threads") = 0,
+      py::arg("progress") = py::none(), R"doc(
 The made-to-measure pattern set of one garment (what ``atelier regen
 --patterns`` writes per body and template; systems/pattern/made_to_measure.h).
 
 mesh: a Mesh (e.g. a regenerated template read with ``read_mesh``; one piece
-    per surface) or a (vertices, faces) pair. Tubes and pieces with several
-    boundary loops are opened along seams chosen from the topology.
+    per surface) or a (vertices, faces) pair. Edges marked as seams (a
+    template's seam marks, carried by regeneration and the .atm format) are
+    cut first, a surface they separate becoming several pieces ("top",
+    "top.1", ...); tubes and pieces with several boundary loops left are
+    opened along seams chosen from the topology.
 out: the folder to write (created): one SVG per piece, pattern.dxf,
     measurements.csv.
 lines: named lines as (name, fraction of the piece's height along the
     grain, +y); default hem 0.02, low 0.25, middle 0.5, high 0.75, top 0.98.
+marked_seams: cut along the marked seams (default); False ignores the marks.
 
 Returns a dict: ``seams_opened``, ``flipped``, ``failed_seams``,
 ``max_seam_difference_mm``, ``max_length_error``, ``pieces`` (``name``,

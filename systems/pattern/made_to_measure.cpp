@@ -57,8 +57,16 @@ Status check_lines(const MadeToMeasureOptions& opt) {
 /// the garment's, mapped to the opened model's.
 PatternFileOptions opened_options(const MadeToMeasureOptions& opt, const OpenedSeams& opened) {
   PatternFileOptions fo = opt.files;
+  // Every piece of a named surface (marked seams may split it).
   auto remap = [&](std::vector<SurfaceIdx>& v) {
-    for (SurfaceIdx& s : v) s = s.value < opened.surfaces.size() ? opened.surfaces[s.value] : SurfaceIdx{};
+    std::vector<SurfaceIdx> o;
+    for (SurfaceIdx s : v) {
+      const std::size_t before = o.size();
+      for (std::uint32_t t = 0; t < opened.part_of.size(); ++t)
+        if (opened.part_of[t] == s) o.push_back(SurfaceIdx{t});
+      if (o.size() == before) o.emplace_back();  // no such surface: refused downstream, as named
+    }
+    v = std::move(o);
   };
   remap(fo.flatten.surfaces);
   remap(fo.pattern.mirror);

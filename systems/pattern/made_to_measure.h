@@ -2,7 +2,9 @@
 // regenerated on one body, what `atelier regen --patterns` writes per body
 // and per template, in one call.
 //
-// Steps: open_seams (seams.h: tubes and multi-loop pieces opened along
+// Steps: open_seams (seams.h: cut along the seams the template marks, a
+// surface they separate becoming several pieces, e.g. the top's front and
+// back body and yoke; then tubes and multi-loop pieces left opened along
 // seams chosen from the topology alone, so every body gets the same seams),
 // then write_pattern_files (pattern_files.h: flatten every piece, make the
 // pattern with allowances and notches, write SVG per piece and one DXF),

@@ -1,6 +1,7 @@
 #include <atelier/engine/math.h>
 #include <atelier/engine/status_format.h>
 #include <atelier/storage/builder.h>
+#include <atelier/storage/edge_flags.h>
 #include <atelier/storage/union_find.h>
 #include <atelier/systems/pattern/seams.h>
 
@@ -53,17 +54,15 @@ Status automatic_seams(const Model& m, SurfaceIdx s, std::vector<std::uint8_t>& 
   if (ids.empty())
     return status_of(ErrorCode::kTopology, "surface '", m.surfaces.name[s.value],
                      "' is closed: a seam needs a boundary to start from (cut or partition it first)");
-  // Loops already joined to the first one by given paths count as reached.
+  // Loops already joined to the first one by paths (given or marked, also
+  // through each other: two marked runs meeting inside) count as reached.
   const std::uint32_t nn = m.nodes.slots.capacity();
   UnionFind joined(nn);
+  for (std::uint32_t v = 0; v < nn; ++v)
+    if (loop[v] != kNone) joined.unite(v, loop[v]);
   for (const auto& p : paths) {
     if (p.empty() || m.nodes.surface[p.front().value] != s) continue;
-    std::uint32_t first = kNone;
-    for (NodeIdx v : p)
-      if (loop[v.value] != kNone) {
-        if (first == kNone) first = loop[v.value];
-        joined.unite(first, loop[v.value]);
-      }
+    for (std::size_t i = 1; i < p.size(); ++i) joined.unite(p[i - 1].value, p[i].value);
   }
   std::vector<NodeIdx> outgoing_nodes;
   std::vector<HalfedgeIdx> out;
@@ -121,6 +120,78 @@ Status automatic_seams(const Model& m, SurfaceIdx s, std::vector<std::uint8_t>& 
       return status_of(ErrorCode::kTopology, "surface '", m.surfaces.name[s.value],
                        "': no seam path reaches boundary loop at node ", ids.back());
   }
+}
+
+/// The marked seams of the chosen surfaces (see seams.h): chains of
+/// interior kEdgeSeam edges between end nodes (a boundary node, or a node
+/// with other than two marked edges; closed loops start at their smallest
+/// node), in node order, cut into runs along joints and runs off them.
+void marked_seams(const Model& m, const std::vector<std::uint8_t>& chosen, std::vector<std::vector<NodeIdx>>& off_joint,
+                  std::vector<std::vector<NodeIdx>>& on_joint) {
+  const std::uint32_t nn = m.nodes.slots.capacity(), ne = m.edges.slots.capacity();
+  std::vector<std::uint8_t> marked(ne, 0), visited(ne, 0);
+  std::vector<std::uint32_t> degree(nn, 0);
+  std::vector<std::uint8_t> on_boundary(nn, 0);
+  bool any = false;
+  for (std::uint32_t e = 0; e < ne; ++e) {
+    const EdgeIdx E{e};
+    if (!m.alive(E)) continue;
+    const HalfedgeIdx h = halfedge_of(E, 0);
+    if (m.is_boundary(E)) on_boundary[m.tail(h).value] = on_boundary[m.head(h).value] = 1;
+    const SurfaceIdx s = m.surface_of(E);
+    if (!(m.edges.flags[e] & kEdgeSeam) || !interior(m, E) || !s.valid() || !chosen[s.value]) continue;
+    marked[e] = 1;
+    any = true;
+    ++degree[m.tail(h).value];
+    ++degree[m.head(h).value];
+  }
+  if (!any) return;
+  auto on_a_joint = [&](EdgeIdx e) {
+    const MeshEdgeIdx me = m.edges.mesh_edge[e.value];
+    return me.valid() && m.mesh_edges.joint[me.value].valid();
+  };
+  auto emit = [&](const std::vector<NodeIdx>& chain) {
+    std::size_t start = 0;
+    for (std::size_t i = 1; i < chain.size(); ++i) {
+      const bool here = on_a_joint(edge_of(m.find_halfedge(chain[i - 1], chain[i])));
+      const bool next =
+          i + 1 < chain.size() && on_a_joint(edge_of(m.find_halfedge(chain[i], chain[i + 1])));
+      if (i + 1 == chain.size() || here != next) {
+        std::vector<NodeIdx> run(chain.begin() + static_cast<std::ptrdiff_t>(start),
+                                 chain.begin() + static_cast<std::ptrdiff_t>(i) + 1);
+        (here ? on_joint : off_joint).push_back(std::move(run));
+        start = i;
+      }
+    }
+  };
+  std::vector<HalfedgeIdx> out;
+  auto walk = [&](NodeIdx v, HalfedgeIdx h, bool stop_at_ends) {
+    std::vector<NodeIdx> chain{v};
+    while (true) {
+      visited[edge_of(h).value] = 1;
+      const NodeIdx w = m.head(h);
+      chain.push_back(w);
+      if ((stop_at_ends && (on_boundary[w.value] || degree[w.value] != 2)) || w == chain.front()) break;
+      HalfedgeIdx nxt{};
+      m.outgoing(w, out);
+      for (HalfedgeIdx g : out)
+        if (marked[edge_of(g).value] && !visited[edge_of(g).value]) {
+          nxt = g;
+          break;
+        }
+      if (!nxt.valid()) break;
+      h = nxt;
+    }
+    emit(chain);
+  };
+  for (int pass = 0; pass < 2; ++pass)  // chains between end nodes, then closed loops
+    for (std::uint32_t v = 0; v < nn; ++v) {
+      if (!degree[v] || (pass == 0 && !on_boundary[v] && degree[v] == 2)) continue;
+      m.outgoing(NodeIdx{v}, out);
+      const std::vector<HalfedgeIdx> starts = out;
+      for (HalfedgeIdx h : starts)
+        if (marked[edge_of(h).value] && !visited[edge_of(h).value]) walk(NodeIdx{v}, h, pass == 0);
+    }
 }
 
 /// The corner a polygon's fan should start from: the first one unless its
@@ -191,11 +262,28 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
     for (NodeIdx v : path) seam_node[v.value] = 1;
     res.paths.push_back(path);
   }
-  if (opt.automatic)
+  // Marked seams: runs off joints open like given paths; runs along a
+  // joint's inner member add the member's other side to that joint.
+  std::vector<std::vector<NodeIdx>> along_joints;
+  if (opt.marked) {
+    marked_seams(m, chosen, res.paths, along_joints);
+    for (const auto* runs : {&res.paths, &along_joints})
+      for (const auto& path : *runs) {
+        for (std::size_t i = 0; i + 1 < path.size(); ++i)
+          seam_edge[edge_of(m.find_halfedge(path[i], path[i + 1])).value] = 1;
+        for (NodeIdx v : path) seam_node[v.value] = 1;
+      }
+  }
+  res.marked_along_joints = along_joints.size();
+  if (opt.automatic) {
+    std::vector<std::vector<NodeIdx>> all = res.paths;  // every cut so far joins boundary loops
+    all.insert(all.end(), along_joints.begin(), along_joints.end());
+    const std::size_t known = all.size();
     for (std::uint32_t s = 0; s < chosen.size(); ++s)
       if (chosen[s] && m.alive(SurfaceIdx{s}))
-        if (Status st = automatic_seams(m, SurfaceIdx{s}, seam_edge, seam_node, on_mesh_edge, res.paths); !st)
-          return st;
+        if (Status st = automatic_seams(m, SurfaceIdx{s}, seam_edge, seam_node, on_mesh_edge, all); !st) return st;
+    res.paths.insert(res.paths.end(), all.begin() + static_cast<std::ptrdiff_t>(known), all.end());
+  }
 
   // Corners (a face's halfedge = its tail's corner) joined across non-seam
   // edges: the wedges of the seam nodes.
@@ -206,12 +294,27 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
     uf.unite(h.value, m.next(t).value);
     uf.unite(t.value, m.next(h).value);
   }
+  // Faces joined across non-seam edges: seams that separate a surface
+  // make several pieces of it.
+  const std::uint32_t nf = m.faces.slots.capacity();
+  UnionFind parts(nf);
+  for (std::uint32_t e = 0; e < ne; ++e)
+    if (m.alive(EdgeIdx{e}) && !seam_edge[e] && interior(m, EdgeIdx{e}))
+      parts.unite(m.face(halfedge_of(EdgeIdx{e}, 0)).value, m.face(halfedge_of(EdgeIdx{e}, 1)).value);
   Model& out = res.model;
   std::vector<std::uint32_t> corner_node(2 * static_cast<std::size_t>(ne), kNone);  // new node per corner
   res.surfaces.assign(m.surfaces.slots.capacity(), SurfaceIdx{});
   std::vector<NodeIdx> fn;
   for (std::uint32_t s = 0; s < m.surfaces.slots.capacity(); ++s) {
     if (!m.alive(SurfaceIdx{s})) continue;
+    // Its pieces, in the order of their first faces.
+    std::vector<std::uint32_t> roots;
+    for (std::uint32_t f = 0; f < nf; ++f)
+      if (m.alive(FaceIdx{f}) && m.faces.surface[f].value == s &&
+          std::find(roots.begin(), roots.end(), parts.find(f)) == roots.end())
+        roots.push_back(parts.find(f));
+    if (roots.empty()) roots.push_back(kNone);  // a surface without faces is copied empty
+    for (std::size_t part = 0; part < roots.size(); ++part) {
     // Node copies in node order, then wedge order.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> keys;
     auto key_of = [&](HalfedgeIdx h) {
@@ -220,7 +323,7 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
     };
     std::vector<FaceIdx> faces;
     for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
-      if (!m.alive(FaceIdx{f}) || m.faces.surface[f].value != s) continue;
+      if (!m.alive(FaceIdx{f}) || m.faces.surface[f].value != s || parts.find(f) != roots[part]) continue;
       faces.push_back(FaceIdx{f});
       m.for_each_face_halfedge(FaceIdx{f}, [&](HalfedgeIdx h) { keys.push_back(key_of(h)); });
     }
@@ -241,11 +344,15 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
       std::rotate(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(k), ids.end());
       soup.add_face(ids);
     }
-    auto made = add_polygon_surface(out, m.surfaces.name[s], soup);
+    const std::string name = part == 0 ? m.surfaces.name[s] : m.surfaces.name[s] + "." + std::to_string(part);
+    auto made = add_polygon_surface(out, name, soup);
     if (!made) return made.status();
-    res.surfaces[s] = made->idx;
+    if (part == 0) res.surfaces[s] = made->idx;
+    res.part_of.resize(out.surfaces.slots.capacity());
+    res.part_of[made->idx.value] = SurfaceIdx{s};
     res.source_node.resize(out.nodes.slots.capacity());
     for (std::size_t k = 0; k < keys.size(); ++k) res.source_node[v0 + k] = NodeIdx{keys[k].first};
+    }
   }
   // The new halfedge of an old one (through the corner on its face side).
   auto mapped = [&](HalfedgeIdx h) -> HalfedgeIdx {
@@ -260,7 +367,17 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
     if (a == kNone || b == kNone) return HalfedgeIdx{};
     return out.find_halfedge(NodeIdx{a}, NodeIdx{b});
   };
-  // Joints carried over, cut where a seam breaks their chains.
+  // The other side of an inner edge opened by a seam: the new halfedge
+  // along old halfedge h (same direction) on its twin's face side.
+  auto other_side = [&](HalfedgeIdx h) -> HalfedgeIdx {
+    if (!m.face(h).valid() || !m.face(twin(h)).valid() || !seam_edge[edge_of(h).value]) return HalfedgeIdx{};
+    const std::uint32_t a = corner_node[m.next(twin(h)).value], b = corner_node[twin(h).value];
+    if (a == kNone || b == kNone) return HalfedgeIdx{};
+    return out.find_halfedge(NodeIdx{a}, NodeIdx{b});
+  };
+  auto surface_of_chain = [&](const std::vector<HalfedgeIdx>& c) { return out.nodes.surface[out.tail(c.front()).value]; };
+  // Joints carried over, cut where a seam breaks their chains; a member
+  // along a marked seam gets its other side as a further member.
   for (std::uint32_t j = 0; j < m.joints.slots.capacity(); ++j) {
     if (!m.alive(JointIdx{j})) continue;
     const auto members = m.joints.members.row(j);
@@ -268,15 +385,22 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
       std::vector<HalfedgeIdx> chain;  // in joint order
       SurfaceIdx surface;
       bool positive;
+      std::vector<HalfedgeIdx> other;  // in joint order: the opened other side, or invalid
     };
     std::vector<Mapped> mm;
     std::size_t n = 0;
     bool ok = true, closed = true;
     for (const JointMember& mem : members) {
       const auto row = m.mesh_edges.halfedges.row(mem.mesh_edge.value);
-      Mapped x{{}, res.surfaces[m.mesh_edges.surface[mem.mesh_edge.value].value], mem.positive};
-      for (HalfedgeIdx h : row) x.chain.push_back(mapped(h));
-      if (!mem.positive) std::reverse(x.chain.begin(), x.chain.end());
+      Mapped x{{}, res.surfaces[m.mesh_edges.surface[mem.mesh_edge.value].value], mem.positive, {}};
+      for (HalfedgeIdx h : row) {
+        x.chain.push_back(mapped(h));
+        x.other.push_back(other_side(h));
+      }
+      if (!mem.positive) {
+        std::reverse(x.chain.begin(), x.chain.end());
+        std::reverse(x.other.begin(), x.other.end());
+      }
       for (HalfedgeIdx h : x.chain) ok = ok && h.valid();
       closed = closed && !row.empty() && m.tail(row.front()) == m.head(row.back());
       n = row.size();
@@ -289,8 +413,12 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
     // there (in its own direction).
     auto broken = [&](std::size_t t, std::size_t u) {
       for (const Mapped& x : mm) {
-        const HalfedgeIdx a = x.positive ? x.chain[t] : x.chain[u], b = x.positive ? x.chain[u] : x.chain[t];
-        if (out.head(a) != out.tail(b)) return true;
+        if (x.other[t].valid() != x.other[u].valid()) return true;  // a marked seam starts or ends along it
+        for (const auto* side : {&x.chain, &x.other}) {
+          if (!(*side)[t].valid()) continue;
+          const HalfedgeIdx a = x.positive ? (*side)[t] : (*side)[u], b = x.positive ? (*side)[u] : (*side)[t];
+          if (out.head(a) != out.tail(b)) return true;
+        }
       }
       return false;
     };
@@ -322,12 +450,14 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
     }
     for (const auto& run : runs) {
       std::vector<JointMember> jm;
-      for (const Mapped& x : mm) {
-        std::vector<HalfedgeIdx> c;
-        for (std::size_t t : run) c.push_back(x.chain[t]);
-        if (!x.positive) std::reverse(c.begin(), c.end());
-        jm.push_back({out.new_mesh_edge(x.surface, c), x.positive});
-      }
+      for (const Mapped& x : mm)
+        for (const auto* side : {&x.chain, &x.other}) {
+          if (!(*side)[run.front()].valid()) continue;  // no other side here
+          std::vector<HalfedgeIdx> c;
+          for (std::size_t t : run) c.push_back((*side)[t]);
+          if (!x.positive) std::reverse(c.begin(), c.end());
+          jm.push_back({out.new_mesh_edge(surface_of_chain(c), c), x.positive});
+        }
       (void)out.new_joint(jm);
     }
   }
@@ -343,8 +473,8 @@ Expected<OpenedSeams> open_seams(const Model& m, const SeamOptions& opt, const E
       if (!left.back().valid() || !right.back().valid())
         return status_of(ErrorCode::kInternal, "open_seams: seam edge ", edge_of(h).value, " was not opened");
     }
-    const SurfaceIdx s = res.surfaces[m.nodes.surface[path.front().value].value];
-    const JointMember jm[2] = {{out.new_mesh_edge(s, left), true}, {out.new_mesh_edge(s, right), true}};
+    const JointMember jm[2] = {{out.new_mesh_edge(surface_of_chain(left), left), true},
+                               {out.new_mesh_edge(surface_of_chain(right), right), true}};
     res.seam_joints.push_back(out.new_joint(jm));
   }
   return res;

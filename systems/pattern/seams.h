@@ -11,6 +11,22 @@
 //    (`SeamOptions::paths`), e.g. a profile edge the template marks as a
 //    seam, or a single generator of a tube, which no partition curve can
 //    express (one curve on a tube separates nothing);
+//  * marked seams (`SeamOptions::marked`): edges carrying the kEdgeSeam
+//    flag (storage/edge_flags.h), which a profile template sets on the
+//    edges it marks as seams (TemplateBuilder::seam) and which every edge
+//    split copies, so a regenerated garment carries them on every body.
+//    Interior marked edges are chained between end nodes (a boundary node
+//    or a node with other than two marked edges; a closed loop starts at
+//    its smallest node), in node order. A marked run off joints opens like
+//    a given path; a marked run along an inner joint member (a collar
+//    sewn on an inner line) opens too, and the member's other side joins
+//    that joint as one more member (a three-layer seam), so the piece sewn
+//    on the inner line is sewn onto the boundaries of the pieces it
+//    separates. Marked seams that close off a region split the surface:
+//  * pieces: after opening, the faces of a surface joined across non-seam
+//    edges form its pieces; a surface the seams separate becomes several
+//    surfaces, named "<name>", "<name>.1", "<name>.2", ... in the order of
+//    their first faces (so the same on every body of one template);
 //  * automatic seams (`SeamOptions::automatic`): for every piece with more
 //    than one boundary loop, paths from its first loop to each other loop,
 //    each the path of fewest edges (breadth-first, ties to the smaller node
@@ -36,7 +52,8 @@
 // is largest: flattening fans polygons from their first corner), joints, no attribute nodes or edges (marks do not
 // carry over: notches come from the seam ends). `source_node` maps each node back.
 //
-// Reads: the surfaces' faces, nodes.position, mesh edges and joints.
+// Reads: the surfaces' faces, nodes.position, edges.flags (kEdgeSeam), mesh
+// edges and joints.
 // Errors: kStaleHandle (a dead surface), kInvalidArgument (a path node not
 // alive, two path nodes not joined by an edge, a path edge on a boundary or
 // in no face pair, a path of fewer than two nodes), kTopology (a closed
@@ -60,6 +77,8 @@ struct SeamOptions {
   /// Seam paths: node chains along edges of one surface, boundary to
   /// boundary (or boundary to inside: a dart).
   std::vector<std::vector<NodeIdx>> paths;
+  /// Marked seams (edges with kEdgeSeam) are cut.
+  bool marked = true;
   /// Automatic seams for pieces that still have several boundary loops.
   bool automatic = true;
 };
@@ -67,9 +86,11 @@ struct SeamOptions {
 struct OpenedSeams {
   Model model;
   std::vector<NodeIdx> source_node;         // per node slot of `model`: its node in the input
-  std::vector<SurfaceIdx> surfaces;         // per input surface slot: its surface in `model` (or invalid)
+  std::vector<SurfaceIdx> surfaces;         // per input surface slot: its (first) surface in `model` (or invalid)
+  std::vector<SurfaceIdx> part_of;          // per surface slot of `model`: the input surface it is part of
   std::vector<std::vector<NodeIdx>> paths;  // every seam opened (input nodes), given ones first
   std::vector<JointIdx> seam_joints;        // per path: its joint in `model`
+  std::size_t marked_along_joints = 0;      // marked runs along joint members (no path: their joints grew)
 };
 
 /// Opens the seams (see above) on a copy of `m`.

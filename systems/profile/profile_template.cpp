@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include <atelier/storage/builder.h>
+#include <atelier/storage/edge_flags.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
@@ -278,6 +279,19 @@ Status TemplateBuilder::surface(const std::string& name, std::span<const std::ve
   I.node_names.resize(I.model.nodes.slots.capacity());
   for (std::uint32_t k = 0; k < order.size(); ++k) I.node_names[base + k] = order[k];
   I.surfaces.emplace(name, std::move(info));
+  return {};
+}
+
+Status TemplateBuilder::seam(std::string_view surface, std::span<const std::string> nodes) {
+  Impl& I = *impl_;
+  if (nodes.size() < 2) return invalid("a seam chain needs at least two nodes");
+  std::vector<EdgeIdx> edges;  // all found before any is marked: nothing changes on error
+  for (std::size_t i = 0; i + 1 < nodes.size(); ++i) {
+    auto h = I.halfedge_of(surface, nodes[i], nodes[i + 1]);
+    if (!h) return h.status();
+    edges.push_back(edge_of(*h));
+  }
+  for (EdgeIdx e : edges) I.model.edges.flags[e.value] |= kEdgeSeam;
   return {};
 }
 

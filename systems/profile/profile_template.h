@@ -119,6 +119,13 @@ class TemplateBuilder {
   };
   Status joint(std::span<const JointChain> members);
 
+  /// Marks the edges of `surface` along a node chain as a seam (the
+  /// kEdgeSeam bit of their flags, storage/edge_flags.h): regeneration
+  /// carries the mark to every refined edge, and the pattern cuts there
+  /// (systems/pattern/seams.h). Errors: kInvalidArgument (no such surface,
+  /// node or edge; fewer than two nodes), with nothing marked.
+  Status seam(std::string_view surface, std::span<const std::string> nodes);
+
   // ------------------------------------------------------------ profiles
   /// A Bezier profile from node `from` to node `to` of `surface`: the
   /// interior control points (the end points are the nodes).

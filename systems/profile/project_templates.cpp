@@ -155,6 +155,17 @@ Expected<ProfileTemplate> make_top_template(const ReferenceBody& body) {
   for (int k = 0; k <= 8; ++k) yoke_loop.push_back(nm("yoke", k % 8));
   const TemplateBuilder::JointChain members[] = {{"top", yoke_loop}, {"collar", yoke_loop}};
   ATELIER_TRY(b.joint(members));
+  // Seams the pattern cuts along (systems/pattern/seams.h): side seams from
+  // the hem to the armhole bottoms, shoulder seams from the armhole tops to
+  // the neckline, and the yoke line at the front and back, where the collar
+  // is sewn; the top's pattern is a front and a back body and a front and a
+  // back yoke, the collar sewn onto their boundaries.
+  for (int k : {2, 6}) {
+    ATELIER_TRY(b.seam("top", std::vector<std::string>{nm("hem", k), nm("waist", k), nm("bust", k), nm("armpit", k)}));
+    ATELIER_TRY(b.seam("top", std::vector<std::string>{nm("yoke", k), nm("neck", k)}));
+  }
+  ATELIER_TRY(b.seam("top", std::vector<std::string>{"yoke_7", "yoke_0", "yoke_1"}));
+  ATELIER_TRY(b.seam("top", std::vector<std::string>{"yoke_3", "yoke_4", "yoke_5"}));
 
   // Scoop neckline: two strokes in a front orthographic view, each dipping
   // between the centre-front node and its neighbours (seed 000 Fig. 13).

@@ -9,7 +9,10 @@
 //    with a stand-up collar joined along the yoke line, an inner edge loop of
 //    the top (a non-manifold inner-edge joint, seed 000 Fig. 17 II), and a
 //    scoop neckline drawn as two 2D strokes in a front view (attached point
-//    lists, seed 000 section 4.1.4);
+//    lists, seed 000 section 4.1.4); its seams are marked on its edges
+//    (TemplateBuilder::seam): side and shoulder seams and the yoke line at
+//    the front and back, so its pattern is a front and a back body and a
+//    front and a back yoke with the collar sewn onto their boundaries;
 //  - "skirt": waist to below the knee, flared, with a scalloped hem of
 //    cubic Bezier profiles (seed 001 eqs. (6)-(7));
 //  - "trousers": a waistband and two legs, three surfaces joined by three

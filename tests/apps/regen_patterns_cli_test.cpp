@@ -42,7 +42,7 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
   const fs::path out = atelier::testing::scratch_dir("regen_patterns");
   const CliRun r = run("--threads 2 regen" + template_args() + " --count 1 --patterns --out " + out.string());
   ASSERT_EQ(r.code, 0) << r.out;
-  const std::map<std::string, std::size_t> pieces = {{"top", 2}, {"skirt", 1}, {"trousers", 3}};
+  const std::map<std::string, std::size_t> pieces = {{"top", 5}, {"skirt", 1}, {"trousers", 3}};
   const auto recs = records(out);
   ASSERT_EQ(recs.size(), 1u);
   std::map<fs::path, fs::file_time_type> written;
@@ -84,6 +84,26 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
   EXPECT_EQ(timing["skipped_complete"].get<std::size_t>(), 1u);
   EXPECT_EQ(timing["regenerated_now"].get<std::size_t>(), 0u);
   for (const auto& [p, t] : written) EXPECT_EQ(fs::last_write_time(p), t) << p;
+}
+
+TEST(RegenPatternsCli, TheTopIsCutAlongItsMarkedSeamsUnlessTold) {
+  // The encoded top template carries its seam marks (template JSON edge
+  // flags): five pieces (front and back body and yoke, collar), all seams
+  // sewable; with --no-marked-seams the top is one piece plus the collar.
+  const std::string top = " --template " + (encoded_templates() / "top.template.json").string();
+  for (const bool marked : {true, false}) {
+    SCOPED_TRACE(marked ? "marked" : "--no-marked-seams");
+    const fs::path out = atelier::testing::scratch_dir(marked ? "regen_top_marked" : "regen_top_unmarked");
+    const CliRun r = run("regen" + top + " --count 1 --patterns" + (marked ? "" : " --no-marked-seams") + " --out " +
+                         out.string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto recs = records(out);
+    ASSERT_EQ(recs.size(), 1u);
+    const auto p = nlohmann::json::parse(read_bytes(recs[0]))["patterns"]["top"];
+    EXPECT_EQ(p["pieces"].get<std::size_t>(), marked ? 5u : 2u);
+    EXPECT_EQ(p["flipped"].get<std::size_t>(), 0u);
+    if (marked) EXPECT_LT(p["max_seam_difference_mm"].get<double>(), 2.0);
+  }
 }
 
 TEST(RegenPatternsCli, PatternsAfterARunWithoutThemRedoTheBodies) {

@@ -2,8 +2,11 @@
 // along one generator (a given seam path, or the automatic seam) or
 // partitioned by sketch partition curves flattens to its r*theta x h
 // rectangles exactly; the seam's two sides are one sewable joint; joints of
-// the input are carried over; closed pieces and bad paths get clear errors.
+// the input are carried over; edges marked as seams (kEdgeSeam, a
+// template's seam marks) are cut, splitting a surface into pieces where
+// they separate it; closed pieces and bad paths get clear errors.
 #include <atelier/storage/builder.h>
+#include <atelier/storage/edge_flags.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/pattern/flatten.h>
 #include <atelier/systems/pattern/pattern.h>
@@ -109,6 +112,141 @@ TEST(Seams, TubeOpenedAlongAGeneratorFlattensToItsRectangle) {
     EXPECT_NEAR(ml.length_2d_mm, 1000 * t.h, 1e-6);
   }
   EXPECT_TRUE(set->seams[0].ok);
+}
+
+/// Marks the edges of a node chain of `m` as a seam (kEdgeSeam), as a
+/// template's seam mark arrives on a regenerated garment.
+void mark(Model& m, const std::vector<NodeIdx>& chain) {
+  for (std::size_t i = 0; i + 1 < chain.size(); ++i) {
+    const HalfedgeIdx h = m.find_halfedge(chain[i], chain[i + 1]);
+    ASSERT_TRUE(h.valid());
+    m.edges.flags[edge_of(h).value] |= kEdgeSeam;
+  }
+}
+
+TEST(Seams, MarkedGeneratorOpensATubeThatFailsToFlattenWithoutIt) {
+  Tube t = tube(0.1, 0.45, 24, 6);
+  SeamOptions none;
+  none.automatic = false;  // only what is marked
+  // Unmarked: nothing is cut, and the tube (two loops) does not flatten.
+  auto plain = open_seams(t.model, none);
+  ASSERT_TRUE(plain) << plain.status().to_string();
+  EXPECT_TRUE(plain->paths.empty());
+  EXPECT_EQ(flatten_surfaces(plain->model).status().code(), ErrorCode::kTopology);
+  // Marked along generator 7 (the flags a template's seam mark leaves on
+  // every refined edge): cut there, and the tube flattens to its rectangle.
+  std::vector<NodeIdx> generator;
+  for (int j = 0; j <= t.nv; ++j) generator.push_back(t.node(7, j));
+  mark(t.model, generator);
+  ASSERT_TRUE(validate(t.model));
+  auto o = open_seams(t.model, none);
+  ASSERT_TRUE(o) << o.status().to_string();
+  ASSERT_TRUE(validate(o->model)) << validate(o->model).to_string();
+  ASSERT_EQ(o->paths.size(), 1u);
+  EXPECT_EQ(o->paths[0], generator);
+  EXPECT_EQ(o->model.num_surfaces(), 1u);  // one cut does not separate the tube
+  auto flat = flatten_surfaces(o->model);
+  ASSERT_TRUE(flat) << flat.status().to_string();
+  ASSERT_EQ(flat->pieces.size(), 1u);
+  expect_exact_piece(flat->pieces[0]);
+  // The seam's two sides: each as long on the pattern as the tube is high.
+  const std::vector<SurfaceIdx> pieces{flat->pieces[0].surface};
+  auto set = make_pattern(o->model, pieces);
+  ASSERT_TRUE(set) << set.status().to_string();
+  ASSERT_EQ(set->seams.size(), 1u);
+  ASSERT_EQ(set->seams[0].members.size(), 2u);
+  for (const SeamMemberLength& ml : set->seams[0].members) {
+    EXPECT_TRUE(ml.boundary);
+    EXPECT_NEAR(ml.length_3d_mm, 1000 * t.h, 1e-9);
+    EXPECT_NEAR(ml.length_2d_mm, 1000 * t.h, 1e-6);
+  }
+  EXPECT_TRUE(set->seams[0].ok);
+  // Marks off (SeamOptions::marked): the mark is ignored again.
+  none.marked = false;
+  auto ignored = open_seams(t.model, none);
+  ASSERT_TRUE(ignored);
+  EXPECT_EQ(flatten_surfaces(ignored->model).status().code(), ErrorCode::kTopology);
+}
+
+TEST(Seams, MarksThatSeparateASurfaceMakePiecesAndAMarkAlongAnInnerJointSewsOntoBoth) {
+  // A sleeve with a band sewn on its middle ring (an inner-edge joint, as
+  // the top's collar on its yoke line), marked along two opposite
+  // generators and along that ring: four pieces, the band sewn onto the
+  // boundaries of the pieces above and below the ring (three members).
+  Tube t = tube(0.1, 0.4, 16, 4);
+  const int nu = t.nu, ring = 2;
+  PolygonSoup band;
+  const std::uint32_t base = t.model.nodes.slots.capacity();
+  for (int j = 0; j <= 1; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double a = 2 * M_PI * i / nu, r = t.r * (1 + 0.3 * j);
+      band.positions.emplace_back(r * std::sin(a), t.h * ring / t.nv + 0.05 * j, r * std::cos(a));
+    }
+  for (int i = 0; i < nu; ++i) {
+    const std::uint32_t q[4] = {static_cast<std::uint32_t>(i), static_cast<std::uint32_t>((i + 1) % nu),
+                                static_cast<std::uint32_t>(nu + (i + 1) % nu), static_cast<std::uint32_t>(nu + i)};
+    band.add_face(q);
+  }
+  auto b = add_polygon_surface(t.model, "band", band);
+  ASSERT_TRUE(b) << b.status().to_string();
+  std::vector<HalfedgeIdx> on_sleeve, on_band;
+  for (int i = 0; i < nu; ++i) {
+    on_sleeve.push_back(t.model.find_halfedge(t.node(i, ring), t.node(i + 1, ring)));
+    on_band.push_back(t.model.find_halfedge(NodeIdx{base + i}, NodeIdx{base + (i + 1) % nu}));
+  }
+  const JointMember jm[2] = {{t.model.new_mesh_edge(SurfaceIdx{0}, on_sleeve), true},
+                             {t.model.new_mesh_edge(b->idx, on_band), true}};
+  (void)t.model.new_joint(jm);
+  ASSERT_TRUE(validate(t.model)) << validate(t.model).to_string();
+  for (int i : {0, nu / 2}) {
+    std::vector<NodeIdx> g;
+    for (int j = 0; j <= t.nv; ++j) g.push_back(t.node(i, j));
+    mark(t.model, g);
+  }
+  std::vector<NodeIdx> loop;
+  for (int i = 0; i <= nu; ++i) loop.push_back(t.node(i, ring));
+  mark(t.model, loop);
+  auto o = open_seams(t.model);  // the band, a tube, gets an automatic seam
+  ASSERT_TRUE(o) << o.status().to_string();
+  ASSERT_TRUE(validate(o->model)) << validate(o->model).to_string();
+  // The sleeve's pieces: "sleeve" (below the ring, front), then in the
+  // order of their first faces; the band.
+  std::vector<std::string> names;
+  for (std::uint32_t s = 0; s < o->model.surfaces.slots.capacity(); ++s)
+    if (o->model.alive(SurfaceIdx{s})) names.push_back(o->model.surfaces.name[s]);
+  EXPECT_EQ(names, (std::vector<std::string>{"sleeve", "sleeve.1", "sleeve.2", "sleeve.3", "band"}));
+  for (std::uint32_t s = 0; s < o->part_of.size(); ++s)
+    EXPECT_EQ(o->part_of[s].value, o->model.surfaces.name[s] == "band" ? 1u : 0u);
+  EXPECT_EQ(o->marked_along_joints, 2u);  // the ring, cut at the two generators
+  FlattenOptions fo;
+  fo.boundary_stiffness = 300;
+  auto flat = flatten_surfaces(o->model, fo);
+  ASSERT_TRUE(flat) << flat.status().to_string();
+  std::vector<SurfaceIdx> pieces;
+  for (const PieceFlattening& p : flat->pieces) {
+    EXPECT_EQ(p.distortion.flipped, 0u) << p.name;
+    pieces.push_back(p.surface);
+  }
+  ASSERT_EQ(pieces.size(), 5u);
+  auto set = make_pattern(o->model, pieces);
+  ASSERT_TRUE(set) << set.status().to_string();
+  // Along the ring: joints of three members (band, piece above, piece
+  // below), all boundaries, each as long as the ring's arc in 3D.
+  const double half_ring_mm = 1000 * (nu / 2) * t.chord();
+  double ring_members_mm = 0;
+  std::size_t three = 0;
+  for (const SeamCheck& c : set->seams) {
+    EXPECT_TRUE(c.ok) << "joint " << c.joint.value << ": " << c.max_difference_mm << " mm";
+    for (const SeamMemberLength& ml : c.members) EXPECT_TRUE(ml.boundary);
+    if (c.members.size() != 3) continue;
+    ++three;
+    for (const SeamMemberLength& ml : c.members) {
+      ring_members_mm += ml.length_3d_mm;
+      EXPECT_NEAR(ml.length_2d_mm, ml.length_3d_mm, 1e-6);
+    }
+  }
+  EXPECT_GE(three, 2u);
+  EXPECT_NEAR(ring_members_mm, 3 * 2 * half_ring_mm, 1e-6);
 }
 
 TEST(Seams, AutomaticSeamOfATubeIsAGeneratorAndDependsOnTopologyOnly) {

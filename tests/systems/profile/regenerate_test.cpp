@@ -10,6 +10,7 @@
 #include <memory>
 
 #include <atelier/engine/parallel.h>
+#include <atelier/storage/edge_flags.h>
 #include <atelier/storage/validate.h>
 #include "support/fixtures.h"
 #include "support/project_templates.h"
@@ -377,4 +378,48 @@ TEST(Regenerate, BadInputIsRefused) {
   nan_pos[0] = Vec3d(NAN, 0, 0);
   BodyCollider col2;
   EXPECT_FALSE(col2.build(f.body.model, f.body.skin, nan_pos, {}));
+}
+
+namespace {
+
+std::size_t seam_edges(const Model& m) {
+  std::size_t n = 0;
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e)
+    n += m.alive(EdgeIdx{e}) && (m.edges.flags[e] & kEdgeSeam);
+  return n;
+}
+
+}  // namespace
+
+TEST(Template, SeamMarksAreSetOnTheirEdgesOnlyAndBadChainsMarkNothing) {
+  // The top marks its side seams (3 edges each), shoulder seams (1 each)
+  // and the yoke line at the front and back (2 each): 12 template edges;
+  // the skirt and trousers mark none.
+  const Fixture& f = fixture();
+  EXPECT_EQ(seam_edges(f.templates[0].model), 12u);
+  EXPECT_EQ(seam_edges(f.templates[1].model), 0u);
+  EXPECT_EQ(seam_edges(f.templates[2].model), 0u);
+  // A small template: one triangle on three body vertices.
+  TemplateBuilder b(f.body, "patch");
+  const char* names[] = {"a", "b", "c"};
+  for (int k = 0; k < 3; ++k)
+    ASSERT_TRUE(b.node_at(names[k], f.body.model.nodes.position[100u * static_cast<unsigned>(k)],
+                          NodeEncodingMode::kVertex));
+  const std::vector<std::vector<std::string>> faces = {{"a", "b", "c"}};
+  ASSERT_TRUE(b.surface("patch", faces));
+  const Status unknown = b.seam("patch", std::vector<std::string>{"a", "b", "x"});
+  EXPECT_EQ(unknown.code(), ErrorCode::kInvalidArgument);
+  EXPECT_NE(unknown.message().find("'x'"), std::string::npos) << unknown.message();
+  EXPECT_FALSE(b.seam("patch", std::vector<std::string>{"a"}));
+  EXPECT_FALSE(b.seam("cape", std::vector<std::string>{"a", "b"}));
+  ASSERT_TRUE(b.seam("patch", std::vector<std::string>{"b", "c"}));
+  auto t = b.build();
+  ASSERT_TRUE(t) << t.status().to_string();
+  ASSERT_EQ(seam_edges(t->model), 1u);  // b - c only: the refused chains marked nothing
+  for (std::uint32_t e = 0; e < t->model.edges.slots.capacity(); ++e)
+    if (t->model.edges.flags[e] & kEdgeSeam) {
+      const HalfedgeIdx h = halfedge_of(EdgeIdx{e}, 0);
+      const std::string ends[2] = {t->node_names[t->model.tail(h).value], t->node_names[t->model.head(h).value]};
+      EXPECT_TRUE((ends[0] == "b" && ends[1] == "c") || (ends[0] == "c" && ends[1] == "b"));
+    }
 }
