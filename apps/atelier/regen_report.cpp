@@ -21,15 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::vector<Triangle> fan(const PolygonSoup& m) {
-  std::vector<Triangle> t;
-  for (std::size_t f = 0; f < m.face_count(); ++f) {
-    const auto face = m.face(f);
-    for (std::size_t c = 1; c + 1 < face.size(); ++c) t.push_back({face[0], face[c], face[c + 1]});
-  }
-  return t;
-}
-
 /// One row of the HTML table from a body's record: per template the fit
 /// figures in mm and %, named with their unit.
 nlohmann::json row_of(const nlohmann::json& rec, const RegenReportInput& in) {
@@ -90,7 +81,7 @@ std::optional<RgbImage> picture_of(std::size_t index, const RegenReportInput& in
   std::vector<std::vector<Triangle>> tris;  // kept alive for the scene's spans
   std::vector<RenderTriangles> scene;
   scene.push_back({body, body_tris->triangles, body_colour()});
-  for (std::size_t k = 0; k < in.details.size(); ++k) tris.push_back(fan(in.details[k]->mesh));
+  for (std::size_t k = 0; k < in.details.size(); ++k) tris.push_back(fan_triangulate(in.details[k]->mesh));
   for (const auto& r : profiles) {
     auto t = fan_triangulate(r.model);
     if (t) tris.push_back(std::move(t->triangles));
@@ -100,18 +91,12 @@ std::optional<RgbImage> picture_of(std::size_t index, const RegenReportInput& in
     scene.push_back({fit[0].garments[k].positions, tris[k], garment_colour(colour++)});
   for (std::size_t k = 0; k < profiles.size() && in.details.size() + k < tris.size(); ++k)
     scene.push_back({profiles[k].model.nodes.position, tris[in.details.size() + k], garment_colour(colour++)});
-  std::vector<RgbImage> views;
-  for (View view : {View::kFront, View::kSide}) {
-    RenderParams rp;
-    rp.view = view;
-    rp.width = 360;
-    rp.height = 560;
-    rp.outlines = true;
-    auto img = render_scene(scene, rp, ctx);
-    if (img) views.push_back(std::move(img->image));
-  }
-  if (views.size() != 2) return std::nullopt;
-  auto both = side_by_side(views);
+  RenderParams rp;
+  rp.width = 360;
+  rp.height = 560;
+  rp.outlines = true;
+  constexpr View kFrontAndSide[] = {View::kFront, View::kSide};
+  auto both = render_views(scene, kFrontAndSide, rp, ctx);
   if (!both) return std::nullopt;
   return std::move(*both);
 }

@@ -139,6 +139,26 @@ void BM_RegenJob(benchmark::State& st) {
 }
 BENCHMARK(BM_RegenJob)->Arg(1000)->Arg(10000)->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
+/// Runs `args` + a fresh output folder once per iteration (manual time: the
+/// child's wall time) and sets the per-body counters of the outfit rows.
+void time_regen(benchmark::State& st, const std::vector<std::string>& args, const std::string& name, long bodies) {
+  ChildRun r;
+  for (auto _ : st) {
+    std::vector<std::string> a = args;
+    a.push_back(scratch(name).string());
+    r = run_child(a);
+    if (r.code != 0) {
+      st.SkipWithError("atelier regen failed");
+      return;
+    }
+    st.SetIterationTime(r.seconds);
+  }
+  st.counters["bodies_per_s"] = static_cast<double>(bodies) / r.seconds;
+  st.counters["cpu_s"] = r.cpu_s;
+  st.counters["cpu_ms_per_body"] = 1e3 * r.cpu_s / static_cast<double>(bodies);
+  st.counters["peak_rss_MB"] = r.peak_rss_mb;
+}
+
 void BM_RegenOutfitJob(benchmark::State& st) {
   const long garments = st.range(0), bodies = st.range(1);
   const fs::path dir = scratch("regen_outfit_templates");
@@ -159,39 +179,15 @@ void BM_RegenOutfitJob(benchmark::State& st) {
     args.insert(args.end(), {"--template", (dir / "garments" / (g + ".atd")).string()});
   }
   args.insert(args.end(), {"--count", std::to_string(bodies), "--chunk", "64", "--out"});
-  ChildRun r;
-  for (auto _ : st) {
-    const fs::path out = scratch("regen_outfit");
-    std::vector<std::string> a = args;
-    a.push_back(out.string());
-    r = run_child(a);
-    if (r.code != 0) {
-      st.SkipWithError("atelier regen failed");
-      return;
-    }
-    st.SetIterationTime(r.seconds);
-  }
-  st.counters["bodies_per_s"] = static_cast<double>(bodies) / r.seconds;
-  st.counters["cpu_s"] = r.cpu_s;
-  st.counters["cpu_ms_per_body"] = 1e3 * r.cpu_s / static_cast<double>(bodies);
-  st.counters["peak_rss_MB"] = r.peak_rss_mb;
+  time_regen(st, args, "regen_outfit", bodies);
   st.SetLabel(garments == 1 ? "atelier regen, skirt as a detail garment, 2 threads"
                             : "atelier regen, trousers + skirt + top as one outfit, 2 threads");
 }
 BENCHMARK(BM_RegenOutfitJob)->Args({1, 300})->Args({3, 300})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
-std::filesystem::path shared_data() {
-  if (const char* env = std::getenv("ATELIER_SHARED_DATA")) return env;
-#ifdef ATELIER_SHARED_DATA
-  return ATELIER_SHARED_DATA;
-#else
-  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path() / "shared" / "data";
-#endif
-}
-
 void BM_RegenOutfitJobMakeHuman(benchmark::State& st) {
   const long garments = st.range(0), bodies = st.range(1);
-  const fs::path data = shared_data();
+  const fs::path data(ATELIER_BENCH_SHARED_DATA);
   if (!fs::exists(data / "makehuman" / "clothes" / "male_casualsuit01.mhclo")) {
     st.SkipWithError("no MakeHuman data");
     return;
@@ -213,22 +209,7 @@ void BM_RegenOutfitJobMakeHuman(benchmark::State& st) {
   }
   args.insert(args.end(), {"--source", "makehuman", "--data", data.string(), "--count", std::to_string(bodies),
                            "--meshes", "0", "--out"});
-  ChildRun r;
-  for (auto _ : st) {
-    const fs::path out = scratch("regen_outfit_mh");
-    std::vector<std::string> a = args;
-    a.push_back(out.string());
-    r = run_child(a);
-    if (r.code != 0) {
-      st.SkipWithError("atelier regen failed");
-      return;
-    }
-    st.SetIterationTime(r.seconds);
-  }
-  st.counters["bodies_per_s"] = static_cast<double>(bodies) / r.seconds;
-  st.counters["cpu_s"] = r.cpu_s;
-  st.counters["cpu_ms_per_body"] = 1e3 * r.cpu_s / static_cast<double>(bodies);
-  st.counters["peak_rss_MB"] = r.peak_rss_mb;
+  time_regen(st, args, "regen_outfit_mh", bodies);
   st.SetLabel(garments == 1 ? "atelier regen, male_casualsuit01 on MakeHuman adults, 2 threads"
                             : "atelier regen, three MakeHuman suits as one outfit, 2 threads");
 }

@@ -62,15 +62,6 @@ std::vector<std::size_t> layer_order(std::span<const GarmentTemplate* const> gar
   return order;
 }
 
-std::vector<Triangle> fan_faces(const PolygonSoup& m) {
-  std::vector<Triangle> tris;
-  for (std::size_t f = 0; f < m.face_count(); ++f) {
-    const auto face = m.face(f);
-    for (std::size_t c = 1; c + 1 < face.size(); ++c) tris.push_back({face[0], face[c], face[c + 1]});
-  }
-  return tris;
-}
-
 /// After resolve_layers: its floor is the inner layers' clearance at their
 /// vertices, and in a concave crease (the crotch) an inner garment's faces
 /// span the crease farther out than its vertices, so an outer vertex can
@@ -86,7 +77,7 @@ Status lift_over_lower_layers(std::span<const GarmentTemplate* const> garments, 
   for (std::size_t l = 1; l < order.size(); ++l) {
     const std::size_t i = order[l];
     const std::size_t j = order[l - 1];  // final now: its BVH serves every layer above it
-    if (Status s = lower[l - 1].build(positions[j], fan_faces(garments[j]->mesh), {}, ExecContext::sequential()); !s)
+    if (Status s = lower[l - 1].build(positions[j], fan_triangulate(garments[j]->mesh), {}, ExecContext::sequential()); !s)
       return named(garments[j]->name, s);
     // A lift moves the closest body point (in a crease, to the other side),
     // so a vertex is tested again until no lower layer is over it (a few
@@ -125,7 +116,7 @@ Status count_layer_penetration(std::span<const GarmentTemplate* const> garments,
   for (std::size_t k = 0; k + 1 < ng; ++k) {
     const std::size_t j = order[k];  // an inner layer
     BodyBvh bvh;
-    if (Status s = bvh.build(positions[j], fan_faces(garments[j]->mesh), {}, ExecContext::sequential()); !s)
+    if (Status s = bvh.build(positions[j], fan_triangulate(garments[j]->mesh), {}, ExecContext::sequential()); !s)
       return named(garments[j]->name, s);
     for (std::size_t l = k + 1; l < ng; ++l) {  // every layer above it
       const std::size_t i = order[l];

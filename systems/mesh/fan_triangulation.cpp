@@ -29,4 +29,14 @@ Expected<SurfaceTriangles> fan_triangulate(const Model& model, std::span<const S
   return out;
 }
 
+std::vector<Triangle> fan_triangulate(const PolygonSoup& soup) {
+  std::vector<Triangle> tris;
+  tris.reserve(soup.face_nodes.size());
+  for (std::size_t f = 0; f < soup.face_count(); ++f) {
+    const auto face = soup.face(f);
+    for (std::size_t c = 1; c + 1 < face.size(); ++c) tris.push_back({face[0], face[c], face[c + 1]});
+  }
+  return tris;
+}
+
 }  // namespace atelier

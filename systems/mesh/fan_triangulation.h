@@ -2,7 +2,8 @@
 // indices, for the spatial structures (BVHs, collision bodies, grids) and
 // rendering, which take triangles and a position column.
 //
-// Reads: faces and halfedges of the given surfaces. Writes: nothing.
+// Reads: faces and halfedges of the given surfaces (or a soup's faces).
+// Writes: nothing.
 #pragma once
 
 #include <span>
@@ -27,5 +28,10 @@ struct SurfaceTriangles {
 /// dead surface index.
 [[nodiscard]] Expected<SurfaceTriangles> fan_triangulate(const Model& model,
                                                          std::span<const SurfaceIdx> surfaces = {});
+
+/// The same convention for a polygon soup (a decoded garment, a MakeHuman
+/// proxy): triangles in face order, indices into the soup's positions.
+/// Precondition: soup.check() passes.
+[[nodiscard]] std::vector<Triangle> fan_triangulate(const PolygonSoup& soup);
 
 }  // namespace atelier

@@ -237,6 +237,21 @@ Expected<RgbImage> side_by_side(std::span<const RgbImage> images, std::uint32_t 
   return out;
 }
 
+Expected<RgbImage> render_views(std::span<const RenderTriangles> meshes, std::span<const View> views,
+                                const RenderParams& params, const ExecContext& ctx) {
+  if (views.empty()) return Status(ErrorCode::kInvalidArgument, "render_views: no views");
+  std::vector<RgbImage> pictures;
+  pictures.reserve(views.size());
+  RenderParams p = params;
+  for (View view : views) {
+    p.view = view;
+    auto r = render_scene(meshes, p, ctx);
+    if (!r) return r.status();
+    pictures.push_back(std::move(r->image));
+  }
+  return side_by_side(pictures);
+}
+
 Vec3d body_colour() noexcept { return {0.80, 0.62, 0.50}; }
 
 Vec3d garment_colour(std::size_t i) noexcept {

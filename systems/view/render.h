@@ -100,6 +100,12 @@ struct RenderTriangles {
 [[nodiscard]] Expected<RgbImage> side_by_side(std::span<const RgbImage> images, std::uint32_t gap = 8,
                                               const Vec3d& background = Vec3d::Ones());
 
+/// Renders the scene once per view (params with its view replaced) and
+/// places the pictures side by side: the reports' front-and-side picture.
+/// Errors as render_scene and side_by_side (kInvalidArgument for no views).
+[[nodiscard]] Expected<RgbImage> render_views(std::span<const RenderTriangles> meshes, std::span<const View> views,
+                                              const RenderParams& params, const ExecContext& ctx = {});
+
 /// Default colours: skin for bodies, then a palette for garments.
 [[nodiscard]] Vec3d body_colour() noexcept;
 [[nodiscard]] Vec3d garment_colour(std::size_t i) noexcept;

@@ -68,15 +68,6 @@ BodySet bodies(std::size_t n, std::uint64_t seed) {
   return set;
 }
 
-std::vector<Triangle> fan(const PolygonSoup& m) {
-  std::vector<Triangle> t;
-  for (std::size_t f = 0; f < m.face_count(); ++f) {
-    const auto face = m.face(f);
-    for (std::size_t c = 1; c + 1 < face.size(); ++c) t.push_back({face[0], face[c], face[c + 1]});
-  }
-  return t;
-}
-
 /// Brute force: the first t in (0, tmax] where origin + t dir meets one of
 /// the triangles (Moller-Trumbore), or infinity.
 double first_hit(const Vec3d& o, const Vec3d& d, std::span<const Vec3d> p, std::span<const Triangle> tris,
@@ -107,7 +98,7 @@ std::vector<std::size_t> independent_layer_count(const Outfit& o, const BodyBvh&
   const double probe = LayerPenetrationParams{}.probe, tolerance = LayerPenetrationParams{}.tolerance;
   std::vector<std::size_t> count(o.layers.size(), 0);
   std::vector<std::vector<Triangle>> tris;
-  for (const auto& l : o.layers) tris.push_back(fan(l->mesh));
+  for (const auto& l : o.layers) tris.push_back(fan_triangulate(l->mesh));
   for (std::size_t i = 0; i < o.layers.size(); ++i) {
     for (const Vec3d& p : g.garments[i].positions) {
       const SignedHit h = bvh.signed_distance(p);
@@ -225,7 +216,7 @@ TEST(Outfit, TheLayerCounterAgreesWithBruteForceOnCrossingGarments) {
     std::vector<BodyDistance> d(out[b].garments[shorts].positions.size());
     ASSERT_TRUE(cb.query_many(out[b].garments[shorts].positions, {}, d));
     BodyBvh inner;
-    ASSERT_TRUE(inner.build(out[b].garments[tights].positions, fan(o.layers[tights]->mesh)));
+    ASSERT_TRUE(inner.build(out[b].garments[tights].positions, fan_triangulate(o.layers[tights]->mesh)));
     auto n = count_inside_layer(out[b].garments[shorts].positions, d, inner);
     ASSERT_TRUE(n);
     EXPECT_GT(*n, 0u);
