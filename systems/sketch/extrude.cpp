@@ -10,6 +10,8 @@
 #include <atelier/systems/sketch/paint.h>
 #include <atelier/systems/spatial/collision_body.h>
 
+#include "extrude_detail.h"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
@@ -20,11 +22,14 @@
 
 namespace atelier {
 
-namespace {
-
+namespace extrude_detail {
 Status fail(ErrorCode c, const std::string& what) {
   return Status(c, "extrude: " + what);
 }
+}  // namespace extrude_detail
+using extrude_detail::fail;
+
+namespace {
 
 /// At least 2 distinct points, all finite.
 Status check_stroke(std::span<const Vec2d> s, const std::string& name) {
@@ -286,6 +291,10 @@ std::vector<Pair> sweep_one(const std::vector<Vec3d>& q) {
   return out;
 }
 
+}  // namespace
+
+namespace extrude_detail {
+
 /// Signed volume of the model's faces (fan triangles about the origin).
 double signed_volume(const Model& m) {
   double v = 0;
@@ -365,7 +374,8 @@ Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
   return h;
 }
 
-Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx) {
+Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx,
+                            Stop stop, RunOut* out) {
   if (!(opt.pick_radius > 0) || !std::isfinite(opt.pick_radius))
     return fail(ErrorCode::kInvalidArgument, "pick_radius must be positive and finite");
   for (const Camera* c : {&in.base_camera, &in.sweep_camera})
@@ -396,6 +406,7 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   rep.base_ring = base->ring;
   rep.capped = capped;
   rep.faces_removed = base->faces_removed;
+  if (stop == Stop::kAfterBase) return rep;
   if (capped && !base->ring)
     return fail(ErrorCode::kInvalidArgument, "a closed extrusion (one extruding stroke) needs a closed base ring");
   const std::vector<NodeIdx>& B = rep.base;
@@ -502,6 +513,12 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   const std::size_t faces0 = m.num_faces(), nodes0 = m.num_nodes();
   std::vector<char> old_node(m.nodes.slots.capacity());
   for (std::uint32_t v = 0; v < old_node.size(); ++v) old_node[v] = m.alive(NodeIdx{v});
+  if (out) {
+    out->ring = base->ring;
+    out->old_node = old_node;
+    out->old_face.assign(m.faces.slots.capacity(), 0);
+    for (std::uint32_t f = 0; f < out->old_face.size(); ++f) out->old_face[f] = m.alive(FaceIdx{f});
+  }
   std::vector<FaceIdx> swept;
   std::vector<NodeIdx> prev = B;
   const std::size_t segs = base->ring ? n : n - 1;
@@ -575,7 +592,7 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   return rep;
 }
 
-}  // namespace
+}  // namespace extrude_detail
 
 Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t first) {
   std::size_t j = first;
@@ -595,7 +612,8 @@ Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t
 Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes, const ExtrudeOptions& options,
                                 const ExecContext& ctx) {
   Model backup = model;  // transactional: every error path restores it
-  Expected<ExtrudeReport> r = run(model, strokes, options, ctx);
+  Expected<ExtrudeReport> r = options.mirror ? extrude_detail::run_mirrored(model, strokes, options, ctx)
+                                             : extrude_detail::run(model, strokes, options, ctx, extrude_detail::Stop::kNever, nullptr);
   if (!r) model = std::move(backup);
   return r;
 }
