@@ -175,7 +175,8 @@ Expected<Base> closed_base(Model& m, const ExtrudeStrokes& in, const ExtrudeOpti
 }
 
 /// Open base stroke: the boundary arc it follows on screen.
-Expected<Base> open_base(const Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt) {
+Expected<Base> open_base(const Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt,
+                         const extrude_detail::BaseSide* only) {
   const Camera& cam = in.base_camera;
   const Vec2d first = in.base.front(), last = in.base.back();
   NodeIdx s, t;
@@ -186,6 +187,7 @@ Expected<Base> open_base(const Model& m, const ExtrudeStrokes& in, const Extrude
     for (unsigned side = 0; side < 2; ++side) {
       const NodeIdx v = m.tail(halfedge_of(EdgeIdx{e}, side));
       if (!in_surfaces(m, v, opt.surfaces)) continue;
+      if (only && !(only->sign * (m.position(v) - only->point).dot(only->normal) > 0)) continue;
       const Vec2d p = px[v.value] = screen(cam, m.position(v));
       if (!p.allFinite()) continue;
       if (const double d = (p - first).norm(); d < ds || (d == ds && s.valid() && v.value < s.value)) ds = d, s = v;
@@ -375,7 +377,7 @@ Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
 }
 
 Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx,
-                            Stop stop, RunOut* out) {
+                            Stop stop, RunOut* out, const BaseSide* only) {
   if (!(opt.pick_radius > 0) || !std::isfinite(opt.pick_radius))
     return fail(ErrorCode::kInvalidArgument, "pick_radius must be positive and finite");
   for (const Camera* c : {&in.base_camera, &in.sweep_camera})
@@ -399,7 +401,7 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   const bool capped = in.sweep.size() == 1;
   // Step 1: base curve. A closed stroke on an open boundary loop is the
   // loop (open_base); on the surface it is painted and cut (closed_base).
-  Expected<Base> base = open_base(m, in, opt);
+  Expected<Base> base = open_base(m, in, opt, only);
   if (!base && closed_stroke) base = closed_base(m, in, opt, ctx);
   if (!base) return base.status();
   rep.base = base->nodes;
@@ -613,7 +615,7 @@ Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes, con
                                 const ExecContext& ctx) {
   Model backup = model;  // transactional: every error path restores it
   Expected<ExtrudeReport> r = options.mirror ? extrude_detail::run_mirrored(model, strokes, options, ctx)
-                                             : extrude_detail::run(model, strokes, options, ctx, extrude_detail::Stop::kNever, nullptr);
+                                             : extrude_detail::run(model, strokes, options, ctx, extrude_detail::Stop::kNever, nullptr, nullptr);
   if (!r) model = std::move(backup);
   return r;
 }

@@ -24,11 +24,19 @@ struct RunOut {
   bool ring = false;
 };
 
+/// An open base selects only boundary nodes with sign * (p - point) . normal
+/// > 0 (the mirror base: the boundary behind it on screen is its twin).
+struct BaseSide {
+  Vec3d point, normal;
+  double sign = 1;
+};
+
 /// One extrusion (steps 1-5 and the additions), not transactional (the
 /// caller restores the model). Stop::kAfterBase returns after step 1 with
 /// rep.base, rep.base_ring and rep.faces_removed set.
 [[nodiscard]] Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt,
-                                          const ExecContext& ctx, Stop stop, RunOut* out);
+                                          const ExecContext& ctx, Stop stop, RunOut* out,
+                                          const BaseSide* only = nullptr);
 [[nodiscard]] double signed_volume(const Model& m);
 [[nodiscard]] std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old);
 void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,

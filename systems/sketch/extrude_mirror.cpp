@@ -86,7 +86,19 @@ Expected<ExtrudeReport> run_mirrored(Model& m, const ExtrudeStrokes& in, const E
   ExtrudeOptions single = opt;
   single.mirror.reset();
   single.as_surface = false;
-  auto mb = run(m, min, single, ctx, Stop::kAfterBase, nullptr);
+  // Which side B is on: step 1 alone on a copy (an open base changes
+  // nothing; a painted one is cut on the copy only). An open B' is then
+  // looked for on the other side only: seen through the reflected camera,
+  // B itself lies right behind B' on screen.
+  double side = 0;
+  {
+    Model probe = m;
+    auto pb = run(probe, in, single, ctx, Stop::kAfterBase, nullptr);
+    if (!pb) return fail(pb.status().code(), "drawn side: " + pb.status().message());
+    for (NodeIdx v : pb->base) side += refl.side(probe.position(v));
+  }
+  const BaseSide other{refl.q, refl.n, side >= 0 ? -1.0 : 1.0};
+  auto mb = run(m, min, single, ctx, Stop::kAfterBase, nullptr, &other);
   if (!mb) return mirror_fail(mb.status().code(), "no mirror base curve: " + mb.status().message());
   const std::vector<NodeIdx> Bm = mb->base;
 
