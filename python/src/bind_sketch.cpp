@@ -175,7 +175,8 @@ void def_extrude(py::module_& m) {
           SymmetryPlane p;
           if (py::isinstance<py::str>(mirror)) {
             const std::string a = mirror.cast<std::string>();
-            if (a != "x" && a != "y" && a != "z") value_error("mirror: expected 'x', 'y', 'z' or 6 numbers, got '" + a + "'");
+            if (a != "x" && a != "y" && a != "z")
+              value_error("mirror: expected 'x', 'y', 'z' or 6 numbers, got '" + a + "'");
             p.normal = Vec3d::Unit(a == "x" ? 0 : a == "y" ? 1 : 2);
           } else {
             const std::vector<double> v = mirror.cast<std::vector<double>>();

@@ -10,8 +10,6 @@
 #include <atelier/systems/sketch/paint.h>
 #include <atelier/systems/spatial/collision_body.h>
 
-#include "extrude_detail.h"
-
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
@@ -19,6 +17,8 @@
 #include <limits>
 #include <sstream>
 #include <string>
+
+#include "extrude_detail.h"
 
 namespace atelier {
 
@@ -615,7 +615,8 @@ Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes, con
                                 const ExecContext& ctx) {
   Model backup = model;  // transactional: every error path restores it
   Expected<ExtrudeReport> r = options.mirror ? extrude_detail::run_mirrored(model, strokes, options, ctx)
-                                             : extrude_detail::run(model, strokes, options, ctx, extrude_detail::Stop::kNever, nullptr, nullptr);
+                                             : extrude_detail::run(model, strokes, options, ctx,
+                                                                   extrude_detail::Stop::kNever, nullptr, nullptr);
   if (!r) model = std::move(backup);
   return r;
 }

@@ -142,10 +142,10 @@ Expected<ExtrudeReport> run_mirrored(Model& m, const ExtrudeStrokes& in, const E
     for (std::size_t j = 0; j < n; ++j)
       if (const double d = (m.position(Bm[j]) - t).norm(); d < best) best = d, bj = j;
     if (!(best <= tol) || used[bj])
-      return mirror_fail(ErrorCode::kDegenerate,
-                         "no mirror base curve: node " + std::to_string(i) + " of B reflected to " + str(t) + " is " +
-                             std::to_string(best) + " from the nearest node of B' (tolerance " + std::to_string(tol) +
-                             "): the mesh is not symmetric there");
+      return mirror_fail(ErrorCode::kDegenerate, "no mirror base curve: node " + std::to_string(i) +
+                                                     " of B reflected to " + str(t) + " is " + std::to_string(best) +
+                                                     " from the nearest node of B' (tolerance " + std::to_string(tol) +
+                                                     "): the mesh is not symmetric there");
     used[bj] = 1;
     map[i] = Bm[bj];
     rep.mirror_base_error = std::max(rep.mirror_base_error, best);

@@ -224,8 +224,8 @@ TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
   for (std::uint32_t v = 0; v < top.model.nodes.slots.capacity(); ++v)
     if (top.model.alive(NodeIdx{v})) roi.extend(top.model.position(NodeIdx{v}));
   const ProfileTemplate one[] = {top};
-  auto regen =
-      regenerate_on_body(one, fx.body, skin_positions(fx.body), roi, {}, {.use_grid = false}, ExecContext::sequential());
+  auto regen = regenerate_on_body(one, fx.body, skin_positions(fx.body), roi, {}, {.use_grid = false},
+                                  ExecContext::sequential());
   ASSERT_TRUE(regen) << regen.status().to_string();
   Model m = std::move((*regen)[0].model);
   // The right armhole (farthest to +x), traced from the side; the sleeve
