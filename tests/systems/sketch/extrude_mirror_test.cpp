@@ -279,6 +279,16 @@ TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
   // right one), not bit for bit: a tolerance of 5 % of L.
   o.mirror_tolerance = 0.05;
   const std::size_t cap = m.nodes.slots.capacity();
+  // The single sleeve, for the counts and the Euler characteristic.
+  const Model m0 = m;
+  Model m1 = m;
+  ExtrudeOptions o1 = o;
+  o1.mirror.reset();
+  ASSERT_TRUE(extrude(m1, in, o1, ExecContext::sequential()));
+  auto chi = [](const Model& x) {
+    const TopologyCounts t = count_topology(x);
+    return t.nodes - t.edges + t.faces;
+  };
   auto r = extrude(m, in, o, ExecContext::sequential());
   ASSERT_TRUE(r) << r.status().to_string();
   ASSERT_TRUE(validate(m)) << validate(m).to_string();
@@ -303,6 +313,10 @@ TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
   EXPECT_EQ(leftn, right);
   EXPECT_EQ(inside, 0u);
   EXPECT_EQ(r->inside_after, 0u);
+  EXPECT_EQ(m.num_nodes() - m0.num_nodes(), 2 * (m1.num_nodes() - m0.num_nodes()));
+  EXPECT_EQ(m.num_faces() - m0.num_faces(), 2 * (m1.num_faces() - m0.num_faces()));
+  EXPECT_EQ(chi(m) - chi(m0), 2 * (chi(m1) - chi(m0)));
+  EXPECT_EQ(count_topology(m).shells, count_topology(m0).shells);
 }
 
 TEST(ExtrudeMirror, AsSurfaceGivesEachPartItsOwnSurfaceAndJoint) {
