@@ -5,8 +5,14 @@
 #include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/spatial/collision_body.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 namespace atelier::cli {
 
@@ -51,11 +57,32 @@ nlohmann::json report_json(const ExtrudeCmdOptions& opt, const ExtrudeReport* r,
     j["inside_after"] = r->inside_after;
     j["min_body_distance"] = r->min_body_distance;
   }
+  if (r->mirrored) {
+    j["mirrored"] = true;
+    j["mirror_base_nodes"] = r->mirror_base.size();
+    j["mirror_base_error"] = r->mirror_base_error;
+    j["mirror_nodes"] = r->mirror_nodes;
+    j["mirror_faces"] = r->mirror_faces;
+    if (opt.as_surface) j["mirror_part_surface"] = r->mirror_part_surface.value;
+  }
   if (opt.as_surface) {
     j["part_surface"] = r->part_surface.value;
     j["joints"] = r->joints.size();
   }
   return j;
+}
+
+/// "px,py,pz,nx,ny,nz": six finite numbers, the normal non-zero.
+bool parse_plane(const std::string& text, std::vector<double>& v) {
+  v.clear();
+  std::stringstream ss(text);
+  for (std::string tok; std::getline(ss, tok, ',');) {
+    char* end = nullptr;
+    const double d = std::strtod(tok.c_str(), &end);
+    if (tok.empty() || *end != '\0' || !std::isfinite(d)) return false;
+    v.push_back(d);
+  }
+  return v.size() == 6 && (v[3] != 0 || v[4] != 0 || v[5] != 0);
 }
 
 }  // namespace
@@ -74,6 +101,18 @@ CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
   c->add_option("--body", opt.body, "closed body mesh (OBJ, PLY, OFF or .atm) the extruded part is kept outside of");
   c->add_option("--clearance", opt.clearance, "with --body: distance kept from the body (model units)")
       ->check(CLI::NonNegativeNumber);
+  auto* mx = c->add_option("--mirror", opt.mirror,
+                           "also extrude the mirror image across the plane through the origin normal to this axis "
+                           "(x: the body's sagittal plane)")
+                 ->check(CLI::IsMember({"x", "y", "z"}));
+  c->add_option("--mirror-plane", opt.mirror_plane, "also extrude the mirror image across the plane px,py,pz,nx,ny,nz")
+      ->excludes(mx)
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            std::vector<double> v;
+            return parse_plane(s, v) ? std::string() : "needs six finite numbers px,py,pz,nx,ny,nz (normal non-zero)";
+          },
+          "PX,PY,PZ,NX,NY,NZ"));
   return c;
 }
 
@@ -88,6 +127,16 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
   eo.optimise = !opt.no_optimise;
   eo.as_surface = opt.as_surface;
   eo.clearance = opt.clearance;
+  if (!opt.mirror.empty()) {
+    SymmetryPlane p;
+    p.normal = Vec3d::Unit(opt.mirror == "x" ? 0 : opt.mirror == "y" ? 1 : 2);
+    eo.mirror = p;
+  }
+  if (!opt.mirror_plane.empty()) {
+    std::vector<double> v;
+    (void)parse_plane(opt.mirror_plane, v);  // checked when parsing (exit 2)
+    eo.mirror = SymmetryPlane{Vec3d(v[0], v[1], v[2]), Vec3d(v[3], v[4], v[5])};
+  }
   // The body: its triangles as a collision body (the garment family's query).
   Model body_model;
   CollisionBody body;

@@ -3,6 +3,7 @@
 // two extruding strokes, each through its own camera or the file's), e.g.
 //   atelier extrude --mesh cup.obj --strokes dome.json --out dome.obj --json report.json
 //   atelier extrude --mesh top.atm --strokes sleeve.json --out top.atm --as-surface --body body.obj
+//   atelier extrude --mesh top.obj --strokes sleeve.json --out top2.obj --mirror x   (both sleeves)
 // Thin over extrude (systems/sketch/extrude.h). Exit codes: 0 ok, 2 usage,
 // 3 bad input (mesh, stroke file, or strokes the extrusion refuses on this
 // mesh: no mesh is written, the --json report holds the error), 4 internal.
@@ -11,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <cstddef>
 #include <filesystem>
+#include <string>
 
 #include "commands.h"
 
@@ -24,6 +26,8 @@ struct ExtrudeCmdOptions {
   bool as_surface = false;
   std::filesystem::path body;  // a closed mesh the extruded part is kept outside of
   double clearance = 0.002;
+  std::string mirror;        // "x", "y" or "z": the plane through the origin normal to that axis
+  std::string mirror_plane;  // "px,py,pz,nx,ny,nz"
 };
 
 CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt);

@@ -155,7 +155,7 @@ void def_extrude(py::module_& m) {
   m.def(
       "extrude",
       [](const MeshLike& mesh, const Strokes& strokes, std::size_t first, double pick_radius, bool optimise,
-         bool as_surface, int threads, const Progress& progress) {
+         bool as_surface, const py::object& mirror, int threads, const Progress& progress) {
         const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
         Model model;
         if (in->model)
@@ -168,6 +168,24 @@ void def_extrude(py::module_& m) {
         eo.pick_radius = pick_radius;
         eo.optimise = optimise;
         eo.as_surface = as_surface;
+        // mirror: None, "x" / "y" / "z" (the plane through the origin normal
+        // to that axis), or (px, py, pz, nx, ny, nz), as the CLI's --mirror
+        // and --mirror-plane.
+        if (!mirror.is_none()) {
+          SymmetryPlane p;
+          if (py::isinstance<py::str>(mirror)) {
+            const std::string a = mirror.cast<std::string>();
+            if (a != "x" && a != "y" && a != "z")
+              value_error("mirror: expected 'x', 'y', 'z' or 6 numbers, got '" + a + "'");
+            p.normal = Vec3d::Unit(a == "x" ? 0 : a == "y" ? 1 : 2);
+          } else {
+            const std::vector<double> v = mirror.cast<std::vector<double>>();
+            if (v.size() != 6) value_error("mirror: expected 6 numbers (px, py, pz, nx, ny, nz)");
+            p.point = Vec3d(v[0], v[1], v[2]);
+            p.normal = Vec3d(v[3], v[4], v[5]);
+          }
+          eo.mirror = p;
+        }
         const ExtrudeReport r =
             unwrap(run_long(progress, threads, [&](const ExecContext& ctx) { return extrude(model, es, eo, ctx); }));
         auto stats = [](const EdgeLengthStats& s) {
@@ -194,11 +212,18 @@ void def_extrude(py::module_& m) {
         rep["volume_change"] = r.volume_change;
         rep["max_deviation"] = r.max_deviation;
         if (as_surface) rep["joints"] = r.joints.size();
+        if (r.mirrored) {
+          rep["mirrored"] = true;
+          rep["mirror_base_nodes"] = r.mirror_base.size();
+          rep["mirror_base_error"] = r.mirror_base_error;
+          rep["mirror_nodes"] = r.mirror_nodes;
+          rep["mirror_faces"] = r.mirror_faces;
+        }
         (void)model.compact();
         return py::make_tuple(mesh_of(std::move(model)), rep);
       },
       py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("first") = 0, py::arg("pick_radius") = 12.0,
-      py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("threads") = 0,
+      py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("mirror") = py::none(), py::arg("threads") = 0,
       py::arg("progress") = py::none(), R"doc(
 Extrudes a surface or a cavity from a mesh by sketched strokes (``atelier extrude``; seed 002).
 
@@ -213,6 +238,12 @@ optimise: run the mesh optimisation of the new region (towards B's mean
     edge length, B fixed; every new edge within [4/5, 4/3] of it).
 as_surface: the extruded part as its own surface joined to the base along
     B by a joint (``face_surface`` of the Mesh tells them apart).
+mirror: None (default), "x" (the body's sagittal plane x = 0), "y", "z", or
+    (px, py, pz, nx, ny, nz): also extrude the mirror image across that
+    plane (both sleeves from one stroke; ``--mirror`` / ``--mirror-plane``).
+    The mirror part is the exact reflection of the drawn one; raises
+    ValueError ("mirror side: ... not symmetric there", "drawn side: ...
+    crosses the symmetry plane") with the mesh unchanged.
 
 Returns (mesh, report): the result as a Mesh and the dict the CLI's --json
 writes (``copies``, ``swept_nodes``, ``swept_faces``, ``splits``,

@@ -101,3 +101,13 @@ def test_optimised_edges_within_bounds_and_as_surface():
     fs = np.asarray(mesh.face_surface)
     assert sorted(np.unique(fs).tolist()) == [0, 1]
     assert np.count_nonzero(fs == fs[0]) == len(f)
+
+
+def test_mirror_across_a_plane_through_the_base_is_refused():
+    """The cup's rim straddles x = 0: the mirrored pair is refused (the
+    message names the side), a bad mirror argument raises too."""
+    v, f = cup()
+    with pytest.raises(ValueError, match="side"):
+        atelier.extrude((v, f), strokes(), mirror="x")
+    with pytest.raises(ValueError, match="mirror"):
+        atelier.extrude((v, f), strokes(), mirror="w")

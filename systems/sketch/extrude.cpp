@@ -18,13 +18,18 @@
 #include <sstream>
 #include <string>
 
+#include "extrude_detail.h"
+
 namespace atelier {
 
-namespace {
-
+namespace extrude_detail {
 Status fail(ErrorCode c, const std::string& what) {
   return Status(c, "extrude: " + what);
 }
+}  // namespace extrude_detail
+using extrude_detail::fail;
+
+namespace {
 
 /// At least 2 distinct points, all finite.
 Status check_stroke(std::span<const Vec2d> s, const std::string& name) {
@@ -170,7 +175,8 @@ Expected<Base> closed_base(Model& m, const ExtrudeStrokes& in, const ExtrudeOpti
 }
 
 /// Open base stroke: the boundary arc it follows on screen.
-Expected<Base> open_base(const Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt) {
+Expected<Base> open_base(const Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt,
+                         const extrude_detail::BaseSide* only) {
   const Camera& cam = in.base_camera;
   const Vec2d first = in.base.front(), last = in.base.back();
   NodeIdx s, t;
@@ -181,6 +187,7 @@ Expected<Base> open_base(const Model& m, const ExtrudeStrokes& in, const Extrude
     for (unsigned side = 0; side < 2; ++side) {
       const NodeIdx v = m.tail(halfedge_of(EdgeIdx{e}, side));
       if (!in_surfaces(m, v, opt.surfaces)) continue;
+      if (only && !(only->sign * (m.position(v) - only->point).dot(only->normal) > 0)) continue;
       const Vec2d p = px[v.value] = screen(cam, m.position(v));
       if (!p.allFinite()) continue;
       if (const double d = (p - first).norm(); d < ds || (d == ds && s.valid() && v.value < s.value)) ds = d, s = v;
@@ -286,6 +293,10 @@ std::vector<Pair> sweep_one(const std::vector<Vec3d>& q) {
   return out;
 }
 
+}  // namespace
+
+namespace extrude_detail {
+
 /// Signed volume of the model's faces (fan triangles about the origin).
 double signed_volume(const Model& m) {
   double v = 0;
@@ -365,7 +376,8 @@ Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
   return h;
 }
 
-Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx) {
+Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx,
+                            Stop stop, RunOut* out, const BaseSide* only) {
   if (!(opt.pick_radius > 0) || !std::isfinite(opt.pick_radius))
     return fail(ErrorCode::kInvalidArgument, "pick_radius must be positive and finite");
   for (const Camera* c : {&in.base_camera, &in.sweep_camera})
@@ -389,13 +401,14 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   const bool capped = in.sweep.size() == 1;
   // Step 1: base curve. A closed stroke on an open boundary loop is the
   // loop (open_base); on the surface it is painted and cut (closed_base).
-  Expected<Base> base = open_base(m, in, opt);
+  Expected<Base> base = open_base(m, in, opt, only);
   if (!base && closed_stroke) base = closed_base(m, in, opt, ctx);
   if (!base) return base.status();
   rep.base = base->nodes;
   rep.base_ring = base->ring;
   rep.capped = capped;
   rep.faces_removed = base->faces_removed;
+  if (stop == Stop::kAfterBase) return rep;
   if (capped && !base->ring)
     return fail(ErrorCode::kInvalidArgument, "a closed extrusion (one extruding stroke) needs a closed base ring");
   const std::vector<NodeIdx>& B = rep.base;
@@ -502,6 +515,12 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   const std::size_t faces0 = m.num_faces(), nodes0 = m.num_nodes();
   std::vector<char> old_node(m.nodes.slots.capacity());
   for (std::uint32_t v = 0; v < old_node.size(); ++v) old_node[v] = m.alive(NodeIdx{v});
+  if (out) {
+    out->ring = base->ring;
+    out->old_node = old_node;
+    out->old_face.assign(m.faces.slots.capacity(), 0);
+    for (std::uint32_t f = 0; f < out->old_face.size(); ++f) out->old_face[f] = m.alive(FaceIdx{f});
+  }
   std::vector<FaceIdx> swept;
   std::vector<NodeIdx> prev = B;
   const std::size_t segs = base->ring ? n : n - 1;
@@ -575,7 +594,7 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   return rep;
 }
 
-}  // namespace
+}  // namespace extrude_detail
 
 Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t first) {
   std::size_t j = first;
@@ -595,7 +614,9 @@ Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t
 Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes, const ExtrudeOptions& options,
                                 const ExecContext& ctx) {
   Model backup = model;  // transactional: every error path restores it
-  Expected<ExtrudeReport> r = run(model, strokes, options, ctx);
+  Expected<ExtrudeReport> r = options.mirror ? extrude_detail::run_mirrored(model, strokes, options, ctx)
+                                             : extrude_detail::run(model, strokes, options, ctx,
+                                                                   extrude_detail::Stop::kNever, nullptr, nullptr);
   if (!r) model = std::move(backup);
   return r;
 }

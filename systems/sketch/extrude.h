@@ -58,7 +58,10 @@
 // no area, P1*P2* parallel to n_B, a plane seen edge-on, strokes that cross
 // so that a copy collapses to a point), kNonManifold (a boundary node with
 // several boundary arcs), those of paint_stroke and cut_along_curves, and
-// kCancelled. The single-threaded result is the result: every step runs in a
+// kCancelled; with options.mirror also kInvalidArgument (a bad plane or
+// tolerance, strokes or parts that cross the plane: "drawn side: ...") and
+// kDegenerate (no mirror base curve: "mirror side: ... the mesh is not
+// symmetric there"). The single-threaded result is the result: every step runs in a
 // fixed order (ExecContext threads do not change a bit).
 #pragma once
 
@@ -73,6 +76,7 @@
 #include <atelier/systems/view/strokes.h>
 
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 namespace atelier {
@@ -87,6 +91,14 @@ struct ExtrudeStrokes {
   /// near B).
   Camera sweep_camera;
   std::vector<std::vector<Vec2d>> sweep;
+};
+
+/// A symmetry plane through `point` with normal `normal` (any length > 0).
+/// The default is the body's sagittal plane x = 0 of the Y-up garment frame
+/// (the mannequins' left and right mirror across it).
+struct SymmetryPlane {
+  Vec3d point = Vec3d::Zero();
+  Vec3d normal = Vec3d::UnitX();
 };
 
 struct ExtrudeOptions {
@@ -116,6 +128,24 @@ struct ExtrudeOptions {
   /// per side), instead of being merged into B's surface.
   bool as_surface = false;
   RetriangulateOptions retriangulate;
+  /// Beyond the paper (issue 21, "mirrored pairs"): with a plane, the strokes
+  /// make two extrusions, the drawn one and its mirror image across the
+  /// plane (both sleeves from one stroke). Off by default. The mirror base
+  /// curve B' is found on the mesh: the drawn strokes seen through the
+  /// reflected cameras (each camera's view composed with the reflection and
+  /// its picture flipped left-right, so a pixel (x, y) becomes (width - x,
+  /// y)) select the reflected boundary arc, or paint and cut the reflected
+  /// ring; every node of B' must lie within mirror_tolerance * L of the
+  /// reflection of its node of B (else: the mesh is not symmetric there).
+  /// The drawn part is swept, sewn and optimised once; the mirror part is
+  /// its exact reflection (nodes reflected, faces reversed so that normals
+  /// stay outward), sewn onto B': the optimisation is not reflection
+  /// symmetric (edge order, ties), so it runs on one region only. With a
+  /// body, the mirror part's nodes get the same push (a no-op for a body
+  /// symmetric about the plane). With as_surface, each part is its own
+  /// surface with its own joint along its base.
+  std::optional<SymmetryPlane> mirror;
+  double mirror_tolerance = 1e-6;
 };
 
 struct ExtrudeReport {
@@ -146,6 +176,16 @@ struct ExtrudeReport {
   /// With as_surface: the extruded part's surface and the joint(s) along B.
   SurfaceIdx part_surface;
   std::vector<Joint> joints;
+  /// With options.mirror: B' (mirror_base[i] is the node at the reflection
+  /// of base[i]), the largest distance between them and the reflections,
+  /// the mirror part's nodes and faces (already counted in nodes_added and
+  /// faces_added, which then hold both parts), its surface and joint(s).
+  bool mirrored = false;
+  std::vector<NodeIdx> mirror_base;
+  double mirror_base_error = 0;
+  std::size_t mirror_nodes = 0, mirror_faces = 0;
+  SurfaceIdx mirror_part_surface;
+  std::vector<Joint> mirror_joints;
 };
 
 /// The extrusion held by the run of "extrude" strokes starting at stroke
