@@ -36,37 +36,6 @@ Box3d bounds(const Model& m) {
   return b;
 }
 
-/// The boundary loop (of any surface) that minimises score(mean position).
-template <class F>
-std::vector<NodeIdx> best_loop(const Model& m, F score) {
-  std::vector<char> seen(m.halfedges.next.size(), 0);
-  std::vector<NodeIdx> best;
-  double best_s = INFINITY;
-  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
-    if (!m.alive(EdgeIdx{e})) continue;
-    for (unsigned side = 0; side < 2; ++side) {
-      HalfedgeIdx h = halfedge_of(EdgeIdx{e}, side);
-      if (seen[h.value] || m.face(h).valid() || !m.face(twin(h)).valid()) continue;
-      std::vector<NodeIdx> loop;
-      Vec3d c = Vec3d::Zero();
-      // Walk the faceless halfedges (each node's faceless outgoing one).
-      for (HalfedgeIdx g = h; g.valid() && !seen[g.value];) {
-        seen[g.value] = 1;
-        loop.push_back(m.tail(g));
-        c += m.position(m.tail(g));
-        HalfedgeIdx next;
-        m.for_each_outgoing(m.head(g), [&](HalfedgeIdx k) {
-          if (!next.valid() && !m.face(k).valid() && m.face(twin(k)).valid()) next = k;
-        });
-        g = next;
-      }
-      c /= static_cast<double>(loop.size());
-      if (const double sc = score(c); sc < best_s) best_s = sc, best = loop;
-    }
-  }
-  return best;
-}
-
 enum class Design { kDress, kSleeve, kCollar };
 
 struct DressResult {
@@ -120,7 +89,7 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
   }
   // Dress: down 35 cm, flaring out 8 cm. Sleeve: out along the arm, 30 cm
   // outwards and 25 cm down, narrowing. Collar: up 5 cm, 1 cm inwards.
-  Vec3d d0, d1;
+  Vec3d d0 = Vec3d::Zero(), d1 = Vec3d::Zero();
   if (design == Design::kDress) d0 = Vec3d(-0.08, -0.35, 0), d1 = Vec3d(0.08, -0.35, 0);
   if (design == Design::kSleeve) d0 = Vec3d(0.30, -0.22, 0), d1 = Vec3d(0.28, -0.28, 0);
   if (design == Design::kCollar) d0 = Vec3d(0.01, 0.05, 0), d1 = Vec3d(-0.01, 0.05, 0);

@@ -183,36 +183,6 @@ TEST(ExtrudeMirror, AsymmetricMeshOrStrokeAcrossThePlaneIsRefusedUnchanged) {
 
 namespace {
 
-/// The boundary loop whose mean position minimises score (faceless halfedges).
-template <class F>
-std::vector<NodeIdx> best_loop(const Model& m, F score) {
-  std::vector<char> seen(m.halfedges.next.size(), 0);
-  std::vector<NodeIdx> best;
-  double best_s = INFINITY;
-  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
-    if (!m.alive(EdgeIdx{e})) continue;
-    for (unsigned side = 0; side < 2; ++side) {
-      HalfedgeIdx h = halfedge_of(EdgeIdx{e}, side);
-      if (seen[h.value] || m.face(h).valid() || !m.face(twin(h)).valid()) continue;
-      std::vector<NodeIdx> loop;
-      Vec3d c = Vec3d::Zero();
-      for (HalfedgeIdx g = h; g.valid() && !seen[g.value];) {
-        seen[g.value] = 1;
-        loop.push_back(m.tail(g));
-        c += m.position(m.tail(g));
-        HalfedgeIdx next;
-        m.for_each_outgoing(m.head(g), [&](HalfedgeIdx k) {
-          if (!next.valid() && !m.face(k).valid() && m.face(twin(k)).valid()) next = k;
-        });
-        g = next;
-      }
-      c /= static_cast<double>(loop.size());
-      if (const double sc = score(c); sc < best_s) best_s = sc, best = loop;
-    }
-  }
-  return best;
-}
-
 }  // namespace
 
 TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {

@@ -120,4 +120,35 @@ inline double distance_to_polyline(const std::vector<Vec2d>& line, const Vec2d& 
   return best;
 }
 
+/// The boundary loop (of any surface) that minimises score(mean position).
+template <class F>
+std::vector<NodeIdx> best_loop(const Model& m, F score) {
+  std::vector<char> seen(m.halfedges.next.size(), 0);
+  std::vector<NodeIdx> best;
+  double best_s = INFINITY;
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e})) continue;
+    for (unsigned side = 0; side < 2; ++side) {
+      HalfedgeIdx h = halfedge_of(EdgeIdx{e}, side);
+      if (seen[h.value] || m.face(h).valid() || !m.face(twin(h)).valid()) continue;
+      std::vector<NodeIdx> loop;
+      Vec3d c = Vec3d::Zero();
+      // Walk the faceless halfedges (each node's faceless outgoing one).
+      for (HalfedgeIdx g = h; g.valid() && !seen[g.value];) {
+        seen[g.value] = 1;
+        loop.push_back(m.tail(g));
+        c += m.position(m.tail(g));
+        HalfedgeIdx next;
+        m.for_each_outgoing(m.head(g), [&](HalfedgeIdx k) {
+          if (!next.valid() && !m.face(k).valid() && m.face(twin(k)).valid()) next = k;
+        });
+        g = next;
+      }
+      c /= static_cast<double>(loop.size());
+      if (const double sc = score(c); sc < best_s) best_s = sc, best = loop;
+    }
+  }
+  return best;
+}
+
 }  // namespace atelier::sketch_test
