@@ -18,6 +18,8 @@
 #include <atelier/systems/sketch/optimise_region.h>
 #include <benchmark/benchmark.h>
 
+#include "extrude_timing.h"
+
 #include <cmath>
 #include <vector>
 
@@ -81,19 +83,7 @@ void BM_Extrude(benchmark::State& state) {
   opt.optimise = state.range(1) != 0;
   const ExtrudeStrokes in = dome();
   ExtrudeReport last;
-  for (auto _ : state) {
-    state.PauseTiming();
-    Model m = base;
-    state.ResumeTiming();
-    auto r = extrude(m, in, opt, ExecContext::sequential());
-    if (!r) {
-      state.SkipWithError(r.status().message().c_str());
-      return;
-    }
-    last = *r;
-    benchmark::DoNotOptimize(m.num_faces());
-  }
-  state.counters["faces_in"] = static_cast<double>(base.num_faces());
+  if (!bench::time_extrude(state, base, in, opt, last)) return;
   state.counters["swept_faces"] = static_cast<double>(last.swept_faces);
   state.counters["within"] = last.after.within;
   state.counters["collapses"] = static_cast<double>(last.collapses);

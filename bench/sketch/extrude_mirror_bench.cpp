@@ -9,6 +9,8 @@
 #include <atelier/systems/sketch/extrude.h>
 #include <benchmark/benchmark.h>
 
+#include "extrude_timing.h"
+
 #include <cmath>
 #include <vector>
 
@@ -68,19 +70,7 @@ void BM_ExtrudeMirror(benchmark::State& state) {
   if (state.range(0) != 0) opt.mirror = SymmetryPlane{};
   const ExtrudeStrokes in = dome();
   ExtrudeReport last;
-  for (auto _ : state) {
-    state.PauseTiming();
-    Model m = base;
-    state.ResumeTiming();
-    auto r = extrude(m, in, opt, ExecContext::sequential());
-    if (!r) {
-      state.SkipWithError(r.status().message().c_str());
-      return;
-    }
-    last = *r;
-    benchmark::DoNotOptimize(m.num_faces());
-  }
-  state.counters["faces_in"] = static_cast<double>(base.num_faces());
+  if (!bench::time_extrude(state, base, in, opt, last)) return;
   state.counters["faces_added"] = static_cast<double>(last.faces_added);
 }
 BENCHMARK(BM_ExtrudeMirror)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
