@@ -43,6 +43,11 @@ done
 # and never a matter of luck).
 seed=()
 [[ -n ${FUZZ_SEED:-} ]] && seed=(-seed="$FUZZ_SEED")
+# FUZZ_MAX_LEN: the largest input libFuzzer makes (and the length corpus files
+# are cut to when loaded). 64 KiB by default; a long run may lower it, since
+# a parser's per-line states are all reached by short inputs and an obj
+# corpus of 20 kB inputs runs at a third of the speed.
+max_len=${FUZZ_MAX_LEN:-65536}
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 for h in "${harnesses[@]}"; do
@@ -55,7 +60,7 @@ for h in "${harnesses[@]}"; do
   start=$(date +%s)
   # -timeout: one input taking 10 s is a hang; -rss_limit_mb: a parser that
   # allocates what a header claims instead of what the bytes hold.
-  if ! "$B/${h}_fuzz" "${limit[@]}" "${seed[@]}" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \
+  if ! "$B/${h}_fuzz" "${limit[@]}" "${seed[@]}" -timeout=10 -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 \
        -artifact_prefix="$B/artifacts/${h}-" "$corpus" "$seed_dir" >"$log" 2>&1; then
     echo "fuzz $h: FAILED (see $log and $B/artifacts/)"
     tail -40 "$log"
