@@ -212,10 +212,16 @@ std::string histogram_svg(const std::string& key, const FigureLabel& fl, const s
        "\" stroke=\"#333\"/><line x1=\"" + num(L) + "\" y1=\"" + num(T) + "\" x2=\"" + num(L) + "\" y2=\"" +
        num(T + ph) + "\" stroke=\"#333\"/>";
   const std::string tick = "font-size=\"10\" fill=\"#333\"";
+  // Integer bins (edges at k - 0.5) are labelled by their first and last value.
+  const bool integer_bins = hg.edges.front() + 0.5 == std::floor(hg.edges.front() + 0.5) &&
+                            hg.edges.back() - hg.edges.front() == static_cast<double>(hg.counts.size()) &&
+                            std::all_of(shown.begin(), shown.end(), [](double v) { return v == std::floor(v); });
+  const double first = integer_bins ? hg.edges.front() + 0.5 : hg.edges.front();
+  const double last = integer_bins ? hg.edges.back() - 0.5 : hg.edges.back();
   s += "<text " + tick + " x=\"" + num(L) + "\" y=\"" + num(T + ph + 12) + "\" text-anchor=\"start\">" +
-       format_significant(hg.edges.front(), fl.digits) + "</text>";
+       (integer_bins ? format_number(first) : format_significant(first, fl.digits)) + "</text>";
   s += "<text " + tick + " x=\"" + num(L + pw) + "\" y=\"" + num(T + ph + 12) + "\" text-anchor=\"end\">" +
-       format_significant(hg.edges.back(), fl.digits) + "</text>";
+       (integer_bins ? format_number(last) : format_significant(last, fl.digits)) + "</text>";
   s += "<text " + tick + " x=\"" + num(L - 4) + "\" y=\"" + num(T + 8) + "\" text-anchor=\"end\">" +
        std::to_string(top) + "</text><text " + tick + " x=\"" + num(L - 4) + "\" y=\"" + num(T + ph) +
        "\" text-anchor=\"end\">0</text>";
@@ -239,8 +245,9 @@ figcaption{font-size:.85em;margin-top:.3em;max-width:360px}
 .note{color:#666;font-size:.85em}
 .charts{display:flex;flex-wrap:wrap;gap:1em}
 .charts figure{padding:.3em}
-.worst{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start}
-.worst table{margin:0}
+.worst-tables{display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start}
+.worst-tables table{margin:0}
+caption{font-size:.9em;text-align:left;padding:.2em 0}
 .bar{display:flex;align-items:center;gap:.4em;font-size:.85em;margin-top:.3em}
 .bar img{width:200px;height:14px;image-rendering:pixelated}
 )";
@@ -595,6 +602,7 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
       }
     h += "<h2>Distributions</h2>\n<div class=\"charts\">\n";
     for (const ColumnStats& st : stats) {
+      if (st.min == st.max) continue;  // one value: said in a line below, no chart
       const FigureLabel fl = describe_figure(st.column);
       std::vector<double> shown;
       for (const json& r : rows)
@@ -603,7 +611,7 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
       const std::string svg = histogram_svg(st.column, fl, shown);
       if (!svg.empty()) h += "<figure>" + svg + "<figcaption>" + escape(fl.label) + "</figcaption></figure>\n";
     }
-    h += "</div>\n<h2>Worst rows per figure</h2>\n<div class=\"worst\">\n";
+    h += "</div>\n<h2>Worst rows per figure</h2>\n<div class=\"worst-tables\">\n";
     for (const ColumnStats& st : stats) {
       const FigureLabel fl = describe_figure(st.column);
       const std::string head = fl.unit.empty() ? fl.label : fl.label + " (" + fl.unit + ")";
