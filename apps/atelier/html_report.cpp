@@ -1,18 +1,23 @@
+// The self-contained HTML report (html_report.h).
+//
+// Why this file is long: the page is one document; its summary, charts,
+// worst-rows tables, colour bars and CSV share the escaping, labelling and
+// number-formatting helpers of this file, which would otherwise be exported.
 #include "html_report.h"
-
-#include <algorithm>
-#include <charconv>
-#include <cmath>
-#include <cctype>
-#include <cstdio>
-#include <numeric>
-#include <unordered_set>
 
 #include <atelier/engine/status.h>
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/mesh_arrays.h>
 #include <atelier/io/png.h>
 #include <atelier/systems/view/colour_map.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <unordered_set>
 
 namespace atelier {
 
@@ -21,17 +26,30 @@ using nlohmann::json;
 
 namespace {
 
-Error bad(std::string_view what) { return Error(Status(ErrorCode::kInvalidArgument, "html report: " + std::string(what))); }
+Error bad(std::string_view what) {
+  return Error(Status(ErrorCode::kInvalidArgument, "html report: " + std::string(what)));
+}
 
 void escape_into(std::string& out, std::string_view s) {
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out.push_back(c);
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out.push_back(c);
     }
   }
 }
@@ -65,7 +83,9 @@ std::string cell(const json& v) {
   return escape(v.dump());
 }
 
-bool scalar(const json& v) { return v.is_null() || v.is_number() || v.is_string() || v.is_boolean(); }
+bool scalar(const json& v) {
+  return v.is_null() || v.is_number() || v.is_string() || v.is_boolean();
+}
 
 const json& rows_of(const json& report) {
   static const json kEmpty = json::array();
@@ -197,7 +217,8 @@ std::string histogram_svg(const std::string& key, const FigureLabel& fl, const s
   auto num = [](double v) { return fixed(v, 1); };
   std::string s = "<svg class=\"hist\" id=\"hist-" + slug(key) + "\" data-key=\"" + escape(key) +
                   "\" width=\"320\" height=\"180\" viewBox=\"0 0 320 180\" "
-                  "role=\"img\" aria-label=\"histogram of " + escape(axis) + "\">";
+                  "role=\"img\" aria-label=\"histogram of " +
+                  escape(axis) + "\">";
   s += "<title>" + escape(axis) + ": " + std::to_string(shown.size()) + " values in " +
        std::to_string(hg.counts.size()) + " bins</title>";
   for (std::size_t i = 0; i < hg.counts.size(); ++i) {
@@ -330,9 +351,8 @@ std::vector<std::size_t> worst_rows(const json& report, std::string_view column,
     const auto it = rows[i].find(key);
     if (it != rows[i].end() && it->is_number()) v.emplace_back(it->get<double>(), i);
   }
-  std::stable_sort(v.begin(), v.end(), [&](const auto& a, const auto& b) {
-    return largest ? a.first > b.first : a.first < b.first;
-  });
+  std::stable_sort(v.begin(), v.end(),
+                   [&](const auto& a, const auto& b) { return largest ? a.first > b.first : a.first < b.first; });
   std::vector<std::size_t> out;
   for (std::size_t i = 0; i < std::min(k, v.size()); ++i) out.push_back(v[i].second);
   return out;
@@ -403,7 +423,8 @@ FigureLabel describe_figure(std::string_view key) {
   // A known phrase at the end, the rest a garment's name.
   for (const KnownPhrase& p : kPhrases) {
     if (base != p.base && !(ends_with(base, p.base) && base[base.size() - p.base.size() - 1] == '_')) continue;
-    const std::string_view prefix = base == p.base ? std::string_view() : base.substr(0, base.size() - p.base.size() - 1);
+    const std::string_view prefix =
+        base == p.base ? std::string_view() : base.substr(0, base.size() - p.base.size() - 1);
     f.label = prefix.empty() ? capitalised(std::string(p.label)) : std::string(prefix) + ": " + std::string(p.label);
     f.digits = p.digits;
     f.lower_is_worse = p.lower_is_worse;
@@ -445,7 +466,7 @@ std::string format_significant(double v, int digits) {
 std::string format_figure(double stored, const FigureLabel& label) {
   const double v = stored * label.scale;
   std::string s = label.scale == 1 && v == std::floor(v) && std::abs(v) < 1e15 ? format_number(v)
-                                                                                : format_significant(v, label.digits);
+                                                                               : format_significant(v, label.digits);
   if (!label.unit.empty()) s += " " + label.unit;
   return s;
 }
@@ -465,8 +486,8 @@ Histogram histogram(std::span<const double> values, std::size_t bins) {
     h.edges = {lo - 0.5, lo + 0.5};
   } else {
     if (bins == 0)
-      bins = std::min<std::size_t>(
-          30, static_cast<std::size_t>(std::ceil(std::log2(static_cast<double>(v.size())))) + 1);
+      bins =
+          std::min<std::size_t>(30, static_cast<std::size_t>(std::ceil(std::log2(static_cast<double>(v.size())))) + 1);
     bins = std::max<std::size_t>(bins, 1);
     h.edges.resize(bins + 1);
     for (std::size_t i = 0; i <= bins; ++i)
@@ -503,9 +524,8 @@ std::string rows_csv(const json& report) {
 std::string html_report(const json& report, const HtmlReportOptions& opt) {
   const json& rows = rows_of(report);
   const std::vector<std::string> cols = report_columns(report);
-  const std::string title = report.contains("title") && report["title"].is_string()
-                                ? report["title"].get<std::string>()
-                                : std::string("Atelier report");
+  const std::string title = report.contains("title") && report["title"].is_string() ? report["title"].get<std::string>()
+                                                                                    : std::string("Atelier report");
   std::string h;
   h += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>";
   escape_into(h, title);
@@ -545,8 +565,8 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
       if (path.is_relative() && !opt.picture_dir.empty()) path = opt.picture_dir / path;
       const std::string bytes = io_detail::read_file_bytes(path);
       const RgbImage img = decode_png(bytes, path.string());  // refuses damaged pictures now, not in the browser
-      const std::string ptitle = p.contains("title") && p["title"].is_string() ? p["title"].get<std::string>()
-                                                                               : path.filename().string();
+      const std::string ptitle =
+          p.contains("title") && p["title"].is_string() ? p["title"].get<std::string>() : path.filename().string();
       h += "<figure><img alt=\"" + escape(ptitle) + "\" width=\"" + std::to_string(img.width) + "\" height=\"" +
            std::to_string(img.height) + "\" src=\"data:image/png;base64,";
       h += base64_encode(bytes);

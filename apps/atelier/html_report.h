@@ -64,8 +64,8 @@ struct ColumnStats {
 /// Indices of the k rows with the largest (or smallest) numeric value in
 /// `column`, worst first; ties go to the lower row index; rows without a
 /// number there are skipped. For choosing which bodies to picture.
-[[nodiscard]] std::vector<std::size_t> worst_rows(const nlohmann::json& report, std::string_view column,
-                                                  std::size_t k, bool largest = true);
+[[nodiscard]] std::vector<std::size_t> worst_rows(const nlohmann::json& report, std::string_view column, std::size_t k,
+                                                  bool largest = true);
 
 /// Standard base64 (RFC 4648, with padding).
 [[nodiscard]] std::string base64_encode(std::string_view bytes);

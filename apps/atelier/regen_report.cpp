@@ -118,7 +118,8 @@ std::optional<RgbImage> picture_of(std::size_t index, const RegenReportInput& in
 Expected<GarmentVertexFigures> garment_vertex_figures(const BodyBvh& body, const GarmentTemplate& garment,
                                                       std::span<const Vec3d> positions) {
   const std::size_t n = garment.mesh.positions.size();
-  if (positions.size() != n || garment.clearance.clearance.size() != n || garment.rest_length.size() != garment.edges.size())
+  if (positions.size() != n || garment.clearance.clearance.size() != n ||
+      garment.rest_length.size() != garment.edges.size())
     return Status(ErrorCode::kInvalidArgument, "vertex figures of " + garment.name + ": " +
                                                    std::to_string(positions.size()) + " positions for " +
                                                    std::to_string(n) + " vertices");
@@ -197,18 +198,18 @@ nlohmann::json fit_colour_pictures(const FitPictureInput& in, const fs::path& ou
     const std::string file = "pictures/" + in.body_name + "_" + m.file + ".png";
     write_png(*both, out / file);
     const std::string unit = m.map == ColourMap::kDiverging ? "mm" : "%";
-    pictures.push_back({{"title", in.body_name + ": " + m.label + (in.why.empty() ? "" : " (" + in.why + ")")},
-                        {"path", file},
-                        {"caption", "front and side: " + names + " coloured by " + m.label + " (" + unit + ")" +
-                                        (m.map == ColourMap::kDiverging
-                                             ? "; blue: closer to the body than on the reference, red: farther"
-                                             : "")},
-                        {"colour_bar",
-                         {{"map", std::string(colour_map_name(m.map))},
-                          {"min", m.lo},
-                          {"max", m.hi},
-                          {"label", m.label},
-                          {"unit", unit}}}});
+    pictures.push_back(
+        {{"title", in.body_name + ": " + m.label + (in.why.empty() ? "" : " (" + in.why + ")")},
+         {"path", file},
+         {"caption",
+          "front and side: " + names + " coloured by " + m.label + " (" + unit + ")" +
+              (m.map == ColourMap::kDiverging ? "; blue: closer to the body than on the reference, red: farther" : "")},
+         {"colour_bar",
+          {{"map", std::string(colour_map_name(m.map))},
+           {"min", m.lo},
+           {"max", m.hi},
+           {"label", m.label},
+           {"unit", unit}}}});
   }
   return pictures;
 }
@@ -242,7 +243,8 @@ void write_regen_html(const RegenReportInput& in, const ExecContext& ctx, Log& l
   for (std::size_t i = 0; i < std::min(in.samples, rows.size()); ++i) picks.emplace_back(i, "sample");
   auto worst = [&](const std::string& column, bool largest) {
     auto w = worst_rows(html, column, 1, largest);
-    if (!w.empty()) picks.emplace_back(w[0], std::string(largest ? "highest " : "lowest ") + describe_figure(column).label);
+    if (!w.empty())
+      picks.emplace_back(w[0], std::string(largest ? "highest " : "lowest ") + describe_figure(column).label);
   };
   for (const auto& d : in.details) {
     worst(d->name + "_min_clearance_mm", false);
@@ -263,7 +265,8 @@ void write_regen_html(const RegenReportInput& in, const ExecContext& ctx, Log& l
   std::vector<std::size_t> done;
   std::optional<std::size_t> colour_row;  // the body pictured coloured by its fit
   if (!in.details.empty())
-    if (const auto w = worst_rows(html, in.details[0]->name + "_strain_p95_pct", 1, true); !w.empty()) colour_row = w[0];
+    if (const auto w = worst_rows(html, in.details[0]->name + "_strain_p95_pct", 1, true); !w.empty())
+      colour_row = w[0];
   Pictured fitted;
   std::string outfit = "body";
   for (const auto& d : in.details) outfit += ", " + d->name;

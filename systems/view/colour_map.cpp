@@ -70,8 +70,8 @@ Vec3d colour_map_linear(ColourMap map, double t) noexcept {
 
 Expected<std::vector<Vec3d>> map_values(std::span<const double> values, double lo, double hi, ColourMap map) {
   if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi)
-    return Status(ErrorCode::kInvalidArgument, "colour map: bad range [" + std::to_string(lo) + ", " +
-                                                   std::to_string(hi) + "]");
+    return Status(ErrorCode::kInvalidArgument,
+                  "colour map: bad range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   std::vector<Vec3d> out(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values[i]))
@@ -84,8 +84,8 @@ Expected<std::vector<Vec3d>> map_values(std::span<const double> values, double l
 
 Expected<RgbImage> colour_bar(ColourMap map, std::uint32_t width, std::uint32_t height, bool border) {
   if (width < 2 || height < 1 || width > 4096 || height > 4096)
-    return Status(ErrorCode::kInvalidArgument, "colour bar: bad size " + std::to_string(width) + " x " +
-                                                   std::to_string(height));
+    return Status(ErrorCode::kInvalidArgument,
+                  "colour bar: bad size " + std::to_string(width) + " x " + std::to_string(height));
   RgbImage img(width, height);
   for (std::uint32_t x = 0; x < width; ++x) {
     const auto c = colour_map_bytes(map, static_cast<double>(x) / static_cast<double>(width - 1));

@@ -16,15 +16,15 @@
 // Reads and writes nothing but its arguments.
 #pragma once
 
-#include <array>
-#include <cstdint>
-#include <vector>
-#include <span>
-#include <string_view>
-
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/io/png.h>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
 
 namespace atelier {
 

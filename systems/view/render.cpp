@@ -1,3 +1,4 @@
+#include <atelier/engine/parallel.h>
 #include <atelier/systems/view/render.h>
 
 #include <algorithm>
@@ -5,8 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
-
-#include <atelier/engine/parallel.h>
 
 namespace atelier {
 
@@ -42,7 +41,9 @@ double srgb_encode(double c) noexcept {
   return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
 }
 
-std::uint8_t to_byte(double c) noexcept { return static_cast<std::uint8_t>(std::lround(srgb_encode(c) * 255.0)); }
+std::uint8_t to_byte(double c) noexcept {
+  return static_cast<std::uint8_t>(std::lround(srgb_encode(c) * 255.0));
+}
 
 Status check_meshes(std::span<const RenderMesh> meshes) {
   if (meshes.empty()) return {ErrorCode::kInvalidArgument, "render: no meshes"};
@@ -80,8 +81,8 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Re
   }
   if (params.width > (1u << 15) || params.height > (1u << 15))
     return Status(ErrorCode::kInvalidArgument, "render: image too large");
-  auto cam = frame_box(box, params.view, params.projection, params.width, params.height, params.margin,
-                       params.fov_degrees);
+  auto cam =
+      frame_box(box, params.view, params.projection, params.width, params.height, params.margin, params.fov_degrees);
   if (!cam) return cam.status();
   return render_scene(meshes, *cam, params, ctx);
 }
@@ -135,9 +136,10 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Ca
         if (h.normal.dot(d) > 0.0) best.normal = -best.normal;
         if (best.normal.dot(d) > 0.0) best.normal = -best.normal;
         const auto& vc = meshes[m].vertex_colours;
-        best.colour = vc.empty() ? meshes[m].colour
-                                 : Vec3d(h.barycentric[0] * vc[tri[0]] + h.barycentric[1] * vc[tri[1]] +
-                                         h.barycentric[2] * vc[tri[2]]);
+        best.colour =
+            vc.empty()
+                ? meshes[m].colour
+                : Vec3d(h.barycentric[0] * vc[tri[0]] + h.barycentric[1] * vc[tri[1]] + h.barycentric[2] * vc[tri[2]]);
       }
     }
     return best;
@@ -270,7 +272,9 @@ Expected<RgbImage> render_views(std::span<const RenderTriangles> meshes, std::sp
   return side_by_side(pictures);
 }
 
-Vec3d body_colour() noexcept { return {0.80, 0.62, 0.50}; }
+Vec3d body_colour() noexcept {
+  return {0.80, 0.62, 0.50};
+}
 
 Vec3d garment_colour(std::size_t i) noexcept {
   static constexpr double kPalette[][3] = {

@@ -14,17 +14,17 @@
 // thread count.
 #pragma once
 
-#include <cstdint>
-#include <span>
-#include <string>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/io/png.h>
-#include <atelier/systems/view/camera.h>
 #include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/view/camera.h>
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
 
 namespace atelier {
 

@@ -7,6 +7,10 @@
 // and units of known keys, histogram bins against a brute-force count, the
 // CSV of all rows parsed back (RFC 4180) against the rows, and the page's
 // histograms, worst-rows tables, CSV link and colour bars in Chromium.
+#include "apps/atelier/html_report.h"
+
+#include <atelier/io/png.h>
+#include <atelier/systems/view/render.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -23,10 +27,7 @@
 #include <string>
 #include <vector>
 
-#include "apps/atelier/html_report.h"
 #include "support/csv_reader.h"
-#include <atelier/io/png.h>
-#include <atelier/systems/view/render.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -74,8 +75,9 @@ std::string chromium_or_install() {
   if (!c.empty()) return c;
   int code = 0;
   const std::string sudo = ::geteuid() == 0 ? "" : "sudo -n ";
-  (void)run(sudo + "env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium "
-                   ">/dev/null 2>&1",
+  (void)run(sudo +
+                "env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium "
+                ">/dev/null 2>&1",
             code);
   return code == 0 ? find_chromium() : std::string();
 }
@@ -329,11 +331,11 @@ void write_pictures(const fs::path& dir) {
                                         "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n";
   for (const char* view : {"front", "side"}) {
     int code = 0;
-    const std::string out = run(std::string(ATELIER_CLI) + " render --body " + (dir / "body.obj").string() +
-                                    " --garment " + (dir / "garment.obj").string() + " --view " + view +
-                                    " --width 64 --height 80 --out " + (dir / (std::string(view) + ".png")).string() +
-                                    " 2>&1",
-                                code);
+    const std::string out =
+        run(std::string(ATELIER_CLI) + " render --body " + (dir / "body.obj").string() + " --garment " +
+                (dir / "garment.obj").string() + " --view " + view + " --width 64 --height 80 --out " +
+                (dir / (std::string(view) + ".png")).string() + " 2>&1",
+            code);
     ASSERT_EQ(code, 0) << out;
     EXPECT_NE(out.find("2 meshes"), std::string::npos) << out;
   }
@@ -395,10 +397,9 @@ TEST(HtmlReport, HeadlessChromiumShowsTablesAndDecodesPictures) {
   if (chromium.empty()) GTEST_SKIP() << "chromium not found and could not be installed (apt-get install chromium)";
   auto dump = [&](const fs::path& page) {
     int code = 0;
-    const std::string out =
-        run("timeout 90 " + chromium + " --headless --disable-gpu --no-sandbox --user-data-dir=" +
-                (dir / "profile").string() + " --dump-dom file://" + page.string() + " 2>/dev/null",
-            code);
+    const std::string out = run("timeout 90 " + chromium + " --headless --disable-gpu --no-sandbox --user-data-dir=" +
+                                    (dir / "profile").string() + " --dump-dom file://" + page.string() + " 2>/dev/null",
+                                code);
     EXPECT_EQ(code, 0) << out;
     return out;
   };
@@ -431,7 +432,8 @@ TEST(HtmlReport, HeadlessChromiumShowsTablesAndDecodesPictures) {
   }
   const auto worst_end = dom.find("</table>", worst);
   ASSERT_EQ(order.size(), 10u);
-  EXPECT_EQ(dom.substr(worst, worst_end - worst).find("<td>body_" + std::to_string(worst_rows(rep, "penetration_mm", 12)[11]) + "</td>"),
+  EXPECT_EQ(dom.substr(worst, worst_end - worst)
+                .find("<td>body_" + std::to_string(worst_rows(rep, "penetration_mm", 12)[11]) + "</td>"),
             std::string::npos);
   EXPECT_NE(dom.find("<a id=\"csv\" href=\"bodies.csv\" download=\"\">"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "bodies.csv"));

@@ -25,7 +25,9 @@ using atelier::testing::read_bytes;
 using atelier::testing::run_cli;
 using atelier::testing::scratch_dir;
 
-bool has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+bool has(const std::string& s, const std::string& what) {
+  return s.find(what) != std::string::npos;
+}
 
 TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
   const fs::path d = scratch_dir("regen_report_cli");
@@ -78,7 +80,8 @@ TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
   // The coloured pictures are of the body with the highest strain.
   for (const char* kind : {"_clearance_change.png", "_strain.png"}) {
     EXPECT_TRUE(fs::exists(o / "pictures" / (most_strained + kind))) << most_strained << kind;
-    EXPECT_EQ(read_bytes(o / "pictures" / (most_strained + kind)), read_bytes(d / "t2" / "pictures" / (most_strained + kind)))
+    EXPECT_EQ(read_bytes(o / "pictures" / (most_strained + kind)),
+              read_bytes(d / "t2" / "pictures" / (most_strained + kind)))
         << kind;
   }
   EXPECT_EQ(read_bytes(o / "bodies.csv"), read_bytes(d / "t2" / "bodies.csv"));

@@ -2,13 +2,12 @@
 // matplotlib's published table at its ends and middle, the diverging map's
 // symmetry, the colour bar's columns, and a rendered garment of uniform
 // high strain showing the map's high colour where it covers the picture.
+#include <atelier/systems/view/colour_map.h>
+#include <atelier/systems/view/render.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
-
-#include <atelier/systems/view/colour_map.h>
-#include <atelier/systems/view/render.h>
 
 namespace atelier {
 namespace {
@@ -47,8 +46,8 @@ TEST(ColourMap, ViridisMatchesMatplotlibAtItsEndsAndMiddle) {
 TEST(ColourMap, DivergingIsBlueWhiteRedAndSymmetricInLightness) {
   const auto lo = colour_map_bytes(ColourMap::kDiverging, 0.0), mid = colour_map_bytes(ColourMap::kDiverging, 0.5),
              hi = colour_map_bytes(ColourMap::kDiverging, 1.0);
-  EXPECT_GT(lo[2], lo[0] + 100);  // blue
-  EXPECT_GT(hi[0], hi[2] + 100);  // red
+  EXPECT_GT(lo[2], lo[0] + 100);                            // blue
+  EXPECT_GT(hi[0], hi[2] + 100);                            // red
   for (int k = 0; k < 3; ++k) EXPECT_GE(mid[k], 240) << k;  // near white
   auto luma = [](double t) {
     const Vec3d c = colour_map_linear(ColourMap::kDiverging, t);
