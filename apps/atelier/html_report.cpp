@@ -125,10 +125,6 @@ constexpr KnownKey kKnownKeys[] = {
     {"worst_penetration_m", "Deepest penetration", "mm", 1000, 2, false},
     {"profile_nodes_under_shorts_total", "Profile-template nodes under the shorts (all bodies)", "", 1, 3, false},
     {"mean_edge_strain_p95", "Mean edge strain (95th percentile)", "%", 100, 2, false},
-    {"mean_decode_ms_per_body", "Mean decode time per body", "ms", 1, 2, false},
-    {"encode_s", "Encoding time", "s", 1, 2, false},
-    {"total_s", "Total time", "s", 1, 3, false},
-    {"bodies_per_s", "Throughput", "bodies/s", 1, 3, false},
     {"profile_template_nodes_inside", "Profile-template nodes inside the body (all bodies)", "", 1, 3, false},
     {"profile_template_max_crack_m", "Largest profile-template crack", "mm", 1000, 2, false},
     {"pattern_pieces", "Pattern pieces", "", 1, 3, false},
@@ -137,6 +133,10 @@ constexpr KnownKey kKnownKeys[] = {
     {"inside_nodes_total", "Garment vertices inside the body (all bodies)", "", 1, 3, false},
     {"layer_inside_vertices_total", "Garment vertices inside a lower layer (all bodies)", "", 1, 3, false},
     {"max_crack_m", "Largest profile-template crack", "mm", 1000, 2, false},
+    {"mean_decode_ms_per_body", "Mean decode time per body", "ms", 1, 2, false},
+    {"encode_s", "Encoding time", "s", 1, 2, false},
+    {"total_s", "Total time", "s", 1, 3, false},
+    {"bodies_per_s", "Throughput", "bodies/s", 1, 3, false},
 };
 
 // Per-garment figures: "<garment>_<phrase key>[unit suffix]".
@@ -540,7 +540,18 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
   if (const auto it = report.find("summary"); it != report.end()) {
     if (!it->is_object()) throw bad("\"summary\" must be an object");
     h += "<h2>Summary</h2>\n<table id=\"summary\"><tbody>\n";
+    // Known keys in the table's order (counts, quality, then timings), the
+    // others after them in the object's (alphabetical) order.
+    std::vector<std::pair<std::size_t, std::string>> order;
     for (const auto& [k, v] : it->items()) {
+      std::size_t rank = std::size(kKnownKeys) + order.size();
+      for (std::size_t i = 0; i < std::size(kKnownKeys); ++i)
+        if (kKnownKeys[i].key == k) rank = i;
+      order.emplace_back(rank, k);
+    }
+    std::sort(order.begin(), order.end());
+    for (const auto& [rank, k] : order) {
+      const json& v = (*it)[k];
       if (!scalar(v)) throw bad("summary." + k + " is not a scalar");
       const FigureLabel fl = describe_figure(k);
       h += "<tr><th data-key=\"" + escape(k) + "\">" + escape(fl.label) + "</th><td" +
@@ -586,7 +597,8 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
           std::string t = format_significant((*cb)[k].get<double>(), 2);
           return unit.empty() ? t : t + " " + unit;
         };
-        h += "<div class=\"bar\"><span class=\"bar-min\">" + escape(end("min")) +
+        h += "<div class=\"bar\" data-min=\"" + (*cb)["min"].dump() + "\" data-max=\"" + (*cb)["max"].dump() +
+             "\"><span class=\"bar-min\">" + escape(end("min")) +
              "</span><img class=\"colour-bar\" alt=\"colour bar: " + escape(std::string(colour_map_name(*map))) +
              "\" width=\"200\" height=\"14\" src=\"data:image/png;base64," + base64_encode(encode_png(*bar)) +
              "\"><span class=\"bar-max\">" + escape(end("max")) + "</span></div>";

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -34,7 +35,11 @@ TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
   auto r = run_cli("encode --garment " + (encoded_templates() / "skirt.obj").string() + " --out " + (d / "g").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const std::string job = " --seed 4 regen --template " + (d / "g" / "skirt.atd").string() + " --count 3 --report";
+  // The 2-thread run only checks that the CSV and the pictures do not depend
+  // on the thread count: left out of the sanitizer run (about 1 s there).
+  const bool twice = !std::getenv("ATELIER_SKIP_LONG_TESTS");
   for (const char* t : {"1", "2"}) {
+    if (std::string(t) == "2" && !twice) break;
     r = run_cli(std::string("--threads ") + t + job + " --out " + (d / (std::string("t") + t)).string());
     ASSERT_EQ(r.code, 0) << r.out;
   }
@@ -60,7 +65,7 @@ TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
     by_body[csv[i][body]] = csv[i];
   }
   std::string most_strained;
-  double most = -1;
+  double most = -1, most_max = 0;
   for (const auto& rec : rep["bodies"]) {
     const std::string name = rec["body"];
     ASSERT_TRUE(by_body.count(name)) << name;
@@ -74,17 +79,19 @@ TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
     if (q["strain_p95"].get<double>() > most) {
       most = q["strain_p95"].get<double>();
       most_strained = name;
+      most_max = q["strain_max"].get<double>();
     }
   }
 
   // The coloured pictures are of the body with the highest strain.
   for (const char* kind : {"_clearance_change.png", "_strain.png"}) {
     EXPECT_TRUE(fs::exists(o / "pictures" / (most_strained + kind))) << most_strained << kind;
+    if (!twice) continue;
     EXPECT_EQ(read_bytes(o / "pictures" / (most_strained + kind)),
               read_bytes(d / "t2" / "pictures" / (most_strained + kind)))
         << kind;
   }
-  EXPECT_EQ(read_bytes(o / "bodies.csv"), read_bytes(d / "t2" / "bodies.csv"));
+  if (twice) EXPECT_EQ(read_bytes(o / "bodies.csv"), read_bytes(d / "t2" / "bodies.csv"));
 
   const std::string html = read_bytes(o / "report.html");
   EXPECT_TRUE(has(html, "<a id=\"csv\" href=\"bodies.csv\" download>"));
@@ -97,6 +104,14 @@ TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
   EXPECT_TRUE(has(html, most_strained + ": clearance change (highest skirt: edge strain (95th percentile))"));
   EXPECT_TRUE(has(html, "<span class=\"bar-min\">0 %</span>"));
   EXPECT_FALSE(has(html, "<table id=\"rows\">"));
+  // The strain picture's range: the largest per-vertex strain (the largest
+  // of each vertex's edges) is the record's strain_max, computed apart by
+  // the regeneration's quality pass.
+  const std::string strain_bar = "<div class=\"bar\" data-min=\"0.0\" data-max=\"";
+  const auto bar = html.find(strain_bar);
+  ASSERT_NE(bar, std::string::npos);
+  const double top = std::stod(html.substr(bar + strain_bar.size()));
+  EXPECT_NEAR(top, 100 * most_max, 1e-9 * std::max(1.0, top));
 }
 
 }  // namespace
