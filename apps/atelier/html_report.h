@@ -29,6 +29,10 @@
 // are all numbers. Picture paths are relative to a base directory (default:
 // the report's directory) or absolute; each must be a readable PNG.
 //
+// A column with one value gets a line instead of a chart and a table; a
+// column's worst rows are its largest values unless describe_figure says the
+// lowest is the worst (smallest clearance, smallest distance).
+//
 // The page carries a short inline script that, once every image has decoded
 // (naturalWidth > 0), sets data-images-decoded="<count>" on <body> (or
 // "failed"): a headless browser check reads it back from the dumped DOM.
