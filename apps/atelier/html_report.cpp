@@ -490,15 +490,17 @@ Histogram histogram(std::span<const double> values, std::size_t bins) {
           std::min<std::size_t>(30, static_cast<std::size_t>(std::ceil(std::log2(static_cast<double>(v.size())))) + 1);
     bins = std::max<std::size_t>(bins, 1);
     h.edges.resize(bins + 1);
+    // std::lerp: monotonic, exact at both ends, no overflow for a range
+    // wider than the largest double (-1e308 to 1e308).
     for (std::size_t i = 0; i <= bins; ++i)
-      h.edges[i] = lo + (hi - lo) * static_cast<double>(i) / static_cast<double>(bins);
-    h.edges.back() = hi;
+      h.edges[i] = std::lerp(lo, hi, static_cast<double>(i) / static_cast<double>(bins));
   }
   h.counts.assign(h.edges.size() - 1, 0);
   // By comparison with the edges themselves: the rule of the header, exactly.
   for (double x : v) {
     const auto up = std::upper_bound(h.edges.begin(), h.edges.end(), x);
-    const std::size_t i = std::min<std::size_t>(static_cast<std::size_t>(up - h.edges.begin()), h.counts.size()) - 1;
+    const auto past = static_cast<std::size_t>(up - h.edges.begin());  // >= 1: edges.front() is the minimum
+    const std::size_t i = std::min(std::max<std::size_t>(past, 1), h.counts.size()) - 1;
     ++h.counts[i];
   }
   return h;

@@ -219,6 +219,12 @@ TEST(HtmlReport, HistogramBinsMatchABruteForceCount) {
   ASSERT_EQ(hi.counts, (std::vector<std::size_t>{3, 1, 0, 2, 0, 1}));
   EXPECT_EQ(hi.edges.front(), -0.5);
   EXPECT_EQ(hi.edges.back(), 5.5);
+  // Extreme but finite values: no overflow of the range, every value counted.
+  const std::vector<double> wide = {-1e308, 0.0, 1e308, 6e307};
+  const Histogram hw = histogram(wide, 4);
+  ASSERT_EQ(hw.counts.size(), 4u);
+  EXPECT_EQ(hw.counts, (std::vector<std::size_t>{1, 0, 1, 2}));
+  for (double e : hw.edges) EXPECT_TRUE(std::isfinite(e));
   const std::vector<double> same = {0.25, 0.25};
   EXPECT_EQ(histogram(same).counts, std::vector<std::size_t>{2});
   EXPECT_TRUE(histogram(std::vector<double>{}).counts.empty());
