@@ -148,7 +148,7 @@ struct KnownPhrase {
 constexpr KnownPhrase kPhrases[] = {
     {"min_clearance", "smallest clearance", 2, true},
     {"min_distance", "smallest distance to the body", 2, true},
-    {"clearance_error", "largest clearance change", 2, false},
+    {"clearance_error", "largest clearance error (|distance - target clearance|)", 2, false},
     {"clearance_change", "clearance change", 2, false},
     {"edge_strain_p95", "edge strain (95th percentile)", 2, false},  // before its suffix strain_p95
     {"strain_p95", "edge strain (95th percentile)", 2, false},
