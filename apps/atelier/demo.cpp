@@ -485,6 +485,7 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
   const std::vector<BodyQuality>& quality = run.quality;
   nlohmann::json html;
   html["title"] = "atelier demo: " + std::to_string(quality.size()) + " mannequin bodies";
+  html["row_noun"] = "bodies";
   html["summary"] = rep["summary"];
   html["summary"]["profile_template_nodes_inside"] = tot.template_inside;
   html["summary"]["profile_template_max_crack_m"] = tot.template_crack;

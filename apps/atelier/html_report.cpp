@@ -207,7 +207,8 @@ std::string csv_field(const json& v) {
 }
 
 // An inline SVG histogram of one column (shown values), axis labels in its unit.
-std::string histogram_svg(const std::string& key, const FigureLabel& fl, const std::vector<double>& shown) {
+std::string histogram_svg(const std::string& key, const FigureLabel& fl, const std::vector<double>& shown,
+                          const std::string& noun) {
   const Histogram hg = histogram(shown);
   if (hg.counts.empty()) return {};
   constexpr double W = 320, H = 180, L = 44, R = 12, T = 12, B = 44;
@@ -249,7 +250,7 @@ std::string histogram_svg(const std::string& key, const FigureLabel& fl, const s
   s += "<text class=\"xlabel\" font-size=\"11\" x=\"" + num(L + pw / 2) + "\" y=\"" + num(H - 8) +
        "\" text-anchor=\"middle\">" + escape(axis) + "</text>";
   s += "<text class=\"ylabel\" font-size=\"11\" transform=\"translate(12," + num(T + ph / 2) +
-       ") rotate(-90)\" text-anchor=\"middle\">rows</text></svg>";
+       ") rotate(-90)\" text-anchor=\"middle\">" + escape(noun) + "</text></svg>";
   return s;
 }
 
@@ -526,6 +527,10 @@ std::string rows_csv(const json& report) {
 std::string html_report(const json& report, const HtmlReportOptions& opt) {
   const json& rows = rows_of(report);
   const std::vector<std::string> cols = report_columns(report);
+  // What a row is ("bodies"), for the page's sentences and axes.
+  const std::string noun = report.contains("row_noun") && report["row_noun"].is_string()
+                               ? report["row_noun"].get<std::string>()
+                               : std::string("rows");
   const std::string title = report.contains("title") && report["title"].is_string() ? report["title"].get<std::string>()
                                                                                     : std::string("Atelier report");
   std::string h;
@@ -564,8 +569,9 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
   }
 
   if (!rows.empty() && !opt.csv_name.empty())
-    h += "<p>All " + std::to_string(rows.size()) + " rows, every column at full precision: <a id=\"csv\" href=\"" +
-         escape(opt.csv_name) + "\" download>" + escape(opt.csv_name) + "</a> (CSV).</p>\n";
+    h += "<p>All " + std::to_string(rows.size()) + " " + escape(noun) +
+         ", every column at full precision: <a id=\"csv\" href=\"" + escape(opt.csv_name) + "\" download>" +
+         escape(opt.csv_name) + "</a> (CSV).</p>\n";
 
   if (const auto it = report.find("pictures"); it != report.end()) {
     if (!it->is_array()) throw bad("\"pictures\" must be an array");
@@ -614,7 +620,8 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
 
   const std::vector<ColumnStats> stats = column_statistics(report);
   if (!stats.empty()) {
-    h += "<h2>Statistics over " + std::to_string(rows.size()) + " rows</h2>\n<table id=\"statistics\">\n";
+    h += "<h2>Statistics over " + std::to_string(rows.size()) + " " + escape(noun) +
+         "</h2>\n<table id=\"statistics\">\n";
     h += "<thead><tr><th>figure</th><th>count</th><th>min</th><th>mean</th><th>median</th><th>p95</th><th>max</th>"
          "</tr></thead>\n<tbody>\n";
     for (const ColumnStats& s : stats) {
@@ -642,7 +649,7 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
       for (const json& r : rows)
         if (const auto it = r.find(st.column); it != r.end() && it->is_number())
           shown.push_back(it->get<double>() * fl.scale);
-      const std::string svg = histogram_svg(st.column, fl, shown);
+      const std::string svg = histogram_svg(st.column, fl, shown, noun);
       if (!svg.empty()) h += "<figure>" + svg + "<figcaption>" + escape(fl.label) + "</figcaption></figure>\n";
     }
     h += "</div>\n<h2>Worst rows per figure</h2>\n<div class=\"worst-tables\">\n";
@@ -651,7 +658,7 @@ std::string html_report(const json& report, const HtmlReportOptions& opt) {
       const std::string head = fl.unit.empty() ? fl.label : fl.label + " (" + fl.unit + ")";
       if (st.min == st.max) {
         h += "<p class=\"note\" data-key=\"" + escape(st.column) + "\">" + escape(head) + ": all " +
-             std::to_string(st.count) + " rows " + escape(format_figure(st.min, fl)) + "</p>\n";
+             std::to_string(st.count) + " " + escape(noun) + " " + escape(format_figure(st.min, fl)) + "</p>\n";
         continue;
       }
       const auto worst = worst_rows(report, st.column, opt.worst_rows, !fl.lower_is_worse);

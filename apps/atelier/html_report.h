@@ -13,6 +13,7 @@
 //
 //   {
 //     "title":    "Garment regeneration on 100 bodies",
+//     "row_noun": "bodies",          (what a row is; default "rows")
 //     "summary":  {"bodies": 100, "failed": 0, "method": "detail template"},
 //     "columns":  ["name", "max_penetration_mm", "mean_offset_mm"],
 //     "rows":     [{"name": "body_0000", "max_penetration_mm": 0.3, ...}, ...],

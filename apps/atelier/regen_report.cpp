@@ -222,6 +222,7 @@ void write_regen_html(const RegenReportInput& in, const ExecContext& ctx, Log& l
   nlohmann::json html;
   const std::size_t n = rep["bodies"].size();
   html["title"] = "atelier regen: " + std::to_string(n) + " bodies";
+  html["row_noun"] = "bodies";
   const nlohmann::json& s = rep["summary"];
   // The record's keys: html_report labels them with their units (describe_figure).
   html["summary"] = {{"bodies", s.value("bodies", 0)},

@@ -268,6 +268,10 @@ TEST(HtmlReport, TheCsvOfAllRowsParsesBackToTheRows) {
     return std::string(std::istreambuf_iterator<char>(f), {});
   }();
   EXPECT_NE(html.find("<a id=\"csv\" href=\"bodies.csv\" download>"), std::string::npos);
+  EXPECT_NE(html.find("<h2>Statistics over 57 rows</h2>"), std::string::npos);
+  json bodies = rep;
+  bodies["row_noun"] = "bodies";
+  EXPECT_NE(html_report(bodies).find("<h2>Statistics over 57 bodies</h2>"), std::string::npos);
   EXPECT_EQ(html.find("<table id=\"rows\">"), std::string::npos);
   for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos);
   fs::remove_all(dir);
