@@ -46,6 +46,7 @@
 
 #include "commands.h"
 #include "html_report.h"
+#include "regen_report.h"
 
 namespace atelier::cli {
 
@@ -484,6 +485,7 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
   const std::vector<BodyQuality>& quality = run.quality;
   nlohmann::json html;
   html["title"] = "atelier demo: " + std::to_string(quality.size()) + " mannequin bodies";
+  html["row_noun"] = "bodies";
   html["summary"] = rep["summary"];
   html["summary"]["profile_template_nodes_inside"] = tot.template_inside;
   html["summary"]["profile_template_max_crack_m"] = tot.template_crack;
@@ -519,13 +521,13 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
     std::size_t best = 0;
     for (std::size_t i = 0; i < rows.size(); ++i)
       if (rows[i].contains(c) && rows[i][c].get<double>() < rows[best][c].get<double>()) best = i;
-    if (!rows.empty()) picks.emplace_back(best, std::string("lowest ") + c);
+    if (!rows.empty()) picks.emplace_back(best, std::string("lowest ") + describe_figure(c).label);
   }
   // Quality figures only, never a timing (the "_ms" columns): the same run
   // picks the same pictures (issue 27).
   for (const char* c : {"shorts_strain_p95", "top_profile_error_mm"}) {
     auto w = worst_rows(html, c, 1);
-    if (!w.empty()) picks.emplace_back(w[0], std::string("highest ") + c);
+    if (!w.empty()) picks.emplace_back(w[0], std::string("highest ") + describe_figure(c).label);
   }
   nlohmann::json pictures = nlohmann::json::array();
   make_output_dir(opt.out / "pictures");
@@ -549,6 +551,27 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
     pictures.push_back({{"title", name + " (" + why + ")"},
                         {"path", file},
                         {"caption", "front and side: body, top with collar, skirt, trousers, shorts"}});
+  }
+  // The shorts coloured by clearance change and by strain on the body with
+  // the highest shorts strain (regen_report.h, shared with `regen --report`).
+  if (const auto w = worst_rows(html, "shorts_strain_p95", 1); !w.empty()) {
+    BodySet one(ref.body);
+    std::vector<BodyFailure> f1;
+    for (std::size_t i = 0; i < src.size(); ++i)
+      if (src.body_name(i) == quality[w[0]].name) src.generate(i, 1, one, f1, ctx);
+    std::vector<BodyGarments> fit;
+    if (one.size() == 1 && regen.shorts().run(one, 0, 1, fit, ctx) && fit[0].status) {
+      const std::vector<Vec3d> body = one.positions(0);
+      const GarmentTemplate& shorts = regen.shorts().garment(0);
+      for (auto& p : fit_colour_pictures({.body_name = quality[w[0]].name,
+                                          .body = body,
+                                          .body_triangles = ref.body_triangles.triangles,
+                                          .garments = {&shorts},
+                                          .positions = {fit[0].garments[0].positions},
+                                          .why = "highest shorts strain"},
+                                         opt.out, ctx))
+        pictures.push_back(std::move(p));
+    }
   }
   // Made-to-measure patterns of the first body.
   if (!quality.empty()) {

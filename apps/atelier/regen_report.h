@@ -5,17 +5,27 @@
 // (GarmentRegenerator for detail templates, regenerate_on_body for profile
 // templates), then rendered (systems/view/render.h).
 //
-// Reads: <out>/report.json (the merged records). Writes: <out>/report.html
-// and <out>/pictures/<body>.png.
+// Besides (issue 26), the worst body by the first garment's strain is
+// pictured with its detail garments coloured by clearance change and by
+// strain, each with a colour bar (fit_colour_pictures, which `demo` shares),
+// and the rows go to bodies.csv (html_report.h).
+//
+// Reads: <out>/report.json (the merged records). Writes: <out>/report.html,
+// <out>/bodies.csv, <out>/pictures/<body>.png and
+// <out>/pictures/<body>_clearance_change.png, <body>_strain.png.
 #pragma once
 
 #include <atelier/engine/exec_context.h>
 #include <atelier/systems/body/body_set.h>
 #include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/profile/regenerate.h>
+#include <atelier/systems/spatial/body_bvh.h>
 
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <span>
+#include <string>
 #include <vector>
 
 #include "log.h"
@@ -34,5 +44,39 @@ struct RegenReportInput {
 
 /// Writes report.html (throws Error on a failed step of a picture's body).
 void write_regen_html(const RegenReportInput& in, const ExecContext& ctx, Log& log);
+
+/// Per-vertex figures of a regenerated detail garment on a body:
+/// clearance change (mm): the vertex's signed distance to the body minus
+/// the clearance encoded on the reference (GarmentTemplate::clearance, the
+/// per-vertex term of fit_measure.h's RMS clearance change); strain (%):
+/// the largest |l / l_reference - 1| of the vertex's edges (0 for a vertex
+/// on no edge), the per-vertex view of GarmentQuality::strain_max.
+struct GarmentVertexFigures {
+  std::vector<double> clearance_change_mm;
+  std::vector<double> strain_pct;
+};
+/// `body` is a BVH over the body (closed); kInvalidArgument for positions
+/// of another count than the template's, a non-finite result (naming the
+/// garment and vertex).
+[[nodiscard]] Expected<GarmentVertexFigures> garment_vertex_figures(const BodyBvh& body, const GarmentTemplate& garment,
+                                                                    std::span<const Vec3d> positions);
+
+/// One body's detail garments (positions in template order) as pictured.
+struct FitPictureInput {
+  std::string body_name;
+  std::span<const Vec3d> body;
+  std::span<const Triangle> body_triangles;
+  std::vector<const GarmentTemplate*> garments;
+  std::vector<std::span<const Vec3d>> positions;  // one per garment
+  std::string why;                                // "highest shorts strain p95"
+};
+/// Two front-and-side pictures of the body with its detail garments
+/// coloured per vertex: by clearance change (diverging map, symmetric
+/// range +-max |change|) and by strain (viridis, 0 to the largest strain),
+/// written to <out>/pictures/<body>_clearance_change.png and _strain.png.
+/// Returns the report's picture entries, each with its colour bar (map,
+/// min, max, unit). Throws Error when a step fails.
+[[nodiscard]] nlohmann::json fit_colour_pictures(const FitPictureInput& in, const std::filesystem::path& out,
+                                                 const ExecContext& ctx);
 
 }  // namespace atelier::cli

@@ -1,3 +1,4 @@
+#include <atelier/engine/parallel.h>
 #include <atelier/systems/view/render.h>
 
 #include <algorithm>
@@ -5,8 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
-
-#include <atelier/engine/parallel.h>
 
 namespace atelier {
 
@@ -34,6 +33,7 @@ struct Hit {
   std::int32_t mesh = -1;
   double t = kInf;
   Vec3d normal = Vec3d::Zero();
+  Vec3d colour = Vec3d::Zero();  // the surface's colour at the hit
 };
 
 double srgb_encode(double c) noexcept {
@@ -41,13 +41,26 @@ double srgb_encode(double c) noexcept {
   return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
 }
 
-std::uint8_t to_byte(double c) noexcept { return static_cast<std::uint8_t>(std::lround(srgb_encode(c) * 255.0)); }
+std::uint8_t to_byte(double c) noexcept {
+  return static_cast<std::uint8_t>(std::lround(srgb_encode(c) * 255.0));
+}
 
 Status check_meshes(std::span<const RenderMesh> meshes) {
   if (meshes.empty()) return {ErrorCode::kInvalidArgument, "render: no meshes"};
   for (std::size_t i = 0; i < meshes.size(); ++i) {
     if (!meshes[i].bvh || meshes[i].bvh->empty())
       return {ErrorCode::kInvalidArgument, "render: mesh " + std::to_string(i) + " has no committed BVH"};
+    const auto& vc = meshes[i].vertex_colours;
+    if (!vc.empty() && vc.size() != meshes[i].bvh->positions().size())
+      return {ErrorCode::kInvalidArgument, "render: mesh " + std::to_string(i) + " has " + std::to_string(vc.size()) +
+                                               " vertex colours for " +
+                                               std::to_string(meshes[i].bvh->positions().size()) + " positions"};
+    for (std::size_t v = 0; v < vc.size(); ++v)
+      if (!vc[v].allFinite())
+        return {ErrorCode::kInvalidArgument,
+                "render: mesh " + std::to_string(i) + " vertex colour " + std::to_string(v) + " is not finite"};
+    if (!(meshes[i].shading >= 0.0 && meshes[i].shading <= 1.0))
+      return {ErrorCode::kInvalidArgument, "render: mesh " + std::to_string(i) + " shading is not in [0, 1]"};
   }
   return {};
 }
@@ -68,8 +81,8 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Re
   }
   if (params.width > (1u << 15) || params.height > (1u << 15))
     return Status(ErrorCode::kInvalidArgument, "render: image too large");
-  auto cam = frame_box(box, params.view, params.projection, params.width, params.height, params.margin,
-                       params.fov_degrees);
+  auto cam =
+      frame_box(box, params.view, params.projection, params.width, params.height, params.margin, params.fov_degrees);
   if (!cam) return cam.status();
   return render_scene(meshes, *cam, params, ctx);
 }
@@ -122,6 +135,11 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Ca
         // Two-sided: garments are open, their inner side may face the camera.
         if (h.normal.dot(d) > 0.0) best.normal = -best.normal;
         if (best.normal.dot(d) > 0.0) best.normal = -best.normal;
+        const auto& vc = meshes[m].vertex_colours;
+        best.colour =
+            vc.empty()
+                ? meshes[m].colour
+                : Vec3d(h.barycentric[0] * vc[tri[0]] + h.barycentric[1] * vc[tri[1]] + h.barycentric[2] * vc[tri[2]]);
       }
     }
     return best;
@@ -129,7 +147,9 @@ Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const Ca
   auto shade = [&](const Hit& h) -> Vec3d {
     if (h.mesh < 0) return params.background;
     const double lambert = std::max(0.0, h.normal.dot(light));
-    return meshes[static_cast<std::size_t>(h.mesh)].colour * (params.ambient + (1.0 - params.ambient) * lambert);
+    const double lit = params.ambient + (1.0 - params.ambient) * lambert;
+    const double s = meshes[static_cast<std::size_t>(h.mesh)].shading;
+    return h.colour * (s == 1.0 ? lit : 1.0 - s + s * lit);
   };
 
   RenderResult out;
@@ -209,7 +229,7 @@ Expected<RenderResult> render_scene(std::span<const RenderTriangles> meshes, con
   for (std::size_t m = 0; m < meshes.size(); ++m) {
     if (Status s = bvhs[m].build(meshes[m].positions, meshes[m].triangles, {}, ctx); !s)
       return Status(s.code(), "render: mesh " + std::to_string(m) + ": " + s.message());
-    scene[m] = {&bvhs[m], meshes[m].colour};
+    scene[m] = {&bvhs[m], meshes[m].colour, meshes[m].vertex_colours, meshes[m].shading};
   }
   return render_scene(scene, params, ctx);
 }
@@ -252,7 +272,9 @@ Expected<RgbImage> render_views(std::span<const RenderTriangles> meshes, std::sp
   return side_by_side(pictures);
 }
 
-Vec3d body_colour() noexcept { return {0.80, 0.62, 0.50}; }
+Vec3d body_colour() noexcept {
+  return {0.80, 0.62, 0.50};
+}
 
 Vec3d garment_colour(std::size_t i) noexcept {
   static constexpr double kPalette[][3] = {

@@ -14,25 +14,33 @@
 // thread count.
 #pragma once
 
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+#include <atelier/io/png.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/view/camera.h>
+
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
-#include <atelier/engine/exec_context.h>
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
-#include <atelier/io/png.h>
-#include <atelier/systems/view/camera.h>
-#include <atelier/systems/spatial/body_bvh.h>
-
 namespace atelier {
 
 /// One mesh of a scene: a committed BVH (not owned) and its colour (linear
-/// RGB in [0, 1]).
+/// RGB in [0, 1]), or one colour per BVH position (issue 26: a garment
+/// coloured by a per-vertex figure, systems/view/colour_map.h), interpolated
+/// barycentrically over each triangle.
 struct RenderMesh {
   const BodyBvh* bvh = nullptr;
   Vec3d colour{0.8, 0.8, 0.8};
+  /// Empty: `colour` everywhere; else one linear RGB colour per position.
+  std::span<const Vec3d> vertex_colours;
+  /// How much of the lighting applies: 1 shades as below (ambient plus
+  /// Lambert); 0 shows the colour itself (a figure read against a colour
+  /// bar); in between, colour * (1 - s + s * light).
+  double shading = 1.0;
 };
 
 struct RenderParams {
@@ -73,7 +81,8 @@ struct RenderResult {
 [[nodiscard]] std::size_t render_scene_bytes(std::uint32_t width, std::uint32_t height) noexcept;
 
 /// Renders the scene. kInvalidArgument for no meshes, a null or empty BVH,
-/// a zero size or a bad supersample; kCancelled when ctx is cancelled (polled
+/// vertex colours not one per position (or not finite), a shading outside
+/// [0, 1], a zero size or a bad supersample; kCancelled when ctx is cancelled (polled
 /// per row). Progress: stage "render", rows done.
 [[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderMesh> meshes, const RenderParams& params,
                                                   const ExecContext& ctx = {});
@@ -89,6 +98,8 @@ struct RenderTriangles {
   std::span<const Vec3d> positions;
   std::span<const Triangle> triangles;
   Vec3d colour{0.8, 0.8, 0.8};
+  std::span<const Vec3d> vertex_colours;  // as RenderMesh: empty or one per position
+  double shading = 1.0;
 };
 /// Builds one BVH per mesh (errors name the mesh), then renders as above.
 [[nodiscard]] Expected<RenderResult> render_scene(std::span<const RenderTriangles> meshes, const RenderParams& params,

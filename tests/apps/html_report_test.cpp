@@ -3,7 +3,14 @@
 // escaping, and a headless Chromium load of a report with two rendered
 // pictures: the tables are in the DOM and both images decoded (the page's own
 // script sets data-images-decoded once every image has naturalWidth > 0; a
-// report with a damaged image is the negative control).
+// report with a damaged image is the negative control). Issue 26: labels
+// and units of known keys, histogram bins against a brute-force count, the
+// CSV of all rows parsed back (RFC 4180) against the rows, and the page's
+// histograms, worst-rows tables, CSV link and colour bars in Chromium.
+#include "apps/atelier/html_report.h"
+
+#include <atelier/io/png.h>
+#include <atelier/systems/view/render.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -16,12 +23,11 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
-#include "apps/atelier/html_report.h"
-#include <atelier/io/png.h>
-#include <atelier/systems/view/render.h>
+#include "support/csv_reader.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -69,8 +75,9 @@ std::string chromium_or_install() {
   if (!c.empty()) return c;
   int code = 0;
   const std::string sudo = ::geteuid() == 0 ? "" : "sudo -n ";
-  (void)run(sudo + "env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium "
-                   ">/dev/null 2>&1",
+  (void)run(sudo +
+                "env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium "
+                ">/dev/null 2>&1",
             code);
   return code == 0 ? find_chromium() : std::string();
 }
@@ -145,6 +152,131 @@ TEST(HtmlReport, StatisticsMatchABruteForceRecount) {
   EXPECT_TRUE(worst_rows(rep, "nope", 3).empty());
 }
 
+TEST(HtmlReport, KnownKeysGetLabelsUnitsAndPrecision) {
+  auto shown = [](const char* key, double v) {
+    const FigureLabel f = describe_figure(key);
+    return f.label + ": " + format_figure(v, f);
+  };
+  EXPECT_EQ(shown("mean_decode_ms_per_body", 0.300591), "Mean decode time per body: 0.30 ms");
+  EXPECT_EQ(shown("worst_penetration_m", 0.0004321), "Deepest penetration: 0.43 mm");
+  EXPECT_EQ(shown("mean_edge_strain_p95", 0.012345), "Mean edge strain (95th percentile): 1.2 %");
+  EXPECT_EQ(shown("bodies_per_s", 101.2345), "Throughput: 101 bodies/s");
+  EXPECT_EQ(shown("completed", 1000), "Bodies completed: 1000");
+  EXPECT_EQ(shown("layer_inside_vertices_total", 0), "Garment vertices inside a lower layer (all bodies): 0");
+  // Per-garment columns: the garment's name, a phrase, the unit.
+  EXPECT_EQ(shown("skirt_min_clearance_mm", 1.23456), "skirt: smallest clearance: 1.2 mm");
+  EXPECT_TRUE(describe_figure("skirt_min_clearance_mm").lower_is_worse);
+  EXPECT_FALSE(describe_figure("skirt_strain_p95_pct").lower_is_worse);
+  EXPECT_EQ(shown("skirt_strain_p95_pct", 3.14159), "skirt: edge strain (95th percentile): 3.1 %");
+  EXPECT_EQ(shown("shorts_strain_p95", 0.031), "shorts: edge strain (95th percentile): 3.1 %");
+  EXPECT_EQ(shown("top_ms", 12.3456), "top: time: 12 ms");
+  EXPECT_TRUE(describe_figure("top_ms").timing);
+  // Unknown keys: humanised, unit from the suffix.
+  EXPECT_EQ(shown("wobble_factor", 2.5), "Wobble factor: 2.50");  // 3 digits unless known
+  EXPECT_EQ(shown("hem_length_m", 0.51234), "Hem length: 512 mm");
+  // Precision and notation.
+  EXPECT_EQ(format_significant(0.300591, 2), "0.30");
+  EXPECT_EQ(format_significant(0.0996, 2), "0.10");
+  EXPECT_EQ(format_significant(-12.345, 3), "-12.3");
+  EXPECT_EQ(format_significant(123456.7, 3), "123457");
+  EXPECT_EQ(format_significant(-0.00001234, 2), "-1.2e-05");
+  EXPECT_EQ(format_significant(0.0, 3), "0");
+  // No raw key or six-digit number in a page's summary.
+  const std::string html =
+      html_report({{"summary", {{"mean_decode_ms_per_body", 0.300591}, {"worst_penetration_m", 0.000123456}}}});
+  EXPECT_EQ(html.find(">mean_decode_ms_per_body<"), std::string::npos);
+  EXPECT_EQ(html.find("0.300591"), std::string::npos);
+  EXPECT_NE(html.find(">Mean decode time per body</th><td class=\"n\">0.30 ms<"), std::string::npos);
+  EXPECT_NE(html.find(">Deepest penetration</th><td class=\"n\">0.12 mm<"), std::string::npos);
+}
+
+TEST(HtmlReport, HistogramBinsMatchABruteForceCount) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g(2.0, 0.7);
+  std::vector<double> v;
+  for (int i = 0; i < 997; ++i) v.push_back(g(rng));
+  v.push_back(std::nan(""));  // skipped
+  for (std::size_t bins : {0u, 1u, 7u, 25u}) {
+    const Histogram h = histogram(v, bins);
+    const std::size_t want_bins = bins ? bins : 11;  // Sturges: ceil(log2 997) + 1
+    ASSERT_EQ(h.counts.size(), want_bins);
+    ASSERT_EQ(h.edges.size(), want_bins + 1);
+    EXPECT_EQ(h.edges.front(), *std::min_element(v.begin(), v.end() - 1));
+    EXPECT_EQ(h.edges.back(), *std::max_element(v.begin(), v.end() - 1));
+    std::size_t total = 0;
+    for (std::size_t i = 0; i < h.counts.size(); ++i) {
+      std::size_t n = 0;
+      for (double x : v)
+        n += x >= h.edges[i] && (x < h.edges[i + 1] || (i + 1 == h.counts.size() && x == h.edges[i + 1]));
+      EXPECT_EQ(h.counts[i], n) << "bin " << i << " of " << want_bins;
+      total += h.counts[i];
+    }
+    EXPECT_EQ(total, 997u);
+  }
+  // Small integers (counts of vertices): one bin per value.
+  const std::vector<double> ints = {0, 0, 3, 1, 0, 3, 5};
+  const Histogram hi = histogram(ints);
+  ASSERT_EQ(hi.counts, (std::vector<std::size_t>{3, 1, 0, 2, 0, 1}));
+  EXPECT_EQ(hi.edges.front(), -0.5);
+  EXPECT_EQ(hi.edges.back(), 5.5);
+  // Extreme but finite values: no overflow of the range, every value counted.
+  const std::vector<double> wide = {-1e308, 0.0, 1e308, 6e307};
+  const Histogram hw = histogram(wide, 4);
+  ASSERT_EQ(hw.counts.size(), 4u);
+  EXPECT_EQ(hw.counts, (std::vector<std::size_t>{1, 0, 1, 2}));
+  for (double e : hw.edges) EXPECT_TRUE(std::isfinite(e));
+  const std::vector<double> same = {0.25, 0.25};
+  EXPECT_EQ(histogram(same).counts, std::vector<std::size_t>{2});
+  EXPECT_TRUE(histogram(std::vector<double>{}).counts.empty());
+}
+
+TEST(HtmlReport, TheCsvOfAllRowsParsesBackToTheRows) {
+  json rep = sample_report(57, 5);
+  rep["rows"][0]["name"] = "comma, \"quote\" and\r\nnewline";
+  rep["rows"][1]["name"] = "";
+  rep["rows"][2]["flag"] = true;
+  const fs::path dir = scratch("html-report-csv");
+  write_html_report(rep, dir / "report.html");
+  const std::string csv = [&] {
+    std::ifstream f(dir / "bodies.csv", std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  }();
+  const auto recs = atelier::testing::parse_csv(csv);
+  const std::vector<std::string> cols = report_columns(rep);
+  ASSERT_EQ(recs.size(), 58u);
+  EXPECT_EQ(recs[0], cols);
+  for (std::size_t i = 0; i < 57; ++i) {
+    const json& row = rep["rows"][i];
+    ASSERT_EQ(recs[i + 1].size(), cols.size()) << i;
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      const std::string& field = recs[i + 1][c];
+      const auto it = row.find(cols[c]);
+      if (it == row.end() || it->is_null()) {
+        EXPECT_EQ(field, "") << i << " " << cols[c];
+      } else if (it->is_number()) {
+        EXPECT_EQ(std::stod(field), it->get<double>()) << i << " " << cols[c];  // exact round trip
+      } else if (it->is_boolean()) {
+        EXPECT_EQ(field, it->get<bool>() ? "true" : "false");
+      } else {
+        EXPECT_EQ(field, it->get<std::string>()) << i;
+      }
+    }
+  }
+  // The page links it and keeps its worst rows short.
+  const std::string html = [&] {
+    std::ifstream f(dir / "report.html", std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  }();
+  EXPECT_NE(html.find("<a id=\"csv\" href=\"bodies.csv\" download>"), std::string::npos);
+  EXPECT_NE(html.find("<h2>Statistics over 57 rows</h2>"), std::string::npos);
+  json bodies = rep;
+  bodies["row_noun"] = "bodies";
+  EXPECT_NE(html_report(bodies).find("<h2>Statistics over 57 bodies</h2>"), std::string::npos);
+  EXPECT_EQ(html.find("<table id=\"rows\">"), std::string::npos);
+  for (const auto& e : fs::directory_iterator(dir)) EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(HtmlReport, Base64AndEscapingAndErrors) {
   // RFC 4648 section 10 test vectors.
   EXPECT_EQ(base64_encode(""), "");
@@ -209,11 +341,11 @@ void write_pictures(const fs::path& dir) {
                                         "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n";
   for (const char* view : {"front", "side"}) {
     int code = 0;
-    const std::string out = run(std::string(ATELIER_CLI) + " render --body " + (dir / "body.obj").string() +
-                                    " --garment " + (dir / "garment.obj").string() + " --view " + view +
-                                    " --width 64 --height 80 --out " + (dir / (std::string(view) + ".png")).string() +
-                                    " 2>&1",
-                                code);
+    const std::string out =
+        run(std::string(ATELIER_CLI) + " render --body " + (dir / "body.obj").string() + " --garment " +
+                (dir / "garment.obj").string() + " --view " + view + " --width 64 --height 80 --out " +
+                (dir / (std::string(view) + ".png")).string() + " 2>&1",
+            code);
     ASSERT_EQ(code, 0) << out;
     EXPECT_NE(out.find("2 meshes"), std::string::npos) << out;
   }
@@ -257,7 +389,9 @@ TEST(HtmlReport, HeadlessChromiumShowsTablesAndDecodesPictures) {
   write_pictures(dir);
   json rep = sample_report(12, 7);
   rep["pictures"] = {{{"title", "body_0 front"}, {"path", "front.png"}, {"caption", "worst penetration_mm"}},
-                     {{"title", "body_0 side"}, {"path", (dir / "side.png").string()}}};
+                     {{"title", "body_0 side"},
+                      {"path", (dir / "side.png").string()},
+                      {"colour_bar", {{"map", "viridis"}, {"min", 0}, {"max", 4.2}, {"unit", "%"}}}}};
   write_html_report(rep, dir / "report.html");
   const std::string html = [&] {
     std::ifstream f(dir / "report.html", std::ios::binary);
@@ -273,21 +407,46 @@ TEST(HtmlReport, HeadlessChromiumShowsTablesAndDecodesPictures) {
   if (chromium.empty()) GTEST_SKIP() << "chromium not found and could not be installed (apt-get install chromium)";
   auto dump = [&](const fs::path& page) {
     int code = 0;
-    const std::string out =
-        run("timeout 90 " + chromium + " --headless --disable-gpu --no-sandbox --user-data-dir=" +
-                (dir / "profile").string() + " --dump-dom file://" + page.string() + " 2>/dev/null",
-            code);
+    const std::string out = run("timeout 90 " + chromium + " --headless --disable-gpu --no-sandbox --user-data-dir=" +
+                                    (dir / "profile").string() + " --dump-dom file://" + page.string() + " 2>/dev/null",
+                                code);
     EXPECT_EQ(code, 0) << out;
     return out;
   };
   const std::string dom = dump(dir / "report.html");
-  EXPECT_NE(dom.find("data-images-decoded=\"2\""), std::string::npos) << dom.substr(0, 2000);
+  // Two pictures and a colour bar.
+  EXPECT_NE(dom.find("data-images-decoded=\"3\""), std::string::npos) << dom.substr(0, 2000);
+  EXPECT_NE(dom.find("<img class=\"colour-bar\""), std::string::npos);
+  EXPECT_NE(dom.find("<span class=\"bar-max\">4.2 %</span>"), std::string::npos);
   EXPECT_NE(dom.find("<table id=\"summary\">"), std::string::npos);
   EXPECT_NE(dom.find("<table id=\"statistics\">"), std::string::npos);
-  EXPECT_NE(dom.find("<table id=\"rows\">"), std::string::npos);
-  for (int i = 0; i < 12; ++i)
-    EXPECT_NE(dom.find("<td>body_" + std::to_string(i) + "</td>"), std::string::npos) << "row " << i;
-  EXPECT_NE(dom.find("<th>penetration_mm</th>"), std::string::npos);
+  // A histogram per numeric column, its bins summing to the rows.
+  for (const char* col : {"penetration_mm", "offset_mm"}) {
+    const auto at = dom.find(std::string("<svg class=\"hist\" id=\"hist-") + col + "\"");
+    ASSERT_NE(at, std::string::npos) << col;
+    const auto end = dom.find("</svg>", at);
+    std::size_t total = 0;
+    for (auto b = dom.find("data-count=\"", at); b < end; b = dom.find("data-count=\"", b + 1))
+      total += std::stoul(dom.substr(b + 12));
+    EXPECT_EQ(total, std::string(col) == "offset_mm" ? 12u - 2u : 12u) << col;  // nulls at 3 and 10
+  }
+  EXPECT_NE(dom.find(">Penetration (mm)</text>"), std::string::npos);
+  // The worst rows: 10 of 12, worst first.
+  const auto worst = dom.find("<table class=\"worst\" id=\"worst-penetration_mm\"");
+  ASSERT_NE(worst, std::string::npos);
+  const auto order = worst_rows(rep, "penetration_mm", 10);
+  auto pos = worst;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    pos = dom.find("<td>body_" + std::to_string(order[k]) + "</td>", pos);
+    ASSERT_NE(pos, std::string::npos) << "rank " << k;
+  }
+  const auto worst_end = dom.find("</table>", worst);
+  ASSERT_EQ(order.size(), 10u);
+  EXPECT_EQ(dom.substr(worst, worst_end - worst)
+                .find("<td>body_" + std::to_string(worst_rows(rep, "penetration_mm", 12)[11]) + "</td>"),
+            std::string::npos);
+  EXPECT_NE(dom.find("<a id=\"csv\" href=\"bodies.csv\" download=\"\">"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "bodies.csv"));
   EXPECT_NE(dom.find("detail template"), std::string::npos);
 
   // Negative control: the same page with the second image's bytes damaged

@@ -184,7 +184,19 @@ TEST(OutfitCli, TheRegenReportDecodesItsPicturesInHeadlessChromium) {
   ASSERT_EQ(dom.code, 0) << dom.out.substr(0, 2000);
   EXPECT_NE(dom.out.find("data-images-decoded=\"" + std::to_string(pictures) + "\""), std::string::npos)
       << dom.out.substr(0, 2000);
-  EXPECT_NE(dom.out.find("garment vertices inside a lower layer (all bodies)"), std::string::npos);
-  EXPECT_NE(dom.out.find("<th>skirt_min_clearance_mm</th>"), std::string::npos);
+  EXPECT_NE(dom.out.find(">Garment vertices inside a lower layer (all bodies)</th>"), std::string::npos);
+  // Issue 26: the histograms, the worst-rows tables, the CSV link and the
+  // colour bars of the pictures coloured by clearance change and strain
+  // (decoded with the rest: they are counted in `pictures`).
+  EXPECT_NE(dom.out.find("<svg class=\"hist\" id=\"hist-skirt_min_clearance_mm\""), std::string::npos);
+  EXPECT_NE(dom.out.find("<svg class=\"hist\" id=\"hist-skirt_strain_p95_pct\""), std::string::npos);
+  EXPECT_NE(dom.out.find("<table class=\"worst\" id=\"worst-skirt_min_clearance_mm\""), std::string::npos);
+  EXPECT_NE(dom.out.find("<th>skirt: smallest clearance (mm)</th>"), std::string::npos);
   EXPECT_NE(dom.out.find("<td>mannequin-00002</td>"), std::string::npos);
+  EXPECT_NE(dom.out.find("<a id=\"csv\" href=\"bodies.csv\" download=\"\">"), std::string::npos);
+  std::size_t bars = 0;
+  for (auto at = dom.out.find("<img class=\"colour-bar\""); at != std::string::npos;
+       at = dom.out.find("<img class=\"colour-bar\"", at + 1))
+    ++bars;
+  EXPECT_EQ(bars, 2u);
 }
