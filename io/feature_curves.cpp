@@ -11,7 +11,6 @@
 #include <utility>
 
 #include <atelier/io/atomic_file.h>
-#include <atelier/io/mesh_arrays.h>
 
 namespace atelier {
 
@@ -42,7 +41,10 @@ struct Value {
   bool number_finite = true;  // false for a literal that overflows a double
   std::string text;
   std::vector<Value> items;
-  std::vector<std::pair<std::string, Value>> members;
+  // An object's members, in order (two vectors: a pair of an incomplete
+  // type cannot be a vector's element).
+  std::vector<std::string> keys;
+  std::vector<Value> values;
 };
 
 const char* kind_name(Value::Kind k) {
@@ -253,13 +255,14 @@ class Parser {
       if (i_ >= s_.size() || s_[i_] != '"') return error("expected a key in double quotes");
       std::string key;
       if (Status st = string(key); !st) return st;
-      for (const auto& m : v.members)
-        if (m.first == key) return error("key \"" + key + "\" appears twice in one object");
+      for (const auto& k : v.keys)
+        if (k == key) return error("key \"" + key + "\" appears twice in one object");
       skip();
       if (i_ >= s_.size() || s_[i_] != ':') return error("expected ':' after key \"" + key + "\"");
       ++i_;
-      v.members.emplace_back(std::move(key), Value{});
-      if (Status st = value(v.members.back().second, depth + 1); !st) return st;
+      v.keys.push_back(std::move(key));
+      v.values.emplace_back();
+      if (Status st = value(v.values.back(), depth + 1); !st) return st;
       skip();
       if (i_ >= s_.size()) return error("unexpected end of file inside an object (missing '}')");
       if (s_[i_] == ',') {
@@ -285,18 +288,18 @@ Status bad(std::string_view file, std::uint32_t line, const std::string& what) {
 }
 
 const Value* member(const Value& o, std::string_view key) {
-  for (const auto& m : o.members)
-    if (m.first == key) return &m.second;
+  for (std::size_t i = 0; i < o.keys.size(); ++i)
+    if (o.keys[i] == key) return &o.values[i];
   return nullptr;
 }
 
 Status check_keys(std::string_view file, const Value& o, std::initializer_list<std::string_view> allowed,
                   const std::string& where) {
-  for (const auto& m : o.members)
-    if (std::find(allowed.begin(), allowed.end(), m.first) == allowed.end()) {
+  for (std::size_t i = 0; i < o.keys.size(); ++i)
+    if (std::find(allowed.begin(), allowed.end(), o.keys[i]) == allowed.end()) {
       std::string list;
       for (auto a : allowed) list += (list.empty() ? "\"" : ", \"") + std::string(a) + "\"";
-      return bad(file, m.second.line, where + ": unknown key \"" + m.first + "\" (the keys are " + list + ")");
+      return bad(file, o.values[i].line, where + ": unknown key \"" + o.keys[i] + "\" (the keys are " + list + ")");
     }
   return {};
 }
@@ -449,7 +452,10 @@ void write_feature_curves(const FeatureCurveFile& f, const std::filesystem::path
       s += i ? ",\n    [" : "\n    [";
       for (int d = 0; d < 3; ++d) {
         if (d) s += ", ";
-        io_detail::append_double(s, k.points[i][d]);
+        // Shortest text that reads back to the same double (std::to_chars).
+        char buf[32];
+        const auto r = std::to_chars(buf, buf + sizeof buf, k.points[i][d]);
+        s.append(buf, r.ptr);
       }
       s += "]";
     }
