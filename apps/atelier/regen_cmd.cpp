@@ -83,6 +83,9 @@ CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
           return {};
         return "'" + r + "': neither mannequin, makehuman nor a body OBJ file";
       });
+  c->add_option("--features", opt.features,
+                "feature curves of a body OBJ file (JSON of named polylines, docs/body-files.md): profile templates "
+                "encode on it");
   c->add_option("--data", opt.data, "the shared data folder (for makehuman)");
   c->add_option("--out", opt.out, "output folder");
   return c;
@@ -146,6 +149,9 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
   ReferenceBody ref;
   std::optional<makehuman::HumanLibrary> lib;
   const bool user_body = opt.reference != "mannequin" && opt.reference != "makehuman";
+  if (!opt.features.empty() && !user_body)
+    throw Error(Status(ErrorCode::kInvalidArgument, "--features is for a body OBJ file; the " + opt.reference +
+                                                        " has its own feature curves"));
   if (opt.reference == "mannequin") {
     auto r = make_mannequin();
     if (!r) throw Error(r.status());
@@ -155,25 +161,29 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
     ref = makehuman::make_reference_body(*lib);
   } else {
     // A user's body: in the file's units and axes, mapped at the door.
-    auto r = read_reference_body(opt.reference, {.frame = body_frame(opt.scale, opt.up), .makehuman_data = opt.data},
-                                 common.context());
+    auto r = read_reference_body(
+        opt.reference,
+        {.frame = body_frame(opt.scale, opt.up), .makehuman_data = opt.data, .features = opt.features},
+        common.context());
     if (!r) throw Error(r.status());
     ref = std::move(*r);
   }
-  make_output_dir(opt.out);
+  const std::string which = opt.name.empty() ? (opt.garment.empty() ? "all" : "") : opt.name;
+  const bool no_curves = user_body && !which.empty() && ref.curves.empty();
   int written = 0;
+  if (no_curves && opt.garment.empty()) written = -1;  // refused below, before anything is written
+  if (written == 0) make_output_dir(opt.out);
   if (!opt.garment.empty()) {
     encode_garment_files(common, opt, ref, lib ? &*lib : nullptr, log);
     ++written;
   }
-  const std::string which = opt.name.empty() ? (opt.garment.empty() ? "all" : "") : opt.name;
-  if (user_body && !which.empty() && ref.curves.empty()) {
+  if (no_curves) {
     // Profile templates are built from feature curves an OBJ file has not.
     const std::string why = opt.reference +
                             ": the body has no feature curves, so only detail templates apply: encode a garment with "
-                            "--garment (profile templates need the mannequin's or MakeHuman's topology; "
-                            "docs/body-files.md)";
-    if (written == 0) throw Error(Status(ErrorCode::kInvalidArgument, why));
+                            "--garment, or give the body's feature curves with --features CURVES.json for profile "
+                            "templates (docs/body-files.md)";
+    if (written <= 0) throw Error(Status(ErrorCode::kInvalidArgument, why));
     log.warn(why + "; the garment was encoded, no profile template");
     return kExitPartial;
   }
@@ -209,6 +219,8 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)")->check(body_count_check());
   c->add_option("--data", opt.bodies.data, "the shared data folder (for makehuman)");
   c->add_option("--reference", opt.bodies.reference, "reference body OBJ (directory sources)");
+  c->add_option("--features", opt.bodies.features,
+                "feature curves of the reference body OBJ (JSON, docs/body-files.md): for profile templates");
   c->add_option("--scale", opt.bodies.scale,
                 "file units to metres (directory sources); outputs are written back in them");
   c->add_option("--up", opt.bodies.up, "the files' up axis, y or z (directory sources); outputs are written back in it")
@@ -258,6 +270,13 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   }
   job.src = make_body_source(common, opt.bodies);
   const auto ref = job.src->reference();
+  if (!job.templates.empty() && ref->curves.empty())
+    // A user's body without feature curves: profile templates cannot be placed on it.
+    throw Error(Status(ErrorCode::kInvalidArgument,
+                       "profile template '" + job.templates.front().name + "': the reference body " +
+                           opt.bodies.reference.string() +
+                           " has no feature curves, so only detail templates (.atd) apply: give its curves with "
+                           "--features CURVES.json (docs/body-files.md)"));
   if (!detail_files.empty()) {
     const ExecContext ctx = common.context();
     auto family = GarmentFamily::of(*ref);
