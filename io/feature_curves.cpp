@@ -1,3 +1,4 @@
+#include <atelier/io/atomic_file.h>
 #include <atelier/io/feature_curves.h>
 
 #include <algorithm>
@@ -10,8 +11,6 @@
 #include <sstream>
 #include <utility>
 
-#include <atelier/io/atomic_file.h>
-
 namespace atelier {
 
 namespace {
@@ -21,14 +20,14 @@ constexpr std::size_t kMaxPoints = 1'000'000;
 constexpr double kMaxCoordinate = 1e6;
 constexpr std::uintmax_t kMaxFileBytes = 64u << 20;
 
-constexpr auto kNames = std::to_array<std::string_view>({
-    // The mannequin's names (systems/body/mannequin_topology.cpp) ...
-    "neck_base", "shoulder_left", "shoulder_right", "armhole_left", "armhole_right", "bust", "underbust", "waist",
-    "hip", "thigh_left", "thigh_right", "knee_left", "knee_right", "ankle_left", "ankle_right", "centre_front",
-    "centre_back", "side_left", "side_right", "upper_arm_left", "upper_arm_right",
-    // ... and MakeHuman's (systems/body/makehuman_body.cpp).
-    "neck", "left_thigh", "right_thigh", "left_knee", "right_knee", "left_calf", "right_calf", "left_ankle",
-    "right_ankle", "left_upperarm", "right_upperarm", "left_wrist", "right_wrist", "left_side", "right_side"});
+constexpr auto kNames = std::to_array<std::string_view>(
+    {// The mannequin's names (systems/body/mannequin_topology.cpp) ...
+     "neck_base", "shoulder_left", "shoulder_right", "armhole_left", "armhole_right", "bust", "underbust", "waist",
+     "hip", "thigh_left", "thigh_right", "knee_left", "knee_right", "ankle_left", "ankle_right", "centre_front",
+     "centre_back", "side_left", "side_right", "upper_arm_left", "upper_arm_right",
+     // ... and MakeHuman's (systems/body/makehuman_body.cpp).
+     "neck", "left_thigh", "right_thigh", "left_knee", "right_knee", "left_calf", "right_calf", "left_ankle",
+     "right_ankle", "left_upperarm", "right_upperarm", "left_wrist", "right_wrist", "left_side", "right_side"});
 
 // A minimal JSON tree that remembers the line of every value: nlohmann's
 // parser reports a byte offset for syntax errors only, and an error about a
@@ -227,7 +226,8 @@ class Parser {
     for (;;) {
       v.items.emplace_back();
       if (Status st = value(v.items.back(), depth + 1); !st) return st;
-      if (++values_ > 4 * kMaxPoints) return error("too many values (at most " + std::to_string(kMaxPoints) + " points)");
+      if (++values_ > 4 * kMaxPoints)
+        return error("too many values (at most " + std::to_string(kMaxPoints) + " points)");
       skip();
       if (i_ >= s_.size()) return error("unexpected end of file inside an array (missing ']')");
       if (s_[i_] == ',') {
@@ -310,7 +310,8 @@ Status read_curve(std::string_view file, const Value& c, std::size_t index, Feat
   out.line = c.line;
   const Value* name = member(c, "name");
   if (!name) return bad(file, c.line, where + " has no \"name\"");
-  if (name->kind != Value::kString) return bad(file, name->line, where + ": \"name\" is " + kind_name(name->kind) + ", not a string");
+  if (name->kind != Value::kString)
+    return bad(file, name->line, where + ": \"name\" is " + kind_name(name->kind) + ", not a string");
   out.name = name->text;
   const auto names = feature_curve_names();
   if (std::find(names.begin(), names.end(), out.name) == names.end()) {
@@ -338,9 +339,11 @@ Status read_curve(std::string_view file, const Value& c, std::size_t index, Feat
     for (int d = 0; d < 3; ++d) {
       const Value& x = p.items[d];
       if (x.kind != Value::kNumber)
-        return bad(file, x.line, pw + ": coordinate " + std::to_string(d) + " is " + kind_name(x.kind) + ", not a number");
+        return bad(file, x.line,
+                   pw + ": coordinate " + std::to_string(d) + " is " + kind_name(x.kind) + ", not a number");
       if (!x.number_finite || !std::isfinite(x.number) || std::abs(x.number) > kMaxCoordinate)
-        return bad(file, x.line, pw + ": coordinate " + std::to_string(d) + " is out of range (at most 1e6 in magnitude)");
+        return bad(file, x.line,
+                   pw + ": coordinate " + std::to_string(d) + " is out of range (at most 1e6 in magnitude)");
       q[d] = x.number;
     }
     out.points.push_back(q);
@@ -378,8 +381,8 @@ Expected<FeatureCurveFile> parse_feature_curves(std::string_view bytes, std::str
     FeatureCurveFile f;
     f.source = std::string(display_name);
     if (root.kind != Value::kObject)
-      return bad(display_name, root.line, std::string("the document is ") + kind_name(root.kind) +
-                                              ", not an object with \"curves\"");
+      return bad(display_name, root.line,
+                 std::string("the document is ") + kind_name(root.kind) + ", not an object with \"curves\"");
     if (Status s = check_keys(display_name, root, {"units", "up", "curves"}, "the document"); !s) return s;
     if (const Value* u = member(root, "units")) {
       if (u->kind != Value::kString || (u->text != "m" && u->text != "cm" && u->text != "mm"))
@@ -396,7 +399,8 @@ Expected<FeatureCurveFile> parse_feature_curves(std::string_view bytes, std::str
     const Value* curves = member(root, "curves");
     if (!curves) return bad(display_name, root.line, "the document has no \"curves\"");
     if (curves->kind != Value::kArray)
-      return bad(display_name, curves->line, std::string("\"curves\" is ") + kind_name(curves->kind) + ", not an array");
+      return bad(display_name, curves->line,
+                 std::string("\"curves\" is ") + kind_name(curves->kind) + ", not an array");
     if (curves->items.empty()) return bad(display_name, curves->line, "\"curves\" is empty");
     std::size_t total = 0;
     for (std::size_t c = 0; c < curves->items.size(); ++c) {

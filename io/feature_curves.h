@@ -26,15 +26,15 @@
 // element, with the curve's name or index and the point's index.
 #pragma once
 
+#include <atelier/engine/math.h>
+#include <atelier/engine/status.h>
+
 #include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <atelier/engine/math.h>
-#include <atelier/engine/status.h>
 
 namespace atelier {
 
@@ -48,11 +48,11 @@ struct FeatureCurveSpec {
 };
 
 struct FeatureCurveFile {
-  std::string source;          // the file name used in messages
-  bool has_units = false;      // "units" given: `scale` is the file's own
-  double scale = 1.0;          // file units to metres ("m" 1, "cm" 0.01, "mm" 0.001)
-  bool has_up = false;         // "up" given: `up_z` is the file's own
-  bool up_z = false;           // "z": file (x, y, z) is engine (x, z, -y)
+  std::string source;      // the file name used in messages
+  bool has_units = false;  // "units" given: `scale` is the file's own
+  double scale = 1.0;      // file units to metres ("m" 1, "cm" 0.01, "mm" 0.001)
+  bool has_up = false;     // "up" given: `up_z` is the file's own
+  bool up_z = false;       // "z": file (x, y, z) is engine (x, z, -y)
   std::vector<FeatureCurveSpec> curves;
 };
 

@@ -5,6 +5,7 @@
 // that frame, give the skirt of the same files in metres and Y-up, written
 // back in centimetres and Z-up; bad curve files and a missing --features
 // are explained and leave no output.
+#include <atelier/systems/body/body_file.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,8 +16,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <atelier/systems/body/body_file.h>
 
 #include "support/feature_curve_files.h"
 #include "support/run_command.h"
@@ -135,10 +134,10 @@ TEST(FeatureCurvesCli, ASkirtOnAFamilyInCentimetresZUpIsTheSkirtInMetresYUp) {
           "e_regen_none", {"only detail templates", "--features"});
   // Malformed JSON: the line is named.
   write_text(d / "bad.json", "{\"curves\": [\n{\"name\": \"waist\",\n \"closed\": tru}]}");
-  refused("encode --template skirt" + ref_cm + " --features " + (d / "bad.json").string(), "e_bad",
-          {"bad.json:3:"});
+  refused("encode --template skirt" + ref_cm + " --features " + (d / "bad.json").string(), "e_bad", {"bad.json:3:"});
   // An unknown curve name.
-  write_text(d / "name.json", "{\"curves\": [{\"name\": \"belly\", \"closed\": true, \"points\": [[0,0,0],[1,0,0],[0,1,0]]}]}");
+  write_text(d / "name.json",
+             "{\"curves\": [{\"name\": \"belly\", \"closed\": true, \"points\": [[0,0,0],[1,0,0],[0,1,0]]}]}");
   refused("encode --template skirt" + ref_cm + " --features " + (d / "name.json").string(), "e_name",
           {"name.json:1:", "unknown curve name \"belly\""});
   // A point far from the surface (the body's own curves, one point 20 cm out).

@@ -2,6 +2,7 @@
 // round trips, and a clean error naming the file and line (and the curve
 // and point) for every kind of malformed input; no input makes the reader
 // throw or crash.
+#include <atelier/io/feature_curves.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +12,6 @@
 #include <string>
 
 #include "io_test_support.h"
-#include <atelier/io/feature_curves.h>
 
 using namespace atelier;
 using namespace atelier::test;
@@ -107,12 +107,12 @@ TEST(FeatureCurveFile, NamesTheLineCurveAndPointOfEveryMalformedInput) {
   EXPECT_NE(error_of("{\"curves\": [\n{\"name\": \"waist\",\n \"closed\": true,\n \"points\": [[1,2,3],[NaN, 1, 2]]", 4)
                 .find("NaN"),
             std::string::npos);
-  error_of("{\"curves\": [1, 2\n", 2);                                  // unterminated
-  error_of("{\"curves\": []}\n\nx", 3);                                  // trailing text
-  error_of("{\"curves\": [], \"curves\": []}", 1);                       // duplicate key
-  error_of(std::string(40, '[') + std::string(40, ']'), 1);              // nesting
-  error_of("{\"curves\": [{\"name\": \"wa\nist\"}]}", 1);                // line break in a string
-  error_of("{\"curves\": [01]}", 1);                                     // leading zero
+  error_of("{\"curves\": [1, 2\n", 2);                       // unterminated
+  error_of("{\"curves\": []}\n\nx", 3);                      // trailing text
+  error_of("{\"curves\": [], \"curves\": []}", 1);           // duplicate key
+  error_of(std::string(40, '[') + std::string(40, ']'), 1);  // nesting
+  error_of("{\"curves\": [{\"name\": \"wa\nist\"}]}", 1);    // line break in a string
+  error_of("{\"curves\": [01]}", 1);                         // leading zero
   // Types and values.
   EXPECT_NE(error_of("[1, 2]", 1).find("not an object"), std::string::npos);
   EXPECT_NE(error_of("{\"curves\": {}}", 1).find("not an array"), std::string::npos);

@@ -4,6 +4,9 @@
 // through read_reference_body and compare with the engine's curves.
 #pragma once
 
+#include <atelier/io/feature_curves.h>
+#include <atelier/systems/body/reference_body.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -11,14 +14,15 @@
 #include <string>
 #include <vector>
 
-#include <atelier/io/feature_curves.h>
-#include <atelier/systems/body/reference_body.h>
-
 namespace atelier::testing {
 
 /// Engine (X, Y, Z) in metres is file (X, -Z, Y) in centimetres, Z up.
-inline Vec3d to_cm_z_up(const Vec3d& p) { return Vec3d(100 * p.x(), -100 * p.z(), 100 * p.y()); }
-inline Vec3d same_frame(const Vec3d& p) { return p; }
+inline Vec3d to_cm_z_up(const Vec3d& p) {
+  return Vec3d(100 * p.x(), -100 * p.z(), 100 * p.y());
+}
+inline Vec3d same_frame(const Vec3d& p) {
+  return p;
+}
 
 /// The skin as OBJ, every vertex mapped and written with 17 digits.
 inline void write_body_obj(const ReferenceBody& b, const std::filesystem::path& file,
@@ -76,8 +80,10 @@ inline void write_body_curves(const ReferenceBody& b, const std::filesystem::pat
   f.up_z = up == "z";
   std::vector<const FeatureCurve*> order;
   for (const auto& c : b.curves)
-    if (c.name == first) order.insert(order.begin(), &c);
-    else order.push_back(&c);
+    if (c.name == first)
+      order.insert(order.begin(), &c);
+    else
+      order.push_back(&c);
   for (const FeatureCurve* c : order) {
     auto pl = feature_curve_polyline(b, c->id);
     if (!pl) throw Error(pl.status());

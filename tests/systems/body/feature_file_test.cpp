@@ -83,10 +83,10 @@ TEST(FeatureFile, CurvesInCentimetresZUpAreTheMannequinsOwnAndCrossWhereItsDo) {
         if ((a == n1 && c == n2) || (a == n2 && c == n1)) got = &q;
       }
       ASSERT_NE(got, nullptr) << p.name;
-      EXPECT_LE((b->model.attrib_nodes.position[got->node.value] -
-                 f.mannequin.model.attrib_nodes.position[p.node.value])
-                    .norm(),
-                1e-9)
+      EXPECT_LE(
+          (b->model.attrib_nodes.position[got->node.value] - f.mannequin.model.attrib_nodes.position[p.node.value])
+              .norm(),
+          1e-9)
           << p.name;
       // The frame of seed 000 eq. (1) is well defined there.
       auto fr = feature_frame(*b, got->id);
@@ -152,7 +152,8 @@ TEST(FeatureFile, FarPointsUnknownNamesAndMissingFilesAreNamedAndLeaveTheBodyAsI
   // 100 times too far (the message suggests the units).
   {
     std::ofstream o(f.dir / "nounits.json");
-    o << "{\"curves\": [{\"name\": \"waist\", \"closed\": true, \"points\": [[0, 0, 100], [10, 0, 100], [0, 10, 100]]}]}";
+    o << "{\"curves\": [{\"name\": \"waist\", \"closed\": true, \"points\": [[0, 0, 100], [10, 0, 100], [0, 10, "
+         "100]]}]}";
   }
   auto wrong = read_reference_body(f.dir / "m.obj", {.features = f.dir / "nounits.json"});
   ASSERT_FALSE(wrong);
@@ -165,8 +166,7 @@ TEST(FeatureFile, FarPointsUnknownNamesAndMissingFilesAreNamedAndLeaveTheBodyAsI
   }
   auto unknown = read_reference_body(f.dir / "m.obj", {.features = f.dir / "unknown.json"});
   ASSERT_FALSE(unknown);
-  EXPECT_NE(unknown.status().message().find("unknown.json:2: curve 0: unknown curve name \"belly\""),
-            std::string::npos)
+  EXPECT_NE(unknown.status().message().find("unknown.json:2: curve 0: unknown curve name \"belly\""), std::string::npos)
       << unknown.status().message();
   auto none = read_reference_body(f.dir / "m.obj", {.features = f.dir / "none.json"});
   ASSERT_FALSE(none);
