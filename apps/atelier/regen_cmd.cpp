@@ -48,6 +48,36 @@ std::string reference_tag(const ReferenceBody& b) {
   return std::to_string(b.model.num_nodes()) + " nodes, " + std::to_string(b.model.num_faces()) + " faces";
 }
 
+/// Feature curves from a file (--features): a template encoded on them
+/// names their feature points by id, so it must be regenerated on the same
+/// curves. A digest (FNV-1a) of the curve and point tables: names, ids and
+/// locations on the skin.
+std::string features_tag(const ReferenceBody& b) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&](const void* p, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
+  };
+  const Model& m = b.model;
+  auto node = [&](AttribNodeIdx a) {
+    mix(&m.attrib_nodes.kind[a.value], sizeof m.attrib_nodes.kind[a.value]);
+    mix(&m.attrib_nodes.element[a.value], sizeof m.attrib_nodes.element[a.value]);
+    mix(m.attrib_nodes.param[a.value].data(), 3 * sizeof(double));
+  };
+  for (const FeatureCurve& c : b.curves) {
+    mix(&c.id, sizeof c.id);
+    mix(c.name.data(), c.name.size());
+    for (AttribNodeIdx a : m.attrib_edges.nodes.row(c.edge.value)) node(a);
+  }
+  for (const FeaturePoint& p : b.points) {
+    mix(&p.id, sizeof p.id);
+    mix(p.name.data(), p.name.size());
+    node(p.node);
+  }
+  char buf[40];
+  std::snprintf(buf, sizeof buf, ", feature curves %016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
 nlohmann::json quality_json(const RegenQuality& q) {
   // No timings: records must be identical for any thread count.
   return {{"nodes", q.nodes},
@@ -192,7 +222,7 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
     if (which != "all" && which != name) continue;
     auto t = make(ref);
     if (!t) throw Error(Status(t.status().code(), std::string(name) + ": " + t.status().message()));
-    t->reference = opt.reference + ": " + reference_tag(ref);
+    t->reference = opt.reference + ": " + reference_tag(ref) + (opt.features.empty() ? "" : features_tag(ref));
     write_template_json(*t, opt.out / (std::string(name) + ".template.json"));
     write_obj(t->model, opt.out / (std::string(name) + ".obj"));
     std::printf("%s: %zu feature nodes, %zu faces, %zu surfaces, %zu joints, %zu profiles -> %s\n", name,
@@ -270,13 +300,12 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   }
   job.src = make_body_source(common, opt.bodies);
   const auto ref = job.src->reference();
-  if (!job.templates.empty() && ref->curves.empty())
-    // A user's body without feature curves: profile templates cannot be placed on it.
-    throw Error(Status(ErrorCode::kInvalidArgument,
-                       "profile template '" + job.templates.front().name + "': the reference body " +
-                           opt.bodies.reference.string() +
-                           " has no feature curves, so only detail templates (.atd) apply: give its curves with "
-                           "--features CURVES.json (docs/body-files.md)"));
+  // A user's body without feature curves: profile templates cannot be placed on it.
+  const std::string no_curves =
+      ref->curves.empty() ? "; the reference body " + opt.bodies.reference.string() +
+                                " has no feature curves, so only detail templates (.atd) apply to it unless they are "
+                                "given with --features CURVES.json (docs/body-files.md)"
+                          : std::string();
   if (!detail_files.empty()) {
     const ExecContext ctx = common.context();
     auto family = GarmentFamily::of(*ref);
@@ -311,7 +340,21 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
     if (t.reference.find(tag) == std::string::npos)
       throw Error(Status(ErrorCode::kMismatch, "template '" + t.name + "' was encoded on a reference body with " +
                                                    t.reference + "; the body set's reference has " + tag +
-                                                   " (encode the template on this reference with `atelier encode`)"));
+                                                   " (encode the template on this reference with `atelier encode`)" +
+                                                   no_curves));
+    if (!no_curves.empty())
+      throw Error(Status(ErrorCode::kInvalidArgument, "profile template '" + t.name + "'" + no_curves));
+    // Curves from a file: the template's feature points are the file's, by id.
+    const bool t_file = t.reference.find(", feature curves ") != std::string::npos;
+    const std::string ftag = opt.bodies.features.empty() ? std::string() : features_tag(*ref);
+    if (t_file != !ftag.empty() || (t_file && t.reference.find(ftag) == std::string::npos))
+      throw Error(Status(ErrorCode::kMismatch,
+                         "template '" + t.name + "' was encoded on " +
+                             (t_file ? "feature curves from a file (" + t.reference + ")" : "the body's own feature curves") +
+                             (ftag.empty() ? "; this job's reference has its own (give the same --features file)"
+                                           : "; this job's --features " + opt.bodies.features.string() +
+                                                 " gives other curves (" + ftag.substr(2) + ")") +
+                             ": its feature points would be others"));
   }
   job.bodies_dir = opt.out / "bodies";
   make_output_dir(job.bodies_dir);

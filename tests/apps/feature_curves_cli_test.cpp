@@ -132,6 +132,21 @@ TEST(FeatureCurvesCli, ASkirtOnAFamilyInCentimetresZUpIsTheSkirtInMetresYUp) {
   refused("regen --template " + (d / "cm" / "tpl" / "skirt.template.json").string() + " --source " +
               (d / "tet_set").string() + " --reference " + (d / "tet.obj").string(),
           "e_regen_none", {"only detail templates", "--features"});
+  // A template encoded on the file's curves, regenerated without them (the
+  // reference, of the mannequin's topology, would bring the mannequin's own
+  // curves and feature points, other ids) or with other curves: refused.
+  refused("regen --template " + (d / "cm" / "tpl" / "skirt.template.json").string() + " --source " +
+              (d / "cm" / "set").string() + ref_cm,
+          "e_regen_own", {"feature curves from a file", "give the same --features file"});
+  {
+    auto fewer = read_feature_curves(d / "cm" / "curves.json");
+    ASSERT_TRUE(fewer);
+    fewer->curves.pop_back();  // a curve that the skirt does not use, gone
+    atelier::testing::write_curves_json(*fewer, d / "fewer.json");
+  }
+  refused("regen --template " + (d / "cm" / "tpl" / "skirt.template.json").string() + " --source " +
+              (d / "cm" / "set").string() + ref_cm + " --features " + (d / "fewer.json").string(),
+          "e_regen_other", {"gives other curves"});
   // Malformed JSON: the line is named.
   write_text(d / "bad.json", "{\"curves\": [\n{\"name\": \"waist\",\n \"closed\": tru}]}");
   refused("encode --template skirt" + ref_cm + " --features " + (d / "bad.json").string(), "e_bad", {"bad.json:3:"});
