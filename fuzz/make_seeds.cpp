@@ -75,6 +75,14 @@ int main(int argc, char** argv) {
   put(out / "mh_modifiers", "modifiers.json",
       std::string("\x01") + R"([{"group": "measure", "modifiers": [{"target": "measure-waist-circ", "min": "decr", "max": "incr"}, {"target": "x"}]}])");
   put(out / "mh_modifiers", "measures.json", std::string("\x00", 1) + R"({"measures": {"waist": [1, 2, 3], "neck": [4]}})");
+  put(out / "feature_curves", "curves.json",
+      "{\"units\": \"cm\", \"up\": \"z\", \"curves\": [\n"
+      "  {\"name\": \"waist\", \"closed\": true, \"points\": [[10, 0, 100], [0, 8, 100.5], [-10, 0, 1e2], [0, -8, "
+      "99.75], [10, 0, 100]]},\n"
+      "  {\"name\": \"centre_front\", \"closed\": false, \"points\": [[0, -8, 120], [0, -8.5, 80.25E0]]}]}\n");
+  put(out / "feature_curves", "escapes.json",
+      "\xEF\xBB\xBF{\"curves\": [{\"name\": \"hip\", \"points\": [[0,0,0],[1,0,0],[0,1,0]], \"closed\": true}], "
+      "\"up\": \"y\", \"units\": \"mm\"}");
   // Binary formats from models built here.
   put(out / "atm", "cube.atm", serialize_model(read_obj_from_string(kCube)));
   put(out / "atm", "two_groups.atm", serialize_model(read_obj_from_string(kTwoGroups)));

@@ -24,7 +24,7 @@ done
 if ((${#harnesses[@]} == 0)); then
   harnesses=(obj ply off atm atd template mhclo mh_target mh_base mh_modifiers)
   # Built only once their parsers are in the tree (fuzz/CMakeLists.txt).
-  for h in curve_network strokes; do [[ -x $B/${h}_fuzz ]] && harnesses+=("$h"); done
+  for h in curve_network strokes feature_curves; do [[ -x $B/${h}_fuzz ]] && harnesses+=("$h"); done
 fi
 
 # Seeds: tests/data by extension, then the generated ones.

@@ -179,6 +179,9 @@ std::size_t remove_stale_output_temporaries(const fs::path& out) noexcept {
 std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesOptions& opt) {
   const ExecContext ctx = common.context();
   std::unique_ptr<BodySource> src;
+  if (!opt.features.empty() && (opt.source == "mannequin" || opt.source == "makehuman"))
+    throw Error(Status(ErrorCode::kInvalidArgument, "--features is for a directory source's --reference body OBJ; the " +
+                                                        opt.source + " has its own feature curves"));
   if (opt.source == "mannequin") {
     auto topo = make_mannequin_topology();
     if (!topo) throw Error(topo.status());
@@ -200,7 +203,8 @@ std::unique_ptr<BodySource> make_body_source(const Common& common, const BodiesO
     if (opt.reference.empty())
       throw Error(Status(ErrorCode::kInvalidArgument, "--reference is required with a directory source"));
     const BodyFrame frame = body_frame(opt.scale, opt.up);
-    auto ref = read_reference_body(opt.reference, {.frame = frame, .makehuman_data = opt.data}, ctx);
+    auto ref = read_reference_body(opt.reference, {.frame = frame, .makehuman_data = opt.data, .features = opt.features},
+                                   ctx);
     if (!ref) throw Error(ref.status());
     src = std::make_unique<ObjDirectorySource>(opt.source, std::make_shared<const ReferenceBody>(std::move(*ref)),
                                                frame);

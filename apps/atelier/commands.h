@@ -97,6 +97,7 @@ struct BodiesOptions {
   std::filesystem::path reference;   // OBJ of the reference body (directory sources)
   double scale = 1.0;                // file units to metres (directory sources)
   std::string up = "y";              // the files' up axis (directory sources): y | z
+  std::filesystem::path features;    // feature-curve JSON for the reference (directory sources; regen)
 };
 int run_bodies(const Common& common, const BodiesOptions& opt, Log& log);
 /// `--scale S --up y|z` as a BodyFrame; throws Error(kInvalidArgument)

@@ -48,6 +48,36 @@ std::string reference_tag(const ReferenceBody& b) {
   return std::to_string(b.model.num_nodes()) + " nodes, " + std::to_string(b.model.num_faces()) + " faces";
 }
 
+/// Feature curves from a file (--features): a template encoded on them
+/// names their feature points by id, so it must be regenerated on the same
+/// curves. A digest (FNV-1a) of the curve and point tables: names, ids and
+/// locations on the skin.
+std::string features_tag(const ReferenceBody& b) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&](const void* p, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
+  };
+  const Model& m = b.model;
+  auto node = [&](AttribNodeIdx a) {
+    mix(&m.attrib_nodes.kind[a.value], sizeof m.attrib_nodes.kind[a.value]);
+    mix(&m.attrib_nodes.element[a.value], sizeof m.attrib_nodes.element[a.value]);
+    mix(m.attrib_nodes.param[a.value].data(), 3 * sizeof(double));
+  };
+  for (const FeatureCurve& c : b.curves) {
+    mix(&c.id, sizeof c.id);
+    mix(c.name.data(), c.name.size());
+    for (AttribNodeIdx a : m.attrib_edges.nodes.row(c.edge.value)) node(a);
+  }
+  for (const FeaturePoint& p : b.points) {
+    mix(&p.id, sizeof p.id);
+    mix(p.name.data(), p.name.size());
+    node(p.node);
+  }
+  char buf[40];
+  std::snprintf(buf, sizeof buf, ", feature curves %016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
 nlohmann::json quality_json(const RegenQuality& q) {
   // No timings: records must be identical for any thread count.
   return {{"nodes", q.nodes},
@@ -83,6 +113,9 @@ CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
           return {};
         return "'" + r + "': neither mannequin, makehuman nor a body OBJ file";
       });
+  c->add_option("--features", opt.features,
+                "feature curves of a body OBJ file (JSON of named polylines, docs/body-files.md): profile templates "
+                "encode on it");
   c->add_option("--data", opt.data, "the shared data folder (for makehuman)");
   c->add_option("--out", opt.out, "output folder");
   return c;
@@ -146,6 +179,9 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
   ReferenceBody ref;
   std::optional<makehuman::HumanLibrary> lib;
   const bool user_body = opt.reference != "mannequin" && opt.reference != "makehuman";
+  if (!opt.features.empty() && !user_body)
+    throw Error(Status(ErrorCode::kInvalidArgument, "--features is for a body OBJ file; the " + opt.reference +
+                                                        " has its own feature curves"));
   if (opt.reference == "mannequin") {
     auto r = make_mannequin();
     if (!r) throw Error(r.status());
@@ -155,25 +191,29 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
     ref = makehuman::make_reference_body(*lib);
   } else {
     // A user's body: in the file's units and axes, mapped at the door.
-    auto r = read_reference_body(opt.reference, {.frame = body_frame(opt.scale, opt.up), .makehuman_data = opt.data},
-                                 common.context());
+    auto r = read_reference_body(
+        opt.reference,
+        {.frame = body_frame(opt.scale, opt.up), .makehuman_data = opt.data, .features = opt.features},
+        common.context());
     if (!r) throw Error(r.status());
     ref = std::move(*r);
   }
-  make_output_dir(opt.out);
+  const std::string which = opt.name.empty() ? (opt.garment.empty() ? "all" : "") : opt.name;
+  const bool no_curves = user_body && !which.empty() && ref.curves.empty();
   int written = 0;
+  if (no_curves && opt.garment.empty()) written = -1;  // refused below, before anything is written
+  if (written == 0) make_output_dir(opt.out);
   if (!opt.garment.empty()) {
     encode_garment_files(common, opt, ref, lib ? &*lib : nullptr, log);
     ++written;
   }
-  const std::string which = opt.name.empty() ? (opt.garment.empty() ? "all" : "") : opt.name;
-  if (user_body && !which.empty() && ref.curves.empty()) {
+  if (no_curves) {
     // Profile templates are built from feature curves an OBJ file has not.
     const std::string why = opt.reference +
                             ": the body has no feature curves, so only detail templates apply: encode a garment with "
-                            "--garment (profile templates need the mannequin's or MakeHuman's topology; "
-                            "docs/body-files.md)";
-    if (written == 0) throw Error(Status(ErrorCode::kInvalidArgument, why));
+                            "--garment, or give the body's feature curves with --features CURVES.json for profile "
+                            "templates (docs/body-files.md)";
+    if (written <= 0) throw Error(Status(ErrorCode::kInvalidArgument, why));
     log.warn(why + "; the garment was encoded, no profile template");
     return kExitPartial;
   }
@@ -182,7 +222,7 @@ int run_encode(const Common& common, const EncodeOptions& opt, Log& log) {
     if (which != "all" && which != name) continue;
     auto t = make(ref);
     if (!t) throw Error(Status(t.status().code(), std::string(name) + ": " + t.status().message()));
-    t->reference = opt.reference + ": " + reference_tag(ref);
+    t->reference = opt.reference + ": " + reference_tag(ref) + (opt.features.empty() ? "" : features_tag(ref));
     write_template_json(*t, opt.out / (std::string(name) + ".template.json"));
     write_obj(t->model, opt.out / (std::string(name) + ".obj"));
     std::printf("%s: %zu feature nodes, %zu faces, %zu surfaces, %zu joints, %zu profiles -> %s\n", name,
@@ -209,6 +249,8 @@ CLI::App* add_regen_subcommand(CLI::App& app, RegenOptions& opt) {
   c->add_option("--count", opt.bodies.count, "bodies to sample (mannequin, makehuman)")->check(body_count_check());
   c->add_option("--data", opt.bodies.data, "the shared data folder (for makehuman)");
   c->add_option("--reference", opt.bodies.reference, "reference body OBJ (directory sources)");
+  c->add_option("--features", opt.bodies.features,
+                "feature curves of the reference body OBJ (JSON, docs/body-files.md): for profile templates");
   c->add_option("--scale", opt.bodies.scale,
                 "file units to metres (directory sources); outputs are written back in them");
   c->add_option("--up", opt.bodies.up, "the files' up axis, y or z (directory sources); outputs are written back in it")
@@ -258,6 +300,12 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   }
   job.src = make_body_source(common, opt.bodies);
   const auto ref = job.src->reference();
+  // A user's body without feature curves: profile templates cannot be placed on it.
+  const std::string no_curves =
+      ref->curves.empty() ? "; the reference body " + opt.bodies.reference.string() +
+                                " has no feature curves, so only detail templates (.atd) apply to it unless they are "
+                                "given with --features CURVES.json (docs/body-files.md)"
+                          : std::string();
   if (!detail_files.empty()) {
     const ExecContext ctx = common.context();
     auto family = GarmentFamily::of(*ref);
@@ -292,7 +340,21 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
     if (t.reference.find(tag) == std::string::npos)
       throw Error(Status(ErrorCode::kMismatch, "template '" + t.name + "' was encoded on a reference body with " +
                                                    t.reference + "; the body set's reference has " + tag +
-                                                   " (encode the template on this reference with `atelier encode`)"));
+                                                   " (encode the template on this reference with `atelier encode`)" +
+                                                   no_curves));
+    if (!no_curves.empty())
+      throw Error(Status(ErrorCode::kInvalidArgument, "profile template '" + t.name + "'" + no_curves));
+    // Curves from a file: the template's feature points are the file's, by id.
+    const bool t_file = t.reference.find(", feature curves ") != std::string::npos;
+    const std::string ftag = opt.bodies.features.empty() ? std::string() : features_tag(*ref);
+    if (t_file != !ftag.empty() || (t_file && t.reference.find(ftag) == std::string::npos))
+      throw Error(Status(ErrorCode::kMismatch,
+                         "template '" + t.name + "' was encoded on " +
+                             (t_file ? "feature curves from a file (" + t.reference + ")" : "the body's own feature curves") +
+                             (ftag.empty() ? "; this job's reference has its own (give the same --features file)"
+                                           : "; this job's --features " + opt.bodies.features.string() +
+                                                 " gives other curves (" + ftag.substr(2) + ")") +
+                             ": its feature points would be others"));
   }
   job.bodies_dir = opt.out / "bodies";
   make_output_dir(job.bodies_dir);

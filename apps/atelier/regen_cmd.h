@@ -16,6 +16,12 @@
 //       door; the template pair written is in metres and Y up. Profile
 //       templates need the body's feature curves: only garments encode on
 //       a body without them (docs/body-files.md);
+//   atelier encode --template skirt --reference my_body.obj --features curves.json
+//       a profile template on a user's body: the named polylines of the
+//       JSON file (io/feature_curves.h) are snapped onto the body; `regen
+//       --source DIR --reference my_body.obj --features curves.json` snaps
+//       them once on the reference, and every body of DIR (same topology)
+//       carries them by their locations on its faces;
 //   atelier regen --template templates/top.template.json --source mannequin
 //       --count 1000 --out run/
 //       regenerates every template on every body of a body set, streamed in
@@ -66,6 +72,7 @@ struct EncodeOptions {
   std::filesystem::path garment;            // .obj or .mhclo: encode as a detail template
   double scale = 1.0;                       // garment (and body file) units to metres
   std::string up = "y";                     // garment (and body file) up axis: y | z
+  std::filesystem::path features;           // feature-curve JSON for a body OBJ (profile templates)
 };
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt);
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log);

@@ -87,6 +87,8 @@ nlohmann::json describe_regen_job(const Common& common, const RegenOptions& opt)
     if (!opt.bodies.reference.empty()) src["reference"] = file_identity(opt.bodies.reference);
     src["scale"] = opt.bodies.scale;
     if (opt.bodies.up != "y") src["up"] = opt.bodies.up;  // absent for Y up: earlier jobs' job.json stays valid
+    // The reference's feature curves place profile templates: other curves, another job.
+    if (!opt.bodies.features.empty()) src["features"] = file_identity(opt.bodies.features);
   }
   nlohmann::json templates = nlohmann::json::array();
   for (const fs::path& t : opt.templates) templates.push_back(file_identity(t));

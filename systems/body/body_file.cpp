@@ -1,3 +1,4 @@
+#include <atelier/io/feature_curves.h>
 #include <atelier/io/obj.h>
 #include <atelier/systems/body/body_file.h>
 #include <atelier/systems/body/makehuman_body.h>
@@ -168,6 +169,27 @@ Expected<ReferenceBody> read_reference_body(const fs::path& file, const BodyFile
   // and the sign of the volume is that of the engine's body.
   if (Status s = check_closed_oriented(rb.model, name); !s) return s;
 
+  if (!options.features.empty()) {
+    // The user's own curves (see the header); a known topology's are not adopted.
+    auto file = read_feature_curves(options.features);
+    if (!file) return file.status();
+    BodyFrame curve_frame = options.frame;
+    if (file->has_units) curve_frame.scale = file->scale;
+    if (file->has_up) curve_frame.up = file->up_z ? UpAxis::kZ : UpAxis::kY;
+    std::vector<std::vector<Vec3d>> points(file->curves.size());
+    std::vector<FeaturePolyline> lines;
+    for (std::size_t c = 0; c < file->curves.size(); ++c) {
+      const FeatureCurveSpec& spec = file->curves[c];
+      points[c] = spec.points;
+      curve_frame.to_engine(points[c]);
+      lines.push_back({spec.name, spec.closed, points[c], spec.point_lines});
+    }
+    FeatureSnapOptions snap = options.snap;
+    snap.source = file->source;
+    auto added = add_snapped_feature_curves(rb, lines, snap);
+    if (!added) return added.status();
+    return rb;
+  }
   // Features of a known topology (see the header).
   const std::vector<Vec3d> positions = rb.model.nodes.position;
   auto adopt = [&](const ReferenceBody& known) -> Expected<bool> {

@@ -67,6 +67,12 @@ struct BodyFileOptions {
   /// A MakeHuman data folder (`<data>/makehuman`): a body with the topology
   /// of MakeHuman's base mesh takes its feature curves. Empty: not tried.
   std::filesystem::path makehuman_data;
+  /// A feature-curve file (io/feature_curves.h, docs/body-files.md): its
+  /// curves are snapped onto the body (add_snapped_feature_curves) and
+  /// replace any a known topology would give. Empty: none.
+  std::filesystem::path features;
+  /// Tolerances of the snap (metres); `source` is set to the file's name.
+  FeatureSnapOptions snap;
 };
 
 /// Reads a reference body from an OBJ file and maps it to metres, Y up.
@@ -76,11 +82,17 @@ struct BodyFileOptions {
 /// options.makehuman_data) takes that reference's feature curves and points:
 /// they sit on nodes, edges and faces, so they follow the file's positions.
 /// Any other body has none: detail templates (garments) encode and
-/// regenerate on it, profile templates refuse it.
+/// regenerate on it, profile templates refuse it; unless options.features
+/// names a feature-curve file: its points, in its own "units" and "up" when
+/// it gives them and in options.frame otherwise, are mapped to metres and Y
+/// up and snapped onto the body (add_snapped_feature_curves); then only the
+/// file's curves are the body's.
 ///
 /// Errors (each naming the file): missing or malformed file (with its line),
 /// a bad frame, a mesh that is not closed, not consistently oriented or
-/// facing inward (check_closed_oriented).
+/// facing inward (check_closed_oriented); a feature-curve file that is
+/// missing or malformed, or a point of it too far from the body (naming the
+/// file, line, curve and point).
 [[nodiscard]] Expected<ReferenceBody> read_reference_body(const std::filesystem::path& file,
                                                           const BodyFileOptions& options = {},
                                                           const ExecContext& ctx = {});

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <unordered_set>
 
+#include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/mesh/normals.h>
+#include <atelier/systems/spatial/body_bvh.h>
 
 namespace atelier {
 
@@ -284,6 +287,156 @@ Status validate_features(const ReferenceBody& body) {
       return {ErrorCode::kInternal, "feature point '" + p.name + "' names a missing curve"};
   }
   return {};
+}
+
+
+namespace {
+
+std::string mm(double metres) {
+  std::ostringstream s;
+  s.precision(1);
+  s << std::fixed << 1000.0 * metres << " mm";
+  return s.str();
+}
+
+/// Closest points of segments [p0, p1] and [q0, q1] (Ericson, Real-Time
+/// Collision Detection, 5.1.9); returns the squared distance.
+double segment_closest(const Vec3d& p0, const Vec3d& p1, const Vec3d& q0, const Vec3d& q1, Vec3d& a, Vec3d& b) {
+  const Vec3d d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double aa = d1.squaredNorm(), ee = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0, t = 0;
+  if (aa <= 0 && ee <= 0) {
+    s = t = 0;
+  } else if (aa <= 0) {
+    t = std::clamp(f / ee, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (ee <= 0) {
+      s = std::clamp(-c / aa, 0.0, 1.0);
+    } else {
+      const double bb = d1.dot(d2), den = aa * ee - bb * bb;
+      s = den > 0 ? std::clamp((bb * f - c * ee) / den, 0.0, 1.0) : 0.0;
+      t = (bb * s + f) / ee;
+      if (t < 0) {
+        t = 0;
+        s = std::clamp(-c / aa, 0.0, 1.0);
+      } else if (t > 1) {
+        t = 1;
+        s = std::clamp((bb - c) / aa, 0.0, 1.0);
+      }
+    }
+  }
+  a = p0 + s * d1;
+  b = q0 + t * d2;
+  return (a - b).squaredNorm();
+}
+
+}  // namespace
+
+Expected<FeatureSnapReport> add_snapped_feature_curves(ReferenceBody& body, std::span<const FeaturePolyline> curves,
+                                                       const FeatureSnapOptions& options) {
+  const std::string src = options.source.empty() ? std::string("feature curves") : options.source;
+  auto where = [&](const FeaturePolyline& c, std::size_t k) {
+    const std::string line = k < c.lines.size() ? ":" + std::to_string(c.lines[k]) : std::string();
+    return src + line + ": curve '" + c.name + "'";
+  };
+  if (!(options.tolerance > 0) || !std::isfinite(options.tolerance) || !(options.crossing_tolerance >= 0) ||
+      !std::isfinite(options.crossing_tolerance))
+    return Status(ErrorCode::kInvalidArgument, src + ": snap tolerances must be finite and positive");
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    const FeaturePolyline& c = curves[i];
+    if (body.find_curve(c.name))
+      return Status(ErrorCode::kInvalidArgument, where(c, 0) + ": the body already has a curve of that name");
+    for (std::size_t j = 0; j < i; ++j)
+      if (curves[j].name == c.name) return Status(ErrorCode::kInvalidArgument, where(c, 0) + " is given twice");
+    if (c.points.size() < (c.closed ? 3u : 2u))
+      return Status(ErrorCode::kInvalidArgument,
+                    where(c, 0) + ": a" + (c.closed ? " closed curve needs 3 points" : "n open curve needs 2 points"));
+  }
+  auto tris = fan_triangulate(body.model, std::vector<SurfaceIdx>{body.skin});
+  if (!tris) return tris.status();
+  if (tris->triangles.empty()) return Status(ErrorCode::kDegenerate, src + ": the body has no faces");
+  // Fan triangle k of a face is (c0, c_{k+1}, c_{k+2}): the corner of a face
+  // location (storage/surface_location.h), and the hit's barycentrics are
+  // its areal coordinates in that order.
+  std::vector<std::uint8_t> corner(tris->triangles.size(), 0);
+  for (std::size_t t = 1; t < corner.size(); ++t)
+    if (tris->face[t] == tris->face[t - 1]) corner[t] = static_cast<std::uint8_t>(std::min(255, corner[t - 1] + 1));
+  BodyBvh bvh;
+  if (Status s = bvh.build(std::span<const Vec3d>(body.model.nodes.position), tris->triangles); !s) return s;
+  auto locate = [&](const ClosestHit& h) {
+    Vec3d w = h.barycentric.cwiseMax(0.0);
+    w /= w.sum();
+    return SurfaceLocation{AttribNodeKind::kFace, tris->face[h.triangle].value, w, corner[h.triangle]};
+  };
+
+  FeatureSnapReport rep;
+  std::vector<std::vector<SurfaceLocation>> paths(curves.size());
+  std::vector<std::vector<Vec3d>> snapped(curves.size());
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    const FeaturePolyline& c = curves[i];
+    for (std::size_t k = 0; k < c.points.size(); ++k) {
+      if (!c.points[k].allFinite())
+        return Status(ErrorCode::kInvalidArgument, where(c, k) + ", point " + std::to_string(k) + " is not finite");
+      const ClosestHit h = bvh.closest_point(c.points[k]);
+      if (h.triangle == kNoTriangle || !(h.distance <= options.tolerance))
+        return Status(ErrorCode::kInvalidArgument,
+                      where(c, k) + ", point " + std::to_string(k) + " is " + mm(h.distance) +
+                          " from the body's surface (at most " + mm(options.tolerance) +
+                          "): drawn on another body, or in other units or axes (\"units\", \"up\", --scale, --up)?");
+      rep.max_distance = std::max(rep.max_distance, h.distance);
+      paths[i].push_back(locate(h));
+      snapped[i].push_back(h.point);
+    }
+  }
+  // Crossings, found on the snapped polylines before anything is written.
+  struct Crossing {
+    std::size_t closed, open;
+    SurfaceLocation at;
+  };
+  std::vector<Crossing> crossings;
+  const double tol2 = options.crossing_tolerance * options.crossing_tolerance;
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    if (!curves[i].closed) continue;
+    for (std::size_t j = 0; j < curves.size(); ++j) {
+      if (curves[j].closed) continue;
+      const auto& P = snapped[i];
+      const auto& Q = snapped[j];
+      double best = std::numeric_limits<double>::infinity();
+      Vec3d mid = Vec3d::Zero();
+      for (std::size_t a = 0; a < P.size(); ++a)
+        for (std::size_t b = 0; b + 1 < Q.size(); ++b) {
+          Vec3d x, y;
+          const double d2 = segment_closest(P[a], P[(a + 1) % P.size()], Q[b], Q[b + 1], x, y);
+          if (d2 < best) best = d2, mid = 0.5 * (x + y);
+        }
+      if (best <= tol2) crossings.push_back({i, j, locate(bvh.closest_point(mid))});
+    }
+  }
+
+  // Everything is checked: write, into a copy so that a failure (none is
+  // expected: names and sizes were checked, locations come from the skin's
+  // faces) leaves the body as it was.
+  ReferenceBody out = body;
+  std::int32_t next_curve = 1, next_point = 1;
+  for (const auto& c : out.curves) next_curve = std::max(next_curve, c.id + 1);
+  for (const auto& p : out.points) next_point = std::max(next_point, p.id + 1);
+  std::vector<std::int32_t> ids(curves.size());
+  for (std::size_t i = 0; i < curves.size(); ++i) {
+    ids[i] = next_curve++;
+    if (Status s = add_feature_curve(out, ids[i], curves[i].name, paths[i], curves[i].closed); !s)
+      return Status(s.code(), src + ": " + s.message());
+    ++rep.curves;
+  }
+  for (const Crossing& x : crossings) {
+    if (Status s = add_feature_point(out, next_point++, curves[x.closed].name + "_x_" + curves[x.open].name, x.at,
+                                     ids[x.closed], ids[x.open]);
+        !s)
+      return Status(s.code(), src + ": " + s.message());
+    ++rep.points;
+  }
+  body = std::move(out);
+  return rep;
 }
 
 }  // namespace atelier

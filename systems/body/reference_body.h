@@ -65,6 +65,51 @@ struct ReferenceBody {
 [[nodiscard]] Status add_feature_point(ReferenceBody& body, std::int32_t id, std::string name,
                                        const SurfaceLocation& where, std::int32_t c1, std::int32_t c2);
 
+/// One polyline to snap onto the skin (engine frame: metres, Y up).
+struct FeaturePolyline {
+  std::string name;
+  bool closed = false;
+  std::span<const Vec3d> points;
+  std::span<const std::uint32_t> lines;  // optional: 1-based file line of each point, for messages
+};
+
+struct FeatureSnapOptions {
+  /// A point farther than this from the skin (metres) is refused: it was
+  /// drawn on another body, in other units or axes (docs/body-files.md).
+  double tolerance = 0.01;
+  /// An open curve whose snapped polyline passes within this distance
+  /// (metres) of a closed curve's crosses it there: a feature point.
+  double crossing_tolerance = 0.005;
+  std::string source;  // the file named in messages ("" in memory)
+};
+
+struct FeatureSnapReport {
+  std::size_t curves = 0, points = 0;  // added
+  double max_distance = 0;             // largest point-to-skin distance snapped over (metres)
+};
+
+/// Snaps named polylines onto the skin and adds them as feature curves (issue
+/// 26: a user's body with feature curves from a file): each point becomes the
+/// face location (fan triangle and areal coordinates) of its closest skin
+/// point, found with the Embree BVH (systems/spatial/body_bvh.h), so the curve
+/// follows the mesh onto every body of the same topology (with_positions,
+/// feature_curve_polyline with other positions). Curve ids are 1 + the
+/// largest existing id, in order. Then every pair of a closed and an open
+/// curve that come within options.crossing_tolerance gets a feature point
+/// "<closed>_x_<open>" (the mannequin's naming) at the skin point closest to
+/// the middle of their closest approach; profile templates anchor nodes
+/// there (seed 000 eq. (1)).
+///
+/// Reads: the skin's faces and positions. Writes: attribute nodes and edges,
+/// body.curves and body.points; on failure nothing (all points are snapped
+/// and checked before anything is added).
+/// Errors (naming options.source, the line, the curve and the point): a point
+/// farther than options.tolerance from the skin, a name the body already has,
+/// too few points, a bad tolerance, a body without faces.
+[[nodiscard]] Expected<FeatureSnapReport> add_snapped_feature_curves(ReferenceBody& body,
+                                                                     std::span<const FeaturePolyline> curves,
+                                                                     const FeatureSnapOptions& options = {});
+
 /// Position of an attribute node evaluated from `positions` (indexed by node
 /// index) instead of the model's own column; lets one topology be evaluated
 /// for many bodies without copying the model.

@@ -105,7 +105,10 @@ struct TemplateBuilder::Impl {
           const double d = (bm.attrib_nodes.position[fp.node.value] - p).squaredNorm();
           if (d < bd) bd = d, best = &fp;
         }
-        if (!best) return invalid("reference body has no feature points");
+        if (!best)
+          return invalid(
+              "reference body has no feature points (crossings of its feature curves: a body with curves from a "
+              "file needs centre_front and centre_back crossing its girths, docs/body-files.md)");
         auto e = encode_on_feature_point(body, best->id, p, mode == NodeEncodingMode::kFeatureOffset);
         if (!e) return e.status();
         f.encoding = *e;
