@@ -23,6 +23,14 @@
 //    MakeHuman adults: male_casualsuit01 (8,426 vertices) alone beside an
 //    outfit of female_sportsuit01, male_casualsuit01 and male_worksuit01
 //    (inner to outer). Skipped without the shared data.
+//  * BM_RegenJobMakeHuman/cli/garments/bodies (issue 26, throughput): the
+//    same MakeHuman jobs run by two CLIs in one run, for the before/after
+//    ratio: cli 1 is the built `atelier`, cli 0 the binary named by the
+//    environment variable ATELIER_BENCH_BEFORE_CLI (a build of the commit
+//    before the change; rows skipped when unset). The templates are encoded
+//    once by the built CLI (the .atd format is unchanged) and both CLIs
+//    read the same files. Counters as BM_RegenOutfitJob (child CPU time
+//    beside the wall time).
 #include <benchmark/benchmark.h>
 #include <fcntl.h>
 #include <spawn.h>
@@ -30,6 +38,7 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -216,6 +225,55 @@ void BM_RegenOutfitJobMakeHuman(benchmark::State& st) {
 BENCHMARK(BM_RegenOutfitJobMakeHuman)
     ->Args({1, 200})
     ->Args({3, 200})
+    ->Iterations(1)
+    ->UseManualTime()
+    ->Unit(benchmark::kSecond);
+
+void BM_RegenJobMakeHuman(benchmark::State& st) {
+  const long cli = st.range(0), garments = st.range(1), bodies = st.range(2);
+  const fs::path data(ATELIER_BENCH_SHARED_DATA);
+  if (!fs::exists(data / "makehuman" / "clothes" / "male_casualsuit01.mhclo")) {
+    st.SkipWithError("no MakeHuman data");
+    return;
+  }
+  const char* before = std::getenv("ATELIER_BENCH_BEFORE_CLI");
+  if (cli == 0 && (before == nullptr || !fs::exists(before))) {
+    st.SkipWithError("ATELIER_BENCH_BEFORE_CLI not set (the binary of the commit before the change)");
+    return;
+  }
+  const std::string exe = cli == 0 ? std::string(before) : std::string(ATELIER_CLI);
+  const std::vector<std::string> names =
+      garments == 1 ? std::vector<std::string>{"male_casualsuit01"}
+                    : std::vector<std::string>{"female_sportsuit01", "male_casualsuit01", "male_worksuit01"};
+  // Encoded once per process (the same files for both CLIs).
+  const fs::path dir = fs::temp_directory_path() / "atelier-bench" / "regen_mh_templates";
+  static bool encoded = false;
+  if (!encoded) {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    for (const auto& g : {"female_sportsuit01", "male_casualsuit01", "male_worksuit01"})
+      if (run_child({ATELIER_CLI, "--quiet", "encode", "--garment",
+                     (data / "makehuman" / "clothes" / (std::string(g) + ".mhclo")).string(), "--reference",
+                     "makehuman", "--data", data.string(), "--out", dir.string()})
+              .code != 0) {
+        st.SkipWithError("atelier encode --garment failed");
+        return;
+      }
+    encoded = true;
+  }
+  std::vector<std::string> args = {exe, "--threads", "2", "--quiet", "regen"};
+  for (const auto& g : names) args.insert(args.end(), {"--template", (dir / (g + ".atd")).string()});
+  args.insert(args.end(), {"--source", "makehuman", "--data", data.string(), "--count", std::to_string(bodies),
+                           "--meshes", "0", "--out"});
+  time_regen(st, args, "regen_mh", bodies);
+  st.SetLabel(std::string(cli == 0 ? "before: " : "after: ") +
+              (garments == 1 ? "male_casualsuit01" : "three suits as one outfit") + ", 2 threads");
+}
+BENCHMARK(BM_RegenJobMakeHuman)
+    ->Args({0, 1, 400})
+    ->Args({1, 1, 400})
+    ->Args({0, 3, 200})
+    ->Args({1, 3, 200})
     ->Iterations(1)
     ->UseManualTime()
     ->Unit(benchmark::kSecond);

@@ -62,23 +62,39 @@ std::vector<std::size_t> layer_order(std::span<const GarmentTemplate* const> gar
   return order;
 }
 
+/// The BVH of layer k (in layer order) over its garment's fanned faces at
+/// its final positions: committed once, when the layer is final, and shared
+/// by the lift of every layer above it and by the penetration count (issue
+/// 26: each built its own before, twice per lower garment and body).
+Status commit_layer_bvh(std::span<const GarmentTemplate* const> garments, std::span<const std::size_t> order,
+                        std::span<const std::vector<Vec3d>> positions, std::size_t k, std::vector<BodyBvh>& bvh) {
+  if (bvh.size() != order.size()) bvh.resize(order.size());
+  if (!bvh[k].empty()) return {};
+  const std::size_t j = order[k];
+  if (Status s = bvh[k].build(positions[j], fan_triangulate(garments[j]->mesh), {}, ExecContext::sequential()); !s) {
+    bvh[k] = BodyBvh();
+    return named(garments[j]->name, s);
+  }
+  return {};
+}
+
 /// After resolve_layers: its floor is the inner layers' clearance at their
 /// vertices, and in a concave crease (the crotch) an inner garment's faces
 /// span the crease farther out than its vertices, so an outer vertex can
 /// end under them. Each such vertex (the test of count_inside_layer) is
 /// lifted along the body normal to layer_gap above the lower garment's
 /// surface, layers inner first, then its body distance is queried again.
+/// `lower` receives the BVH of every layer but the outermost (see
+/// commit_layer_bvh).
 Status lift_over_lower_layers(std::span<const GarmentTemplate* const> garments, const GarmentRegenOptions& options,
                               std::span<std::vector<Vec3d>> positions, std::span<std::vector<BodyDistance>> fin,
-                              const CollisionBody& body) {
+                              const CollisionBody& body, std::vector<BodyBvh>& lower) {
   const std::vector<std::size_t> order = layer_order(garments);
   const double probe = options.layer_penetration.probe, gap = options.collision.layer_gap;
-  std::vector<BodyBvh> lower(order.size());
   for (std::size_t l = 1; l < order.size(); ++l) {
     const std::size_t i = order[l];
-    const std::size_t j = order[l - 1];  // final now: its BVH serves every layer above it
-    if (Status s = lower[l - 1].build(positions[j], fan_triangulate(garments[j]->mesh), {}, ExecContext::sequential()); !s)
-      return named(garments[j]->name, s);
+    // Layer l - 1 is final now: its BVH serves every layer above it.
+    if (Status s = commit_layer_bvh(garments, order, positions, l - 1, lower); !s) return s;
     // A lift moves the closest body point (in a crease, to the other side),
     // so a vertex is tested again until no lower layer is over it (a few
     // rounds; what is left is counted by count_layer_penetration).
@@ -103,21 +119,21 @@ Status lift_over_lower_layers(std::span<const GarmentTemplate* const> garments, 
 
 /// Each garment's vertices inside a garment of a lower layer (z_depth
 /// order, ties in the order given, as resolve_layers orders them): one BVH
-/// over each inner garment's triangles (faces fanned), rays from the outer
+/// over each inner garment's triangles (faces fanned; those the lift
+/// committed are reused, the others committed here), rays from the outer
 /// vertices' closest body points (count_inside_layer).
 Status count_layer_penetration(std::span<const GarmentTemplate* const> garments, const GarmentRegenOptions& options,
                                std::span<const std::vector<Vec3d>> positions, std::vector<GarmentResult>& results,
-                               std::span<const std::vector<BodyDistance>> fin, const ExecContext& ctx) {
+                               std::span<const std::vector<BodyDistance>> fin, std::vector<BodyBvh>& lower,
+                               const ExecContext& ctx) {
   const std::size_t ng = garments.size();
   const std::vector<std::size_t> order = layer_order(garments);
   std::vector<std::vector<std::uint8_t>> flags(ng);
   for (std::size_t k = 0; k < ng; ++k) flags[order[k]].assign(positions[order[k]].size(), 0);
   std::vector<std::uint8_t> inside;
   for (std::size_t k = 0; k + 1 < ng; ++k) {
-    const std::size_t j = order[k];  // an inner layer
-    BodyBvh bvh;
-    if (Status s = bvh.build(positions[j], fan_triangulate(garments[j]->mesh), {}, ExecContext::sequential()); !s)
-      return named(garments[j]->name, s);
+    if (Status s = commit_layer_bvh(garments, order, positions, k, lower); !s) return s;  // an inner layer
+    const BodyBvh& bvh = lower[k];
     for (std::size_t l = k + 1; l < ng; ++l) {  // every layer above it
       const std::size_t i = order[l];
       auto n = count_inside_layer(positions[i], fin[i], bvh, options.layer_penetration, &inside);
@@ -152,6 +168,7 @@ BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTempla
   }
   std::vector<std::vector<BodyDistance>> fin(ng);
   std::vector<CollisionReport> reports(ng);
+  std::vector<BodyBvh> lower;  // per layer (layer order), at its final positions; shared by the lift and the count
   if (!options.collision_pass) {
     for (std::size_t i = 0; i < ng; ++i) {
       fin[i].resize(decoded[i].size());
@@ -180,7 +197,7 @@ BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTempla
       return out;
     }
     reports = std::move(*pass);
-    if (Status s = lift_over_lower_layers(garments, options, decoded, fin, cb); !s) {
+    if (Status s = lift_over_lower_layers(garments, options, decoded, fin, cb, lower); !s) {
       out.status = s;
       return out;
     }
@@ -199,7 +216,7 @@ BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTempla
     r.quality.pushed = reports[i].pushed;
   }
   if (options.layers && ng > 1)
-    if (Status s = count_layer_penetration(garments, options, decoded, out.garments, fin, ctx); !s) {
+    if (Status s = count_layer_penetration(garments, options, decoded, out.garments, fin, lower, ctx); !s) {
       out.status = s;
       out.garments.clear();
       return out;
