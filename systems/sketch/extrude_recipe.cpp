@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "extrude_detail.h"
@@ -203,6 +204,68 @@ Expected<ExtrudeReport> replay_extrusion(Model& model, const ExtrusionRecipe& rc
   auto r = extrude_detail::finish(m, std::move(rep), rc.ring, copies, opt, ctx, nullptr,
                                   extrude_detail::signed_volume(m));
   if (!r) m = std::move(backup);
+  return r;
+}
+
+std::string extrusion_recipe_json(const ExtrusionRecipe& r) {
+  nlohmann::json j;
+  j["format"] = "atelier extrusion recipe";
+  j["version"] = 1;
+  j["base"] = r.base;
+  j["ring"] = r.ring;
+  j["capped"] = r.capped;
+  j["p1"] = {r.p1_segment, r.p1_t};
+  j["p2"] = {r.p2_segment, r.p2_t};
+  j["normal_sign"] = r.normal_sign;
+  nlohmann::json copies = nlohmann::json::array();
+  for (std::size_t k = 0; k < r.scales.size(); ++k) {
+    nlohmann::json c;
+    c["scale"] = r.scales[k];
+    c["rotation"] = std::vector<double>(r.rotations[k].data(), r.rotations[k].data() + 9);  // column-major
+    c["translation"] = {r.translations[k].x(), r.translations[k].y(), r.translations[k].z()};
+    copies.push_back(std::move(c));
+  }
+  j["copies"] = std::move(copies);
+  return j.dump(1) + "\n";
+}
+
+Expected<ExtrusionRecipe> parse_extrusion_recipe(std::string_view text, const std::string& source) {
+  auto bad = [&](const std::string& what) {
+    return Status(ErrorCode::kInvalidArgument, source + ": extrusion recipe: " + what);
+  };
+  const nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return bad("not a JSON object");
+  if (j.value("format", std::string()) != "atelier extrusion recipe") return bad("\"format\" is not \"atelier extrusion recipe\"");
+  ExtrusionRecipe r;
+  try {
+    r.base = j.at("base").get<std::vector<std::uint32_t>>();
+    r.ring = j.at("ring").get<bool>();
+    r.capped = j.at("capped").get<bool>();
+    const auto& p1 = j.at("p1");
+    const auto& p2 = j.at("p2");
+    if (!p1.is_array() || p1.size() != 2 || !p2.is_array() || p2.size() != 2)
+      return bad("\"p1\" and \"p2\" must be [segment, t]");
+    r.p1_segment = p1[0].get<std::uint32_t>(), r.p1_t = p1[1].get<double>();
+    r.p2_segment = p2[0].get<std::uint32_t>(), r.p2_t = p2[1].get<double>();
+    r.normal_sign = j.at("normal_sign").get<double>();
+    const auto& copies = j.at("copies");
+    if (!copies.is_array()) return bad("\"copies\" must be an array");
+    for (std::size_t k = 0; k < copies.size(); ++k) {
+      const auto rot = copies[k].at("rotation").get<std::vector<double>>();
+      const auto tr = copies[k].at("translation").get<std::vector<double>>();
+      if (rot.size() != 9 || tr.size() != 3)
+        return bad("copy " + std::to_string(k) + ": a rotation of 9 numbers and a translation of 3 needed");
+      r.scales.push_back(copies[k].at("scale").get<double>());
+      r.rotations.push_back(Eigen::Map<const Mat3d>(rot.data()));
+      r.translations.push_back(Vec3d(tr[0], tr[1], tr[2]));
+    }
+  } catch (const nlohmann::json::exception& e) {
+    return bad(e.what());
+  }
+  if (!std::isfinite(r.p1_t) || !std::isfinite(r.p2_t) || !std::isfinite(r.normal_sign)) return bad("a number is not finite");
+  for (std::size_t k = 0; k < r.scales.size(); ++k)
+    if (!std::isfinite(r.scales[k]) || !r.rotations[k].allFinite() || !r.translations[k].allFinite())
+      return bad("copy " + std::to_string(k) + " is not finite");
   return r;
 }
 

@@ -39,6 +39,8 @@
 #include <atelier/systems/sketch/extrude.h>
 
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace atelier {
@@ -52,5 +54,14 @@ namespace atelier {
 [[nodiscard]] Expected<ExtrudeReport> replay_extrusion(Model& model, const ExtrusionRecipe& recipe,
                                                        const ExtrudeOptions& options = {},
                                                        const ExecContext& ctx = {});
+
+/// The recipe as JSON text (docs/strokes.md, "Extrusion recipes"); numbers
+/// written to round trip bit for bit.
+[[nodiscard]] std::string extrusion_recipe_json(const ExtrusionRecipe& recipe);
+
+/// Parses extrusion_recipe_json's text. kInvalidArgument naming `source` and
+/// the field (not JSON, a missing or mistyped field, tables of different
+/// sizes, a non-finite number).
+[[nodiscard]] Expected<ExtrusionRecipe> parse_extrusion_recipe(std::string_view text, const std::string& source);
 
 }  // namespace atelier
