@@ -171,7 +171,7 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
   Expected<ExtrudeReport> r = !opt.replay.empty() ? replay_extrusion(m, *recipe, eo, common.context())
                               : in                 ? extrude(m, *in, eo, common.context())
                                                    : Expected<ExtrudeReport>(in.status());
-  Expected<ExtrusionRecipe> out_recipe = Status{};
+  Expected<ExtrusionRecipe> out_recipe = ExtrusionRecipe{};
   if (r && !opt.recipe_out.empty()) out_recipe = extrusion_recipe(m, *r);
   const Status st = r ? Status{} : r.status();
   if (!opt.json.empty()) {
