@@ -3,11 +3,11 @@
 // collar's top edge, on the top regenerated on sampled mannequins, with the
 // mannequin as the body the extrusion is kept outside of.
 //
-// The regeneration path cannot carry an extruded part (a ProfileTemplate
-// has no place for it and nothing transfers an extrusion design the way
-// transfer_curves transfers painted curves), so each design is re-drawn on
-// every regenerated top: the same strokes relative to that body's loop (its
-// extreme points on screen), then extrude().
+// ExtrudeGarment draws each design on every regenerated top (the same
+// strokes relative to that body's loop, its extreme points on screen).
+// ExtrudeRecipe draws it once, on the top regenerated on the reference body,
+// and replays its recipe (systems/sketch/extrude_recipe.h) on the others:
+// no strokes; bit for bit the original on the reference body.
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/body/mannequin.h>
