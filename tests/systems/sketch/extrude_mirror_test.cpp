@@ -258,8 +258,9 @@ SleevesResult both_sleeves_on(const ReferenceBody& body) {
   o.mirror = SymmetryPlane{};
   // The regenerated top is symmetric only to ~1.6 % of its armhole's mean
   // edge on the default mannequin (its left armhole lies 3.6e-4 from the
-  // reflection of the right one), not bit for bit: a tolerance of 5 % of L.
-  o.mirror_tolerance = 0.05;
+  // reflection of the right one), not bit for bit, and to 7.7 % on sampled
+  // mannequin 37 of 100 (the worst; refused at 5 %): a tolerance of 10 % of L.
+  o.mirror_tolerance = 0.10;
   const std::size_t cap = m.nodes.slots.capacity();
   const Model m0 = m;
   Model m1 = m;
