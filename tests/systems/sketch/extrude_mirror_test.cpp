@@ -198,6 +198,8 @@ struct SleevesResult {
   std::int64_t d_nodes = 0, d_faces = 0, d_chi = 0, single_nodes = 0, single_faces = 0, single_chi = 0;
   std::size_t shells = 0, shells0 = 0;
   double mirror_base_error = 0;
+  double asymmetry = 0, tolerance = 0;  // of the armholes, in B's mean edge
+  bool refused = false;                 // cleanly, the armholes too asymmetric
 };
 
 /// The top regenerated on `body`, both sleeves from one armhole stroke (the
@@ -258,9 +260,11 @@ SleevesResult both_sleeves_on(const ReferenceBody& body) {
   o.mirror = SymmetryPlane{};
   // The regenerated top is symmetric only to ~1.6 % of its armhole's mean
   // edge on the default mannequin (its left armhole lies 3.6e-4 from the
-  // reflection of the right one), not bit for bit, and to 7.7 % on sampled
-  // mannequin 37 of 100 (the worst; refused at 5 %): a tolerance of 10 % of L.
-  o.mirror_tolerance = 0.10;
+  // reflection of the right one), not bit for bit: a tolerance of 5 % of L.
+  // On a sampled mannequin it can be less symmetric than that (mannequin 37
+  // of 100: over 13 %); extrude must then refuse cleanly (kDegenerate, the
+  // model unchanged), which is checked against the asymmetry measured here.
+  o.mirror_tolerance = 0.05;
   const std::size_t cap = m.nodes.slots.capacity();
   const Model m0 = m;
   Model m1 = m;
@@ -271,10 +275,27 @@ SleevesResult both_sleeves_on(const ReferenceBody& body) {
     const TopologyCounts t = count_topology(x);
     return static_cast<std::int64_t>(t.nodes) - static_cast<std::int64_t>(t.edges) + static_cast<std::int64_t>(t.faces);
   };
-  auto r = extrude(m, in, o, ExecContext::sequential());
-  if (!r) return {r.status().to_string()};
-  if (Status s = validate(m); !s) return {s.to_string()};
   SleevesResult out;
+  {  // The armholes' asymmetry, brute force: each right armhole node
+     // reflected, to the nearest left armhole node, over B's mean edge.
+    double L = 0;
+    for (std::size_t i = 0; i < loop.size(); ++i)
+      L += (m.position(loop[(i + 1) % loop.size()]) - m.position(loop[i])).norm();
+    L /= static_cast<double>(loop.size());
+    for (NodeIdx v : loop) {
+      double best = INFINITY;
+      for (NodeIdx w : left) best = std::min(best, (mirror_x(m.position(v)) - m.position(w)).norm());
+      out.asymmetry = std::max(out.asymmetry, best / L);
+    }
+  }
+  out.tolerance = o.mirror_tolerance;
+  auto r = extrude(m, in, o, ExecContext::sequential());
+  if (!r) {
+    out.refused = r.status().code() == ErrorCode::kDegenerate && diff_tables(m, m0).empty();
+    if (out.refused && out.asymmetry > o.mirror_tolerance) return out;
+    return {r.status().to_string()};
+  }
+  if (Status s = validate(m); !s) return {s.to_string()};
   out.mirror_base_error = r->mirror_base_error / r->base_mean_edge;
   out.base = r->base.size();
   out.loop = loop.size();
@@ -305,6 +326,10 @@ SleevesResult both_sleeves_on(const ReferenceBody& body) {
 
 void expect_both_sleeves(const SleevesResult& g, const std::string& where) {
   ASSERT_EQ(g.error, "") << where;
+  if (g.refused) {  // only when the armholes are measured too asymmetric
+    EXPECT_GT(g.asymmetry, g.tolerance) << where;
+    return;
+  }
   // B is the right armhole, B' the left one (the other loop farthest out).
   EXPECT_EQ(g.base, g.loop) << where;
   EXPECT_EQ(g.mirror_in_left, g.mirror_base) << where;
@@ -335,11 +360,16 @@ void sleeves_on_mannequins(std::size_t n) {
     got[i] = both_sleeves_on(*body);
   });
   double worst = 0;
+  std::size_t refused = 0;
   for (std::size_t i = 0; i < n; ++i) {
     expect_both_sleeves(got[i], "body " + std::to_string(i));
     worst = std::max(worst, got[i].mirror_base_error);
+    refused += got[i].refused;
   }
+  // Nearly every body's top is symmetric enough (measured: 1 refused of 100).
+  EXPECT_LE(refused, std::max<std::size_t>(1, n / 50));
   ::testing::Test::RecordProperty("worst_mirror_base_error_over_L", std::to_string(worst));
+  ::testing::Test::RecordProperty("refused_as_asymmetric", std::to_string(refused));
 }
 
 }  // namespace
@@ -348,6 +378,7 @@ TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
   // On the reference body. Not as_surface: see ExtrudeMirror.AsSurface* and
   // Extrude.AsSurfaceOnTheTopsArmhole (the top's armhole is a mesh edge).
   const SleevesResult g = both_sleeves_on(atelier::testing::template_fixture().body);
+  EXPECT_FALSE(g.refused);  // symmetric to ~1.6 % of L here
   expect_both_sleeves(g, "reference body");
   RecordProperty("mirror_base_error", std::to_string(g.mirror_base_error));
 }
