@@ -3,12 +3,15 @@
 #include <atelier/io/atomic_file.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/sketch/extrude_recipe.h>
 #include <atelier/systems/spatial/collision_body.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -90,7 +93,11 @@ bool parse_plane(const std::string& text, std::vector<double>& v) {
 CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
   auto* c = app.add_subcommand("extrude", "extrude a surface or a cavity from a mesh by sketched strokes (seed 002)");
   c->add_option("--mesh", opt.mesh, "input mesh: OBJ, PLY, OFF or .atm")->required();
-  c->add_option("--strokes", opt.strokes, "stroke file with a run of extrude strokes (docs/strokes.md)")->required();
+  auto* input = c->add_option_group("input", "the strokes or a recipe (exactly one)");
+  input->add_option("--strokes", opt.strokes, "stroke file with a run of extrude strokes (docs/strokes.md)");
+  input->add_option("--replay", opt.replay, "extrusion recipe (from --recipe-out) to replay instead of strokes");
+  input->require_option(1);
+  c->add_option("--recipe-out", opt.recipe_out, "write the extrusion's recipe (JSON) for --replay on other meshes");
   c->add_option("--out", opt.out, "output mesh: OBJ, PLY, OFF or .atm")->required();
   c->add_option("--json", opt.json, "write the extrusion report as JSON");
   c->add_option("--first", opt.first, "index of the base stroke of the extrusion (default 0)");
@@ -119,9 +126,19 @@ CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
 int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
   check_mesh_output(opt.out);
   Model m = read_mesh_file(opt.mesh);
-  auto file = read_strokes(opt.strokes);
-  if (!file) throw Error(file.status());
-  auto in = extrusion_from_file(*file, opt.first);
+  Expected<ExtrudeStrokes> in = Status(ErrorCode::kInvalidArgument, "no strokes");
+  Expected<ExtrusionRecipe> recipe = Status(ErrorCode::kInvalidArgument, "no recipe");
+  if (!opt.strokes.empty()) {
+    auto file = read_strokes(opt.strokes);
+    if (!file) throw Error(file.status());
+    in = extrusion_from_file(*file, opt.first);
+  } else {
+    std::ifstream f(opt.replay, std::ios::binary);
+    if (!f) throw Error(Status(ErrorCode::kInvalidArgument, opt.replay.string() + ": cannot be read"));
+    const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    recipe = parse_extrusion_recipe(text, opt.replay.string());
+    if (!recipe) throw Error(recipe.status());
+  }
   ExtrudeOptions eo;
   eo.pick_radius = opt.pick_radius;
   eo.optimise = !opt.no_optimise;
@@ -151,19 +168,29 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
       throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + s.message()));
     eo.body = &body;
   }
-  Expected<ExtrudeReport> r = in ? extrude(m, *in, eo, common.context()) : Expected<ExtrudeReport>(in.status());
+  Expected<ExtrudeReport> r = !opt.replay.empty() ? replay_extrusion(m, *recipe, eo, common.context())
+                              : in                 ? extrude(m, *in, eo, common.context())
+                                                   : Expected<ExtrudeReport>(in.status());
+  Expected<ExtrusionRecipe> out_recipe = ExtrusionRecipe{};
+  if (r && !opt.recipe_out.empty()) out_recipe = extrusion_recipe(m, *r);
   const Status st = r ? Status{} : r.status();
   if (!opt.json.empty()) {
     const std::string text = report_json(opt, r ? &*r : nullptr, st).dump(1) + "\n";
     write_atomically(opt.json, [&](AtomicFile& f) { f.write(text); });
   }
-  if (!r) throw Error(Status(st.code(), opt.strokes.string() + ": " + st.message()));
+  const std::string source = (opt.replay.empty() ? opt.strokes : opt.replay).string();
+  if (!r) throw Error(Status(st.code(), source + ": " + st.message()));
+  if (!out_recipe) throw Error(Status(out_recipe.status().code(), source + ": " + out_recipe.status().message()));
   std::printf(
       "extrude: %zu copies of a %s of %zu nodes, %zu nodes and %zu faces added (%zu splits, %zu collapses, "
       "%zu swaps), volume change %.6g\n",
       r->copies, r->base_ring ? "ring" : "chain", r->base.size(), r->nodes_added, r->faces_added, r->splits,
       r->collapses, r->swaps, r->volume_change);
   write_mesh_file(m, opt.out, log);
+  if (!opt.recipe_out.empty()) {
+    const std::string text = extrusion_recipe_json(*out_recipe);
+    write_atomically(opt.recipe_out, [&](AtomicFile& f) { f.write(text); });
+  }
   if (eo.body && r->inside_after > 0) {
     std::printf("extrude: %zu new nodes are still inside the body %s (deepest %.6g)\n", r->inside_after,
                 opt.body.string().c_str(), -r->min_body_distance);

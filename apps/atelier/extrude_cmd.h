@@ -4,6 +4,10 @@
 //   atelier extrude --mesh cup.obj --strokes dome.json --out dome.obj --json report.json
 //   atelier extrude --mesh top.atm --strokes sleeve.json --out top.atm --as-surface --body body.obj
 //   atelier extrude --mesh top.obj --strokes sleeve.json --out top2.obj --mirror x   (both sleeves)
+//   atelier extrude --mesh top.obj --strokes sleeve.json --out top2.obj --recipe-out sleeve.recipe.json
+//   atelier extrude --mesh other_top.obj --replay sleeve.recipe.json --out other2.obj --body other.obj
+// (--replay: replay_extrusion, systems/sketch/extrude_recipe.h, instead of
+// the strokes: the same part relative to B on a mesh of the same topology.)
 // Thin over extrude (systems/sketch/extrude.h). Exit codes: 0 ok, 2 usage,
 // 3 bad input (mesh, stroke file, or strokes the extrusion refuses on this
 // mesh: no mesh is written, the --json report holds the error), 4 internal.
@@ -20,6 +24,7 @@ namespace atelier::cli {
 
 struct ExtrudeCmdOptions {
   std::filesystem::path mesh, strokes, out, json;
+  std::filesystem::path recipe_out, replay;  // write the recipe / replay one instead of strokes
   std::size_t first = 0;  // index of the run's first (base) stroke
   double pick_radius = 12.0;
   bool no_optimise = false;

@@ -64,7 +64,7 @@ double distance_to(std::span<const Vec2d> line, const Vec2d& q) {
 /// The point of B nearest on screen to pixel q (section 3.2, constraint 1):
 /// on B's segments, linearly interpolated in 3D. Returns the screen distance.
 double nearest_on_base(const Model& m, const Camera& cam, std::span<const NodeIdx> base, bool ring, const Vec2d& q,
-                       Vec3d& out) {
+                       Vec3d& out, std::uint32_t& seg, double& at) {
   double best = std::numeric_limits<double>::infinity();
   const std::size_t segs = ring ? base.size() : base.size() - 1;
   for (std::size_t i = 0; i < segs; ++i) {
@@ -77,7 +77,9 @@ double nearest_on_base(const Model& m, const Camera& cam, std::span<const NodeId
     const double dist = (a + t * d - q).norm();
     if (dist < best) {
       best = dist;
-      out = A + t * (B - A);
+      out = A + t * (B - A);  // the recipe's P* = B[s] + t (B[s+1] - B[s]), bit for bit
+      seg = static_cast<std::uint32_t>(i);
+      at = t;
     }
   }
   return best;
@@ -376,154 +378,24 @@ Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
   return h;
 }
 
-Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx,
-                            Stop stop, RunOut* out, const BaseSide* only) {
-  if (!(opt.pick_radius > 0) || !std::isfinite(opt.pick_radius))
-    return fail(ErrorCode::kInvalidArgument, "pick_radius must be positive and finite");
-  for (const Camera* c : {&in.base_camera, &in.sweep_camera})
-    if (Status s = c->check(); !s) return fail(ErrorCode::kInvalidArgument, s.message());
-  if (Status s = check_stroke(in.base, "base stroke"); !s) return s;
-  if (in.sweep.empty() || in.sweep.size() > 2)
-    return fail(ErrorCode::kInvalidArgument,
-                "one (closed extrusion) or two (open extrusion) extruding strokes needed, found " +
-                    std::to_string(in.sweep.size()));
-  for (std::size_t k = 0; k < in.sweep.size(); ++k)
-    if (Status s = check_stroke(in.sweep[k], "extruding stroke " + std::to_string(k)); !s) return s;
-  if (opt.body && (!(opt.clearance >= 0) || !std::isfinite(opt.clearance) || opt.push_rounds < 1))
-    return fail(ErrorCode::kInvalidArgument, "the clearance must be finite and >= 0, push_rounds >= 1");
-  if (opt.body && opt.body->empty()) return fail(ErrorCode::kInvalidArgument, "the body is empty");
-  for (SurfaceIdx s : opt.surfaces)
-    if (!m.alive(s)) return fail(ErrorCode::kStaleHandle, "surface " + std::to_string(s.value) + " is dead");
-
-  ExtrudeReport rep;
-  const double volume_before = signed_volume(m);
-  const bool closed_stroke = in.base.size() > 2 && in.base.front() == in.base.back();
-  const bool capped = in.sweep.size() == 1;
-  // Step 1: base curve. A closed stroke on an open boundary loop is the
-  // loop (open_base); on the surface it is painted and cut (closed_base).
-  Expected<Base> base = open_base(m, in, opt, only);
-  if (!base && closed_stroke) base = closed_base(m, in, opt, ctx);
-  if (!base) return base.status();
-  rep.base = base->nodes;
-  rep.base_ring = base->ring;
-  rep.capped = capped;
-  rep.faces_removed = base->faces_removed;
-  if (stop == Stop::kAfterBase) return rep;
-  if (capped && !base->ring)
-    return fail(ErrorCode::kInvalidArgument, "a closed extrusion (one extruding stroke) needs a closed base ring");
+Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std::vector<std::vector<Vec3d>>& copies,
+                               const ExtrudeOptions& opt, const ExecContext& ctx, RunOut* out, double volume_before) {
   const std::vector<NodeIdx>& B = rep.base;
   const std::size_t n = B.size();
   const SurfaceIdx surface = m.nodes.surface[B[0].value];
-  {
-    double sum = 0;
-    const std::size_t segs = base->ring ? n : n - 1;
-    for (std::size_t i = 0; i < segs; ++i) sum += (m.position(B[(i + 1) % n]) - m.position(B[i])).norm();
-    rep.base_mean_edge = sum / static_cast<double>(segs);
-  }
-
-  // Step 2: projection plane (eq. 1).
-  Vec3d centroid = Vec3d::Zero();
-  for (NodeIdx v : B) centroid += m.position(v);
-  centroid /= static_cast<double>(n);
-  Mat3d cov = Mat3d::Zero();
-  for (NodeIdx v : B) cov += (m.position(v) - centroid) * (m.position(v) - centroid).transpose();
-  Eigen::SelfAdjointEigenSolver<Mat3d> eig(cov);
-  const Vec3d ev = eig.eigenvalues();
-  if (!(ev[2] > 0) || !(ev[1] > 1e-12 * ev[2]))
-    return fail(ErrorCode::kDegenerate, "the base curve's least-squares plane has no area (B is straight)");
-  rep.base_normal = eig.eigenvectors().col(0).normalized();
-  const Camera& cam = in.sweep_camera;
-  const Vec2d end1 = in.sweep[0].front(), end2 = capped ? in.sweep[0].back() : in.sweep[1].front();
-  const double d1 = nearest_on_base(m, cam, B, base->ring, end1, rep.p1);
-  const double d2 = nearest_on_base(m, cam, B, base->ring, end2, rep.p2);
-  if (!(d1 <= opt.pick_radius) || !(d2 <= opt.pick_radius)) {
-    std::ostringstream o;
-    o << (capped ? "the extruding stroke's " : "extruding stroke ")
-      << (!(d1 <= opt.pick_radius) ? (capped ? "first point" : "0") : (capped ? "last point" : "1"))
-      << " does not start near the base curve (" << (!(d1 <= opt.pick_radius) ? d1 : d2) << " pixels from it, at most "
-      << opt.pick_radius << ")";
-    return fail(ErrorCode::kInvalidArgument, o.str());
-  }
-  const Vec3d e_star = rep.p2 - rep.p1;
-  const double chord = e_star.norm();
-  if (!(chord > 1e-12 * (1 + centroid.norm())))
-    return fail(ErrorCode::kDegenerate, "P1* and P2* coincide: the strokes' ends meet B at one point");
-  Vec3d np = e_star.cross(rep.base_normal);
-  if (!(np.norm() > 1e-6 * chord)) return fail(ErrorCode::kDegenerate, "P1*P2* is parallel to the normal of B");
-  np.normalize();
-  const Vec3d view = cam.ray(screen(cam, rep.p1)).second;
-  if (np.dot(view) > 0) np = -np;
-  if (!(std::abs(np.dot(view)) > 1e-3))
-    return fail(ErrorCode::kDegenerate, "the projection plane is seen edge-on from the extruding strokes' camera");
-  rep.plane_normal = np;
-
-  std::vector<std::vector<Vec3d>> proj(in.sweep.size());
-  for (std::size_t k = 0; k < in.sweep.size(); ++k) {
-    for (const Vec2d& px : in.sweep[k]) {
-      auto p = cast(cam, px, rep.p1, np, "extruding stroke " + std::to_string(k));
-      if (!p) return p.status();
-      proj[k].push_back(*p);
-    }
-    // The sweep starts on B itself: the stroke's first point becomes P*.
-    proj[k].front() = k == 0 ? rep.p1 : rep.p2;
-    if (capped) proj[k].back() = rep.p2;
-    proj[k] = dedupe(std::move(proj[k]));
-  }
-
-  // Step 3: sweep (Figs. 5-6, eq. 2).
-  const std::vector<Pair> pairs = capped ? sweep_one(proj[0]) : sweep_two(proj[0], proj[1]);
-  if (pairs.empty()) return fail(ErrorCode::kDegenerate, "the extruding stroke is too short for one copy of B");
-  const Vec3d u_star = e_star / chord;
-  Mat3d f_star;
-  f_star << np, u_star, np.cross(u_star);
-  std::vector<std::vector<Vec3d>> copies;
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    Vec3d e = pairs[k].right - pairs[k].left;
-    e -= e.dot(np) * np;  // the pair lies in the plane up to rounding
-    const double len = e.norm();
-    const bool apex = capped && k + 1 == pairs.size();
-    if (!apex && !(len > 1e-9 * chord))
-      return fail(ErrorCode::kDegenerate, "copy " + std::to_string(k + 1) +
-                                              " collapses to a point (the extruding strokes cross or meet early)");
-    Mat3d rot = Mat3d::Identity();
-    double scale = 0;
-    if (!apex) {
-      const Vec3d u = e / len;
-      Mat3d f;
-      f << np, u, np.cross(u);
-      rot = f * f_star.transpose();
-      scale = len / chord;
-    }
-    const Vec3d trans = pairs[k].left - scale * (rot * rep.p1);
-    rep.scales.push_back(scale);
-    rep.rotations.push_back(rot);
-    rep.translations.push_back(trans);
-    std::vector<Vec3d> row;
-    if (apex) {
-      row.push_back(pairs[k].left);
-    } else {
-      for (NodeIdx v : B) row.push_back(trans + scale * (rot * m.position(v)));
-    }
-    for (const Vec3d& p : row)
-      if (!p.allFinite()) return fail(ErrorCode::kDegenerate, "a copy of B is not finite");
-    copies.push_back(std::move(row));
-  }
-  rep.copies = copies.size();
-  if (ctx.cancelled()) return fail(ErrorCode::kCancelled, "cancelled");
-
   // Step 4: sewing (Figs. 7-8).
   const std::size_t faces0 = m.num_faces(), nodes0 = m.num_nodes();
   std::vector<char> old_node(m.nodes.slots.capacity());
   for (std::uint32_t v = 0; v < old_node.size(); ++v) old_node[v] = m.alive(NodeIdx{v});
   if (out) {
-    out->ring = base->ring;
+    out->ring = ring;
     out->old_node = old_node;
     out->old_face.assign(m.faces.slots.capacity(), 0);
     for (std::uint32_t f = 0; f < out->old_face.size(); ++f) out->old_face[f] = m.alive(FaceIdx{f});
   }
   std::vector<FaceIdx> swept;
   std::vector<NodeIdx> prev = B;
-  const std::size_t segs = base->ring ? n : n - 1;
+  const std::size_t segs = ring ? n : n - 1;
   auto tri = [&](NodeIdx a, NodeIdx b, NodeIdx c) -> Status {
     std::array<HalfedgeIdx, 3> cyc;
     const NodeIdx v[3] = {a, b, c};
@@ -586,12 +458,148 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   rep.faces_added = m.num_faces() - faces0;
   rep.volume_change = signed_volume(m) - volume_before;
   if (opt.as_surface)
-    if (Status s = split_off(m, B, base->ring, rep, ctx); !s) return s;
+    if (Status s = split_off(m, B, ring, rep, ctx); !s) return s;
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
     if (m.alive(NodeIdx{v}) && !m.nodes.position[v].allFinite())
       return fail(ErrorCode::kInternal, "node " + std::to_string(v) + " has a non-finite position");
   if (Status s = validate(m); !s) return fail(ErrorCode::kInternal, "the result does not validate: " + s.message());
   return rep;
+}
+
+Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt, const ExecContext& ctx,
+                            Stop stop, RunOut* out, const BaseSide* only) {
+  if (!(opt.pick_radius > 0) || !std::isfinite(opt.pick_radius))
+    return fail(ErrorCode::kInvalidArgument, "pick_radius must be positive and finite");
+  for (const Camera* c : {&in.base_camera, &in.sweep_camera})
+    if (Status s = c->check(); !s) return fail(ErrorCode::kInvalidArgument, s.message());
+  if (Status s = check_stroke(in.base, "base stroke"); !s) return s;
+  if (in.sweep.empty() || in.sweep.size() > 2)
+    return fail(ErrorCode::kInvalidArgument,
+                "one (closed extrusion) or two (open extrusion) extruding strokes needed, found " +
+                    std::to_string(in.sweep.size()));
+  for (std::size_t k = 0; k < in.sweep.size(); ++k)
+    if (Status s = check_stroke(in.sweep[k], "extruding stroke " + std::to_string(k)); !s) return s;
+  if (opt.body && (!(opt.clearance >= 0) || !std::isfinite(opt.clearance) || opt.push_rounds < 1))
+    return fail(ErrorCode::kInvalidArgument, "the clearance must be finite and >= 0, push_rounds >= 1");
+  if (opt.body && opt.body->empty()) return fail(ErrorCode::kInvalidArgument, "the body is empty");
+  for (SurfaceIdx s : opt.surfaces)
+    if (!m.alive(s)) return fail(ErrorCode::kStaleHandle, "surface " + std::to_string(s.value) + " is dead");
+
+  ExtrudeReport rep;
+  const double volume_before = signed_volume(m);
+  const bool closed_stroke = in.base.size() > 2 && in.base.front() == in.base.back();
+  const bool capped = in.sweep.size() == 1;
+  // Step 1: base curve. A closed stroke on an open boundary loop is the
+  // loop (open_base); on the surface it is painted and cut (closed_base).
+  Expected<Base> base = open_base(m, in, opt, only);
+  if (!base && closed_stroke) base = closed_base(m, in, opt, ctx);
+  if (!base) return base.status();
+  rep.base = base->nodes;
+  rep.base_ring = base->ring;
+  rep.capped = capped;
+  rep.faces_removed = base->faces_removed;
+  if (stop == Stop::kAfterBase) return rep;
+  if (capped && !base->ring)
+    return fail(ErrorCode::kInvalidArgument, "a closed extrusion (one extruding stroke) needs a closed base ring");
+  const std::vector<NodeIdx>& B = rep.base;
+  const std::size_t n = B.size();
+  {
+    double sum = 0;
+    const std::size_t segs = base->ring ? n : n - 1;
+    for (std::size_t i = 0; i < segs; ++i) sum += (m.position(B[(i + 1) % n]) - m.position(B[i])).norm();
+    rep.base_mean_edge = sum / static_cast<double>(segs);
+  }
+
+  // Step 2: projection plane (eq. 1).
+  Vec3d centroid = Vec3d::Zero();
+  for (NodeIdx v : B) centroid += m.position(v);
+  centroid /= static_cast<double>(n);
+  Mat3d cov = Mat3d::Zero();
+  for (NodeIdx v : B) cov += (m.position(v) - centroid) * (m.position(v) - centroid).transpose();
+  Eigen::SelfAdjointEigenSolver<Mat3d> eig(cov);
+  const Vec3d ev = eig.eigenvalues();
+  if (!(ev[2] > 0) || !(ev[1] > 1e-12 * ev[2]))
+    return fail(ErrorCode::kDegenerate, "the base curve's least-squares plane has no area (B is straight)");
+  rep.base_normal = eig.eigenvectors().col(0).normalized();
+  const Camera& cam = in.sweep_camera;
+  const Vec2d end1 = in.sweep[0].front(), end2 = capped ? in.sweep[0].back() : in.sweep[1].front();
+  const double d1 = nearest_on_base(m, cam, B, base->ring, end1, rep.p1, rep.recipe.p1_segment, rep.recipe.p1_t);
+  const double d2 = nearest_on_base(m, cam, B, base->ring, end2, rep.p2, rep.recipe.p2_segment, rep.recipe.p2_t);
+  if (!(d1 <= opt.pick_radius) || !(d2 <= opt.pick_radius)) {
+    std::ostringstream o;
+    o << (capped ? "the extruding stroke's " : "extruding stroke ")
+      << (!(d1 <= opt.pick_radius) ? (capped ? "first point" : "0") : (capped ? "last point" : "1"))
+      << " does not start near the base curve (" << (!(d1 <= opt.pick_radius) ? d1 : d2) << " pixels from it, at most "
+      << opt.pick_radius << ")";
+    return fail(ErrorCode::kInvalidArgument, o.str());
+  }
+  const Vec3d e_star = rep.p2 - rep.p1;
+  const double chord = e_star.norm();
+  if (!(chord > 1e-12 * (1 + centroid.norm())))
+    return fail(ErrorCode::kDegenerate, "P1* and P2* coincide: the strokes' ends meet B at one point");
+  Vec3d np = e_star.cross(rep.base_normal);
+  if (!(np.norm() > 1e-6 * chord)) return fail(ErrorCode::kDegenerate, "P1*P2* is parallel to the normal of B");
+  np.normalize();
+  const Vec3d view = cam.ray(screen(cam, rep.p1)).second;
+  if (np.dot(view) > 0) np = -np;
+  if (!(std::abs(np.dot(view)) > 1e-3))
+    return fail(ErrorCode::kDegenerate, "the projection plane is seen edge-on from the extruding strokes' camera");
+  rep.plane_normal = np;
+
+  std::vector<std::vector<Vec3d>> proj(in.sweep.size());
+  for (std::size_t k = 0; k < in.sweep.size(); ++k) {
+    for (const Vec2d& px : in.sweep[k]) {
+      auto p = cast(cam, px, rep.p1, np, "extruding stroke " + std::to_string(k));
+      if (!p) return p.status();
+      proj[k].push_back(*p);
+    }
+    // The sweep starts on B itself: the stroke's first point becomes P*.
+    proj[k].front() = k == 0 ? rep.p1 : rep.p2;
+    if (capped) proj[k].back() = rep.p2;
+    proj[k] = dedupe(std::move(proj[k]));
+  }
+
+  // Step 3: sweep (Figs. 5-6, eq. 2).
+  const std::vector<Pair> pairs = capped ? sweep_one(proj[0]) : sweep_two(proj[0], proj[1]);
+  if (pairs.empty()) return fail(ErrorCode::kDegenerate, "the extruding stroke is too short for one copy of B");
+  const Vec3d u_star = e_star / chord;
+  Mat3d f_star;
+  f_star << np, u_star, np.cross(u_star);
+  std::vector<std::vector<Vec3d>> copies;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    Vec3d e = pairs[k].right - pairs[k].left;
+    e -= e.dot(np) * np;  // the pair lies in the plane up to rounding
+    const double len = e.norm();
+    const bool apex = capped && k + 1 == pairs.size();
+    if (!apex && !(len > 1e-9 * chord))
+      return fail(ErrorCode::kDegenerate, "copy " + std::to_string(k + 1) +
+                                              " collapses to a point (the extruding strokes cross or meet early)");
+    Mat3d rot = Mat3d::Identity();
+    double scale = 0;
+    if (!apex) {
+      const Vec3d u = e / len;
+      Mat3d f;
+      f << np, u, np.cross(u);
+      rot = f * f_star.transpose();
+      scale = len / chord;
+    }
+    const Vec3d trans = pairs[k].left - scale * (rot * rep.p1);
+    rep.scales.push_back(scale);
+    rep.rotations.push_back(rot);
+    rep.translations.push_back(trans);
+  }
+  // The copies through B's frame (extrude_recipe.h): the recipe holds the
+  // similarities relative to B, and the copies are placed from it, exactly
+  // as replay_extrusion places them (a replay on this B repeats them bit for
+  // bit; they differ from the direct similarities above by rounding).
+  rep.recipe.ring = base->ring;
+  rep.recipe.capped = capped;
+  for (NodeIdx v : B) rep.recipe.base.push_back(v.value);
+  if (Status s = extrude_detail::localise(m, rep.recipe, rep); !s) return s;
+  if (Status s = extrude_detail::place_copies(m, rep.recipe, rep, copies); !s) return s;
+  if (ctx.cancelled()) return fail(ErrorCode::kCancelled, "cancelled");
+
+  return finish(m, std::move(rep), base->ring, copies, opt, ctx, out, volume_before);
 }
 
 }  // namespace extrude_detail

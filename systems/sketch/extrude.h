@@ -76,6 +76,7 @@
 #include <atelier/systems/view/strokes.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -148,6 +149,22 @@ struct ExtrudeOptions {
   double mirror_tolerance = 1e-6;
 };
 
+/// An extrusion relative to its base curve B (systems/sketch/extrude_recipe.h:
+/// B's frame, P_i* as points of B's segments, the copies' similarities in
+/// that frame), filled by extrude() and replayed by replay_extrusion().
+struct ExtrusionRecipe {
+  std::vector<std::uint32_t> base;  // B's node indices in order
+  bool ring = false;                // B is a boundary loop
+  bool capped = false;              // the last copy is one vertex (closed extrusion)
+  std::uint32_t p1_segment = 0, p2_segment = 0;  // P_i* = B[s] + t (B[s+1] - B[s])
+  double p1_t = 0, p2_t = 0;
+  double normal_sign = 1;  // n_p = normal_sign * unit(e x n_B)
+  /// Copy k in B's frame: x_loc' = translations[k] + scales[k] * rotations[k] * x_loc.
+  std::vector<double> scales;
+  std::vector<Mat3d> rotations;
+  std::vector<Vec3d> translations;
+};
+
 struct ExtrudeReport {
   bool base_ring = false;                        // B is a closed ring
   bool capped = false;                           // closed extrusion: the last copy is one vertex
@@ -161,6 +178,9 @@ struct ExtrudeReport {
   std::vector<double> scales;
   std::vector<Mat3d> rotations;
   std::vector<Vec3d> translations;
+  /// The same extrusion relative to B (replay_extrusion; usable on another
+  /// model when B was a boundary, faces_removed == 0).
+  ExtrusionRecipe recipe;
   std::size_t faces_removed = 0;                 // by the base cut
   std::size_t swept_nodes = 0, swept_faces = 0;  // added by sweep and sewing
   std::size_t splits = 0, collapses = 0, swaps = 0;

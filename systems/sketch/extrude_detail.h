@@ -37,6 +37,20 @@ struct BaseSide {
 [[nodiscard]] Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOptions& opt,
                                           const ExecContext& ctx, Stop stop, RunOut* out,
                                           const BaseSide* only = nullptr);
+/// Steps 4-5 and the additions (sewing, body push, optimisation, the part
+/// as a surface, validation) for copies of B = rep.base already placed
+/// (rep.base_mean_edge set): shared by run() and the recipe replay.
+[[nodiscard]] Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring,
+                                             const std::vector<std::vector<Vec3d>>& copies, const ExtrudeOptions& opt,
+                                             const ExecContext& ctx, RunOut* out, double volume_before);
+/// The recipe's local similarities (and n_p's sign) from rep's world ones,
+/// in B's frame on m (extrude_recipe.cpp).
+[[nodiscard]] Status localise(const Model& m, ExtrusionRecipe& rc, const ExtrudeReport& rep);
+/// The copies of B from the recipe, through B's frame on m; sets rep's
+/// similarities, P_i*, n_p, L and copies (extrude_recipe.cpp). run() places
+/// its copies this way too, so a replay on the same B repeats them bit for bit.
+[[nodiscard]] Status place_copies(const Model& m, const ExtrusionRecipe& rc, ExtrudeReport& rep,
+                                  std::vector<std::vector<Vec3d>>& copies);
 [[nodiscard]] double signed_volume(const Model& m);
 [[nodiscard]] std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old);
 void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,

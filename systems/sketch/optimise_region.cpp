@@ -145,6 +145,10 @@ class Optimiser {
   /// Moving r to p keeps every face around r (but those holding k) turned
   /// the same way and makes no edge longer than hi.
   bool collapse_ok(NodeIdx r, NodeIdx k, const Vec3d& p) const {
+    // r staying where it is (a fixed end of B, or a border end kept) changes
+    // none of its edges or faces: its edges outside the region may be far
+    // longer than hi and must not veto the collapse.
+    if (p == m_.position(r)) return true;
     bool ok = true;
     m_.for_each_outgoing(r, [&](HalfedgeIdx h) {
       if (!ok) return;
@@ -190,7 +194,21 @@ class Optimiser {
         if (cb) p = m_.position(b);
       }
     }
-    if (!collapse_ok(gone, keep, p) || !collapse_ok(keep, gone, p)) return NodeIdx{};
+    if (!collapse_ok(gone, keep, p) || !collapse_ok(keep, gone, p)) {
+      // Last resort, two free inner ends: the midpoint may fold a face or
+      // stretch an edge where one of the ends would not (a crease of the
+      // swept surface, a pushed fold): try each end's place.
+      if (collapse_limit_ <= hi_ || fixed(keep) || on_border(a) || on_border(b)) return NodeIdx{};
+      bool found = false;
+      for (const NodeIdx at : {a, b}) {
+        p = m_.position(at);
+        if (collapse_ok(gone, keep, p) && collapse_ok(keep, gone, p)) {
+          found = true;
+          break;
+        }
+      }
+      if (!found) return NodeIdx{};
+    }
     const Vec3d keep_pos = m_.position(keep);
     auto res = edge_collapse(m_, m_.handle(e), p, eo_);
     if (!res) return NodeIdx{};
@@ -441,25 +459,39 @@ class Optimiser {
   }
 
   // ---------------------------------------------------------- step 2
+  /// Each edge at most once in the queue (the budget counts operations, not
+  /// duplicates of the same edge pushed by each of its neighbours).
+  void enqueue(EdgeIdx e, std::deque<EdgeIdx>& q) {
+    if (e.value >= queued_.size()) queued_.resize(m_.edges.slots.capacity(), 0);
+    if (queued_[e.value]) return;
+    queued_[e.value] = 1;
+    q.push_back(e);
+  }
+
   void push_ring(NodeIdx v, std::deque<EdgeIdx>& q) {
     if (!m_.alive(v)) return;
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
       const EdgeIdx e = edge_of(h);
-      if (editable(e) && !in_bounds(length(e))) q.push_back(e);
+      if (editable(e) && !in_bounds(length(e))) enqueue(e, q);
     });
   }
 
   Status repair(const ExecContext& ctx) {
     collapse_limit_ = hi_;
     std::deque<EdgeIdx> q;
-    for (EdgeIdx e : region_edges())
-      if (!in_bounds(length(e))) q.push_back(e);
-    std::size_t budget = static_cast<std::size_t>(std::max(1, o_.repair_budget)) * (q.size() + 16);
+    const std::vector<EdgeIdx> all = region_edges();
+    for (EdgeIdx e : all)
+      if (!in_bounds(length(e))) enqueue(e, q);
+    // Per region edge, as documented (not per edge out of bounds at the
+    // start: a few bad edges in a large region may need many operations
+    // around them before their neighbourhood settles).
+    std::size_t budget = static_cast<std::size_t>(std::max(1, o_.repair_budget)) * (all.size() + 16);
     std::size_t ops = 0;
     while (!q.empty() && ops < budget) {
       if ((ops & 1023) == 0 && ctx.cancelled()) return region_error(ErrorCode::kCancelled, "cancelled");
       const EdgeIdx e = q.front();
       q.pop_front();
+      queued_[e.value] = 0;
       if (!editable(e)) continue;
       const double l = length(e);
       if (in_bounds(l)) continue;
@@ -556,7 +588,7 @@ class Optimiser {
   Model& m_;
   const RegionOptimiseOptions& o_;
   double lo_ = 0, hi_ = 0, collapse_limit_ = 0;
-  std::vector<char> outside_, fixed_;
+  std::vector<char> outside_, fixed_, queued_;
   std::vector<std::uint32_t> stamp_, node_stamp_;
   std::uint32_t tick_ = 0;
   EditOptions eo_;
@@ -585,7 +617,16 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
     free = free && h.valid() && m.alive(edge_of(h)) && !m.edges.mesh_edge[edge_of(h).value].valid();
   if (free && edits) temp = m.new_mesh_edge(m.nodes.surface[m.tail(chain[0]).value], chain);
   Status s = opt.rounds(ctx);
-  if (s && o.repair_budget > 0) s = opt.repair(ctx);
+  // A greedy repair can stall where every single operation makes some
+  // ring worse; a relaxation of the whole region moves it out of that
+  // state, and the repair runs again (at most three times more).
+  for (int round = 0; s && o.repair_budget > 0 && round < 4; ++round) {
+    if (round > 0) {
+      if (opt.stats().outside == 0) break;
+      if (o.relax) opt.relax_all();
+    }
+    s = opt.repair(ctx);
+  }
   if (temp.valid()) m.delete_mesh_edge(temp);
   if (!s) return s;
   opt.rep_.after = opt.stats();

@@ -13,8 +13,10 @@
 //  2. Repair (beyond the paper, which states no bound): a local queue of the
 //     edges still outside [low L, high L]; each is swapped, split or
 //     collapsed, or its free ends relaxed, and the edges an operator touched
-//     re-enter the queue. Never a pass over the whole model; budget
-//     options.repair_budget operations per region edge.
+//     re-enter the queue (each edge at most once in it). Never a pass over
+//     the whole model; budget options.repair_budget operations per region
+//     edge. A stalled repair (edges left out, nothing applies) is followed
+//     by a relaxation of the region and the repair again, up to three times.
 //
 // Region: the faces given (triangles), and every face an operator creates
 // from them. An edge is editable when every face on it is a region face.

@@ -230,3 +230,45 @@ TEST(ExtrudeCli, MirrorDomesCloseBothCups) {
   EXPECT_EQ(atelier::testing::run_cli(args(f, f.dir / "bad.obj", "--mirror x --mirror-plane 0,0,0,1,0,0")).code, 2);
   EXPECT_FALSE(fs::exists(f.dir / "bad.obj"));
 }
+
+TEST(ExtrudeCli, RecipeReplaysTheDomeOnAnotherCup) {
+  // Recorded on the cup, replayed on the cup (the same mesh) and on the cup
+  // scaled by 2 about the origin: the dome follows B, so without the
+  // optimisation its new nodes lie on the sphere of radius 2.
+  const Files f = setup("extrude-cli-recipe");
+  const fs::path recipe = f.dir / "dome.recipe.json";
+  auto r = atelier::testing::run_cli(args(f, f.dir / "out.obj", "--no-optimise --recipe-out " + recipe.string()));
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(fs::exists(recipe));
+  const Model cup = read_obj(f.mesh), once = read_obj(f.dir / "out.obj");
+  Model big = cup;
+  for (auto& p : big.nodes.position) p *= 2;
+  write_obj(big, f.dir / "big.obj");
+  const std::string replay = " --replay " + recipe.string() + " --no-optimise --out ";
+  r = atelier::testing::run_cli("extrude --mesh " + f.mesh.string() + replay + (f.dir / "again.obj").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = atelier::testing::run_cli("extrude --mesh " + (f.dir / "big.obj").string() + replay + (f.dir / "big_out.obj").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Model again = read_obj(f.dir / "again.obj"), big_out = read_obj(f.dir / "big_out.obj");
+  ASSERT_TRUE(validate(again));
+  ASSERT_TRUE(validate(big_out));
+  ASSERT_EQ(again.num_nodes(), once.num_nodes());
+  ASSERT_EQ(big_out.num_nodes(), once.num_nodes());
+  for (std::uint32_t v = 0; v < once.nodes.slots.capacity(); ++v) {
+    EXPECT_NEAR((again.position(NodeIdx{v}) - once.position(NodeIdx{v})).norm(), 0, 1e-9) << v;
+    if (v > 3 * kRing) EXPECT_NEAR(big_out.position(NodeIdx{v}).norm(), 2.0, 1e-6) << v;
+  }
+  const TopologyCounts t = count_topology(big_out);
+  EXPECT_EQ(t.nodes - t.edges + t.faces, 2);
+  // Neither or both inputs: usage (2); a bad recipe: exit 3 naming it.
+  EXPECT_EQ(atelier::testing::run_cli("extrude --mesh " + f.mesh.string() + " --out " + (f.dir / "x.obj").string()).code, 2);
+  {
+    std::ofstream bad(f.dir / "bad.json");
+    bad << "{\"format\": \"atelier extrusion recipe\"}";
+  }
+  r = atelier::testing::run_cli("extrude --mesh " + f.mesh.string() + " --replay " + (f.dir / "bad.json").string() +
+                                " --out " + (f.dir / "x.obj").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("bad.json"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(f.dir / "x.obj"));
+}

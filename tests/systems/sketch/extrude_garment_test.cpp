@@ -3,22 +3,24 @@
 // collar's top edge, on the top regenerated on sampled mannequins, with the
 // mannequin as the body the extrusion is kept outside of.
 //
-// The regeneration path cannot carry an extruded part (a ProfileTemplate
-// has no place for it and nothing transfers an extrusion design the way
-// transfer_curves transfers painted curves), so each design is re-drawn on
-// every regenerated top: the same strokes relative to that body's loop (its
-// extreme points on screen), then extrude().
+// ExtrudeGarment draws each design on every regenerated top (the same
+// strokes relative to that body's loop, its extreme points on screen).
+// ExtrudeRecipe draws it once, on the top regenerated on the reference body,
+// and replays its recipe (systems/sketch/extrude_recipe.h) on the others:
+// no strokes; bit for bit the original on the reference body.
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/sketch/extrude_recipe.h>
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/spatial/collision_body.h>
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <memory>
 #include <string>
 
 #include "support/project_templates.h"
@@ -40,27 +42,18 @@ enum class Design { kDress, kSleeve, kCollar };
 
 struct DressResult {
   std::string error;
-  std::size_t new_nodes = 0, inside = 0, outside_bounds = 0, pushed = 0;
+  std::size_t new_nodes = 0, inside = 0, outside_bounds = 0, brute_outside = 0, pushed = 0;
   double deepest = 0;
 };
 
-/// Regenerates the top on `body`, draws the design on its loop, extrudes it
-/// outside the body, and checks the new nodes against the body (BodyBvh
-/// signed distance, an oracle apart from the CollisionBody extrude uses).
-DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, const ReferenceBody& reference,
-                      const Box3d& roi, Design design) {
-  DressResult out;
-  const ProfileTemplate one[] = {top};
-  auto regen =
-      regenerate_on_body(one, reference, skin_positions(body), roi, {}, {.use_grid = false}, ExecContext::sequential());
-  if (!regen) return {regen.status().to_string()};
-  Model m = std::move((*regen)[0].model);
-  // B: the hem (lowest loop), the right armhole (the loop farthest to +x),
-  // or the collar's top edge (the highest loop).
+/// The design's strokes on a regenerated top: its loop (the hem: lowest;
+/// the right armhole: farthest to +x; the collar's top edge: highest) and
+/// strokes relative to the loop's extreme points on screen.
+Expected<ExtrudeStrokes> design_strokes(const Model& m, Design design) {
   const std::vector<NodeIdx> loop = best_loop(m, [&](const Vec3d& c) {
     return design == Design::kDress ? c.y() : design == Design::kSleeve ? -c.x() : -c.y();
   });
-  if (loop.size() < 8) return {"no boundary loop found"};
+  if (loop.size() < 8) return Status(ErrorCode::kInvalidArgument, "no boundary loop found");
   // A front view level with the loop's centre; the stroke ends: the loop's
   // extreme points on screen (left/right; for the armhole, top/bottom).
   Vec3d c = Vec3d::Zero(), e0, e1;
@@ -100,25 +93,67 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
     s1.push_back(Vec3d(e1.x(), e1.y(), 0) + t * d1);
   }
   in.sweep = {project(cam, s0), project(cam, s1)};
-  // The body (its skin), for extrude and for the check.
-  auto tris = fan_triangulate(body.model, std::vector<SurfaceIdx>{body.skin});
-  if (!tris) return {tris.status().to_string()};
-  auto topo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body.model.nodes.slots.capacity()));
-  if (!topo) return {topo.status().to_string()};
+  return in;
+}
+
+/// The body's skin as extrude's CollisionBody and as an oracle (BodyBvh).
+struct BodyChecks {
   CollisionBody cb;
-  if (Status s = cb.build(*topo, body.model.nodes.position); !s) return {s.to_string()};
+  BodyBvh oracle;
+  std::string error;
+};
+
+std::unique_ptr<BodyChecks> body_checks(const ReferenceBody& body) {
+  auto out = std::make_unique<BodyChecks>();
+  auto tris = fan_triangulate(body.model, std::vector<SurfaceIdx>{body.skin});
+  if (!tris) {
+    out->error = tris.status().to_string();
+    return out;
+  }
+  auto topo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body.model.nodes.slots.capacity()));
+  if (!topo) {
+    out->error = topo.status().to_string();
+    return out;
+  }
+  if (Status s = out->cb.build(*topo, body.model.nodes.position); !s) {
+    out->error = s.to_string();
+    return out;
+  }
+  if (Status s = out->oracle.build(std::span<const Vec3d>(body.model.nodes.position), tris->triangles); !s)
+    out->error = s.to_string();
+  return out;
+}
+
+/// Regenerates the top on `body`, draws the design on its loop, extrudes it
+/// outside the body, and checks the new nodes against the body (BodyBvh
+/// signed distance, an oracle apart from the CollisionBody extrude uses).
+DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, const ReferenceBody& reference,
+                      const Box3d& roi, Design design) {
+  DressResult out;
+  const ProfileTemplate one[] = {top};
+  auto regen =
+      regenerate_on_body(one, reference, skin_positions(body), roi, {}, {.use_grid = false}, ExecContext::sequential());
+  if (!regen) return {regen.status().to_string()};
+  Model m = std::move((*regen)[0].model);
+  auto in = design_strokes(m, design);
+  if (!in) return {in.status().to_string()};
+  const std::size_t loop_size = best_loop(m, [&](const Vec3d& c) {
+                                  return design == Design::kDress    ? c.y()
+                                         : design == Design::kSleeve ? -c.x()
+                                                                     : -c.y();
+                                }).size();
+  const auto checks = body_checks(body);
+  if (!checks->error.empty()) return {checks->error};
   ExtrudeOptions o;
   o.pick_radius = 30;
-  o.body = &cb;
+  o.body = &checks->cb;
   o.clearance = 0.005;
   const std::size_t cap = m.nodes.slots.capacity();
-  auto r = extrude(m, in, o, ExecContext::sequential());
+  auto r = extrude(m, *in, o, ExecContext::sequential());
   if (!r) return {r.status().to_string()};
   if (Status s = validate(m); !s) return {s.to_string()};
-  if (r->base.size() != loop.size()) return {"B is not the loop"};
-  BodyBvh oracle;
-  if (Status s = oracle.build(std::span<const Vec3d>(body.model.nodes.position), tris->triangles); !s)
-    return {s.to_string()};
+  if (r->base.size() != loop_size) return {"B is not the loop"};
+  const BodyBvh& oracle = checks->oracle;
   for (std::uint32_t v = static_cast<std::uint32_t>(cap); v < m.nodes.slots.capacity(); ++v) {
     if (!m.alive(NodeIdx{v})) continue;
     ++out.new_nodes;
@@ -126,7 +161,17 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
     out.inside += d < 0;
     out.deepest = std::min(out.deepest, d);
   }
+  // Brute force over the model (apart from the report): edges with a new
+  // node outside [4/5, 4/3] L, measured after extrude's last push.
   out.outside_bounds = r->after.outside;
+  const double L = r->base_mean_edge;
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e})) continue;
+    const NodeIdx a = m.tail(halfedge_of(EdgeIdx{e}, 0)), b = m.tail(halfedge_of(EdgeIdx{e}, 1));
+    if (a.value < cap && b.value < cap) continue;
+    const double l = (m.position(a) - m.position(b)).norm();
+    out.brute_outside += l < 0.8 * L * (1 - 1e-12) || l > 4.0 / 3.0 * L * (1 + 1e-12);
+  }
   out.pushed = r->pushed;
   return out;
 }
@@ -149,15 +194,150 @@ void run_bodies(std::size_t n, Design design) {
     }
     got[i] = design_on(*body, top, fx.body, roi, design);
   });
-  std::size_t pushed = 0, bodies_pushed = 0, off_bounds = 0;
-  for (const DressResult& g : got) pushed += g.pushed, bodies_pushed += g.pushed > 0, off_bounds += g.outside_bounds;
+  std::size_t pushed = 0, bodies_pushed = 0, off_bounds = 0, brute = 0, worst = 0, worst_brute = 0;
+  for (const DressResult& g : got) {
+    pushed += g.pushed, bodies_pushed += g.pushed > 0, off_bounds += g.outside_bounds, brute += g.brute_outside;
+    worst = std::max(worst, g.outside_bounds), worst_brute = std::max(worst_brute, g.brute_outside);
+  }
   ::testing::Test::RecordProperty("design" + std::to_string(static_cast<int>(design)),
                                   "pushed " + std::to_string(pushed) + " nodes on " + std::to_string(bodies_pushed) +
-                                      " bodies; edges off bounds " + std::to_string(off_bounds));
+                                      " bodies; edges off bounds " + std::to_string(off_bounds) +
+                                      " (after the last push " + std::to_string(brute) + "), per body at most " +
+                                      std::to_string(worst) + " (" + std::to_string(worst_brute) + ")");
   for (std::size_t i = 0; i < n; ++i) {
     ASSERT_EQ(got[i].error, "") << "design " << static_cast<int>(design) << ", body " << i;
     EXPECT_GT(got[i].new_nodes, 100u) << "body " << i;
     EXPECT_EQ(got[i].inside, 0u) << "body " << i << ": deepest " << got[i].deepest;
+    // Edge bounds (issue 21: all new edges within [4/5, 4/3] L). Not met
+    // everywhere: pinned near the measured worst on 100 bodies so that a
+    // regression shows. Dress and collar: at most 2 edges out (of ~2000;
+    // measured at most 1). The sleeve, grown along the arm and pushed out
+    // of it before the optimisation (the optimiser then keeps to a crumpled
+    // target surface), up to 39 in the optimiser's count and 82 after
+    // extrude's last push, which moves nodes out of the body without
+    // remeshing (of ~3000 edges).
+    EXPECT_LE(got[i].outside_bounds, design == Design::kSleeve ? 60u : 2u) << "body " << i;
+    EXPECT_LE(got[i].brute_outside, design == Design::kSleeve ? 120u : 2u) << "body " << i;
+  }
+}
+
+
+Expected<Model> regenerate_top(const ReferenceBody& body, const ProfileTemplate& top, const ReferenceBody& reference,
+                               const Box3d& roi) {
+  const ProfileTemplate one[] = {top};
+  auto regen =
+      regenerate_on_body(one, reference, skin_positions(body), roi, {}, {.use_grid = false}, ExecContext::sequential());
+  if (!regen) return regen.status();
+  return std::move((*regen)[0].model);
+}
+
+ExtrudeOptions garment_options(const BodyChecks& checks) {
+  ExtrudeOptions o;
+  o.pick_radius = 30;
+  o.body = &checks.cb;
+  o.clearance = 0.005;
+  return o;
+}
+
+/// A design drawn once, on the top regenerated on the reference body.
+struct Recorded {
+  Model before, after;
+  ExtrudeReport report;
+  ExtrusionRecipe recipe;
+};
+
+Recorded record(Design d) {
+  const auto& fx = atelier::testing::template_fixture();
+  const ProfileTemplate& top = fx.templates[0];
+  Recorded out;
+  out.before = regenerate_top(fx.body, top, fx.body, bounds(top.model)).value();
+  out.after = out.before;
+  const auto checks = body_checks(fx.body);
+  EXPECT_EQ(checks->error, "");
+  auto in = design_strokes(out.before, d);
+  EXPECT_TRUE(in) << in.status().to_string();
+  auto r = extrude(out.after, *in, garment_options(*checks), ExecContext::sequential());
+  EXPECT_TRUE(r) << r.status().to_string();
+  out.report = *r;
+  auto rc = extrusion_recipe(out.after, *r);
+  EXPECT_TRUE(rc) << rc.status().to_string();
+  out.recipe = *rc;
+  return out;
+}
+
+struct ReplayResult {
+  std::string error;
+  std::size_t new_nodes = 0, inside = 0, unsewn = 0, b_moved = 0;
+  double along = 0;  // mean of the new nodes minus B's centroid, along the design's direction
+};
+
+/// Regenerates the top on `body` and replays the recipe on it (no strokes).
+ReplayResult replay_on(const ReferenceBody& body, const Recorded& rec, Design d) {
+  const auto& fx = atelier::testing::template_fixture();
+  const ProfileTemplate& top = fx.templates[0];
+  auto m = regenerate_top(body, top, fx.body, bounds(top.model));
+  if (!m) return {m.status().to_string()};
+  const Model before = *m;
+  const auto checks = body_checks(body);
+  if (!checks->error.empty()) return {checks->error};
+  const std::size_t cap = m->nodes.slots.capacity();
+  auto r = replay_extrusion(*m, rec.recipe, garment_options(*checks), ExecContext::sequential());
+  if (!r) return {r.status().to_string()};
+  if (Status s = validate(*m); !s) return {s.to_string()};
+  ReplayResult out;
+  // Attached along B: B's nodes where they were, every edge of B (a
+  // boundary before) now with a face on both sides.
+  Vec3d cb = Vec3d::Zero(), cn = Vec3d::Zero();
+  const std::size_t n = rec.recipe.base.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const NodeIdx v{rec.recipe.base[i]};
+    out.b_moved += m->position(v) != before.position(v);
+    cb += m->position(v);
+    if (!rec.recipe.ring && i + 1 == n) continue;
+    const HalfedgeIdx h = m->find_halfedge(v, NodeIdx{rec.recipe.base[(i + 1) % n]});
+    out.unsewn += !h.valid() || !m->face(h).valid() || !m->face(twin(h)).valid();
+  }
+  cb /= static_cast<double>(n);
+  for (std::uint32_t v = static_cast<std::uint32_t>(cap); v < m->nodes.slots.capacity(); ++v) {
+    if (!m->alive(NodeIdx{v})) continue;
+    ++out.new_nodes;
+    cn += m->position(NodeIdx{v});
+    out.inside += checks->oracle.signed_distance(m->position(NodeIdx{v})).distance < 0;
+  }
+  if (out.new_nodes) cn /= static_cast<double>(out.new_nodes);
+  const Vec3d dir = d == Design::kDress ? Vec3d(0, -1, 0) : d == Design::kSleeve ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+  out.along = (cn - cb).dot(dir);
+  return out;
+}
+
+void replay_bodies(std::size_t n) {
+  const auto topo = make_mannequin_topology().value();
+  for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) {
+    const Recorded rec = record(d);
+    std::vector<ReplayResult> got(n);
+    ExecContext ctx;
+    ctx.sequential_threshold = 2;
+    ctx.grain = 1;
+    par::for_each_n(ctx, n, [&](std::size_t i) {
+      auto body = make_mannequin(sample_mannequin(42, i), topo);
+      if (!body) {
+        got[i].error = body.status().to_string();
+        return;
+      }
+      got[i] = replay_on(*body, rec, d);
+    });
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(got[i].error, "") << "design " << static_cast<int>(d) << ", body " << i;
+      EXPECT_GT(got[i].new_nodes, 100u) << "body " << i;
+      EXPECT_EQ(got[i].inside, 0u) << "body " << i;
+      EXPECT_EQ(got[i].unsewn, 0u) << "body " << i;
+      EXPECT_EQ(got[i].b_moved, 0u) << "body " << i;
+      // The part grows the designed way from B: dress down, sleeve out,
+      // collar up (by at least a third of the stroke's reach, measured on
+      // the reference: 0.35, 0.30, 0.05 m).
+      const double reach = d == Design::kDress ? 0.35 : d == Design::kSleeve ? 0.30 : 0.05;
+      EXPECT_GT(got[i].along, reach / 6) << "design " << static_cast<int>(d) << ", body " << i;
+    }
   }
 }
 
@@ -170,4 +350,87 @@ TEST(ExtrudeGarment, DressSleeveAndCollarOnTheTopOutsideTheBodyOnAFewMannequins)
 TEST(ExtrudeGarment, DressSleeveAndCollarOnTheTopOutsideTheBodyOn100Mannequins) {
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "300 regenerations (long under sanitizers)";
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) run_bodies(100, d);
+}
+
+TEST(ExtrudeRecipe, OnTheReferenceBodyTheReplayIsTheOriginal) {
+  for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) {
+    const Recorded rec = record(d);
+    ASSERT_FALSE(rec.recipe.base.empty());
+    const auto& fx = atelier::testing::template_fixture();
+    const auto checks = body_checks(fx.body);
+    Model m = rec.before;
+    auto r = replay_extrusion(m, rec.recipe, garment_options(*checks), ExecContext::sequential());
+    ASSERT_TRUE(r) << r.status().to_string();
+    ASSERT_TRUE(validate(m)) << validate(m).to_string();
+    // The copies of B to rounding, then the same sewing and optimisation:
+    // the same model, node for node and face for face.
+    ASSERT_EQ(r->copies, rec.report.copies);
+    for (std::size_t k = 0; k < r->copies; ++k) {
+      EXPECT_NEAR((r->rotations[k] - rec.report.rotations[k]).norm(), 0, 1e-12);
+      EXPECT_NEAR((r->translations[k] - rec.report.translations[k]).norm(), 0, 1e-12);
+      EXPECT_EQ(r->scales[k], rec.report.scales[k]);
+    }
+    ASSERT_EQ(m.nodes.slots.capacity(), rec.after.nodes.slots.capacity());
+    ASSERT_EQ(m.faces.slots.capacity(), rec.after.faces.slots.capacity());
+    double worst = 0;
+    for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v) {
+      ASSERT_EQ(m.alive(NodeIdx{v}), rec.after.alive(NodeIdx{v}));
+      if (m.alive(NodeIdx{v})) worst = std::max(worst, (m.position(NodeIdx{v}) - rec.after.position(NodeIdx{v})).norm());
+    }
+    std::vector<NodeIdx> f0, f1;
+    for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
+      ASSERT_EQ(m.alive(FaceIdx{f}), rec.after.alive(FaceIdx{f}));
+      if (!m.alive(FaceIdx{f})) continue;
+      m.face_nodes(FaceIdx{f}, f0);
+      rec.after.face_nodes(FaceIdx{f}, f1);
+      ASSERT_EQ(f0, f1) << "face " << f;
+    }
+    EXPECT_LT(worst, 1e-9) << "design " << static_cast<int>(d);
+    RecordProperty("design" + std::to_string(static_cast<int>(d)) + "_max_node_difference", std::to_string(worst));
+  }
+}
+
+TEST(ExtrudeRecipe, RefusesAPaintedBaseAndABaseThatIsNotABoundary) {
+  const Recorded rec = record(Design::kCollar);
+  // Replayed on the model that already has the part: B is no longer a
+  // boundary; the model is unchanged.
+  Model m = rec.after;
+  const Model before = m;
+  auto r = replay_extrusion(m, rec.recipe);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.status().code(), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(diff_tables(before, m), "");
+  ExtrusionRecipe bad = rec.recipe;
+  bad.base[0] = static_cast<std::uint32_t>(m.nodes.slots.capacity() + 5);
+  Model m2 = rec.before;
+  EXPECT_EQ(replay_extrusion(m2, bad).status().code(), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(diff_tables(rec.before, m2), "");
+  // The JSON text round trips bit for bit; bad text is refused by name.
+  auto back = parse_extrusion_recipe(extrusion_recipe_json(rec.recipe), "r.json");
+  ASSERT_TRUE(back) << back.status().to_string();
+  EXPECT_EQ(back->base, rec.recipe.base);
+  EXPECT_EQ(back->p1_t, rec.recipe.p1_t);
+  ASSERT_EQ(back->scales.size(), rec.recipe.scales.size());
+  for (std::size_t k = 0; k < back->scales.size(); ++k) {
+    EXPECT_EQ(back->scales[k], rec.recipe.scales[k]);
+    EXPECT_EQ(back->rotations[k], rec.recipe.rotations[k]);
+    EXPECT_EQ(back->translations[k], rec.recipe.translations[k]);
+  }
+  for (const char* text : {"[1,2]", "{\"format\": \"atelier extrusion recipe\"}", "not json"}) {
+    auto r2 = parse_extrusion_recipe(text, "r.json");
+    ASSERT_FALSE(r2) << text;
+    EXPECT_NE(r2.status().message().find("r.json"), std::string::npos);
+  }
+  ExtrudeReport painted = rec.report;
+  painted.faces_removed = 3;
+  EXPECT_EQ(extrusion_recipe(rec.after, painted).status().code(), ErrorCode::kUnsupported);
+}
+
+TEST(ExtrudeRecipe, DressSleeveAndCollarReplayOnAFewMannequinsWithoutStrokes) {
+  replay_bodies(2);
+}
+
+TEST(ExtrudeRecipe, DressSleeveAndCollarReplayOn100MannequinsWithoutStrokes) {
+  if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "300 regenerations (long under sanitizers)";
+  replay_bodies(100);
 }

@@ -5,9 +5,11 @@
 // closed, oriented, Euler characteristic 2; an asymmetric sphere and a
 // stroke across the plane are refused with the model unchanged; both
 // sleeves of the project's top from one armhole stroke, outside the body.
+#include <atelier/engine/parallel.h>
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/spatial/body_bvh.h>
@@ -17,6 +19,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <map>
 
 #include "support/project_templates.h"
@@ -185,24 +189,38 @@ namespace {
 
 }  // namespace
 
-TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
+namespace {
+
+struct SleevesResult {
+  std::string error;
+  std::size_t right = 0, left = 0, inside = 0, inside_after = 0, base = 0, loop = 0, mirror_base = 0,
+              mirror_in_left = 0;
+  std::int64_t d_nodes = 0, d_faces = 0, d_chi = 0, single_nodes = 0, single_faces = 0, single_chi = 0;
+  std::size_t shells = 0, shells0 = 0;
+  double mirror_base_error = 0;
+  double asymmetry = 0, tolerance = 0;  // of the armholes, in B's mean edge
+  bool refused = false;                 // cleanly, the armholes too asymmetric
+};
+
+/// The top regenerated on `body`, both sleeves from one armhole stroke (the
+/// right armhole traced from the side, the sleeve strokes drawn from the
+/// front, as in ExtrudeGarment), outside the body, against the single
+/// sleeve for the counts.
+SleevesResult both_sleeves_on(const ReferenceBody& body) {
   const auto& fx = atelier::testing::template_fixture();
   const ProfileTemplate& top = fx.templates[0];
-  ASSERT_EQ(top.name, "top");
-  // The top regenerated on the default mannequin (as ExtrudeGarment does).
+  if (top.name != "top") return {"no top"};
   Box3d roi;
   for (std::uint32_t v = 0; v < top.model.nodes.slots.capacity(); ++v)
     if (top.model.alive(NodeIdx{v})) roi.extend(top.model.position(NodeIdx{v}));
   const ProfileTemplate one[] = {top};
-  auto regen = regenerate_on_body(one, fx.body, skin_positions(fx.body), roi, {}, {.use_grid = false},
+  auto regen = regenerate_on_body(one, fx.body, skin_positions(body), roi, {}, {.use_grid = false},
                                   ExecContext::sequential());
-  ASSERT_TRUE(regen) << regen.status().to_string();
+  if (!regen) return {regen.status().to_string()};
   Model m = std::move((*regen)[0].model);
-  // The right armhole (farthest to +x), traced from the side; the sleeve
-  // strokes drawn from the front (as in ExtrudeGarment).
   const std::vector<NodeIdx> loop = best_loop(m, [&](const Vec3d& c) { return -c.x(); });
   const std::vector<NodeIdx> left = best_loop(m, [&](const Vec3d& c) { return c.x(); });
-  ASSERT_GE(loop.size(), 8u);
+  if (loop.size() < 8) return {"no armhole"};
   Vec3d c = Vec3d::Zero(), e0, e1;
   double lo = INFINITY, hi = -INFINITY;
   for (NodeIdx v : loop) {
@@ -212,7 +230,7 @@ TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
     if (p.y() > hi) hi = p.y(), e1 = p;
   }
   c /= static_cast<double>(loop.size());
-  ASSERT_GT(c.x(), 0.05);
+  if (!(c.x() > 0.05)) return {"the right armhole is not on the right"};
   const Camera cam =
       Camera::orthographic(Vec3d(c.x(), c.y(), 3), Vec3d(c.x(), c.y(), 0), Vec3d::UnitY(), 0.8, 800, 800);
   ExtrudeStrokes in;
@@ -229,64 +247,149 @@ TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
     s1.push_back(Vec3d(e1.x(), e1.y(), 0) + t * Vec3d(0.28, -0.28, 0));
   }
   in.sweep = {project(cam, s0), project(cam, s1)};
-  auto tris = fan_triangulate(fx.body.model, std::vector<SurfaceIdx>{fx.body.skin});
-  ASSERT_TRUE(tris);
-  auto topo =
-      CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(fx.body.model.nodes.slots.capacity()));
-  ASSERT_TRUE(topo) << topo.status().to_string();
+  auto tris = fan_triangulate(body.model, std::vector<SurfaceIdx>{body.skin});
+  if (!tris) return {tris.status().to_string()};
+  auto topo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body.model.nodes.slots.capacity()));
+  if (!topo) return {topo.status().to_string()};
   CollisionBody cb;
-  ASSERT_TRUE(cb.build(*topo, fx.body.model.nodes.position));
+  if (Status s = cb.build(*topo, body.model.nodes.position); !s) return {s.to_string()};
   ExtrudeOptions o;
   o.pick_radius = 30;
   o.body = &cb;
   o.clearance = 0.005;
-  // Not as_surface: partition_along_curves refuses the top's armhole even
-  // for a single sleeve ("seams must not follow existing mesh edges"); the
-  // mirrored parts as surfaces are shown on the sphere below.
   o.mirror = SymmetryPlane{};
   // The regenerated top is symmetric only to ~1.6 % of its armhole's mean
-  // edge (measured: its left armhole lies 3.6e-4 from the reflection of the
-  // right one), not bit for bit: a tolerance of 5 % of L.
+  // edge on the default mannequin (its left armhole lies 3.6e-4 from the
+  // reflection of the right one), not bit for bit: a tolerance of 5 % of L.
+  // On a sampled mannequin it can be less symmetric than that (mannequin 37
+  // of 100: over 13 %); extrude must then refuse cleanly (kDegenerate, the
+  // model unchanged), which is checked against the asymmetry measured here.
   o.mirror_tolerance = 0.05;
   const std::size_t cap = m.nodes.slots.capacity();
-  // The single sleeve, for the counts and the Euler characteristic.
   const Model m0 = m;
   Model m1 = m;
   ExtrudeOptions o1 = o;
   o1.mirror.reset();
-  ASSERT_TRUE(extrude(m1, in, o1, ExecContext::sequential()));
+  if (auto r1 = extrude(m1, in, o1, ExecContext::sequential()); !r1) return {"single: " + r1.status().to_string()};
   auto chi = [](const Model& x) {
     const TopologyCounts t = count_topology(x);
-    return t.nodes - t.edges + t.faces;
+    return static_cast<std::int64_t>(t.nodes) - static_cast<std::int64_t>(t.edges) + static_cast<std::int64_t>(t.faces);
   };
+  SleevesResult out;
+  {  // The armholes' asymmetry, brute force: each right armhole node
+     // reflected, to the nearest left armhole node, over B's mean edge.
+    double L = 0;
+    for (std::size_t i = 0; i < loop.size(); ++i)
+      L += (m.position(loop[(i + 1) % loop.size()]) - m.position(loop[i])).norm();
+    L /= static_cast<double>(loop.size());
+    for (NodeIdx v : loop) {
+      double best = INFINITY;
+      for (NodeIdx w : left) best = std::min(best, (mirror_x(m.position(v)) - m.position(w)).norm());
+      out.asymmetry = std::max(out.asymmetry, best / L);
+    }
+  }
+  out.tolerance = o.mirror_tolerance;
   auto r = extrude(m, in, o, ExecContext::sequential());
-  ASSERT_TRUE(r) << r.status().to_string();
-  ASSERT_TRUE(validate(m)) << validate(m).to_string();
-  RecordProperty("mirror_base_error", std::to_string(r->mirror_base_error / r->base_mean_edge));
-  // B is the right armhole, B' the left one (the other loop farthest out).
-  EXPECT_EQ(r->base.size(), loop.size());
-  ASSERT_EQ(r->mirror_base.size(), left.size());
-  for (NodeIdx v : r->mirror_base) EXPECT_NE(std::find(left.begin(), left.end(), v), left.end());
-  // Two sleeves, each its own surface with a joint, both outside the body
-  // (BodyBvh signed distance: an oracle apart from extrude's CollisionBody).
+  if (!r) {
+    out.refused = r.status().code() == ErrorCode::kDegenerate && diff_tables(m, m0).empty();
+    if (out.refused && out.asymmetry > o.mirror_tolerance) return out;
+    return {r.status().to_string()};
+  }
+  if (Status s = validate(m); !s) return {s.to_string()};
+  out.mirror_base_error = r->mirror_base_error / r->base_mean_edge;
+  out.base = r->base.size();
+  out.loop = loop.size();
+  out.mirror_base = r->mirror_base.size();
+  for (NodeIdx v : r->mirror_base) out.mirror_in_left += std::find(left.begin(), left.end(), v) != left.end();
+  // BodyBvh signed distance: an oracle apart from extrude's CollisionBody.
   BodyBvh oracle;
-  ASSERT_TRUE(oracle.build(std::span<const Vec3d>(fx.body.model.nodes.position), tris->triangles));
-  std::size_t right = 0, leftn = 0, inside = 0;
+  if (Status s = oracle.build(std::span<const Vec3d>(body.model.nodes.position), tris->triangles); !s)
+    return {s.to_string()};
   for (std::uint32_t v = static_cast<std::uint32_t>(cap); v < m.nodes.slots.capacity(); ++v) {
     if (!m.alive(NodeIdx{v})) continue;
     const Vec3d p = m.position(NodeIdx{v});
-    right += p.x() > c.x() + 0.02;
-    leftn += p.x() < -c.x() - 0.02;
-    inside += oracle.signed_distance(p).distance < 0;
+    out.right += p.x() > c.x() + 0.02;
+    out.left += p.x() < -c.x() - 0.02;
+    out.inside += oracle.signed_distance(p).distance < 0;
   }
-  EXPECT_GT(right, 100u);
-  EXPECT_EQ(leftn, right);
-  EXPECT_EQ(inside, 0u);
-  EXPECT_EQ(r->inside_after, 0u);
-  EXPECT_EQ(m.num_nodes() - m0.num_nodes(), 2 * (m1.num_nodes() - m0.num_nodes()));
-  EXPECT_EQ(m.num_faces() - m0.num_faces(), 2 * (m1.num_faces() - m0.num_faces()));
-  EXPECT_EQ(chi(m) - chi(m0), 2 * (chi(m1) - chi(m0)));
-  EXPECT_EQ(count_topology(m).shells, count_topology(m0).shells);
+  out.inside_after = r->inside_after;
+  out.d_nodes = static_cast<std::int64_t>(m.num_nodes()) - static_cast<std::int64_t>(m0.num_nodes());
+  out.d_faces = static_cast<std::int64_t>(m.num_faces()) - static_cast<std::int64_t>(m0.num_faces());
+  out.single_nodes = static_cast<std::int64_t>(m1.num_nodes()) - static_cast<std::int64_t>(m0.num_nodes());
+  out.single_faces = static_cast<std::int64_t>(m1.num_faces()) - static_cast<std::int64_t>(m0.num_faces());
+  out.d_chi = chi(m) - chi(m0);
+  out.single_chi = chi(m1) - chi(m0);
+  out.shells = count_topology(m).shells;
+  out.shells0 = count_topology(m0).shells;
+  return out;
+}
+
+void expect_both_sleeves(const SleevesResult& g, const std::string& where) {
+  ASSERT_EQ(g.error, "") << where;
+  if (g.refused) {  // only when the armholes are measured too asymmetric
+    EXPECT_GT(g.asymmetry, g.tolerance) << where;
+    return;
+  }
+  // B is the right armhole, B' the left one (the other loop farthest out).
+  EXPECT_EQ(g.base, g.loop) << where;
+  EXPECT_EQ(g.mirror_in_left, g.mirror_base) << where;
+  EXPECT_GT(g.mirror_base, 8u) << where;
+  // Two sleeves, outside the body, each with the single sleeve's counts.
+  EXPECT_GT(g.right, 100u) << where;
+  EXPECT_EQ(g.left, g.right) << where;
+  EXPECT_EQ(g.inside, 0u) << where;
+  EXPECT_EQ(g.inside_after, 0u) << where;
+  EXPECT_EQ(g.d_nodes, 2 * g.single_nodes) << where;
+  EXPECT_EQ(g.d_faces, 2 * g.single_faces) << where;
+  EXPECT_EQ(g.d_chi, 2 * g.single_chi) << where;
+  EXPECT_EQ(g.shells, g.shells0) << where;
+}
+
+void sleeves_on_mannequins(std::size_t n) {
+  const auto topo = make_mannequin_topology().value();
+  std::vector<SleevesResult> got(n);
+  ExecContext ctx;
+  ctx.sequential_threshold = 2;
+  ctx.grain = 1;
+  par::for_each_n(ctx, n, [&](std::size_t i) {
+    auto body = make_mannequin(sample_mannequin(42, i), topo);
+    if (!body) {
+      got[i].error = body.status().to_string();
+      return;
+    }
+    got[i] = both_sleeves_on(*body);
+  });
+  double worst = 0;
+  std::size_t refused = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    expect_both_sleeves(got[i], "body " + std::to_string(i));
+    worst = std::max(worst, got[i].mirror_base_error);
+    refused += got[i].refused;
+  }
+  // Nearly every body's top is symmetric enough (measured: 1 refused of 100).
+  EXPECT_LE(refused, std::max<std::size_t>(1, n / 50));
+  ::testing::Test::RecordProperty("worst_mirror_base_error_over_L", std::to_string(worst));
+  ::testing::Test::RecordProperty("refused_as_asymmetric", std::to_string(refused));
+}
+
+}  // namespace
+
+TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
+  // On the reference body. Not as_surface: see ExtrudeMirror.AsSurface* and
+  // Extrude.AsSurfaceOnTheTopsArmhole (the top's armhole is a mesh edge).
+  const SleevesResult g = both_sleeves_on(atelier::testing::template_fixture().body);
+  EXPECT_FALSE(g.refused);  // symmetric to ~1.6 % of L here
+  expect_both_sleeves(g, "reference body");
+  RecordProperty("mirror_base_error", std::to_string(g.mirror_base_error));
+}
+
+TEST(ExtrudeMirror, BothSleevesOnTwoSampledMannequins) {
+  sleeves_on_mannequins(2);
+}
+
+TEST(ExtrudeMirror, BothSleevesOn100SampledMannequins) {
+  if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "100 regenerations (long under sanitizers)";
+  sleeves_on_mannequins(100);
 }
 
 TEST(ExtrudeMirror, AsSurfaceGivesEachPartItsOwnSurfaceAndJoint) {
