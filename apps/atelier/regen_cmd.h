@@ -51,6 +51,7 @@
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,7 @@ struct EncodeOptions {
   std::filesystem::path garment;            // .obj or .mhclo: encode as a detail template
   double scale = 1.0;                       // garment (and body file) units to metres
   std::string up = "y";                     // garment (and body file) up axis: y | z
+  std::optional<int> z_depth;               // the garment's layer order (a .mhclo's own by default)
 };
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt);
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log);
