@@ -84,6 +84,7 @@ struct BodyQuality {
   std::size_t layer_inside_unlayered = 0;
   std::size_t layer_inside = 0;
   std::size_t layer_pushed = 0;  // profile-template vertices the layering moved
+  std::array<std::size_t, kDemoOutfitOrder.size()> layer_inside_by{};  // after layering, by place in the order
 };
 
 // ------------------------------------------------------------------ set-up
@@ -274,6 +275,7 @@ Status dress(const DemoReference& ref, std::span<const Vec3d> body, std::vector<
     for (const OutfitGarment& x : g) {
       q->layer_inside_unlayered += x.layer_inside_before;
       q->layer_inside += x.layer_inside;
+      q->layer_inside_by[static_cast<std::size_t>(x.z_depth)] += x.layer_inside;
     }
     for (std::size_t k = 0; k < k_n; ++k) q->layer_pushed += g[1 + k].pushed;
   }
@@ -394,6 +396,12 @@ DemoRun run_bodies(const DemoOptions& opt, const DemoReference& ref, const Manne
 
 // ------------------------------------------------------------------ report
 
+nlohmann::json by_garment(const BodyQuality& r) {
+  nlohmann::json j;
+  for (std::size_t k = 0; k < kDemoOutfitOrder.size(); ++k) j[std::string(kDemoOutfitOrder[k])] = r.layer_inside_by[k];
+  return j;
+}
+
 /// Totals over the completed bodies, for report.json and the summary.
 struct DemoTotals {
   std::size_t bodies_with_penetration = 0;
@@ -437,6 +445,7 @@ std::pair<nlohmann::json, DemoTotals> write_report(const Common& common, const D
                    {"collision_pushed", r.pushed},
                    {"layer_inside_vertices", r.layer_inside},
                    {"layer_inside_vertices_unlayered", r.layer_inside_unlayered},
+                   {"layer_inside_by_garment", by_garment(r)},
                    {"layer_pushed", r.layer_pushed},
                    {"decode_ms", r.decode_ms}});
   }

@@ -49,6 +49,39 @@ Status count_layers(std::span<OutfitGarment> g, std::span<const std::size_t> ord
   return {};
 }
 
+/// Collision step 8 (docs/collision.md), as regen applies it to detail
+/// garments (lift_over_lower_layers, private to
+/// systems/garment/regenerate_garment.cpp): after resolve_layers, an outer
+/// vertex that a lower garment's faces still cover (a crease, or a coarse
+/// inner face spanning body points that got no floor) is lifted along the
+/// body normal to layer_gap above it, layers inner first, a few rounds.
+Status lift_over_lower_layers(std::span<OutfitGarment> g, std::span<const std::size_t> order,
+                              const CollisionBody& body, const CollisionParams& params) {
+  const LayerPenetrationParams lp;
+  std::vector<BodyBvh> lower(order.size());
+  for (std::size_t l = 1; l < order.size(); ++l) {
+    const OutfitGarment& below = g[order[l - 1]];  // final now: its BVH serves every layer above it
+    if (Status s = lower[l - 1].build(below.positions, below.triangles, {}, ExecContext::sequential()); !s) return s;
+    OutfitGarment& x = g[order[l]];
+    for (int round = 0; round < 8; ++round) {
+      std::size_t lifted = 0;
+      for (std::size_t k = 0; k < l; ++k)
+        for (std::size_t v = 0; v < x.positions.size(); ++v) {
+          BodyDistance& b = x.distance[v];
+          if (!(b.distance > 0) || b.normal.squaredNorm() == 0) continue;
+          const Vec3d n = b.normal.normalized();
+          const RayHit h = lower[k].ray_first_hit(b.closest, n, b.distance + lp.probe);
+          if (!h.hit || h.t <= b.distance) continue;
+          x.positions[v] = b.closest + (h.t + params.layer_gap) * n;
+          b = body.query(x.positions[v], b.triangle);
+          ++lifted;
+        }
+      if (lifted == 0) break;
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 Expected<ModelLayer> ModelLayer::of(const Model& m, const CollisionBody& reference, const ExecContext& ctx) {
@@ -143,6 +176,7 @@ Status layer_outfit(std::span<OutfitGarment> g, const CollisionBody& body, const
   auto reps = resolve_layers(layers, body, params, ctx);
   if (!reps) return reps.status();
   for (std::size_t i = 0; i < g.size(); ++i) g[i].pushed = (*reps)[i].pushed;
+  if (Status s = lift_over_lower_layers(g, order, body, params); !s) return s;
   return count_layers(g, order, &OutfitGarment::layer_inside);
 }
 

@@ -71,7 +71,8 @@ struct OutfitGarment {
   std::size_t pushed = 0;               // vertices the layered pass moved
 };
 
-/// Counts, resolves the layers (resolve_layers), counts again. Sequential
+/// Counts, resolves the layers (resolve_layers), lifts what a lower layer
+/// still covers (collision step 8, as regen does), counts again. Sequential
 /// unless ctx says otherwise. Errors: those of the library calls.
 [[nodiscard]] Status layer_outfit(std::span<OutfitGarment> garments, const CollisionBody& body,
                                   const CollisionParams& params, const ExecContext& ctx);
