@@ -38,7 +38,7 @@ def makehuman_job(data, n, seed):
     family = atelier.GarmentFamily(body)
     garment = atelier.encode_garment(family, mh.garment(data / "makehuman" / "clothes" / "male_casualsuit01.mhclo"),
                                      name="male_casualsuit01")
-    bodies = mh.positions(atelier.MakeHuman.sample(n, seed), dtype=np.float32)
+    bodies = mh.positions(mh.adults(n, seed)[0], dtype=np.float32)  # regen's adults (survey statures)
     return "MakeHuman adults", garment, bodies
 
 

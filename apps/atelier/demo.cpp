@@ -1,9 +1,11 @@
 // `atelier demo`: the main job on the embedded default. Samples mannequin
 // bodies and regenerates on each the project's three profile templates (top
 // with collar, skirt, trousers: modified variational subdivision with
-// collision avoidance) and its detail template (shorts), measures quality,
-// and writes meshes, a JSON report, pictures, an HTML report and the
-// bodies' measurements to the output folder.
+// collision avoidance) and its detail template (shorts), resolves the four
+// as one outfit (demo_outfit.h: shorts, trousers, skirt, top, innermost
+// first, by the library's resolve_layers), measures quality, and writes
+// meshes, a JSON report, pictures, an HTML report and the bodies'
+// measurements to the output folder.
 //
 // run_demo is the outline; its stages: set_up (the reference mannequin, the
 // shorts encoded on it, the profile templates), run_bodies (the bodies in
@@ -45,6 +47,7 @@
 #include <atelier/systems/view/render.h>
 
 #include "commands.h"
+#include "demo_outfit.h"
 #include "html_report.h"
 #include "regen_report.h"
 
@@ -76,10 +79,13 @@ struct BodyQuality {
   double decode_ms = 0;
   std::size_t pushed = 0;               // garment vertices moved by the collision pass
   std::vector<RegenQuality> templates;  // one per profile template
-  /// Profile-template nodes under the shorts (count_inside_layer): where the
-  /// shorts poke through the top, skirt or trousers. The demo fits the
-  /// shorts and the profile templates apart (issue 26: not yet one outfit).
-  std::size_t under_shorts = 0;
+  /// Garment vertices inside a garment of a lower layer of the outfit
+  /// (count_inside_layer, each vertex once): as each garment is fitted alone
+  /// (where the shorts poked through the skirt), and after the layering.
+  std::size_t layer_inside_unlayered = 0;
+  std::size_t layer_inside = 0;
+  std::size_t layer_pushed = 0;  // profile-template vertices the layering moved
+  std::array<std::size_t, kDemoOutfitOrder.size()> layer_inside_by{};  // after layering, by place in the order
 };
 
 // ------------------------------------------------------------------ set-up
@@ -95,9 +101,19 @@ struct DemoReference {
   std::vector<ProfileTemplate> templates;         // the project's profile templates
   Box3d roi;                                      // what the profile templates' collider covers
   SurfaceTriangles body_triangles;                // for the pictures
-  std::vector<Triangle> shorts_triangles;         // the shorts fanned (nodes_under)
+  std::vector<Triangle> shorts_triangles;         // the shorts fanned (layer counts)
+  std::vector<ModelLayer> layers;                 // per profile template: it as a layer of the outfit
+  std::vector<int> template_z;                    // per profile template: its place in kDemoOutfitOrder
+  int shorts_z = 0;
   double encode_s = 0;                            // wall time of the shorts' encoding
 };
+
+int outfit_place(std::string_view name) {
+  const auto it = std::find(kDemoOutfitOrder.begin(), kDemoOutfitOrder.end(), name);
+  if (it == kDemoOutfitOrder.end())
+    throw Error(Status(ErrorCode::kInternal, "demo: garment '" + std::string(name) + "' has no place in the outfit"));
+  return static_cast<int>(it - kDemoOutfitOrder.begin());
+}
 
 /// The shorts' edges in the model's order, as encode_garment takes them.
 std::vector<std::array<std::uint32_t, 2>> edges_of(const Model& garment) {
@@ -166,6 +182,20 @@ DemoReference set_up(const DemoOptions& opt, const ExecContext& ctx, Log& log) {
              " joints, " + std::to_string(t.profiles.size()) + " profiles");
   }
   for (const auto& g : g0) r.roi.extend(g);
+  // The outfit: each profile template regenerated on the reference itself
+  // (the topology every body's regeneration has) as a layer, its clearance
+  // encoded on the reference skin.
+  auto on_ref = regenerate_on_body(r.templates, ref, r.family->reference_positions, r.roi, {}, {.use_grid = false}, ctx);
+  if (!on_ref) throw Error(on_ref.status());
+  CollisionBody ref_cb;
+  if (Status s = ref_cb.build(r.family->collision, r.family->reference_positions, {}, ctx); !s) throw Error(s);
+  for (std::size_t k = 0; k < r.templates.size(); ++k) {
+    auto layer = ModelLayer::of((*on_ref)[k].model, ref_cb, ctx);
+    if (!layer) throw Error(Status(layer.status().code(), r.templates[k].name + ": " + layer.status().message()));
+    r.layers.push_back(std::move(*layer));
+    r.template_z.push_back(outfit_place(r.templates[k].name));
+  }
+  r.shorts_z = outfit_place("shorts");
   return r;
 }
 
@@ -175,7 +205,10 @@ DemoReference set_up(const DemoOptions& opt, const ExecContext& ctx, Log& log) {
 class Regenerators {
  public:
   Regenerators(const DemoReference& ref, const ExecContext& ctx) : ref_(ref) {
-    auto made = GarmentRegenerator::create(ref.family, {ref.shorts}, {}, ctx);
+    // The shorts' collision pass is the outfit's first layer (dress).
+    GarmentRegenOptions o;
+    o.collision_pass = false;
+    auto made = GarmentRegenerator::create(ref.family, {ref.shorts}, o, ctx);
     if (!made) throw Error(made.status());
     shorts_ = std::move(*made);
   }
@@ -196,25 +229,82 @@ class Regenerators {
 
 // ------------------------------------------------------------------ bodies
 
-/// Nodes of the profile templates under the shorts on one body
-/// (count_inside_layer, systems/garment/fit_measure.h); 0 when a step fails.
-std::size_t nodes_under(const std::vector<RegenResult>& profiles, std::span<const Vec3d> shorts,
-                        const DemoReference& ref, std::span<const Vec3d> body, const ExecContext& ctx) {
+/// The shorts' fit on one body after the outfit's layering.
+struct ShortsFit {
+  std::size_t inside = 0, pushed = 0;
+  double max_depth = 0, min_clearance = 0, mean_clearance = 0, strain_p95 = 0;
+};
+
+/// Dresses one body: the shorts (decoded, edge-transferred) and the profile
+/// templates (regenerated) resolved as one outfit (layer_outfit, in
+/// kDemoOutfitOrder), in place; the shorts' fit measured after it, the
+/// profile templates' penetration and cracks measured again.
+Status dress(const DemoReference& ref, std::span<const Vec3d> body, std::vector<Vec3d>& shorts,
+             std::vector<RegenResult>& profiles, BodyQuality* q, ShortsFit* fit, const ExecContext& ctx) {
   CollisionBody cb;
-  if (!cb.build(ref.family->collision, body, {}, ctx)) return 0;
-  BodyBvh bvh;
-  if (!bvh.build(shorts, ref.shorts_triangles, {}, ctx)) return 0;
-  std::size_t n = 0;
-  for (const RegenResult& r : profiles) {
-    std::vector<Vec3d> p;
-    for (std::uint32_t v = 0; v < r.model.nodes.slots.capacity(); ++v)
-      if (r.model.alive(NodeIdx{v})) p.push_back(r.model.nodes.position[v]);
-    std::vector<BodyDistance> d(p.size());
-    if (!cb.query_many(p, {}, d, ctx)) continue;
-    auto k = count_inside_layer(p, d, bvh);
-    if (k) n += *k;
+  if (Status s = cb.build(ref.family->collision, body, {}, ctx); !s) return s;
+  const std::size_t k_n = profiles.size();
+  std::vector<OutfitGarment> g(1 + k_n);
+  g[0].positions = shorts;
+  g[0].adjacency = &ref.shorts->adjacency;
+  g[0].clearance = &ref.shorts->clearance;
+  g[0].triangles = ref.shorts_triangles;
+  g[0].z_depth = ref.shorts_z;
+  std::vector<std::vector<Vec3d>> before(k_n);
+  for (std::size_t k = 0; k < k_n; ++k) {
+    if (Status s = ref.layers[k].positions(profiles[k].model, before[k]); !s) return s;
+    g[1 + k].positions = before[k];
+    g[1 + k].adjacency = &ref.layers[k].adjacency;
+    g[1 + k].clearance = &ref.layers[k].clearance;
+    g[1 + k].triangles = ref.layers[k].triangles;
+    g[1 + k].z_depth = ref.template_z[k];
   }
-  return n;
+  if (Status s = layer_outfit(g, cb, CollisionParams{}, ctx); !s) return s;
+  shorts = g[0].positions;
+  for (std::size_t k = 0; k < k_n; ++k) {
+    ref.layers[k].apply(profiles[k].model, before[k], g[1 + k].positions);
+    RegenQuality& rq = profiles[k].quality;
+    rq.crack = joint_crack(profiles[k].model);  // the layering moves joint nodes together
+    rq.inside = 0;
+    rq.min_distance = std::numeric_limits<double>::infinity();
+    for (const BodyDistance& d : g[1 + k].distance) {
+      rq.inside += d.distance < 0;
+      rq.min_distance = std::min(rq.min_distance, d.distance);
+    }
+  }
+  if (q) {
+    for (const OutfitGarment& x : g) {
+      q->layer_inside_unlayered += x.layer_inside_before;
+      q->layer_inside += x.layer_inside;
+      q->layer_inside_by[static_cast<std::size_t>(x.z_depth)] += x.layer_inside;
+    }
+    for (std::size_t k = 0; k < k_n; ++k) q->layer_pushed += g[1 + k].pushed;
+  }
+  if (fit) {
+    *fit = {};
+    fit->pushed = g[0].pushed;
+    fit->min_clearance = std::numeric_limits<double>::infinity();
+    double sum = 0;
+    for (const BodyDistance& d : g[0].distance) {
+      fit->inside += d.distance < 0;
+      fit->max_depth = std::max(fit->max_depth, -d.distance);
+      fit->min_clearance = std::min(fit->min_clearance, d.distance);
+      sum += d.distance;
+    }
+    fit->mean_clearance = sum / static_cast<double>(std::max<std::size_t>(1, g[0].distance.size()));
+    std::vector<double> strain;
+    for (std::size_t e = 0; e < ref.shorts->edges.size(); ++e) {
+      const auto [a, b] = ref.shorts->edges[e];
+      if (ref.shorts->rest_length[e] > 0)
+        strain.push_back(std::abs((shorts[a] - shorts[b]).norm() / ref.shorts->rest_length[e] - 1));
+    }
+    if (!strain.empty()) {
+      auto at = strain.begin() + static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(strain.size() - 1));
+      std::nth_element(strain.begin(), at, strain.end());
+      fit->strain_p95 = *at;
+    }
+  }
+  return {};
 }
 
 struct DemoRun {
@@ -254,16 +344,20 @@ DemoRun run_bodies(const DemoOptions& opt, const DemoReference& ref, const Manne
         errors[b] = s.message();
         return;
       }
-      if (first + b < opt.meshes) {
-        for (std::size_t k = 0; k < profiles.size(); ++k)
-          write_obj(profiles[k].model, opt.out / "meshes" / (chunk.name(b) + "_" + ref.templates[k].name + ".obj"));
-      }
       if (!fitted[b].status) {
         errors[b] = fitted[b].status.message();
         return;
       }
-      const GarmentQuality& fit = fitted[b].garments[0].quality;
       BodyQuality& r = q[b];
+      ShortsFit fit;
+      if (Status s = dress(ref, body, fitted[b].garments[0].positions, profiles, &r, &fit, inner); !s) {
+        errors[b] = "outfit: " + s.message();
+        return;
+      }
+      if (first + b < opt.meshes) {
+        for (std::size_t k = 0; k < profiles.size(); ++k)
+          write_obj(profiles[k].model, opt.out / "meshes" / (chunk.name(b) + "_" + ref.templates[k].name + ".obj"));
+      }
       r.name = chunk.name(b);
       r.pushed = fit.pushed;
       r.min_clearance = fit.min_clearance;
@@ -273,7 +367,6 @@ DemoRun run_bodies(const DemoOptions& opt, const DemoReference& ref, const Manne
       r.strain_p95 = fit.strain_p95;
       r.decode_ms = per_body_ms;
       for (const auto& x : profiles) r.templates.push_back(x.quality);
-      r.under_shorts = nodes_under(profiles, fitted[b].garments[0].positions, ref, body, inner);
     });
     for (std::size_t b = 0; b < chunk.size(); ++b) {
       if (!errors[b].empty()) {
@@ -303,6 +396,12 @@ DemoRun run_bodies(const DemoOptions& opt, const DemoReference& ref, const Manne
 }
 
 // ------------------------------------------------------------------ report
+
+nlohmann::json by_garment(const BodyQuality& r) {
+  nlohmann::json j;
+  for (std::size_t k = 0; k < kDemoOutfitOrder.size(); ++k) j[std::string(kDemoOutfitOrder[k])] = r.layer_inside_by[k];
+  return j;
+}
 
 /// Totals over the completed bodies, for report.json and the summary.
 struct DemoTotals {
@@ -345,17 +444,24 @@ std::pair<nlohmann::json, DemoTotals> write_report(const Common& common, const D
                    {"mean_clearance_m", r.mean_clearance},
                    {"edge_strain_p95", r.strain_p95},
                    {"collision_pushed", r.pushed},
-                   {"profile_nodes_under_shorts", r.under_shorts},
+                   {"layer_inside_vertices", r.layer_inside},
+                   {"layer_inside_vertices_unlayered", r.layer_inside_unlayered},
+                   {"layer_inside_by_garment", by_garment(r)},
+                   {"layer_pushed", r.layer_pushed},
                    {"decode_ms", r.decode_ms}});
   }
-  std::size_t under = 0;
-  for (const auto& r : quality) under += r.under_shorts;
+  std::size_t layered = 0, unlayered = 0;
+  for (const auto& r : quality) layered += r.layer_inside, unlayered += r.layer_inside_unlayered;
+  nlohmann::json order = nlohmann::json::array();
+  for (std::string_view g : kDemoOutfitOrder) order.push_back(std::string(g));
+  rep["outfit_order"] = order;  // innermost first
   tot.nq = std::max<double>(1, static_cast<double>(quality.size()));
   rep["summary"] = {{"completed", quality.size()},
                     {"failed", run.failures.size()},
                     {"bodies_with_penetration", tot.bodies_with_penetration},
                     {"worst_penetration_m", tot.worst_depth},
-                    {"profile_nodes_under_shorts_total", under},
+                    {"layer_inside_vertices_total", layered},
+                    {"layer_inside_vertices_unlayered_total", unlayered},
                     {"mean_edge_strain_p95", tot.strain_sum / tot.nq},
                     {"mean_decode_ms_per_body", tot.decode_sum / tot.nq},
                     {"encode_s", ref.encode_s},
@@ -415,7 +521,11 @@ std::optional<RgbImage> picture_of(std::size_t index, const std::string& name, c
     log.warn("picture of " + name + ": " + (st ? one_fit[0].status : st).to_string());
     return std::nullopt;
   }
-  const std::vector<Vec3d>& shorts_d = one_fit[0].garments[0].positions;
+  std::vector<Vec3d>& shorts_d = one_fit[0].garments[0].positions;
+  if (Status st = dress(ref, body, shorts_d, profiles, nullptr, nullptr, ctx); !st) {
+    log.warn("picture of " + name + ": outfit: " + st.to_string());
+    return std::nullopt;
+  }
   auto shorts_tris = fan_triangulate(ref.garment);
   std::vector<SurfaceTriangles> gt;
   for (const auto& r : profiles) gt.push_back(fan_triangulate(r.model).value());
@@ -490,7 +600,7 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
   html["summary"]["profile_template_nodes_inside"] = tot.template_inside;
   html["summary"]["profile_template_max_crack_m"] = tot.template_crack;
   std::vector<std::string> columns = {"body", "shorts_inside", "shorts_min_clearance_mm", "shorts_strain_p95",
-                                      "profile_nodes_under_shorts"};
+                                      "layer_inside_vertices"};
   for (const auto& t : ref.templates)
     for (const char* c : {"_inside", "_min_distance_mm", "_profile_error_mm", "_crack_mm", "_ms"})
       columns.push_back(t.name + c);
@@ -501,7 +611,7 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
                           {"shorts_inside", r.inside},
                           {"shorts_min_clearance_mm", 1000 * r.min_clearance},
                           {"shorts_strain_p95", r.strain_p95},
-                          {"profile_nodes_under_shorts", r.under_shorts}};
+                          {"layer_inside_vertices", r.layer_inside}};
     for (std::size_t k = 0; k < r.templates.size() && k < ref.templates.size(); ++k) {
       const RegenQuality& q = r.templates[k];
       const std::string& n = ref.templates[k].name;
@@ -598,11 +708,12 @@ void print_summary(const DemoOptions& opt, const DemoReference& ref, const DemoR
               ref.shorts->mesh.positions.size(), tot.decode_sum / tot.nq, 100.0 * tot.strain_sum / tot.nq);
   std::printf("  penetration: %zu of %zu bodies have garment vertices inside the body (worst %.1f mm)\n",
               tot.bodies_with_penetration, completed, 1000.0 * tot.worst_depth);
-  std::size_t under = 0;
-  for (const auto& r : run.quality) under += r.under_shorts;
+  std::size_t layered = 0, unlayered = 0;
+  for (const auto& r : run.quality) layered += r.layer_inside, unlayered += r.layer_inside_unlayered;
   std::printf(
-      "  layers: %zu profile-template nodes under the shorts over all bodies (fitted apart, not yet one outfit)\n",
-      under);
+      "  outfit (shorts, trousers, skirt, top, innermost first): %zu garment vertices inside a lower layer over all "
+      "bodies (%zu as fitted apart)\n",
+      layered, unlayered);
   for (const auto& t : tot.templates)
     std::printf(
         "  %-9s %6zu nodes, %zu nodes inside over all bodies, max crack %.1e m, max profile error %.2f mm, %.1f ms per "

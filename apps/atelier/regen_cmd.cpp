@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <optional>
 
 #include "mpi_split.h"
@@ -117,6 +118,9 @@ CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
                 "feature curves of a body OBJ file (JSON of named polylines, docs/body-files.md): profile templates "
                 "encode on it");
   c->add_option("--data", opt.data, "the shared data folder (for makehuman)");
+  c->add_option("--z-depth", opt.z_depth,
+                "the garment's layer order in an outfit, stored in the .atd (smaller is nearer the skin; a .mhclo's "
+                "z_depth by default): regen with several templates that all have one layers them by it");
   c->add_option("--out", opt.out, "output folder");
   return c;
 }
@@ -141,6 +145,11 @@ void encode_garment_files(const Common& common, const EncodeOptions& opt, const 
                                          "makehuman (or give the garment as an OBJ on the mannequin)"));
     g = makehuman::fitted_garment(*lib, file);
   }
+  std::optional<int> z_depth = opt.z_depth;
+  if (ext == ".mhclo" && !z_depth) {
+    const makehuman::GarmentBinding b = makehuman::read_mhclo(file, lib->vertex_count());  // read again: cheap
+    if (b.has_z_depth) z_depth = b.z_depth;
+  }
   Expected<GarmentTemplate> t = Status(ErrorCode::kInternal, "not encoded");
   if (ext == ".obj") {
     // One library call: read, mapped to metres and Y up, encoded.
@@ -154,6 +163,10 @@ void encode_garment_files(const Common& common, const EncodeOptions& opt, const 
     if (!t) t = Status(t.status().code(), file.string() + ": " + t.status().message());
   }
   if (!t) throw Error(t.status());
+  if (z_depth) {
+    t->encoding.z_depth = *z_depth;  // written in the .atd
+    t->z_depth = *z_depth;
+  }
   std::size_t inside = 0;
   double min_c = std::numeric_limits<double>::infinity();
   for (float c : t->clearance.clearance) {
@@ -311,13 +324,21 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
     auto family = GarmentFamily::of(*ref);
     if (!family) throw Error(family.status());
     job.family = std::make_shared<const GarmentFamily>(std::move(*family));
+    std::vector<GarmentTemplate> read;
     for (const fs::path& f : detail_files) {
       auto d = read_garment_template(*job.family, f, ctx);
       if (!d) throw Error(d.status());
-      // An outfit: the garments are layers in the order of the --template
-      // options, the first nearest the skin (the order is part of job.json).
-      d->z_depth = static_cast<int>(job.details.size());
-      job.details.push_back(std::make_shared<const GarmentTemplate>(std::move(*d)));
+      read.push_back(std::move(*d));
+    }
+    // An outfit: the garments are layers by the z_depth stored in their .atd
+    // files when every one has one (MakeHuman's order; ties in the order of
+    // the --template options), else in the order of the --template options,
+    // the first nearest the skin. The effective order follows from the
+    // templates' contents and order, both part of job.json.
+    const bool by_z = std::all_of(read.begin(), read.end(), [](const GarmentTemplate& g) { return g.encoding.z_depth; });
+    for (std::size_t i = 0; i < read.size(); ++i) {
+      read[i].z_depth = by_z ? *read[i].encoding.z_depth : static_cast<int>(i);
+      job.details.push_back(std::make_shared<const GarmentTemplate>(std::move(read[i])));
     }
   }
   // Outputs are named after the templates: two of one name would overwrite
@@ -629,6 +650,16 @@ MergeCounts merge_report(const Common& common, const RegenOptions& opt, const Re
     for (const auto& t : job.templates) names.push_back(t.name);
     for (const auto& d : job.details) names.push_back(d->name);
     rest["templates"] = names;
+    if (job.details.size() > 1) {
+      // The outfit's effective layer order, innermost first (stable by z_depth).
+      std::vector<std::size_t> order(job.details.size());
+      std::iota(order.begin(), order.end(), std::size_t{0});
+      std::stable_sort(order.begin(), order.end(),
+                       [&](std::size_t a, std::size_t b) { return job.details[a]->z_depth < job.details[b]->z_depth; });
+      nlohmann::json layers = nlohmann::json::array();
+      for (std::size_t i : order) layers.push_back({{"garment", job.details[i]->name}, {"z_depth", job.details[i]->z_depth}});
+      rest["layer_order"] = layers;
+    }
     rest["summary"] = {{"bodies", n},
                        {"completed", m.ok},
                        {"failed", m.failed},

@@ -57,6 +57,7 @@
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,7 @@ struct EncodeOptions {
   double scale = 1.0;                       // garment (and body file) units to metres
   std::string up = "y";                     // garment (and body file) up axis: y | z
   std::filesystem::path features;           // feature-curve JSON for a body OBJ (profile templates)
+  std::optional<int> z_depth;               // the garment's layer order (a .mhclo's own by default)
 };
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt);
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log);

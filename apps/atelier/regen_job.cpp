@@ -78,6 +78,9 @@ nlohmann::json describe_regen_job(const Common& common, const RegenOptions& opt)
   } else if (opt.bodies.source == "makehuman") {
     src["count"] = opt.bodies.count;
     src["data"] = absolute_text(opt.bodies.data);
+    // Issue 26: statures drawn from a survey, bodies on the floor y = 0:
+    // other bodies than earlier jobs' of the same seed, so not resumed with them.
+    src["bodies"] = "stature-sampled, floor y=0";
   } else {
     // A directory: the folder here, each body file by contents in its own
     // record (body_input_identity: a body set may be large, and an edited

@@ -41,4 +41,41 @@ void BM_MakeHumanBodies_1000(benchmark::State& st) {
 }
 BENCHMARK(BM_MakeHumanBodies_1000)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
+// Issue 26: drawing one adult. Sliders only (the uniform height slider, the
+// old draw) side by side with the stature draw that regen's MakeHuman
+// source now makes per body (its sliders plus the height slider inverted
+// from a drawn stature), and one body's full build for scale.
+const makehuman::HumanLibrary* bench_library() {
+  const fs::path dir = fs::path(ATELIER_BENCH_SHARED_DATA) / "makehuman";
+  if (!fs::exists(dir / "base.obj")) return nullptr;
+  static const makehuman::HumanLibrary lib = makehuman::HumanLibrary::load(dir);
+  return &lib;
+}
+
+void BM_MakeHumanAdult_Sliders(benchmark::State& st) {
+  std::size_t i = 0;
+  for (auto _ : st) benchmark::DoNotOptimize(makehuman::sample_adult(7, i++).height);
+}
+BENCHMARK(BM_MakeHumanAdult_Sliders)->Unit(benchmark::kMicrosecond);
+
+void BM_MakeHumanAdult_Stature(benchmark::State& st) {
+  const makehuman::HumanLibrary* lib = bench_library();
+  if (!lib) return st.SkipWithError("MakeHuman data absent");
+  std::size_t i = 0;
+  for (auto _ : st) benchmark::DoNotOptimize(makehuman::sample_adult(*lib, 7, i++).height);
+}
+BENCHMARK(BM_MakeHumanAdult_Stature)->Unit(benchmark::kMicrosecond);
+
+void BM_MakeHumanAdult_Build(benchmark::State& st) {
+  const makehuman::HumanLibrary* lib = bench_library();
+  if (!lib) return st.SkipWithError("MakeHuman data absent");
+  std::vector<Vec3f> full(lib->vertex_count());
+  std::size_t i = 0;
+  for (auto _ : st) {
+    lib->build(makehuman::sample_adult(7, i++), full);
+    benchmark::DoNotOptimize(full.data());
+  }
+}
+BENCHMARK(BM_MakeHumanAdult_Build)->Unit(benchmark::kMicrosecond);
+
 }  // namespace

@@ -108,6 +108,7 @@ class MhcloParser {
       if (w.size() != 2 || r.ec != std::errc{} || r.ptr != w[1].data() + w[1].size())
         fail(file_, ln_, "z_depth needs one integer");
       b_.z_depth = z;
+      b_.has_z_depth = true;
     } else if (key == "x_scale" || key == "y_scale" || key == "z_scale") {
       const int axis = key[0] - 'x';
       if (w.size() != 4) fail(file_, ln_, std::string(key) + " needs two vertex indices and a positive distance");

@@ -20,6 +20,7 @@ struct GarmentBinding {
   std::string name;
   std::string obj_file;
   int z_depth = 0;                                // layer order (inner first)
+  bool has_z_depth = false;                       // the file has a z_depth line
   std::array<std::uint32_t, 3> scale_a{}, scale_b{};  // per axis: reference vertex pair
   std::array<double, 3> scale_d{1, 1, 1};         // per axis: reference distance
   std::array<bool, 3> has_scale{};

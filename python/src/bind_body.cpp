@@ -560,9 +560,31 @@ naming the file for bad data. GIL released.
             return adopt(std::move(rows), {static_cast<py::ssize_t>(n)});
           },
           py::arg("n"), py::arg("seed") = 1, R"doc(
-n random adults (``atelier regen --source makehuman --seed S``'s bodies) as
-a structured array (n,) of macro slider values: gender, age, muscle,
-weight, height, proportions, african, asian, caucasian.
+n random adults' sliders with the height slider drawn uniformly (0.2-0.9:
+17% of them taller than 2.05 m) as a structured array (n,) of macro slider
+values: gender, age, muscle, weight, height, proportions, african, asian,
+caucasian. The bodies of ``atelier regen --source makehuman --seed S`` are
+``MakeHuman(...).adults(n, S)``: the same sliders with the height slider of
+a stature drawn from a survey (docs/body-files.md).
+)doc")
+      .def(
+          "adults",
+          [](const MakeHumanData& d, std::size_t n, std::uint64_t seed) {
+            std::vector<MacroRow> rows(n);
+            std::vector<double> stature(n);
+            for (std::size_t i = 0; i < n; ++i) {
+              const auto p = makehuman::sample_adult(*d.lib, seed, i, &stature[i]);
+              rows[i] = {p.gender, p.age, p.muscle, p.weight, p.height, p.proportions, p.african, p.asian, p.caucasian};
+            }
+            return py::make_tuple(adopt(std::move(rows), {static_cast<py::ssize_t>(n)}),
+                                  adopt(std::move(stature), {static_cast<py::ssize_t>(n)}));
+          },
+          py::arg("n"), py::arg("seed") = 1, R"doc(
+n random adults as ``atelier regen --source makehuman --seed S`` draws
+them: (rows, stature) with rows the structured array of ``sample`` (the
+height slider chosen to give a stature drawn per sex from NHANES
+2015-2018 percentiles, docs/body-files.md) and stature (n,) their
+statures in metres (soles on y = 0 to the top of the head).
 )doc")
       .def(
           "positions",

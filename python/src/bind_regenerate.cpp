@@ -23,6 +23,7 @@ namespace atelier::python {
 struct QualityRow {
   bool ok;
   std::uint64_t vertices, inside, pushed;
+  std::uint64_t layer_inside;  // vertices inside a garment of a lower layer (count_inside_layer)
   double max_depth, min_clearance, mean_clearance, clearance_error, clearance_change, strain_p95, strain_max;
   double clearance_change_rms, excess_strain_p95, clearance_p50, clearance_p95;
 };
@@ -64,6 +65,7 @@ QualityRow row_of(const GarmentQuality& q, double reference_mean_clearance) {
   r.vertices = q.vertices;
   r.inside = q.inside;
   r.pushed = q.pushed;
+  r.layer_inside = q.layer_inside;
   r.max_depth = q.max_depth;
   r.min_clearance = q.min_clearance;
   r.mean_clearance = q.mean_clearance;
@@ -272,7 +274,10 @@ fit: also run measure_fit on every body against the garment on the
 Returns a Regeneration: ``positions[g]`` is a (B, m_g, 3) array per garment
 (one copy from the engine's per-body vectors), ``quality[g]`` a structured
 array (B,) of fit figures: ok, vertices, inside (vertices inside the
-body), pushed, max_depth, min_clearance, mean_clearance, clearance_error
+body), pushed, layer_inside (vertices inside a garment of a lower layer
+of the outfit: count_inside_layer, systems/garment/fit_measure.h; 0 for the
+innermost layer and with layers=False), max_depth, min_clearance,
+mean_clearance, clearance_error
 (max |distance - target clearance|), clearance_change (mean clearance
 minus the mean on the reference body), strain_p95, strain_max
 (|l / l_reference - 1| over edges), and the fit=True fields. A body that
@@ -288,7 +293,7 @@ returned). The GIL is released while the engine runs.
 
 void bind_regenerate(py::module_& m) {
   // The structured numpy dtype of the fit figures (registered at import).
-  PYBIND11_NUMPY_DTYPE(QualityRow, ok, vertices, inside, pushed, max_depth, min_clearance, mean_clearance,
+  PYBIND11_NUMPY_DTYPE(QualityRow, ok, vertices, inside, pushed, layer_inside, max_depth, min_clearance, mean_clearance,
                        clearance_error, clearance_change, strain_p95, strain_max, clearance_change_rms,
                        excess_strain_p95, clearance_p50, clearance_p95);
 

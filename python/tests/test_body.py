@@ -111,3 +111,19 @@ def test_makehuman_bodies(makehuman):
 def test_makehuman_missing_folder(scratch):
     with pytest.raises(FileNotFoundError):
         atelier.MakeHuman(scratch / "nowhere")
+
+
+def test_makehuman_adults_have_survey_statures(makehuman):
+    # Issue 26: regen's adults, with their statures (soles on y = 0).
+    rows, stature = makehuman.adults(200, seed=5)
+    assert rows.shape == (200,) and stature.shape == (200,)
+    assert stature.max() <= 2.10 and stature.min() >= 1.40
+    bodies = makehuman.positions(rows[:4], threads=2)
+    for b in range(4):
+        y = bodies[b][:, 1]
+        assert abs(y.min()) < 1e-9
+        assert abs((y.max() - y.min()) - stature[b]) < 1e-5
+    female = stature[rows["gender"] < 0.5]
+    male = stature[rows["gender"] >= 0.5]
+    assert abs(np.median(female) - 1.615) < 0.02 and abs(np.median(male) - 1.755) < 0.02
+

@@ -82,6 +82,26 @@ def test_layers(small):
         atelier.Regenerator([shorts, atelier.encode_garment(atelier.GarmentFamily(body), top_band(body))])
 
 
+def test_layer_inside_counts_the_outer_garment_under_the_inner_one(small):
+    # Issue 26: the layer-inside counter (count_inside_layer) per body and
+    # garment. The wrap (outer, z_depth 1) is cut 4 mm off the skin, inside
+    # the shorts (8 mm) where they overlap: decoded without the collision
+    # pass the counter finds its vertices under the shorts; with the layers
+    # resolved none is left. The inner layer is never counted.
+    body, family, shorts, bodies = small["body"], small["family"], small["shorts"], small["bodies"][:3]
+    wrap = atelier.encode_garment(family, top_band(body, offset=0.004), name="wrap", z_depth=1)
+    apart = atelier.Regenerator([shorts, wrap], collision_pass=False).run(bodies)
+    layered = atelier.Regenerator([shorts, wrap]).run(bodies)
+    for run in (apart, layered):
+        assert run.quality[1]["layer_inside"].dtype == np.uint64
+        assert (run.quality[0]["layer_inside"] == 0).all()
+    assert (apart.quality[1]["layer_inside"] > 0).all()
+    assert (apart.quality[1]["layer_inside"] <= wrap.vertex_count).all()
+    assert (layered.quality[1]["layer_inside"] == 0).all()
+    # Not layered: not counted.
+    assert (atelier.Regenerator([shorts, wrap], layers=False).run(bodies).quality[1]["layer_inside"] == 0).all()
+
+
 def test_run_one_moves_the_engine_vector_into_the_array(small):
     shorts, bodies = small["shorts"], small["bodies"]
     regen = atelier.Regenerator(shorts)

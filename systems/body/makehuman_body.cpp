@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <iomanip>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -49,6 +50,19 @@ double three_way(std::string_view level, double v) {
   return 1 - mx - mn;
 }
 
+// Every factor token of the macro target names, and its index.
+constexpr std::array<std::string_view, 19> kFactorNames = {
+    "universal",     "male",          "female",    "child",         "young",         "old",
+    "african",       "asian",         "caucasian", "minmuscle",     "averagemuscle", "maxmuscle",
+    "minweight",     "averageweight", "maxweight", "minheight",     "maxheight",     "idealproportions",
+    "uncommonproportions"};
+
+std::string_view target_stem(std::string_view name) {
+  if (auto s = name.rfind('/'); s != std::string_view::npos) name = name.substr(s + 1);
+  if (name.size() > 7 && name.substr(name.size() - 7) == ".target") name = name.substr(0, name.size() - 7);
+  return name;
+}
+
 }  // namespace
 
 double macro_factor(std::string_view t, const MacroParams& p) {
@@ -77,8 +91,7 @@ double macro_factor(std::string_view t, const MacroParams& p) {
 
 double macro_target_weight(std::string_view name, const MacroParams& p) {
   // Strip a folder prefix ("height/") and the extension.
-  if (auto s = name.rfind('/'); s != std::string_view::npos) name = name.substr(s + 1);
-  if (name.size() > 7 && name.substr(name.size() - 7) == ".target") name = name.substr(0, name.size() - 7);
+  name = target_stem(name);
   double w = 1.0;
   std::size_t pos = 0;
   while (pos <= name.size()) {
@@ -171,9 +184,49 @@ HumanLibrary HumanLibrary::load(const std::filesystem::path& dir, const ExecCont
   } else {
     throw Error(Status(ErrorCode::kParse, (dir / "base.obj").string() + ": no 'body' group"));
   }
-  // Check every macro name parses now, not at build time.
+  // Check every macro name parses now, not at build time, and keep its
+  // factors' indices.
   MacroParams probe;
-  for (const auto& t : lib.macro_) (void)macro_target_weight(t.name, probe);
+  for (const auto& t : lib.macro_) {
+    (void)macro_target_weight(t.name, probe);
+    const std::string_view name = target_stem(t.name);
+    auto& f = lib.macro_factors_.emplace_back();
+    std::size_t pos = 0;
+    while (pos <= name.size()) {
+      std::size_t dash = name.find('-', pos);
+      if (dash == std::string_view::npos) dash = name.size();
+      const auto it = std::find(kFactorNames.begin(), kFactorNames.end(), name.substr(pos, dash - pos));
+      if (it == kFactorNames.end())
+        throw Error(Status(ErrorCode::kParse, t.name + ": unknown macro factor '" +
+                                                  std::string(name.substr(pos, dash - pos)) + "'"));
+      f.push_back(static_cast<std::uint8_t>(it - kFactorNames.begin()));
+      pos = dash + 1;
+    }
+  }
+  // Stature candidates: skin vertices within 4% of the base body's height
+  // of its top or its bottom (the head's crown, the soles).
+  {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (std::uint32_t v = 0; v < lib.skin_vertices_; ++v) {
+      lo = std::min(lo, lib.base_.positions[v].y());
+      hi = std::max(hi, lib.base_.positions[v].y());
+    }
+    const float band = 0.04f * (hi - lo);
+    std::vector<std::int64_t> slot(nv, -1);
+    for (std::uint32_t v = 0; v < lib.skin_vertices_; ++v) {
+      const float y = lib.base_.positions[v].y();
+      if (y > lo + band && y < hi - band) continue;
+      slot[v] = static_cast<std::int64_t>(lib.stature_vertices_.size());
+      lib.stature_vertices_.push_back(v);
+      lib.stature_base_y_.push_back(y);
+    }
+    for (const auto* list : {&lib.macro_, &lib.measure_})
+      for (const Target& t : *list) {
+        auto& dy = lib.stature_dy_.emplace_back();
+        for (std::size_t k = 0; k < t.index.size(); ++k)
+          if (slot[t.index[k]] >= 0) dy.emplace_back(static_cast<std::uint32_t>(slot[t.index[k]]), t.delta[k].y());
+      }
+  }
   return lib;
 }
 
@@ -186,9 +239,14 @@ const Target* HumanLibrary::find_target(std::string_view name) const noexcept {
 
 std::vector<std::pair<const Target*, double>> HumanLibrary::active_targets(const MacroParams& p) const {
   std::vector<std::pair<const Target*, double>> out;
-  for (const auto& t : macro_) {
-    const double w = macro_target_weight(t.name, p);
-    if (w > 0) out.emplace_back(&t, w);
+  // Each factor once, then each target's product in its name's order (the
+  // value macro_target_weight gives, bit for bit).
+  std::array<double, kFactorNames.size()> factor{};
+  for (std::size_t k = 0; k < kFactorNames.size(); ++k) factor[k] = macro_factor(kFactorNames[k], p);
+  for (std::size_t i = 0; i < macro_.size(); ++i) {
+    double w = 1.0;
+    for (std::uint8_t k : macro_factors_[i]) w *= factor[k];
+    if (w > 0) out.emplace_back(&macro_[i], w);
   }
   for (const auto& [name, v] : p.measures) {
     if (v == 0) continue;
@@ -213,6 +271,11 @@ void HumanLibrary::build(const MacroParams& p, std::span<Vec3f> out) const {
     const float wf = static_cast<float>(w);
     for (std::size_t k = 0; k < t->index.size(); ++k) out[t->index[k]] += wf * t->delta[k];
   }
+  // Onto the floor: the lowest skin vertex at y = 0 exactly (x - x = 0).
+  float floor_y = std::numeric_limits<float>::infinity();
+  for (std::uint32_t v = 0; v < skin_vertices_; ++v) floor_y = std::min(floor_y, out[v].y());
+  if (skin_vertices_ > 0)
+    for (Vec3f& q : out) q.y() -= floor_y;
 }
 
 
@@ -493,6 +556,11 @@ std::vector<std::pair<std::string, std::string>> MakeHumanSource::parameters(std
   const MacroParams p = params(i);
   std::vector<std::pair<std::string, std::string>> out;
   out.emplace_back("sampled_sex", p.gender < 0.5 ? "female" : "male");
+  {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.4f", lib_->stature(p));  // 0.1 mm
+    out.emplace_back("sampled_stature_m", b);
+  }
   for (const auto& [name, v] : {std::pair{"gender", p.gender}, std::pair{"age", p.age}, std::pair{"muscle", p.muscle},
                                 std::pair{"weight", p.weight}, std::pair{"height", p.height},
                                 std::pair{"proportions", p.proportions}}) {

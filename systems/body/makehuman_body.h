@@ -45,13 +45,25 @@ struct MacroParams {
 /// name, e.g. height/female-young-averagemuscle-maxweight-maxheight.
 [[nodiscard]] double macro_target_weight(std::string_view target_name, const MacroParams& p);
 
-/// Random adult bodies, deterministic for a seed: age 0.45-0.95, weight
-/// 0.1-0.9, height 0.2-0.9, muscle 0.3-0.8, proportions 0.3-0.9, both
-/// genders (gender near 0 or 1 with some spread), mixed ethnicity.
+/// Random adult sliders, deterministic for a seed: age 0.45-0.95, weight
+/// 0.1-0.9, height slider 0.2-0.9, muscle 0.3-0.8, proportions 0.3-0.9, both
+/// genders (gender near 0 or 1 with some spread), mixed ethnicity. The height
+/// slider is uniform here, which makes 17% of adults taller than 2.05 m:
+/// bodies meant as people come from the library form below, which replaces
+/// it by the slider of a stature drawn from a survey.
 [[nodiscard]] std::vector<MacroParams> sample_adults(std::size_t n, std::uint64_t seed);
 /// Adult `index` of sample_adults(n, seed) for any n > index, drawn alone
 /// (its own random stream): a source draws each body when it is made.
 [[nodiscard]] MacroParams sample_adult(std::uint64_t seed, std::size_t index);
+
+/// Adult stature percentiles (metres) of one sex: 5th, 50th, 95th.
+struct StaturePercentiles {
+  double p5 = 0, p50 = 0, p95 = 0;
+};
+/// What the stature sampler aims for: US adults aged 20 and over, NHANES
+/// 2015-2018 (Fryar et al. 2021, Anthropometric reference data for children
+/// and adults: United States, 2015-2018, Vital Health Stat 3(46); docs/body-files.md).
+[[nodiscard]] StaturePercentiles stature_percentiles(bool female) noexcept;
 
 class HumanLibrary {
  public:
@@ -77,9 +89,25 @@ class HumanLibrary {
   /// Number of skin vertices: the `body` group uses vertices [0, skin_vertex_count()).
   [[nodiscard]] std::uint32_t skin_vertex_count() const noexcept { return skin_vertices_; }
 
-  /// out = base + sum(weight * target) over all vertices of base.obj.
-  /// Throws std::invalid_argument for an unknown measure modifier name.
+  /// out = base + sum(weight * target) over all vertices of base.obj, then
+  /// translated along y so that the lowest skin vertex is at y = 0: every
+  /// body source stands on the floor y = 0, Y up (docs/body-files.md);
+  /// base.obj is centred mid-body. Helpers and garments fitted to `out`
+  /// move with it. Throws std::invalid_argument for an unknown measure
+  /// modifier name.
   void build(const MacroParams& p, std::span<Vec3f> out) const;
+
+  /// Stature (metres: highest minus lowest skin vertex) of the body build(p)
+  /// makes, from the skin vertices near the top of the head and the soles
+  /// (those within 4% of the base body's height of its top or bottom; the
+  /// targets do not move other vertices that far) in double precision.
+  [[nodiscard]] double stature(const MacroParams& p) const;
+  /// The height slider in [0, 1] that gives `stature_m` with p's other
+  /// sliders: each vertex is linear in the slider on [0, 0.5] and on
+  /// [0.5, 1] (the min/maxheight weights, README), so the stature is known
+  /// exactly between three evaluations and bisected. A stature out of the
+  /// sliders' reach gives 0 or 1.
+  [[nodiscard]] double height_for_stature(const MacroParams& p, double stature_m) const;
 
  private:
   BaseMesh base_;
@@ -88,7 +116,28 @@ class HumanLibrary {
   std::map<std::string, std::vector<std::uint32_t>> measures_;
   std::vector<std::string> measure_modifiers_;
   std::uint32_t skin_vertices_ = 0;
+  // Per macro target, its factor tokens as indices into kFactorNames (the
+  // file name parsed once: active_targets is called per body and per
+  // stature evaluation).
+  std::vector<std::vector<std::uint8_t>> macro_factors_;
+  // stature(): skin vertices near the top and the soles, their base y and,
+  // per target (macro_ then measure_), (candidate slot, dy) pairs.
+  std::vector<std::uint32_t> stature_vertices_;
+  std::vector<double> stature_base_y_;
+  std::vector<std::vector<std::pair<std::uint32_t, float>>> stature_dy_;
+  void stature_y(const MacroParams& p, std::vector<double>& y) const;
 };
+
+/// Adult `index` for a seed, drawn alone: the sliders of sample_adult(seed,
+/// index) with the height slider replaced by the one that gives a stature
+/// drawn for the sex (gender < 0.5: female) from a normal distribution with
+/// the survey's median and the spread of its 5th-95th percentiles, clamped
+/// to 2.5 standard deviations (stature_percentiles). `stature_m`, when set,
+/// gets the stature the body has (lib.stature of the result).
+[[nodiscard]] MacroParams sample_adult(const HumanLibrary& lib, std::uint64_t seed, std::size_t index,
+                                       double* stature_m = nullptr);
+/// Adults 0..n-1 of sample_adult(lib, seed, i).
+[[nodiscard]] std::vector<MacroParams> sample_adults(const HumanLibrary& lib, std::size_t n, std::uint64_t seed);
 
 /// Base-mesh units (decimetres) to metres.
 inline constexpr double kMakeHumanToMetres = 0.1;
@@ -110,17 +159,21 @@ class MakeHumanSource final : public BodySource {
  public:
   MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::vector<MacroParams> params,
                   std::shared_ptr<const ReferenceBody> reference);
-  /// `count` bodies of sample_adults(count, seed), each drawn when its chunk
+  /// `count` bodies of sample_adult(*lib, seed, i), each drawn when its chunk
   /// is generated: the source's memory does not grow with `count` (issue 27:
   /// the list of 10^7 parameters took 1 GB before the first body).
   MakeHumanSource(std::shared_ptr<const HumanLibrary> lib, std::size_t count, std::uint64_t seed,
                   std::shared_ptr<const ReferenceBody> reference);
   [[nodiscard]] std::size_t size() const override { return sampled_ ? count_ : params_.size(); }
-  [[nodiscard]] MacroParams params(std::size_t i) const { return sampled_ ? sample_adult(seed_, i) : params_[i]; }
+  [[nodiscard]] MacroParams params(std::size_t i) const {
+    return sampled_ ? sample_adult(*lib_, seed_, i) : params_[i];
+  }
   [[nodiscard]] std::shared_ptr<const ReferenceBody> reference() const override { return reference_; }
   [[nodiscard]] std::string body_name(std::size_t i) const override;
-  /// The macro sliders of body i (MacroParams, each in [0, 1]) and the sex
-  /// they make (gender below 0.5: female).
+  /// The macro sliders of body i (MacroParams, each in [0, 1]), the sex
+  /// they make (gender below 0.5: female) and the body's stature
+  /// (sampled_stature_m, HumanLibrary::stature: for sampled bodies the
+  /// stature drawn, unless out of the sliders' reach).
   [[nodiscard]] std::vector<std::pair<std::string, std::string>> parameters(std::size_t i) const override;
   void generate(std::size_t first, std::size_t count, BodySet& out, std::vector<BodyFailure>& failures,
                 const ExecContext& ctx) const override;

@@ -1,8 +1,10 @@
 // The detail-template file (.atd): magic, version, sizes and topology hash,
-// the CSR matrix, then a checksum of everything before it. Version 2 (what
-// is written) ends in the CRC-32 of the native formats (io/checksum.h) and
-// is written through an AtomicFile; version 1 files (an FNV-1a sum) are
-// still read.
+// the CSR matrix, then a checksum of everything before it. Version 3 (what
+// is written) has, after the matrix, the garment's layer order (one byte:
+// 1 if it has one, then its z_depth as an int32) and ends in the CRC-32 of
+// the native formats (io/checksum.h); it is written through an AtomicFile.
+// Version 2 files (no layer order) and version 1 files (no layer order, an
+// FNV-1a sum) are still read.
 #include <atelier/systems/garment/detail_template.h>
 
 #include <array>
@@ -22,7 +24,7 @@ using namespace detail_internal;
 namespace {
 
 constexpr char kMagic[8] = {'A', 'T', 'L', 'D', 'E', 'T', 'L', '1'};
-constexpr std::uint32_t kVersion = 2;  // 1: FNV-1a checksum (read only)
+constexpr std::uint32_t kVersion = 3;  // 2: no z_depth, 1: also an FNV-1a checksum (both read only)
 
 template <class T>
 void put(std::string& s, const T& v) {
@@ -51,6 +53,8 @@ void write_detail(const DetailEncoding& enc, const std::filesystem::path& path) 
   put_vec(s, enc.c);
   put_vec(s, enc.d);
   put_vec(s, enc.reference_corners);
+  put(s, static_cast<std::uint8_t>(enc.z_depth.has_value()));
+  put(s, enc.z_depth.value_or(0));
   put(s, crc32(s));
   write_atomically(path, [&](AtomicFile& f) { f.write(s); });
 }
@@ -79,9 +83,9 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
   }
   std::uint32_t version;
   get(&version, 4, "version");
-  if (version != 1 && version != kVersion) {
+  if (version < 1 || version > kVersion) {
     pos -= 4;
-    fail("unsupported version " + std::to_string(version) + " (this atelier reads versions 1 and 2)");
+    fail("unsupported version " + std::to_string(version) + " (this atelier reads versions 1 to 3)");
   }
   DetailEncoding e;
   std::uint64_t nv, ne, nc;
@@ -91,7 +95,7 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
   get(&nv, 8, "header");
   get(&ne, 8, "header");
   get(&nc, 8, "header");
-  const std::size_t sum_bytes = version == 1 ? 8 : 4;
+  const std::size_t sum_bytes = (version == 1 ? 8 : 4) + (version >= 3 ? 5 : 0);  // with the layer order
   // Sizes are checked against the file before anything is allocated.
   if (nv >= s.size() || ne > s.size() || nc > s.size() || s.size() - pos < (nv + 1) * 4 + ne * 20 + nc * 8 + sum_bytes)
     fail("truncated file (the sizes in the header exceed the file)");
@@ -106,6 +110,13 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
   for (auto* v : {&e.a, &e.b, &e.c, &e.d}) get(v->data(), ne * 4, "coefficients");
   e.reference_corners.resize(nc);
   get(e.reference_corners.data(), nc * 8, "reference corners");
+  std::size_t z_at = pos;
+  std::uint8_t has_z = 0;
+  std::int32_t z = 0;
+  if (version >= 3) {
+    get(&has_z, 1, "layer order");
+    get(&z, 4, "layer order");
+  }
   const std::size_t body_end = pos;
   bool ok = false;
   if (version == 1) {
@@ -122,6 +133,11 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
     fail("checksum mismatch (corrupted file)");
   }
   if (pos != s.size()) fail(std::to_string(s.size() - pos) + " bytes after the checksum");
+  if (has_z > 1) {
+    pos = z_at;
+    fail("bad layer-order flag " + std::to_string(has_z) + " (0 or 1)");
+  }
+  if (has_z) e.z_depth = z;
   pos = row_at;
   if (e.row.front() != 0) fail("row offsets do not start at 0");
   pos = row_at + nv * 4;

@@ -19,6 +19,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -103,6 +104,9 @@ struct DetailEncoding {
   /// Corners of every body polygon in its reference frame (fitted frames);
   /// empty in eq. (8) mode.
   std::vector<Eigen::Vector2f> reference_corners;
+  /// The garment's layer order when it has one (MakeHuman's .mhclo z_depth:
+  /// smaller is nearer the skin); stored in the .atd from version 3 on.
+  std::optional<std::int32_t> z_depth;
   [[nodiscard]] std::size_t vertex_count() const noexcept { return row.empty() ? 0 : row.size() - 1; }
   [[nodiscard]] std::size_t entries() const noexcept { return polygon.size(); }
   /// Bytes of the matrix (what one decoding pass streams).

@@ -377,6 +377,7 @@ Expected<GarmentTemplate> read_garment_template(const GarmentFamily& family, con
                                             std::to_string(enc.vertex_count()));
   auto g = encode_garment(family, atd.stem().string(), std::move(*mesh), std::move(enc), {}, ctx);
   if (!g) return Status(g.status().code(), mesh_file.string() + ": " + g.status().message());
+  g->z_depth = g->encoding.z_depth.value_or(0);  // the .atd's layer order when it has one
   return g;
 }
 

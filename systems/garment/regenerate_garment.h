@@ -117,7 +117,8 @@ struct GarmentFileOptions {
 
 /// A garment file pair: `<stem>.atd` (the detail encoding) and `<stem>.obj`
 /// beside it (the garment on the reference body), as `atelier encode
-/// --garment` writes them. Errors name the file.
+/// --garment` writes them; z_depth is the .atd's when it has one (0 if not).
+/// Errors name the file.
 [[nodiscard]] Expected<GarmentTemplate> read_garment_template(const GarmentFamily& family,
                                                               const std::filesystem::path& atd,
                                                               const ExecContext& ctx = {});

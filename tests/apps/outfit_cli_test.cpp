@@ -200,3 +200,47 @@ TEST(OutfitCli, TheRegenReportDecodesItsPicturesInHeadlessChromium) {
     ++bars;
   EXPECT_EQ(bars, 2u);
 }
+
+// Issue 26: the z_depth stored in the .atd (encode --z-depth; a .mhclo's
+// own) orders the layers when every template has one: an outfit given in
+// the wrong --template order is layered as in the right one (the inner
+// garment stays inner), byte for byte; without z_depth the order given is
+// the order used, and another order gives other garments.
+TEST(OutfitCli, TemplatesWithAZDepthAreLayeredByItWhateverTheirOrder) {
+  const fs::path d = scratch_dir("outfit_cli_z");
+  const std::vector<std::string> right = {"trousers", "skirt", "top"}, wrong = {"top", "skirt", "trousers"};
+  for (std::size_t k = 0; k < right.size(); ++k) {
+    const std::string g = (encoded_templates() / (right[k] + ".obj")).string();
+    auto r = run_cli("encode --garment " + g + " --out " + (d / "plain").string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    r = run_cli("encode --garment " + g + " --z-depth " + std::to_string(10 * (k + 1)) + " --out " +
+                (d / "z").string());
+    ASSERT_EQ(r.code, 0) << r.out;
+  }
+  auto run = [&](const char* dir, const std::vector<std::string>& order, const char* out) {
+    std::string t;
+    for (const auto& g : order) t += " --template " + (d / dir / (g + ".atd")).string();
+    const auto r = run_cli("--threads 2 --seed 4 regen" + t + " --count 2 --meshes 2 --out " + (d / out).string());
+    EXPECT_EQ(r.code, 0) << r.out;
+  };
+  run("plain", right, "right");
+  run("z", wrong, "wrong_z");
+  run("plain", wrong, "wrong_plain");
+  std::size_t differ = 0;
+  for (const char* body : {"mannequin-00000", "mannequin-00001"})
+    for (const auto& g : right) {
+      const fs::path f = fs::path("bodies") / body / (g + ".obj");
+      ASSERT_TRUE(fs::exists(d / "right" / f)) << f;
+      EXPECT_EQ(read_bytes(d / "right" / f), read_bytes(d / "wrong_z" / f)) << f;
+      differ += read_bytes(d / "right" / f) != read_bytes(d / "wrong_plain" / f);
+    }
+  EXPECT_GT(differ, 0u) << "the --template order was expected to matter without z_depth";
+  const auto rep = nlohmann::json::parse(read_bytes(d / "wrong_z" / "report.json"));
+  ASSERT_EQ(rep["layer_order"].size(), 3u) << rep.dump();
+  for (std::size_t k = 0; k < right.size(); ++k) {
+    EXPECT_EQ(rep["layer_order"][k]["garment"], right[k]);
+    EXPECT_EQ(rep["layer_order"][k]["z_depth"], 10 * static_cast<int>(k + 1));
+  }
+  const auto plain = nlohmann::json::parse(read_bytes(d / "wrong_plain" / "report.json"));
+  EXPECT_EQ(plain["layer_order"][0]["garment"], "top");  // the order given
+}

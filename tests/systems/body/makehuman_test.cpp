@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 
@@ -108,9 +112,14 @@ TEST(MakeHumanMixing, ASampledSourceHoldsNoPerBodyMemory) {
   const MakeHumanSource huge(nullptr, std::size_t{1} << 32, 7, nullptr);
   EXPECT_EQ(huge.size(), std::size_t{1} << 32);
   EXPECT_LT(resident_bytes(), before + (std::size_t{16} << 20)) << "the source grew with the count";
+}
+
+TEST(MakeHumanMixing, ASampledSourceDrawsTheBodiesOfTheList) {
+  REQUIRE_MAKEHUMAN();
+  auto lib = std::shared_ptr<const HumanLibrary>(&library(), [](const HumanLibrary*) {});
   // The same bodies as the list of sample_adults, for any count.
-  const auto list = sample_adults(40, 7);
-  const MakeHumanSource small(nullptr, 40, 7, nullptr);
+  const auto list = sample_adults(library(), 40, 7);
+  const MakeHumanSource huge(lib, std::size_t{1} << 32, 7, nullptr), small(lib, 40, 7, nullptr);
   for (std::size_t i = 0; i < list.size(); ++i) {
     for (const MakeHumanSource* s : {&huge, &small}) {
       const MacroParams p = s->params(i);
@@ -131,7 +140,7 @@ TEST(MakeHumanMixing, ASampledSourceMakesTheBodiesOfItsList) {
   REQUIRE_MAKEHUMAN();
   auto lib = std::make_shared<const HumanLibrary>(HumanLibrary::load(mh_dir()));
   auto ref = std::make_shared<const ReferenceBody>(make_reference_body(*lib));
-  const MakeHumanSource listed(lib, sample_adults(3, 21), ref);
+  const MakeHumanSource listed(lib, sample_adults(*lib, 3, 21), ref);
   const MakeHumanSource sampled(lib, 100'000'000, 21, ref);
   BodySet a(ref), b(ref);
   std::vector<BodyFailure> fa, fb;
@@ -266,4 +275,110 @@ TEST(MakeHumanBody, MeasuresAreValidLoopsOnTheSkin) {
     EXPECT_GT(m.at(name).size(), 8u);
     for (auto v : m.at(name)) EXPECT_LT(v, 13380u) << name;
   }
+}
+
+namespace {
+// Lowest and highest skin y (metres) of a full build, the independent measure.
+std::pair<double, double> skin_extent(const HumanLibrary& lib, const MacroParams& p) {
+  std::vector<Vec3f> full(lib.vertex_count());
+  lib.build(p, full);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::uint32_t v = 0; v < lib.skin_vertex_count(); ++v) {
+    lo = std::min(lo, kMakeHumanToMetres * full[v].cast<double>().y());
+    hi = std::max(hi, kMakeHumanToMetres * full[v].cast<double>().y());
+  }
+  return {lo, hi};
+}
+
+double quantile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const auto k = static_cast<std::size_t>(at);
+  return k + 1 < v.size() ? v[k] + (at - static_cast<double>(k)) * (v[k + 1] - v[k]) : v.back();
+}
+}  // namespace
+
+// Issue 26: every body source stands on y = 0 (docs/body-files.md); the
+// stature model (head and sole vertices only) is the full mesh's extent.
+TEST(MakeHumanStature, BodiesStandOnTheFloorAndTheStatureModelIsTheMeshExtent) {
+  REQUIRE_MAKEHUMAN();
+  const HumanLibrary& lib = library();
+  std::vector<MacroParams> ps = sample_adults(lib, 24, 5);
+  for (double h : {0.0, 0.5, 1.0})
+    for (double w : {0.0, 1.0})
+      for (double g : {0.0, 1.0}) {
+        MacroParams p;
+        p.height = h, p.weight = w, p.gender = g, p.age = 0.95, p.muscle = 1 - w, p.proportions = w;
+        ps.push_back(p);
+      }
+  for (const MacroParams& p : ps) {
+    const auto [lo, hi] = skin_extent(lib, p);
+    EXPECT_NEAR(lo, 0.0, 1e-9);
+    EXPECT_NEAR(lib.stature(p), hi - lo, 1e-5) << "height slider " << p.height;
+  }
+  // Through the source as regen and bodies use it.
+  auto shared = std::shared_ptr<const HumanLibrary>(&lib, [](const HumanLibrary*) {});
+  auto ref = std::make_shared<const ReferenceBody>(make_reference_body(lib));
+  const MakeHumanSource src(shared, 6, 3, ref);
+  BodySet set(ref);
+  std::vector<BodyFailure> fails;
+  src.generate(0, 6, set, fails, {});
+  ASSERT_TRUE(fails.empty());
+  double ref_lo = std::numeric_limits<double>::infinity();
+  for (std::uint32_t v = 0; v < lib.skin_vertex_count(); ++v) ref_lo = std::min(ref_lo, ref->model.nodes.position[v].y());
+  EXPECT_NEAR(ref_lo, 0.0, 1e-9);
+  for (std::size_t b = 0; b < set.size(); ++b) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec3d& q : set.positions(b)) lo = std::min(lo, q.y()), hi = std::max(hi, q.y());
+    EXPECT_NEAR(lo, 0.0, 1e-9) << b;
+    // The exported stature is the body's.
+    std::string st;
+    for (const auto& [k, v] : src.parameters(b))
+      if (k == "sampled_stature_m") st = v;
+    ASSERT_FALSE(st.empty());
+    EXPECT_NEAR(std::stod(st), hi - lo, 2e-4) << b;
+  }
+}
+
+// Issue 26: the sampler made 17% of adults taller than 2.05 m. It now draws
+// a stature per sex from NHANES 2015-2018 percentiles and inverts the
+// height slider: none above 2.10 m, and the 5th/50th/95th percentiles of
+// the statures the bodies have within 1 cm of the survey's (sampling error
+// of a 5th percentile of ~5,000 draws is ~0.3 cm; clamping at 2.5 sd and
+// out-of-reach statures move them less than that, checked here).
+TEST(MakeHumanStature, SampledAdultsHaveTheSurveysStatures) {
+  REQUIRE_MAKEHUMAN();
+  const HumanLibrary& lib = library();
+  // 6,000 adults (~3,000 per sex) keep the test under a second in Release.
+  const std::size_t n = std::getenv("ATELIER_SKIP_LONG_TESTS") ? 2000 : 6000;
+  std::vector<double> female, male;
+  double tallest = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double st = 0;
+    const MacroParams p = sample_adult(lib, 2026, i, &st);
+    (p.gender < 0.5 ? female : male).push_back(st);
+    tallest = std::max(tallest, st);
+    // The other sliders are those of the slider-only draw.
+    const MacroParams q = sample_adult(2026, i);
+    ASSERT_EQ(p.gender, q.gender);
+    ASSERT_EQ(p.weight, q.weight);
+  }
+  EXPECT_LE(tallest, 2.10);
+  const double tol = n >= 6000 ? 0.01 : 0.02;
+  for (bool f : {true, false}) {
+    const auto& v = f ? female : male;
+    const StaturePercentiles want = stature_percentiles(f);
+    ASSERT_GT(v.size(), n / 3);
+    std::printf("%s: %zu adults, stature p5 %.4f p50 %.4f p95 %.4f m (survey %.3f %.3f %.3f), tallest %.4f\n",
+                f ? "female" : "male", v.size(), quantile(v, 0.05), quantile(v, 0.5), quantile(v, 0.95), want.p5,
+                want.p50, want.p95, tallest);
+    EXPECT_NEAR(quantile(v, 0.05), want.p5, tol) << (f ? "female" : "male");
+    EXPECT_NEAR(quantile(v, 0.50), want.p50, tol) << (f ? "female" : "male");
+    EXPECT_NEAR(quantile(v, 0.95), want.p95, tol) << (f ? "female" : "male");
+  }
+  // The slider-only draw it replaces (an independent count of the problem).
+  std::size_t over = 0;
+  for (std::size_t i = 0; i < 300; ++i) over += lib.stature(sample_adult(2026, i)) > 2.05;
+  std::printf("slider-only draw: %zu of 300 adults taller than 2.05 m\n", over);
+  EXPECT_GT(over, 10u) << "the uniform height slider was expected to make giants";
 }

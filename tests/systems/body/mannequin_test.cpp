@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string>
@@ -543,4 +544,34 @@ TEST(Mannequin, MeasurementsCsv) {
 }
 
 }  // namespace
+}  // namespace atelier
+
+// Issue 26: every body source uses one floor, y = 0, Y up
+// (docs/body-files.md). The mannequin is footless and headless: y = 0 is
+// the floor its person stands on, and its lowest point is the cap under the
+// ankles, 0.03 of the person's stature above it (ankle 0.055 H, cap 0.025 H
+// below it); MakeHuman bodies, which have feet, touch y = 0
+// (MakeHumanStature tests).
+namespace atelier {
+TEST(Mannequin, SampledBodiesStandOnTheFloorYZero) {
+  auto topo = make_mannequin_topology();
+  ASSERT_TRUE(topo);
+  auto t = std::make_shared<const MannequinTopology>(std::move(*topo));
+  auto ref = make_mannequin(MannequinParams{}, *t);
+  ASSERT_TRUE(ref);
+  auto r = std::make_shared<const ReferenceBody>(std::move(*ref));
+  const MannequinSource src(t, 12, 26, r);
+  BodySet set(r);
+  std::vector<BodyFailure> fails;
+  src.generate(0, 12, set, fails, {});
+  ASSERT_TRUE(fails.empty());
+  for (std::size_t b = 0; b < set.size(); ++b) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec3d& q : set.positions(b)) lo = std::min(lo, q.y()), hi = std::max(hi, q.y());
+    const double stature = src.params(b).height;
+    EXPECT_NEAR(lo, 0.03 * stature, 1e-8) << b;  // a BodySet keeps float positions (ulp 4e-9 m here)
+    EXPECT_LT(hi, stature) << b;  // headless: below the crown, Y up
+    EXPECT_GT(hi, 0.8 * stature) << b;
+  }
+}
 }  // namespace atelier

@@ -11,6 +11,7 @@
 #include <random>
 
 #include <atelier/engine/random.h>
+#include <atelier/io/checksum.h>
 #include "support/shapes.h"
 #include <atelier/systems/body/body_set.h>
 #include <atelier/systems/body/makehuman_body.h>
@@ -622,8 +623,10 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
   EXPECT_EQ(back.d, enc->d);
   EXPECT_EQ(back.topology_hash, enc->topology_hash);
   EXPECT_EQ(back.reference_corners, enc->reference_corners);
-  // Header (magic, version, sizes, topology hash), the matrix, a CRC-32.
-  EXPECT_EQ(fs::file_size(p), enc->bytes() + 8 + 4 + 4 + 4 + 8 + 8 + 8 + 8 + 4);
+  EXPECT_FALSE(back.z_depth.has_value());
+  // Header (magic, version, sizes, topology hash), the matrix, the layer
+  // order (flag and int32), a CRC-32.
+  EXPECT_EQ(fs::file_size(p), enc->bytes() + 8 + 4 + 4 + 4 + 8 + 8 + 8 + 8 + 5 + 4);
   std::string bytes;
   {
     std::ifstream in(p, std::ios::binary);
@@ -659,9 +662,9 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
   expect_error("hello world, not a template", "bad magic");
   expect_error(bytes + "x", "1 bytes after the checksum");
   expect_error(flipped, "byte offset");
-  // Version 1 files (an FNV-1a checksum of 8 bytes) are still read.
+  // Version 1 files (no layer order, an FNV-1a checksum of 8 bytes) are still read.
   {
-    std::string v1 = bytes.substr(0, bytes.size() - 4);
+    std::string v1 = bytes.substr(0, bytes.size() - 4 - 5);
     const std::uint32_t one = 1;
     std::memcpy(v1.data() + 8, &one, 4);
     std::uint64_t h = 0xcbf29ce484222325ull;
@@ -670,6 +673,39 @@ TEST(DetailTemplate, FileRoundTripAndCorruption) {
     const fs::path old = tmp_dir() / "v1.atd";
     std::ofstream(old, std::ios::binary) << v1;
     EXPECT_EQ(read_detail(old).a, enc->a);
+  }
+  // Version 2 files (no layer order, a CRC-32) are still read, without a z_depth.
+  {
+    std::string v2 = bytes.substr(0, bytes.size() - 4 - 5);
+    const std::uint32_t two = 2;
+    std::memcpy(v2.data() + 8, &two, 4);
+    const std::uint32_t sum = crc32(v2);
+    v2.append(reinterpret_cast<const char*>(&sum), 4);
+    const fs::path old = tmp_dir() / "v2.atd";
+    std::ofstream(old, std::ios::binary) << v2;
+    const DetailEncoding o = read_detail(old);
+    EXPECT_EQ(o.a, enc->a);
+    EXPECT_EQ(o.reference_corners, enc->reference_corners);
+    EXPECT_FALSE(o.z_depth.has_value());
+  }
+  // Issue 26: the layer order round-trips (negative and zero included: a
+  // z_depth of 0 is not "none"), and a flag other than 0 or 1 is named.
+  for (const std::int32_t z : {0, -3, 50}) {
+    DetailEncoding with = *enc;
+    with.z_depth = z;
+    const fs::path pz = tmp_dir() / "layered.atd";
+    write_detail(with, pz);
+    const DetailEncoding got = read_detail(pz);
+    ASSERT_TRUE(got.z_depth.has_value());
+    EXPECT_EQ(*got.z_depth, z);
+    EXPECT_EQ(got.a, enc->a);
+  }
+  {
+    std::string bad_flag = bytes.substr(0, bytes.size() - 4);
+    bad_flag[bad_flag.size() - 5] = 7;
+    const std::uint32_t sum = crc32(bad_flag);
+    bad_flag.append(reinterpret_cast<const char*>(&sum), 4);
+    expect_error(bad_flag, "layer-order flag");
   }
   // Writing into a missing folder fails cleanly and leaves nothing behind.
   EXPECT_THROW(write_detail(*enc, tmp_dir() / "no" / "such" / "dir" / "x.atd"), Error);

@@ -20,6 +20,8 @@
 #include <atelier/systems/sketch/transfer.h>
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <filesystem>
 #include <mutex>
 
@@ -217,9 +219,17 @@ TEST(FollowGarment, MakeHumanGarmentThroughTheDetailTemplate) {
   const Box3d box = bounds(m0);
   const Vec3d c = 0.5 * (box.lo + box.hi);
   const Camera cam = Camera::orthographic(c + Vec3d(0, 0, 3), c, Vec3d::UnitY(), 0.8, 800, 800);
-  auto knee = paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, -0.35, 0), Vec3d(0.6, -0.33, 0)}), {.through = true});
+  // Heights were chosen in base.obj's frame (centred mid-body); bodies
+  // now stand on y = 0 (issue 26), so the strokes move up by base.obj's
+  // sole height.
+  float sole = std::numeric_limits<float>::infinity();
+  for (std::uint32_t v = 0; v < lib.skin_vertex_count(); ++v) sole = std::min(sole, lib.base().positions[v].y());
+  const double up = -kMakeHumanToMetres * sole;
+  auto knee = paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, -0.35 + up, 0), Vec3d(0.6, -0.33 + up, 0)}),
+                           {.through = true});
   ASSERT_TRUE(knee) << knee.status().to_string();
-  auto waist = paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, 0.02, 0), Vec3d(0.6, 0.0, 0)}), {.through = true});
+  auto waist = paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, 0.02 + up, 0), Vec3d(0.6, 0.0 + up, 0)}),
+                            {.through = true});
   ASSERT_TRUE(waist) << waist.status().to_string();
   const Design design{edges_of(*knee), edges_of(*waist), std::nullopt};
   Model ref_cut = m0;
