@@ -1,6 +1,8 @@
-// The MESHEDGE bookkeeping of an edge split, shared by the Euler split
-// (systems/mesh/euler_split.cpp), the face triangulation and the sketch
-// re-triangulation, which split edges with their own face links.
+// MESHEDGE chains: the bookkeeping of an edge split, shared by the Euler
+// split (systems/mesh/euler_split.cpp), the face triangulation and the
+// sketch re-triangulation, which split edges with their own face links; and
+// the walk along a MESHJOINT member's chain in the joint's direction, shared
+// by the profile regeneration, the pattern pieces and the demo's outfit.
 #pragma once
 
 #include <atelier/storage/model.h>
@@ -28,6 +30,14 @@ inline void chain_split_edge(Model& m, HalfedgeIdx h, HalfedgeIdx g) {
     }
   }
   m.edges.mesh_edge[edge_of(g).value] = me;
+}
+
+/// The halfedge of joint member `mem` from its node t to node t + 1, in the
+/// joint's direction: the member's MESHEDGE chain read forwards when the
+/// member is positive, backwards on the twins otherwise (t < chain length).
+[[nodiscard]] inline HalfedgeIdx joint_member_halfedge(const Model& m, const JointMember& mem, std::size_t t) {
+  auto chain = m.mesh_edges.halfedges.row(mem.mesh_edge.value);
+  return mem.positive ? chain[t] : twin(chain[chain.size() - 1 - t]);
 }
 
 }  // namespace atelier

@@ -1,25 +1,19 @@
 #include "demo_outfit.h"
 
+#include <atelier/storage/mesh_edge_chain.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/spatial/body_bvh.h>
+
 #include <algorithm>
 #include <limits>
 #include <numeric>
 #include <string>
-
-#include <atelier/systems/mesh/fan_triangulation.h>
-#include <atelier/systems/spatial/body_bvh.h>
 
 namespace atelier::cli {
 
 namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-
-/// The halfedge of joint member `mem` from its node t to node t + 1, in the
-/// joint's direction (as joint_crack, systems/profile/regenerate.h, pairs them).
-HalfedgeIdx member_halfedge(const Model& m, const JointMember& mem, std::size_t t) {
-  auto chain = m.mesh_edges.halfedges.row(mem.mesh_edge.value);
-  return mem.positive ? chain[t] : twin(chain[chain.size() - 1 - t]);
-}
 
 std::uint32_t find(std::vector<std::uint32_t>& parent, std::uint32_t v) {
   while (parent[v] != v) v = parent[v] = parent[parent[v]];
@@ -28,8 +22,7 @@ std::uint32_t find(std::vector<std::uint32_t>& parent, std::uint32_t v) {
 
 /// Each garment's vertices inside a garment of a lower layer (z_depth
 /// order, ties in the order given), counted once per vertex.
-Status count_layers(std::span<OutfitGarment> g, std::span<const std::size_t> order,
-                    std::size_t OutfitGarment::*field) {
+Status count_layers(std::span<OutfitGarment> g, std::span<const std::size_t> order, std::size_t OutfitGarment::*field) {
   std::vector<std::vector<std::uint8_t>> flags(g.size());
   for (std::size_t i = 0; i < g.size(); ++i) flags[i].assign(g[i].positions.size(), 0);
   std::vector<std::uint8_t> inside;
@@ -49,35 +42,21 @@ Status count_layers(std::span<OutfitGarment> g, std::span<const std::size_t> ord
   return {};
 }
 
-/// Collision step 8 (docs/collision.md), as regen applies it to detail
-/// garments (lift_over_lower_layers, private to
-/// systems/garment/regenerate_garment.cpp): after resolve_layers, an outer
-/// vertex that a lower garment's faces still cover (a crease, or a coarse
-/// inner face spanning body points that got no floor) is lifted along the
-/// body normal to layer_gap above it, layers inner first, a few rounds.
-Status lift_over_lower_layers(std::span<OutfitGarment> g, std::span<const std::size_t> order,
-                              const CollisionBody& body, const CollisionParams& params) {
+/// Collision step 8 (docs/collision.md): after resolve_layers, the
+/// library's lift over every lower layer (lift_over_lower_layers, as regen
+/// applies it), layers inner first, each lower layer's BVH built once when
+/// it is final.
+Status lift_layers(std::span<OutfitGarment> g, std::span<const std::size_t> order, const CollisionBody& body,
+                   const CollisionParams& params) {
   const LayerPenetrationParams lp;
   std::vector<BodyBvh> lower(order.size());
   for (std::size_t l = 1; l < order.size(); ++l) {
     const OutfitGarment& below = g[order[l - 1]];  // final now: its BVH serves every layer above it
     if (Status s = lower[l - 1].build(below.positions, below.triangles, {}, ExecContext::sequential()); !s) return s;
     OutfitGarment& x = g[order[l]];
-    for (int round = 0; round < 8; ++round) {
-      std::size_t lifted = 0;
-      for (std::size_t k = 0; k < l; ++k)
-        for (std::size_t v = 0; v < x.positions.size(); ++v) {
-          BodyDistance& b = x.distance[v];
-          if (!(b.distance > 0) || b.normal.squaredNorm() == 0) continue;
-          const Vec3d n = b.normal.normalized();
-          const RayHit h = lower[k].ray_first_hit(b.closest, n, b.distance + lp.probe);
-          if (!h.hit || h.t <= b.distance) continue;
-          x.positions[v] = b.closest + (h.t + params.layer_gap) * n;
-          b = body.query(x.positions[v], b.triangle);
-          ++lifted;
-        }
-      if (lifted == 0) break;
-    }
+    auto lifted = lift_over_lower_layers(x.positions, x.distance, std::span<const BodyBvh>(lower.data(), l), body,
+                                         lp.probe, params.layer_gap);
+    if (!lifted) return lifted.status();
   }
   return {};
 }
@@ -102,7 +81,7 @@ Expected<ModelLayer> ModelLayer::of(const Model& m, const CollisionBody& referen
     for (std::size_t k = 1; k < members.size(); ++k) {
       if (m.mesh_edges.halfedges.size(members[k].mesh_edge.value) != len) continue;
       for (std::size_t t = 0; t < len; ++t) {
-        const HalfedgeIdx h0 = member_halfedge(m, members[0], t), hk = member_halfedge(m, members[k], t);
+        const HalfedgeIdx h0 = joint_member_halfedge(m, members[0], t), hk = joint_member_halfedge(m, members[k], t);
         unite(m.tail(h0), m.tail(hk));
         unite(m.head(h0), m.head(hk));
       }
@@ -163,7 +142,8 @@ Status layer_outfit(std::span<OutfitGarment> g, const CollisionBody& body, const
                     const ExecContext& ctx) {
   std::vector<std::size_t> order(g.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return g[a].z_depth < g[b].z_depth; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return g[a].z_depth < g[b].z_depth; });
   // As fitted alone: each garment's exact distances, then the count.
   for (OutfitGarment& x : g) {
     x.distance.resize(x.positions.size());
@@ -176,7 +156,7 @@ Status layer_outfit(std::span<OutfitGarment> g, const CollisionBody& body, const
   auto reps = resolve_layers(layers, body, params, ctx);
   if (!reps) return reps.status();
   for (std::size_t i = 0; i < g.size(); ++i) g[i].pushed = (*reps)[i].pushed;
-  if (Status s = lift_over_lower_layers(g, order, body, params); !s) return s;
+  if (Status s = lift_layers(g, order, body, params); !s) return s;
   return count_layers(g, order, &OutfitGarment::layer_inside);
 }
 

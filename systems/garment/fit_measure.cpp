@@ -1,11 +1,10 @@
+#include <atelier/engine/parallel.h>
 #include <atelier/systems/garment/fit_measure.h>
+#include <atelier/systems/mesh/normals.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
-
-#include <atelier/engine/parallel.h>
-#include <atelier/systems/mesh/normals.h>
 
 namespace atelier {
 
@@ -124,11 +123,11 @@ Expected<std::size_t> count_inside_layer(std::span<const Vec3d> outer, std::span
   if (outer.size() != on_body.size())
     return Status(ErrorCode::kMismatch, "layer penetration: " + std::to_string(outer.size()) + " vertices, " +
                                             std::to_string(on_body.size()) + " body distances");
-  if (inner.empty()) return Status(ErrorCode::kInvalidArgument, "layer penetration: the inner garment has no triangles");
+  if (inner.empty())
+    return Status(ErrorCode::kInvalidArgument, "layer penetration: the inner garment has no triangles");
   if (!(params.probe > 0) || !std::isfinite(params.probe) || !(params.tolerance >= 0) ||
       !(params.tolerance < params.probe))
-    return Status(ErrorCode::kInvalidArgument,
-                  "layer penetration: need a positive probe and 0 <= tolerance < probe");
+    return Status(ErrorCode::kInvalidArgument, "layer penetration: need a positive probe and 0 <= tolerance < probe");
   if (inside) inside->assign(outer.size(), 0);
   std::size_t n = 0;
   for (std::size_t v = 0; v < outer.size(); ++v) {
@@ -141,6 +140,38 @@ Expected<std::size_t> count_inside_layer(std::span<const Vec3d> outer, std::span
     }
   }
   return n;
+}
+
+Expected<std::size_t> lift_over_lower_layers(std::span<Vec3d> outer, std::span<BodyDistance> on_body,
+                                             std::span<const BodyBvh> lower, const CollisionBody& body, double probe,
+                                             double gap, int rounds) {
+  if (outer.size() != on_body.size())
+    return Status(ErrorCode::kMismatch, "lift_over_lower_layers: " + std::to_string(outer.size()) + " vertices, " +
+                                            std::to_string(on_body.size()) + " body distances");
+  if (!(probe > 0) || !(gap > 0) || !std::isfinite(probe) || !std::isfinite(gap))
+    return Status(ErrorCode::kInvalidArgument, "lift_over_lower_layers: probe and gap must be positive and finite");
+  for (std::size_t k = 0; k < lower.size(); ++k)
+    if (lower[k].empty())
+      return Status(ErrorCode::kInvalidArgument,
+                    "lift_over_lower_layers: lower layer " + std::to_string(k) + " has no committed BVH");
+  std::size_t total = 0;
+  for (int round = 0; round < rounds; ++round) {
+    std::size_t lifted = 0;
+    for (std::size_t k = 0; k < lower.size(); ++k)
+      for (std::size_t v = 0; v < outer.size(); ++v) {
+        BodyDistance& b = on_body[v];
+        if (!(b.distance > 0) || b.normal.squaredNorm() == 0) continue;
+        const Vec3d n = b.normal.normalized();
+        const RayHit h = lower[k].ray_first_hit(b.closest, n, b.distance + probe);
+        if (!h.hit || h.t <= b.distance) continue;
+        outer[v] = b.closest + (h.t + gap) * n;
+        b = body.query(outer[v], b.triangle);
+        ++lifted;
+      }
+    total += lifted;
+    if (lifted == 0) break;
+  }
+  return total;
 }
 
 }  // namespace atelier

@@ -22,16 +22,16 @@
 // source pair). Writes: nothing but the result.
 #pragma once
 
-#include <array>
-#include <cstdint>
-#include <span>
-#include <vector>
-
 #include <atelier/engine/exec_context.h>
 #include <atelier/engine/math.h>
 #include <atelier/engine/status.h>
 #include <atelier/systems/spatial/body_bvh.h>
 #include <atelier/systems/spatial/collision_body.h>
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
 
 namespace atelier {
 
@@ -103,5 +103,22 @@ struct LayerPenetrationParams {
                                                        std::span<const BodyDistance> on_body, const BodyBvh& inner,
                                                        const LayerPenetrationParams& params = {},
                                                        std::vector<std::uint8_t>* inside = nullptr);
+
+/// Collision step 8 (docs/collision.md), the counterpart of
+/// count_inside_layer: after resolve_layers, each vertex of `outer` that one
+/// of the `lower` garments still covers (its ray from the closest body point
+/// meets a lower garment above it within `probe`: a crease, or a coarse inner
+/// face spanning body points that got no floor) is moved along the body
+/// normal to `gap` above that garment, and its body distance in `on_body` is
+/// queried again. A lift moves the closest body point (in a crease, to the
+/// other side), so vertices are tested again, at most `rounds` times, until no
+/// lower layer is over them. Reads `lower` (BVHs over the final positions of
+/// every layer under `outer`), `body`; writes `outer`, `on_body`. Sequential
+/// and in vertex order (callers parallelise over bodies), so the result does
+/// not depend on the thread count. Returns the number of lifts; errors:
+/// sizes that differ, an empty lower BVH, a non-positive probe or gap.
+[[nodiscard]] Expected<std::size_t> lift_over_lower_layers(std::span<Vec3d> outer, std::span<BodyDistance> on_body,
+                                                           std::span<const BodyBvh> lower, const CollisionBody& body,
+                                                           double probe, double gap, int rounds = 8);
 
 }  // namespace atelier

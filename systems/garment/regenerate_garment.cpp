@@ -1,18 +1,17 @@
-#include <atelier/systems/garment/regenerate_garment.h>
-
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <map>
-#include <cstdio>
-#include <limits>
-#include <numeric>
-
 #include <atelier/engine/parallel.h>
 #include <atelier/io/atomic_file.h>
 #include <atelier/io/makehuman/makehuman.h>
 #include <atelier/systems/garment/fit_measure.h>
+#include <atelier/systems/garment/regenerate_garment.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <numeric>
 
 namespace atelier {
 
@@ -20,12 +19,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Status named(const std::string& name, const Status& s) { return {s.code(), name + ": " + s.message()}; }
+Status named(const std::string& name, const Status& s) {
+  return {s.code(), name + ": " + s.message()};
+}
 
 /// The fit figures from each vertex's exact distance at its final position
 /// (the pass's own last query of it, or a query when there is no pass).
-GarmentQuality quality_of(const GarmentTemplate& g, std::span<const Vec3d> x, std::span<const BodyDistance> final_distance,
-                          const CollisionParams& cp) {
+GarmentQuality quality_of(const GarmentTemplate& g, std::span<const Vec3d> x,
+                          std::span<const BodyDistance> final_distance, const CollisionParams& cp) {
   GarmentQuality q;
   const std::size_t n = x.size();
   q.vertices = n;
@@ -86,33 +87,18 @@ Status commit_layer_bvh(std::span<const GarmentTemplate* const> garments, std::s
 /// surface, layers inner first, then its body distance is queried again.
 /// `lower` receives the BVH of every layer but the outermost (see
 /// commit_layer_bvh).
-Status lift_over_lower_layers(std::span<const GarmentTemplate* const> garments, const GarmentRegenOptions& options,
-                              std::span<std::vector<Vec3d>> positions, std::span<std::vector<BodyDistance>> fin,
-                              const CollisionBody& body, std::vector<BodyBvh>& lower) {
+Status lift_layers(std::span<const GarmentTemplate* const> garments, const GarmentRegenOptions& options,
+                   std::span<std::vector<Vec3d>> positions, std::span<std::vector<BodyDistance>> fin,
+                   const CollisionBody& body, std::vector<BodyBvh>& lower) {
   const std::vector<std::size_t> order = layer_order(garments);
   const double probe = options.layer_penetration.probe, gap = options.collision.layer_gap;
   for (std::size_t l = 1; l < order.size(); ++l) {
     const std::size_t i = order[l];
     // Layer l - 1 is final now: its BVH serves every layer above it.
     if (Status s = commit_layer_bvh(garments, order, positions, l - 1, lower); !s) return s;
-    // A lift moves the closest body point (in a crease, to the other side),
-    // so a vertex is tested again until no lower layer is over it (a few
-    // rounds; what is left is counted by count_layer_penetration).
-    for (int round = 0; round < 8; ++round) {
-      std::size_t lifted = 0;
-      for (std::size_t k = 0; k < l; ++k)
-        for (std::size_t v = 0; v < positions[i].size(); ++v) {
-          BodyDistance& b = fin[i][v];
-          if (!(b.distance > 0) || b.normal.squaredNorm() == 0) continue;
-          const Vec3d n = b.normal.normalized();
-          const RayHit h = lower[k].ray_first_hit(b.closest, n, b.distance + probe);
-          if (!h.hit || h.t <= b.distance) continue;
-          positions[i][v] = b.closest + (h.t + gap) * n;
-          b = body.query(positions[i][v], b.triangle);
-          ++lifted;
-        }
-      if (lifted == 0) break;
-    }
+    auto lifted = atelier::lift_over_lower_layers(positions[i], fin[i], std::span<const BodyBvh>(lower.data(), l), body,
+                                                  probe, gap);
+    if (!lifted) return named(garments[i]->name, lifted.status());
   }
   return {};
 }
@@ -157,7 +143,8 @@ BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTempla
   const std::size_t ng = garments.size();
   if (options.edge_transfer)
     for (std::size_t i = 0; i < ng; ++i)
-      if (Status s = apply_edge_transfer(garments[i]->transfer, body, fam.collision->triangles(), decoded[i], ctx); !s) {
+      if (Status s = apply_edge_transfer(garments[i]->transfer, body, fam.collision->triangles(), decoded[i], ctx);
+          !s) {
         out.status = named(garments[i]->name, s);
         return out;
       }
@@ -197,7 +184,7 @@ BodyGarments finish_body(const GarmentFamily& fam, std::span<const GarmentTempla
       return out;
     }
     reports = std::move(*pass);
-    if (Status s = lift_over_lower_layers(garments, options, decoded, fin, cb, lower); !s) {
+    if (Status s = lift_layers(garments, options, decoded, fin, cb, lower); !s) {
       out.status = s;
       return out;
     }
@@ -421,8 +408,8 @@ void write_garment_template(const GarmentTemplate& garment, const fs::path& dir)
 // ------------------------------------------------------------ the pipeline
 
 Expected<GarmentRegenerator> GarmentRegenerator::create(std::shared_ptr<const GarmentFamily> family,
-                                                       std::vector<std::shared_ptr<const GarmentTemplate>> garments,
-                                                       const GarmentRegenOptions& options, const ExecContext& ctx) {
+                                                        std::vector<std::shared_ptr<const GarmentTemplate>> garments,
+                                                        const GarmentRegenOptions& options, const ExecContext& ctx) {
   if (!family) return Status(ErrorCode::kInvalidArgument, "garment regeneration: no body family");
   if (garments.empty()) return Status(ErrorCode::kInvalidArgument, "garment regeneration: no garments");
   GarmentRegenerator r;

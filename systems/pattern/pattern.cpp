@@ -7,6 +7,8 @@
 #include <cmath>
 #include <map>
 
+#include <atelier/storage/mesh_edge_chain.h>
+
 #include "flatten_detail.h"
 
 namespace atelier {
@@ -83,13 +85,6 @@ void remove_local_loops(std::vector<Vec2d>& p, bool closed, std::size_t window =
   const std::size_t len = chain.size();
   if (mem.positive) return t < len ? m.tail(chain[t]) : m.head(chain[len - 1]);
   return t < len ? m.head(chain[len - 1 - t]) : m.tail(chain[0]);
-}
-
-/// The halfedge of member segment t (node t to node t + 1) in the joint's
-/// direction.
-[[nodiscard]] HalfedgeIdx member_halfedge(const Model& m, const JointMember& mem, std::size_t t) {
-  auto chain = m.mesh_edges.halfedges.row(mem.mesh_edge.value);
-  return mem.positive ? chain[t] : twin(chain[chain.size() - 1 - t]);
 }
 
 struct PieceBuild {
@@ -265,7 +260,7 @@ Expected<PatternSet> make_pattern(const Model& m, std::span<const SurfaceIdx> pi
         const NodeIdx a = member_node(m, mem, t), b = member_node(m, mem, t + 1);
         wk.a2.push_back(wk.a2.back() + (uv_mm(b) - uv_mm(a)).norm());
         wk.a3.push_back(wk.a3.back() + k * (m.position(b) - m.position(a)).norm());
-        const HalfedgeIdx h = member_halfedge(m, mem, t);
+        const HalfedgeIdx h = joint_member_halfedge(m, mem, t);
         boundary = boundary && (!m.face(h).valid() || !m.face(twin(h)).valid());
       }
       SeamMemberLength ml;
@@ -280,7 +275,7 @@ Expected<PatternSet> make_pattern(const Model& m, std::span<const SurfaceIdx> pi
       if (!(L3 > 0)) continue;
       std::map<std::uint32_t, std::size_t> node_t, half_t;  // member node / halfedge -> t
       for (std::size_t t = 0; t <= len; ++t) node_t[member_node(m, mem, t).value] = t;
-      for (std::size_t t = 0; t < len; ++t) half_t[edge_of(member_halfedge(m, mem, t)).value] = t;
+      for (std::size_t t = 0; t < len; ++t) half_t[edge_of(joint_member_halfedge(m, mem, t)).value] = t;
       for (std::uint32_t an = 0; an < m.attrib_nodes.slots.capacity(); ++an) {
         // A mark stands alone: points of an attribute edge (profiles) are not marks.
         if (!m.alive(AttribNodeIdx{an}) || m.attrib_nodes.owner[an].valid()) continue;
@@ -291,7 +286,7 @@ Expected<PatternSet> make_pattern(const Model& m, std::span<const SurfaceIdx> pi
           if (auto it = half_t.find(el >> 1); it != half_t.end()) {
             const std::size_t t = it->second;
             const double u = m.attrib_nodes.param[an].x();
-            const double along = el == member_halfedge(m, mem, t).value ? u : 1 - u;
+            const double along = el == joint_member_halfedge(m, mem, t).value ? u : 1 - u;
             fractions.push_back((wk.a3[t] + along * (wk.a3[t + 1] - wk.a3[t])) / L3);
           }
         }
@@ -328,7 +323,7 @@ Expected<PatternSet> make_pattern(const Model& m, std::span<const SurfaceIdx> pi
         const Vec2d pa = uv_mm(member_node(m, mem, t)), pb = uv_mm(member_node(m, mem, t + 1));
         const double seg = wk.a2[t + 1] - wk.a2[t];
         const double u = seg > 0 ? std::clamp((s - wk.a2[t]) / seg, 0.0, 1.0) : 0.0;
-        const HalfedgeIdx h = member_halfedge(m, mem, t);
+        const HalfedgeIdx h = joint_member_halfedge(m, mem, t);
         const HalfedgeIdx open = m.face(h).valid() ? twin(h) : h;
         const Vec2d d = uv_mm(m.head(open)) - uv_mm(m.tail(open));
         PatternNotch nt;

@@ -16,6 +16,7 @@
 #include <optional>
 
 #include <atelier/engine/parallel.h>
+#include <atelier/storage/mesh_edge_chain.h>
 #include <atelier/systems/mesh/subdivide.h>
 #include <atelier/systems/smooth/fairing.h>
 
@@ -26,14 +27,6 @@ namespace atelier {
 namespace {
 
 enum Role : std::uint8_t { kFree = 0, kFeature = 1, kProfile = 2, kChain = 3, kOld = 4 };
-
-/// The halfedge of joint member `mem` from its node t to node t + 1 (in the
-/// joint's direction).
-HalfedgeIdx member_halfedge(const Model& m, const JointMember& mem, std::size_t t) {
-  auto chain = m.mesh_edges.halfedges.row(mem.mesh_edge.value);
-  const std::size_t len = chain.size();
-  return mem.positive ? chain[t] : twin(chain[len - 1 - t]);
-}
 
 /// A curve per edge, oriented along the edge's even halfedge, and the index
 /// of the template profile it descends from (for the quality check).
@@ -131,10 +124,10 @@ double joint_crack(const Model& m) noexcept {
     if (members.size() < 2) continue;
     const std::size_t len = m.mesh_edges.halfedges.size(members[0].mesh_edge.value);
     for (std::size_t t = 0; t < len; ++t) {
-      const HalfedgeIdx h0 = member_halfedge(m, members[0], t);
+      const HalfedgeIdx h0 = joint_member_halfedge(m, members[0], t);
       for (std::size_t k = 1; k < members.size(); ++k) {
         if (m.mesh_edges.halfedges.size(members[k].mesh_edge.value) != len) return INFINITY;
-        const HalfedgeIdx hk = member_halfedge(m, members[k], t);
+        const HalfedgeIdx hk = joint_member_halfedge(m, members[k], t);
         worst = std::max(worst, (m.position(m.tail(hk)) - m.position(m.tail(h0))).norm());
         worst = std::max(worst, (m.position(m.head(hk)) - m.position(m.head(h0))).norm());
       }
@@ -238,13 +231,13 @@ class Regeneration {
       for (std::size_t s = 0; s < len; ++s) {
         std::optional<std::pair<ProfileCurve, std::int32_t>> c;  // along the joint direction
         for (const JointMember& mem : members) {
-          const HalfedgeIdx h = member_halfedge(m, mem, s);
+          const HalfedgeIdx h = joint_member_halfedge(m, mem, s);
           if (const ProfileCurve* pc = ec_.of(edge_of(h)); pc && !c)
             c.emplace(along(*pc, h), ec_.root[static_cast<std::size_t>(ec_.curve[edge_of(h).value])]);
         }
         if (!c) continue;
         for (const JointMember& mem : members) {
-          const HalfedgeIdx h = member_halfedge(m, mem, s);
+          const HalfedgeIdx h = joint_member_halfedge(m, mem, s);
           if (!ec_.of(edge_of(h))) ec_.set(edge_of(h), along(c->first, h), c->second);  // along() reverses odd h back
         }
       }
@@ -433,11 +426,11 @@ class Regeneration {
       if (!m.alive(JointIdx{j})) continue;
       auto members = m.joints.members.row(j);
       const std::size_t len = m.mesh_edges.halfedges.size(members[0].mesh_edge.value);
-      const NodeIdx first = m.tail(member_halfedge(m, members[0], 0));
-      const NodeIdx lastn = m.head(member_halfedge(m, members[0], len - 1));
+      const NodeIdx first = m.tail(joint_member_halfedge(m, members[0], 0));
+      const NodeIdx lastn = m.head(joint_member_halfedge(m, members[0], len - 1));
       const bool closed = first == lastn;
       for (std::size_t s = 0; s < len; ++s) {
-        const HalfedgeIdx h0 = member_halfedge(m, members[0], s);
+        const HalfedgeIdx h0 = joint_member_halfedge(m, members[0], s);
         Vec3d pm;
         std::uint8_t role = kChain;
         std::optional<std::pair<ProfileCurve, ProfileCurve>> hv;
@@ -448,14 +441,14 @@ class Regeneration {
           role = kProfile;
         } else if (params_.smooth_chains) {
           std::optional<Vec3d> ap, bn;
-          if (s > 0 || closed) ap = m.position(m.tail(member_halfedge(m, members[0], s > 0 ? s - 1 : len - 1)));
-          if (s + 1 < len || closed) bn = m.position(m.head(member_halfedge(m, members[0], s + 1 < len ? s + 1 : 0)));
+          if (s > 0 || closed) ap = m.position(m.tail(joint_member_halfedge(m, members[0], s > 0 ? s - 1 : len - 1)));
+          if (s + 1 < len || closed) bn = m.position(m.head(joint_member_halfedge(m, members[0], s + 1 < len ? s + 1 : 0)));
           pm = four_point(m.position(m.tail(h0)), m.position(m.head(h0)), ap, bn);
         } else {
           pm = 0.5 * (m.position(m.tail(h0)) + m.position(m.head(h0)));
         }
         for (const JointMember& mem : members) {
-          const HalfedgeIdx h = member_halfedge(m, mem, s);
+          const HalfedgeIdx h = joint_member_halfedge(m, mem, s);
           const EdgeIdx e = edge_of(h);
           sp.mid[e.value] = pm;
           sp.role[e.value] = role;

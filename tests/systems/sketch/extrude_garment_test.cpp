@@ -24,6 +24,7 @@
 #include <string>
 
 #include "support/project_templates.h"
+#include "systems/sketch/sampled_mannequins.h"
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -181,19 +182,8 @@ void run_bodies(std::size_t n, Design design) {
   const ProfileTemplate& top = fx.templates[0];
   ASSERT_EQ(top.name, "top");
   const Box3d roi = bounds(top.model);
-  const auto topo = make_mannequin_topology().value();
-  std::vector<DressResult> got(n);
-  ExecContext ctx;
-  ctx.sequential_threshold = 2;
-  ctx.grain = 1;
-  par::for_each_n(ctx, n, [&](std::size_t i) {
-    auto body = make_mannequin(sample_mannequin(42, i), topo);
-    if (!body) {
-      got[i].error = body.status().to_string();
-      return;
-    }
-    got[i] = design_on(*body, top, fx.body, roi, design);
-  });
+  const std::vector<DressResult> got = sketch_test::on_sampled_mannequins<DressResult>(
+      n, [&](const ReferenceBody& body) { return design_on(body, top, fx.body, roi, design); });
   std::size_t pushed = 0, bodies_pushed = 0, off_bounds = 0, brute = 0, worst = 0, worst_brute = 0;
   for (const DressResult& g : got) {
     pushed += g.pushed, bodies_pushed += g.pushed > 0, off_bounds += g.outside_bounds, brute += g.brute_outside;
@@ -311,21 +301,10 @@ ReplayResult replay_on(const ReferenceBody& body, const Recorded& rec, Design d)
 }
 
 void replay_bodies(std::size_t n) {
-  const auto topo = make_mannequin_topology().value();
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) {
     const Recorded rec = record(d);
-    std::vector<ReplayResult> got(n);
-    ExecContext ctx;
-    ctx.sequential_threshold = 2;
-    ctx.grain = 1;
-    par::for_each_n(ctx, n, [&](std::size_t i) {
-      auto body = make_mannequin(sample_mannequin(42, i), topo);
-      if (!body) {
-        got[i].error = body.status().to_string();
-        return;
-      }
-      got[i] = replay_on(*body, rec, d);
-    });
+    const std::vector<ReplayResult> got = sketch_test::on_sampled_mannequins<ReplayResult>(
+        n, [&](const ReferenceBody& body) { return replay_on(body, rec, d); });
     for (std::size_t i = 0; i < n; ++i) {
       ASSERT_EQ(got[i].error, "") << "design " << static_cast<int>(d) << ", body " << i;
       EXPECT_GT(got[i].new_nodes, 100u) << "body " << i;

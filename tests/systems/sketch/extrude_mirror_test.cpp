@@ -24,6 +24,7 @@
 #include <map>
 
 #include "support/project_templates.h"
+#include "systems/sketch/sampled_mannequins.h"
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -346,19 +347,8 @@ void expect_both_sleeves(const SleevesResult& g, const std::string& where) {
 }
 
 void sleeves_on_mannequins(std::size_t n) {
-  const auto topo = make_mannequin_topology().value();
-  std::vector<SleevesResult> got(n);
-  ExecContext ctx;
-  ctx.sequential_threshold = 2;
-  ctx.grain = 1;
-  par::for_each_n(ctx, n, [&](std::size_t i) {
-    auto body = make_mannequin(sample_mannequin(42, i), topo);
-    if (!body) {
-      got[i].error = body.status().to_string();
-      return;
-    }
-    got[i] = both_sleeves_on(*body);
-  });
+  const std::vector<SleevesResult> got = sketch_test::on_sampled_mannequins<SleevesResult>(
+      n, [&](const ReferenceBody& body) { return both_sleeves_on(body); });
   double worst = 0;
   std::size_t refused = 0;
   for (std::size_t i = 0; i < n; ++i) {
