@@ -246,8 +246,9 @@ TEST(Outfit, TheLiftMovesCoveredOuterVerticesOutwardAboveTheLowerLayer) {
   ASSERT_TRUE(alone->run(set, 0, set.size(), out));
   const std::size_t shorts = 1, tights = 2;
   for (std::size_t b = 0; b < set.size(); ++b) {
+    const std::vector<Vec3d> body = set.positions(b);  // the collision body reads it in place
     CollisionBody cb;
-    ASSERT_TRUE(cb.build(o.family->collision, set.positions(b)));
+    ASSERT_TRUE(cb.build(o.family->collision, body));
     std::vector<Vec3d> p = out[b].garments[shorts].positions;
     const std::vector<Vec3d> p0 = p;
     std::vector<BodyDistance> d(p.size());
@@ -280,8 +281,9 @@ TEST(Outfit, TheLiftMovesCoveredOuterVerticesOutwardAboveTheLowerLayer) {
   // Bad input is an error and leaves the positions as they were.
   std::vector<Vec3d> p(2, Vec3d::Ones());
   std::vector<BodyDistance> d(1);
+  const std::vector<Vec3d> body = set.positions(0);
   CollisionBody cb;
-  ASSERT_TRUE(cb.build(o.family->collision, set.positions(0)));
+  ASSERT_TRUE(cb.build(o.family->collision, body));
   BodyBvh empty;
   EXPECT_FALSE(lift_over_lower_layers(p, d, {}, cb, 0.01, 0.001).has_value());
   d.resize(2);
