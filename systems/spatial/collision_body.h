@@ -81,6 +81,10 @@ class CollisionBody {
   /// float), an Embree error.
   [[nodiscard]] Status build(std::shared_ptr<const CollisionTopology> topology, std::span<const Vec3d> positions,
                              const CollisionBodyParams& params = {}, const ExecContext& ctx = {});
+  /// The body keeps a view of its positions: a temporary vector would be
+  /// freed while it is read, so that is refused when compiling.
+  Status build(std::shared_ptr<const CollisionTopology> topology, std::vector<Vec3d>&& positions,
+               const CollisionBodyParams& params = {}, const ExecContext& ctx = {}) = delete;
   [[nodiscard]] bool empty() const noexcept { return topo_ == nullptr; }
   [[nodiscard]] const CollisionTopology& topology() const noexcept { return *topo_; }
   [[nodiscard]] std::span<const Vec3d> positions() const noexcept { return pos_; }
