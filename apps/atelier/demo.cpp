@@ -534,12 +534,7 @@ std::optional<RgbImage> picture_of(std::size_t index, const std::string& name, c
   for (std::size_t k = 0; k < profiles.size(); ++k)
     scene.push_back({profiles[k].model.nodes.position, gt[k].triangles, garment_colour(k)});
   if (shorts_tris) scene.push_back({shorts_d, shorts_tris->triangles, garment_colour(profiles.size())});
-  RenderParams rp;
-  rp.width = 360;
-  rp.height = 560;
-  rp.outlines = true;
-  constexpr View kFrontAndSide[] = {View::kFront, View::kSide};
-  auto both = render_views(scene, kFrontAndSide, rp, ctx);
+  auto both = render_report_views(scene, ctx);
   if (!both) return std::nullopt;
   return std::move(*both);
 }

@@ -42,6 +42,10 @@
 // missing or damaged pictures throw Error(kIo)/Error(kParse) naming the path.
 #pragma once
 
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/status.h>
+#include <atelier/systems/view/render.h>
+
 #include <cstddef>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -51,6 +55,18 @@
 #include <vector>
 
 namespace atelier {
+
+/// The reports' pictures (demo and regen --report): the scene seen from the
+/// front and from the side, 360 x 560 each, outlined, side by side.
+[[nodiscard]] inline Expected<RgbImage> render_report_views(std::span<const RenderTriangles> scene,
+                                                            const ExecContext& ctx) {
+  RenderParams rp;
+  rp.width = 360;
+  rp.height = 560;
+  rp.outlines = true;
+  constexpr View kFrontAndSide[] = {View::kFront, View::kSide};
+  return render_views(scene, kFrontAndSide, rp, ctx);
+}
 
 struct ColumnStats {
   std::string column;

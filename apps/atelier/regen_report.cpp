@@ -98,12 +98,7 @@ std::optional<RgbImage> picture_of(std::size_t index, const RegenReportInput& in
     scene.push_back({fit[0].garments[k].positions, tris[k], garment_colour(colour++)});
   for (std::size_t k = 0; k < profiles.size() && in.details.size() + k < tris.size(); ++k)
     scene.push_back({profiles[k].model.nodes.position, tris[in.details.size() + k], garment_colour(colour++)});
-  RenderParams rp;
-  rp.width = 360;
-  rp.height = 560;
-  rp.outlines = true;
-  constexpr View kFrontAndSide[] = {View::kFront, View::kSide};
-  auto both = render_views(scene, kFrontAndSide, rp, ctx);
+  auto both = render_report_views(scene, ctx);
   if (!both) return std::nullopt;
   if (pictured) {
     pictured->body = body;
@@ -188,12 +183,7 @@ nlohmann::json fit_colour_pictures(const FitPictureInput& in, const fs::path& ou
       g.shading = 0.3;  // mostly the map's colour (read against the bar), a little light for the shape
       scene.push_back(g);
     }
-    RenderParams rp;
-    rp.width = 360;
-    rp.height = 560;
-    rp.outlines = true;
-    constexpr View kFrontAndSide[] = {View::kFront, View::kSide};
-    auto both = render_views(scene, kFrontAndSide, rp, ctx);
+    auto both = render_report_views(scene, ctx);
     if (!both) throw Error(both.status());
     const std::string file = "pictures/" + in.body_name + "_" + m.file + ".png";
     write_png(*both, out / file);

@@ -68,6 +68,16 @@ BodySet bodies(std::size_t n, std::uint64_t seed) {
   return set;
 }
 
+/// The outfit's garments each fitted on its own (no layers): they cross.
+std::vector<BodyGarments> fitted_apart(const Outfit& o, const BodySet& set) {
+  GarmentRegenOptions apart;
+  apart.layers = false;
+  auto alone = GarmentRegenerator::create(o.family, o.layers, apart);
+  std::vector<BodyGarments> out;
+  if (!alone || !alone->run(set, 0, set.size(), out)) out.clear();
+  return out;
+}
+
 /// Brute force: the first t in (0, tmax] where origin + t dir meets one of
 /// the triangles (Moller-Trumbore), or infinity.
 double first_hit(const Vec3d& o, const Vec3d& d, std::span<const Vec3d> p, std::span<const Triangle> tris,
@@ -196,12 +206,8 @@ TEST(Outfit, TheLayerCounterAgreesWithBruteForceOnCrossingGarments) {
   // The engine's counter (count_inside_layer) on garments that do cross.
   const Outfit& o = outfit();
   const BodySet set = bodies(3, 7);
-  GarmentRegenOptions apart;
-  apart.layers = false;
-  auto alone = GarmentRegenerator::create(o.family, o.layers, apart);
-  ASSERT_TRUE(alone);
-  std::vector<BodyGarments> out;
-  ASSERT_TRUE(alone->run(set, 0, set.size(), out));
+  const std::vector<BodyGarments> out = fitted_apart(o, set);
+  ASSERT_EQ(out.size(), set.size());
   const auto tris = fan_triangulate(o.ref->model).value();
   for (std::size_t b = 0; b < set.size(); ++b) {
     const std::vector<Vec3d> body = set.positions(b);
@@ -238,12 +244,8 @@ TEST(Outfit, TheLiftMovesCoveredOuterVerticesOutwardAboveTheLowerLayer) {
   // counter (shown equal to brute force above) finds almost none covered.
   const Outfit& o = outfit();
   const BodySet set = bodies(2, 11);
-  GarmentRegenOptions apart;
-  apart.layers = false;
-  auto alone = GarmentRegenerator::create(o.family, o.layers, apart);
-  ASSERT_TRUE(alone);
-  std::vector<BodyGarments> out;
-  ASSERT_TRUE(alone->run(set, 0, set.size(), out));
+  const std::vector<BodyGarments> out = fitted_apart(o, set);
+  ASSERT_EQ(out.size(), set.size());
   const std::size_t shorts = 1, tights = 2;
   for (std::size_t b = 0; b < set.size(); ++b) {
     const std::vector<Vec3d> body = set.positions(b);  // the collision body reads it in place
