@@ -307,7 +307,8 @@ ValueError for bad arrays or a mesh the engine's model refuses.
 )doc")
       .def_static(
           "read",
-          [](const fs::path& path, double scale, const std::string& up, std::optional<fs::path> data) {
+          [](const fs::path& path, double scale, const std::string& up, std::optional<fs::path> data,
+             std::optional<fs::path> features) {
             auto axis = parse_up_axis(up);
             if (!axis) value_error("up: " + axis.status().message());
             if (!fs::exists(path)) {
@@ -315,11 +316,19 @@ ValueError for bad arrays or a mesh the engine's model refuses.
                               py::make_tuple(ENOENT, path.string() + ": no such file", path.string()).ptr());
               throw py::error_already_set();
             }
-            BodyFileOptions o{.frame = {scale, *axis}, .makehuman_data = data ? *data : fs::path()};
+            if (features && !fs::exists(*features)) {
+              PyErr_SetObject(PyExc_FileNotFoundError,
+                              py::make_tuple(ENOENT, features->string() + ": no such file", features->string()).ptr());
+              throw py::error_already_set();
+            }
+            BodyFileOptions o{.frame = {scale, *axis},
+                              .makehuman_data = data ? *data : fs::path(),
+                              .features = features ? *features : fs::path()};
             py::gil_scoped_release release;
             return Body::of(std::make_shared<const ReferenceBody>(unwrap(read_reference_body(path, o))));
           },
           py::arg("path"), py::kw_only(), py::arg("scale") = 1.0, py::arg("up") = "y", py::arg("data") = py::none(),
+          py::arg("features") = py::none(),
           R"doc(
 A user's reference body from an OBJ file (systems/body/body_file.h,
 docs/body-files.md): one closed, consistently oriented, outward-facing
@@ -327,9 +336,15 @@ surface in the file's units (``scale``: to metres, 0.01 for centimetres) and
 up axis (``up``: "y" or "z"), mapped to metres and Y up. A body with the
 mannequin's topology (or MakeHuman's, with the shared ``data`` folder)
 takes its feature curves; any other has none: garments encode and
-regenerate on it, profile templates refuse it. Raises FileNotFoundError,
+regenerate on it, profile templates refuse it. ``features``: a
+feature-curve file (JSON of named polylines, docs/body-files.md; the CLI's
+``--features``), in its own "units" and "up" or else ``scale`` and ``up``:
+its curves are snapped onto the skin and become the body's only curves, with
+a feature point where a closed and an open curve cross, so profile
+templates (``project_templates``) apply. Raises FileNotFoundError,
 ValueError naming the file and the reason (not closed, not consistently
-oriented, facing inward, malformed).
+oriented, facing inward, malformed; for ``features``: the file, line, curve
+and point of a malformed file or of a point too far from the skin).
 )doc")
       .def_property_readonly(
           "vertices",

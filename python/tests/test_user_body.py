@@ -55,3 +55,74 @@ def test_an_open_body_and_a_bad_axis_are_refused(scratch):
         atelier.Body.read(scratch / "open.obj", up="x")
     with pytest.raises(FileNotFoundError):
         atelier.Body.read(scratch / "none.obj")
+
+
+# The mannequin's open feature curves (docs/body-files.md); the others are loops.
+OPEN_CURVES = {"shoulder_left", "shoulder_right", "centre_front", "centre_back", "side_left", "side_right"}
+
+
+def write_curves(path, body, mapping, units=None, up=None):
+    import json
+
+    doc = {}
+    if units:
+        doc["units"] = units
+    if up:
+        doc["up"] = up
+    doc["curves"] = [
+        {"name": n, "closed": n not in OPEN_CURVES, "points": mapping(body.curve(n)).tolist()} for n in body.curves
+    ]
+    path.write_text(json.dumps(doc))
+
+
+def test_feature_curves_from_a_file_make_profile_templates_apply(small, scratch):
+    body = small["body"]
+    v = np.asarray(body.vertices, dtype=np.float32).astype(np.float64)
+    # Renumbered vertices: no longer the mannequin's topology, so the file
+    # is the only source of the body's curves.
+    perm = np.random.default_rng(3).permutation(len(v))
+    inv = np.empty_like(perm)
+    inv[perm] = np.arange(len(v))
+    faces = [inv[np.asarray(face)] for face in body.faces]
+    v2 = np.empty_like(v)
+    v2[inv] = v
+    write_obj(scratch / "body_m.obj", v2, faces)
+    write_obj(scratch / "body_cm.obj", to_cm_z_up(v2), faces)
+    write_curves(scratch / "curves_m.json", body, lambda p: np.asarray(p))
+    write_curves(scratch / "curves_cm.json", body, to_cm_z_up, units="cm", up="z")
+
+    plain = atelier.Body.read(scratch / "body_m.obj")
+    assert plain.curves == []
+    with pytest.raises(ValueError):
+        atelier.project_templates(plain)
+
+    mine = atelier.Body.read(scratch / "body_m.obj", features=scratch / "curves_m.json")
+    mine_cm = atelier.Body.read(scratch / "body_cm.obj", scale=0.01, up="z", features=scratch / "curves_cm.json")
+    assert mine.curves == body.curves and mine_cm.curves == body.curves
+    # Every curve crossing of the engine's own is found again from the
+    # file's polylines (named "<closed>_x_<open>": the mannequin names the
+    # shoulder-armhole crossings the other way round).
+    swap = lambda n: "_x_".join(reversed(n.split("_x_")))  # noqa: E731
+    assert all(p in mine.points or swap(p) in mine.points for p in body.points)
+    for n in body.curves:
+        snapped, own = mine.curve(n), body.curve(n)
+        assert snapped.shape == own.shape, n
+        assert np.abs(snapped - own).max() < 1e-6, n  # points on the skin stay where they were
+        assert np.abs(mine_cm.curve(n) - snapped).max() < 1e-9, n  # units and axes of the file
+    names = [t.name for t in atelier.project_templates(mine)]
+    assert names == [t.name for t in atelier.project_templates(body)]
+
+
+def test_a_feature_file_with_a_point_off_the_body_is_refused_naming_it(small, scratch):
+    import json
+
+    body = small["body"]
+    write_obj(scratch / "body.obj", np.asarray(body.vertices), body.faces)
+    far = body.curve("waist") * 1.5
+    (scratch / "bad.json").write_text(
+        json.dumps({"curves": [{"name": "waist", "closed": True, "points": far.tolist()}]}, indent=1)
+    )
+    with pytest.raises(ValueError, match=r"bad\.json.*waist"):
+        atelier.Body.read(scratch / "body.obj", features=scratch / "bad.json")
+    with pytest.raises(FileNotFoundError):
+        atelier.Body.read(scratch / "body.obj", features=scratch / "none.json")
