@@ -74,7 +74,9 @@ class Body:
     @staticmethod
     def from_arrays(vertices: FloatArray, faces: Faces) -> Body: ...
     @staticmethod
-    def read(path: Path, *, scale: float = 1.0, up: str = "y", data: Optional[Path] = None) -> Body: ...
+    def read(
+        path: Path, *, scale: float = 1.0, up: str = "y", data: Optional[Path] = None, features: Optional[Path] = None
+    ) -> Body: ...
     @property
     def vertices(self) -> npt.NDArray[np.float64]: ...
     @property
@@ -449,7 +451,21 @@ def extrude(
     first: int = 0,
     pick_radius: float = 12.0,
     optimise: bool = True,
+    as_surface: bool = False,
+    mirror: Union[None, str, Sequence[float]] = None,
     threads: int = 0,
     progress: Progress = None,
 ) -> tuple[Mesh, dict[str, Any]]:
-    """Extrudes a surface or cavity from a mesh by sketched strokes (seed 002): (mesh, report)."""
+    """Extrudes a surface or cavity from a mesh by sketched strokes (seed 002): (mesh, report);
+    report["recipe"] replays it with replay_extrusion."""
+
+def replay_extrusion(
+    mesh: MeshLike,
+    recipe: Union[Path, dict[str, Any]],
+    *,
+    optimise: bool = True,
+    as_surface: bool = False,
+    threads: int = 0,
+    progress: Progress = None,
+) -> tuple[Mesh, dict[str, Any]]:
+    """A recorded extrusion grown again on a mesh of the same topology: (mesh, report)."""

@@ -5,12 +5,16 @@
 // the same JSON as a dict; docs/strokes.md).
 #include <atelier/storage/builder.h>
 #include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/sketch/extrude_recipe.h>
 #include <atelier/systems/sketch/sketch.h>
 #include <atelier/systems/view/strokes.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cerrno>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -92,6 +96,7 @@ py::dict report_dict(const Model& m, const SketchReport& r) {
 }
 
 void def_extrude(py::module_& m);
+void def_replay_extrusion(py::module_& m);
 
 }  // namespace
 
@@ -147,21 +152,64 @@ engine's message (naming the file and JSON location for bad stroke files,
 the stroke for a failed tool), FileNotFoundError for a missing file.
 )doc");
   def_extrude(m);
+  def_replay_extrusion(m);
 }
 
 namespace {
+
+/// The model of a Mesh or a (vertices, faces) pair (one copy).
+Model model_of(const MeshLike& mesh) {
+  const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
+  Model model;
+  if (in->model)
+    model = *in->model;
+  else
+    (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+  return model;
+}
+
+/// The dict the CLI's --json writes for an extrusion.
+py::dict extrude_report(const ExtrudeReport& r, bool as_surface) {
+  auto stats = [](const EdgeLengthStats& s) {
+    return py::dict(py::arg("edges") = s.edges, py::arg("mean") = s.mean, py::arg("min") = s.min,
+                    py::arg("max") = s.max, py::arg("within") = s.within, py::arg("outside") = s.outside);
+  };
+  py::dict rep;
+  rep["base_ring"] = r.base_ring;
+  rep["capped"] = r.capped;
+  rep["base_nodes"] = r.base.size();
+  rep["base_mean_edge"] = r.base_mean_edge;
+  rep["copies"] = r.copies;
+  rep["scales"] = r.scales;
+  rep["faces_removed"] = r.faces_removed;
+  rep["swept_nodes"] = r.swept_nodes;
+  rep["swept_faces"] = r.swept_faces;
+  rep["splits"] = r.splits;
+  rep["collapses"] = r.collapses;
+  rep["swaps"] = r.swaps;
+  rep["before"] = stats(r.before);
+  rep["after"] = stats(r.after);
+  rep["nodes_added"] = r.nodes_added;
+  rep["faces_added"] = r.faces_added;
+  rep["volume_change"] = r.volume_change;
+  rep["max_deviation"] = r.max_deviation;
+  if (as_surface) rep["joints"] = r.joints.size();
+  if (r.mirrored) {
+    rep["mirrored"] = true;
+    rep["mirror_base_nodes"] = r.mirror_base.size();
+    rep["mirror_base_error"] = r.mirror_base_error;
+    rep["mirror_nodes"] = r.mirror_nodes;
+    rep["mirror_faces"] = r.mirror_faces;
+  }
+  return rep;
+}
 
 void def_extrude(py::module_& m) {
   m.def(
       "extrude",
       [](const MeshLike& mesh, const Strokes& strokes, std::size_t first, double pick_radius, bool optimise,
          bool as_surface, const py::object& mirror, int threads, const Progress& progress) {
-        const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
-        Model model;
-        if (in->model)
-          model = *in->model;
-        else
-          (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+        Model model = model_of(mesh);
         const StrokeFile file = strokes_arg(strokes);
         const ExtrudeStrokes es = unwrap(extrusion_from_file(file, first));
         ExtrudeOptions eo;
@@ -188,37 +236,13 @@ void def_extrude(py::module_& m) {
         }
         const ExtrudeReport r =
             unwrap(run_long(progress, threads, [&](const ExecContext& ctx) { return extrude(model, es, eo, ctx); }));
-        auto stats = [](const EdgeLengthStats& s) {
-          return py::dict(py::arg("edges") = s.edges, py::arg("mean") = s.mean, py::arg("min") = s.min,
-                          py::arg("max") = s.max, py::arg("within") = s.within, py::arg("outside") = s.outside);
-        };
-        py::dict rep;
-        rep["base_ring"] = r.base_ring;
-        rep["capped"] = r.capped;
-        rep["base_nodes"] = r.base.size();
-        rep["base_mean_edge"] = r.base_mean_edge;
-        rep["copies"] = r.copies;
-        rep["scales"] = r.scales;
-        rep["faces_removed"] = r.faces_removed;
-        rep["swept_nodes"] = r.swept_nodes;
-        rep["swept_faces"] = r.swept_faces;
-        rep["splits"] = r.splits;
-        rep["collapses"] = r.collapses;
-        rep["swaps"] = r.swaps;
-        rep["before"] = stats(r.before);
-        rep["after"] = stats(r.after);
-        rep["nodes_added"] = r.nodes_added;
-        rep["faces_added"] = r.faces_added;
-        rep["volume_change"] = r.volume_change;
-        rep["max_deviation"] = r.max_deviation;
-        if (as_surface) rep["joints"] = r.joints.size();
-        if (r.mirrored) {
-          rep["mirrored"] = true;
-          rep["mirror_base_nodes"] = r.mirror_base.size();
-          rep["mirror_base_error"] = r.mirror_base_error;
-          rep["mirror_nodes"] = r.mirror_nodes;
-          rep["mirror_faces"] = r.mirror_faces;
-        }
+        py::dict rep = extrude_report(r, as_surface);
+        // The recipe (extrude_recipe.h) of an open extrusion, to grow the
+        // same part on another mesh of this topology (replay_extrusion);
+        // None for a painted and cut base or a mirrored pair, which have none.
+        const Expected<ExtrusionRecipe> recipe = extrusion_recipe(model, r);
+        rep["recipe"] = recipe ? py::module_::import("json").attr("loads")(extrusion_recipe_json(*recipe))
+                               : py::object(py::none());
         (void)model.compact();
         return py::make_tuple(mesh_of(std::move(model)), rep);
       },
@@ -248,9 +272,67 @@ mirror: None (default), "x" (the body's sagittal plane x = 0), "y", "z", or
 Returns (mesh, report): the result as a Mesh and the dict the CLI's --json
 writes (``copies``, ``swept_nodes``, ``swept_faces``, ``splits``,
 ``collapses``, ``swaps``, edge-length ``before``/``after``,
-``volume_change``...). Long call (GIL released, Ctrl-C cancels). Raises
+``volume_change``...) and ``recipe``: the extrusion relative to its base
+curve (a dict of the JSON ``--recipe-out`` writes) for ``replay_extrusion``
+on another mesh of the same topology, or None (a painted and cut base, a
+mirrored pair: their base nodes exist on no other mesh). Long call (GIL released, Ctrl-C cancels). Raises
 ValueError with the engine's message (a stroke not starting near the base,
 NaN, a degenerate plane), FileNotFoundError for a missing file.
+)doc");
+}
+
+void def_replay_extrusion(py::module_& m) {
+  m.def(
+      "replay_extrusion",
+      [](const MeshLike& mesh, const py::object& recipe, bool optimise, bool as_surface, int threads,
+         const Progress& progress) {
+        Model model = model_of(mesh);
+        // The recipe: the report's dict (the JSON of --recipe-out) or a path to that file.
+        ExtrusionRecipe rec;
+        if (py::isinstance<py::dict>(recipe)) {
+          const std::string text = py::module_::import("json").attr("dumps")(recipe).cast<std::string>();
+          rec = unwrap(parse_extrusion_recipe(text, "recipe"));
+        } else if (py::isinstance<py::str>(recipe) || py::hasattr(recipe, "__fspath__")) {
+          const fs::path p = recipe.cast<fs::path>();
+          std::ifstream f(p, std::ios::binary);
+          if (!f) {
+            PyErr_SetObject(PyExc_FileNotFoundError,
+                            py::make_tuple(ENOENT, p.string() + ": cannot be read", p.string()).ptr());
+            throw py::error_already_set();
+          }
+          const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+          rec = unwrap(parse_extrusion_recipe(text, p.string()));
+        } else {
+          throw py::type_error("recipe: expected the dict of extrude()'s report['recipe'] or a recipe file path");
+        }
+        ExtrudeOptions eo;
+        eo.optimise = optimise;
+        eo.as_surface = as_surface;
+        const ExtrudeReport r = unwrap(
+            run_long(progress, threads, [&](const ExecContext& ctx) { return replay_extrusion(model, rec, eo, ctx); }));
+        py::dict rep = extrude_report(r, as_surface);
+        (void)model.compact();
+        return py::make_tuple(mesh_of(std::move(model)), rep);
+      },
+      py::arg("mesh"), py::arg("recipe"), py::kw_only(), py::arg("optimise") = true, py::arg("as_surface") = false,
+      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+Grows a recorded extrusion again on another mesh (``atelier extrude
+--replay``; systems/sketch/extrude_recipe.h): the part drawn once (a sleeve
+from an armhole, a dress from a hem) on each body's garment without
+redrawing strokes.
+
+mesh: a Mesh or a (vertices, faces) pair with the topology of the mesh the
+    recipe was recorded on (the same base nodes, joined by boundary edges).
+recipe: ``report["recipe"]`` of ``extrude`` (a dict), or the path of a file
+    written by ``atelier extrude --recipe-out``.
+optimise, as_surface: as for ``extrude``.
+
+The copies of B follow B's position, orientation and size on this mesh (a
+similarity of the drawn part; on the recorded mesh, the drawn part itself
+to rounding). Returns (mesh, report) as ``extrude`` does (no ``recipe``).
+Long call (GIL released, Ctrl-C cancels). Raises ValueError naming the
+field of a bad recipe, or the base node that this mesh lacks, with the mesh
+unchanged; FileNotFoundError for a missing file.
 )doc");
 }
 

@@ -111,3 +111,47 @@ def test_mirror_across_a_plane_through_the_base_is_refused():
         atelier.extrude((v, f), strokes(), mirror="x")
     with pytest.raises(ValueError, match="mirror"):
         atelier.extrude((v, f), strokes(), mirror="w")
+
+
+def test_a_recipe_replays_the_dome_on_a_moved_and_scaled_cup(scratch):
+    """extrude's report["recipe"] grows the same dome on another cup of the
+    same topology (replay_extrusion, `atelier extrude --replay`): on the cup
+    it was drawn on, the drawn dome; on a cup turned, scaled by 1.7 and moved,
+    the dome under the same similarity (the part follows its base curve)."""
+    v, f = cup()
+    drawn, rep = atelier.extrude((v, f), strokes(), optimise=False)
+    recipe = rep["recipe"]
+    assert recipe is not None
+    again, rep2 = atelier.replay_extrusion((v, f), recipe, optimise=False)
+    assert rep2["copies"] == rep["copies"] and "recipe" not in rep2
+    assert np.abs(np.asarray(again.vertices) - np.asarray(drawn.vertices)).max() < 1e-12
+    assert [list(x) for x in again.faces] == [list(x) for x in drawn.faces]
+
+    c, s = np.cos(0.4), np.sin(0.4)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    move = lambda p: 1.7 * np.asarray(p) @ rot.T + np.array([0.3, -2.0, 5.0])  # noqa: E731
+    moved, _ = atelier.replay_extrusion((move(v), f), recipe, optimise=False)
+    assert np.abs(np.asarray(moved.vertices) - move(drawn.vertices)).max() < 1e-9
+    # The CLI's recipe file is the same recipe: the same mesh from the path.
+    (scratch / "recipe.json").write_text(json.dumps(recipe))
+    from_file, _ = atelier.replay_extrusion((move(v), f), scratch / "recipe.json", optimise=False)
+    assert np.array_equal(np.asarray(from_file.vertices), np.asarray(moved.vertices))
+
+
+def test_a_bad_recipe_is_refused_naming_what_is_wrong(scratch):
+    v, f = cup()
+    _, rep = atelier.extrude((v, f), strokes(), optimise=False)
+    recipe = rep["recipe"]
+    broken = json.loads(json.dumps(recipe))
+    key = next(k for k, x in broken.items() if isinstance(x, list))
+    del broken[key]
+    with pytest.raises(ValueError, match=key):
+        atelier.replay_extrusion((v, f), broken)
+    # A mesh without the base nodes (a smaller cup) is refused.
+    small_v, small_f = cup(8)
+    with pytest.raises(ValueError):
+        atelier.replay_extrusion((small_v, small_f), recipe)
+    with pytest.raises(FileNotFoundError):
+        atelier.replay_extrusion((v, f), scratch / "none.json")
+    with pytest.raises(TypeError):
+        atelier.replay_extrusion((v, f), 42)
