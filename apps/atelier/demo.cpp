@@ -76,6 +76,10 @@ struct BodyQuality {
   double min_clearance = 0;  // signed distance of the closest vertex (m)
   double mean_clearance = 0;
   double strain_p95 = 0;  // |l/l0 - 1| of garment edges, 95th percentile
+  /// RMS over the shorts' vertices of (signed distance on this body - signed
+  /// distance on the reference body): issue 7's clearance change
+  /// (fit_measure.h), from the same exact distances as the figures above.
+  double clearance_change_rms = 0;
   double decode_ms = 0;
   std::size_t pushed = 0;               // garment vertices moved by the collision pass
   std::vector<RegenQuality> templates;  // one per profile template
@@ -232,7 +236,7 @@ class Regenerators {
 /// The shorts' fit on one body after the outfit's layering.
 struct ShortsFit {
   std::size_t inside = 0, pushed = 0;
-  double max_depth = 0, min_clearance = 0, mean_clearance = 0, strain_p95 = 0;
+  double max_depth = 0, min_clearance = 0, mean_clearance = 0, strain_p95 = 0, clearance_change_rms = 0;
 };
 
 /// Dresses one body: the shorts (decoded, edge-transferred) and the profile
@@ -284,14 +288,18 @@ Status dress(const DemoReference& ref, std::span<const Vec3d> body, std::vector<
     *fit = {};
     fit->pushed = g[0].pushed;
     fit->min_clearance = std::numeric_limits<double>::infinity();
-    double sum = 0;
-    for (const BodyDistance& d : g[0].distance) {
+    double sum = 0, change2 = 0;
+    const std::vector<float>& designed = ref.shorts->clearance.clearance;
+    for (std::size_t i = 0; i < g[0].distance.size(); ++i) {
+      const BodyDistance& d = g[0].distance[i];
+      if (i < designed.size()) change2 += (d.distance - designed[i]) * (d.distance - designed[i]);
       fit->inside += d.distance < 0;
       fit->max_depth = std::max(fit->max_depth, -d.distance);
       fit->min_clearance = std::min(fit->min_clearance, d.distance);
       sum += d.distance;
     }
     fit->mean_clearance = sum / static_cast<double>(std::max<std::size_t>(1, g[0].distance.size()));
+    fit->clearance_change_rms = std::sqrt(change2 / static_cast<double>(std::max<std::size_t>(1, designed.size())));
     std::vector<double> strain;
     for (std::size_t e = 0; e < ref.shorts->edges.size(); ++e) {
       const auto [a, b] = ref.shorts->edges[e];
@@ -365,6 +373,7 @@ DemoRun run_bodies(const DemoOptions& opt, const DemoReference& ref, const Manne
       r.inside = fit.inside;
       r.max_depth = fit.max_depth;
       r.strain_p95 = fit.strain_p95;
+      r.clearance_change_rms = fit.clearance_change_rms;
       r.decode_ms = per_body_ms;
       for (const auto& x : profiles) r.templates.push_back(x.quality);
     });
@@ -406,7 +415,7 @@ nlohmann::json by_garment(const BodyQuality& r) {
 /// Totals over the completed bodies, for report.json and the summary.
 struct DemoTotals {
   std::size_t bodies_with_penetration = 0;
-  double worst_depth = 0, strain_sum = 0, decode_sum = 0;
+  double worst_depth = 0, strain_sum = 0, change_sum = 0, decode_sum = 0;
   double nq = 1;                                       // completed bodies (at least 1, a divisor)
   nlohmann::json templates = nlohmann::json::array();  // per profile template
   std::size_t template_inside = 0;                     // profile template nodes inside, over all bodies
@@ -436,6 +445,7 @@ std::pair<nlohmann::json, DemoTotals> write_report(const Common& common, const D
     tot.bodies_with_penetration += r.inside > 0;
     tot.worst_depth = std::max(tot.worst_depth, r.max_depth);
     tot.strain_sum += r.strain_p95;
+    tot.change_sum += r.clearance_change_rms;
     tot.decode_sum += r.decode_ms;
     per.push_back({{"body", r.name},
                    {"inside_vertices", r.inside},
@@ -443,6 +453,7 @@ std::pair<nlohmann::json, DemoTotals> write_report(const Common& common, const D
                    {"min_clearance_m", r.min_clearance},
                    {"mean_clearance_m", r.mean_clearance},
                    {"edge_strain_p95", r.strain_p95},
+                   {"clearance_change_rms_m", r.clearance_change_rms},
                    {"collision_pushed", r.pushed},
                    {"layer_inside_vertices", r.layer_inside},
                    {"layer_inside_vertices_unlayered", r.layer_inside_unlayered},
@@ -463,6 +474,7 @@ std::pair<nlohmann::json, DemoTotals> write_report(const Common& common, const D
                     {"layer_inside_vertices_total", layered},
                     {"layer_inside_vertices_unlayered_total", unlayered},
                     {"mean_edge_strain_p95", tot.strain_sum / tot.nq},
+                    {"mean_clearance_change_rms_m", tot.change_sum / tot.nq},
                     {"mean_decode_ms_per_body", tot.decode_sum / tot.nq},
                     {"encode_s", ref.encode_s},
                     {"total_s", total_s},
@@ -594,7 +606,11 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
   html["summary"] = rep["summary"];
   html["summary"]["profile_template_nodes_inside"] = tot.template_inside;
   html["summary"]["profile_template_max_crack_m"] = tot.template_crack;
-  std::vector<std::string> columns = {"body", "shorts_inside", "shorts_min_clearance_mm", "shorts_strain_p95",
+  std::vector<std::string> columns = {"body",
+                                      "shorts_inside",
+                                      "shorts_min_clearance_mm",
+                                      "shorts_clearance_change_mm",
+                                      "shorts_strain_p95",
                                       "layer_inside_vertices"};
   for (const auto& t : ref.templates)
     for (const char* c : {"_inside", "_min_distance_mm", "_profile_error_mm", "_crack_mm", "_ms"})
@@ -605,6 +621,7 @@ void write_html(const DemoOptions& opt, const DemoReference& ref, const Mannequi
     nlohmann::json row = {{"body", r.name},
                           {"shorts_inside", r.inside},
                           {"shorts_min_clearance_mm", 1000 * r.min_clearance},
+                          {"shorts_clearance_change_mm", 1000 * r.clearance_change_rms},
                           {"shorts_strain_p95", r.strain_p95},
                           {"layer_inside_vertices", r.layer_inside}};
     for (std::size_t k = 0; k < r.templates.size() && k < ref.templates.size(); ++k) {

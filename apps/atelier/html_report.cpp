@@ -125,6 +125,7 @@ constexpr KnownKey kKnownKeys[] = {
     {"worst_penetration_m", "Deepest penetration", "mm", 1000, 2, false},
     {"profile_nodes_under_shorts_total", "Profile-template nodes under the shorts (all bodies)", "", 1, 3, false},
     {"mean_edge_strain_p95", "Mean edge strain (95th percentile)", "%", 100, 2, false},
+    {"mean_clearance_change_rms_m", "Mean clearance change (RMS per body)", "mm", 1000, 2, false},
     {"profile_template_nodes_inside", "Profile-template nodes inside the body (all bodies)", "", 1, 3, false},
     {"profile_template_max_crack_m", "Largest profile-template crack", "mm", 1000, 2, false},
     {"pattern_pieces", "Pattern pieces", "", 1, 3, false},

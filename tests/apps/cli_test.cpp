@@ -90,6 +90,29 @@ TEST(Cli, DemoWritesAReportMeshesAndMeasurements) {
   }
   EXPECT_TRUE(fs::exists(d / "meshes" / "mannequin-00001_shorts.obj"));
   EXPECT_FALSE(fs::exists(d / "meshes" / "mannequin-00002_shorts.obj"));
+  // Each body's clearance change (issue 26's report, issue 7's figure) is
+  // what `atelier measure` finds from the files alone: the body and its
+  // shorts against the shorts as designed on the reference body.
+  for (int b : {0, 1}) {
+    const std::string stem = (d / "meshes" / ("mannequin-0000" + std::to_string(b))).string();
+    const fs::path mj = d / ("measure" + std::to_string(b) + ".json");
+    auto m = run("measure --body " + stem + "_body.obj --garment " + stem + "_shorts.obj --source-garment " +
+                 (d / "garment_template.obj").string() + " --source-body " + (d / "reference_body.obj").string() +
+                 " --json " + mj.string());
+    ASSERT_EQ(m.code, 0) << m.out;
+    std::ifstream mjs(mj);
+    const auto measured = nlohmann::json::parse(mjs);
+    const double reported = rep["bodies_quality"][b]["clearance_change_rms_m"].get<double>();
+    EXPECT_GT(reported, 0.0);
+    EXPECT_LT(reported, 0.002);  // issue 7: at most 2 mm RMS
+    EXPECT_NEAR(reported, measured["clearance_change_rms_m"].get<double>(), 2e-5) << measured.dump();
+  }
+  {
+    std::ifstream bodies_csv(d / "bodies.csv");
+    std::string header;
+    std::getline(bodies_csv, header);
+    EXPECT_NE(header.find("shorts_clearance_change_mm"), std::string::npos) << header;
+  }
   // measurements.csv: a header and one row per body.
   std::ifstream csv(d / "measurements.csv");
   std::string line;

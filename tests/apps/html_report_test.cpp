@@ -160,6 +160,7 @@ TEST(HtmlReport, KnownKeysGetLabelsUnitsAndPrecision) {
   EXPECT_EQ(shown("mean_decode_ms_per_body", 0.300591), "Mean decode time per body: 0.30 ms");
   EXPECT_EQ(shown("worst_penetration_m", 0.0004321), "Deepest penetration: 0.43 mm");
   EXPECT_EQ(shown("mean_edge_strain_p95", 0.012345), "Mean edge strain (95th percentile): 1.2 %");
+  EXPECT_EQ(shown("mean_clearance_change_rms_m", 0.00123456), "Mean clearance change (RMS per body): 1.2 mm");
   EXPECT_EQ(shown("bodies_per_s", 101.2345), "Throughput: 101 bodies/s");
   EXPECT_EQ(shown("completed", 1000), "Bodies completed: 1000");
   EXPECT_EQ(shown("layer_inside_vertices_total", 0), "Garment vertices inside a lower layer (all bodies): 0");
