@@ -345,6 +345,25 @@ void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body,
 /// edge on B's nodes, removed again unless it is the painted base curve).
 Status split_off(Model& m, const std::vector<NodeIdx>& B, bool ring, ExtrudeReport& rep, const ExecContext& ctx) {
   const SurfaceIdx s = m.nodes.surface[B[0].value];
+  // A stretch of B on a mesh edge that a joint already holds (the project
+  // top's right armhole runs 16 edges along the seam of its collar piece)
+  // would become a seam of three surfaces, which the partition does not make.
+  for (std::size_t i = 0; i + (ring ? 0 : 1) < B.size(); ++i) {
+    const HalfedgeIdx h = m.find_halfedge(B[i], B[(i + 1) % B.size()]);
+    if (!h.valid()) continue;
+    const MeshEdgeIdx me = m.edges.mesh_edge[edge_of(h).value];
+    if (!me.valid() || !m.mesh_edges.joint[me.value].valid()) continue;
+    std::size_t along = 0;
+    for (std::size_t k = 0; k + (ring ? 0 : 1) < B.size(); ++k)
+      if (const HalfedgeIdx g = m.find_halfedge(B[k], B[(k + 1) % B.size()]);
+          g.valid() && m.edges.mesh_edge[edge_of(g).value] == me)
+        ++along;
+    return fail(ErrorCode::kJointRefused,
+                "as a surface: the base curve runs along " + std::to_string(along) + " edges of mesh edge " +
+                    std::to_string(me.value) + ", which joint " + std::to_string(m.mesh_edges.joint[me.value].value) +
+                    " already joins to another surface; the part would make a seam of three surfaces there (extrude "
+                    "it without as_surface, or from a base off that seam)");
+  }
   std::vector<AttribNodeIdx> an;
   for (std::size_t i = 0; i <= B.size() - (ring ? 0 : 1); ++i) {
     const NodeIdx v = B[i % B.size()];

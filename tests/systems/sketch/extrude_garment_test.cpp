@@ -331,6 +331,74 @@ TEST(ExtrudeGarment, DressSleeveAndCollarOnTheTopOutsideTheBodyOn100Mannequins) 
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) run_bodies(100, d);
 }
 
+TEST(ExtrudeGarment, TheDressAndCollarAsTheirOwnSurfacesAndTheSleeveRefusedOnTheCollarSeam) {
+  // `--as-surface` on the project's top (issue 21): the dress (from the hem)
+  // and the ring collar (from the collar's top edge) become surfaces of
+  // their own, joined along B. The right armhole runs 16 edges along the
+  // seam (a joint) between the top and its collar piece: a sleeve there
+  // would be a seam of three surfaces, refused by name with the model
+  // unchanged.
+  if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "six extrusions on the top (5 s in Release)";
+  const auto& fx = atelier::testing::template_fixture();
+  const ProfileTemplate& top = fx.templates[0];
+  const Model before = regenerate_top(fx.body, top, fx.body, bounds(top.model)).value();
+  const auto checks = body_checks(fx.body);
+  ASSERT_EQ(checks->error, "");
+  for (Design d : {Design::kDress, Design::kCollar, Design::kSleeve}) {
+    SCOPED_TRACE(static_cast<int>(d));
+    auto in = design_strokes(before, d);
+    ASSERT_TRUE(in) << in.status().to_string();
+    ExtrudeOptions o = garment_options(*checks);
+    Model plain = before;
+    auto rp = extrude(plain, *in, o, ExecContext::sequential());
+    ASSERT_TRUE(rp) << rp.status().to_string();
+    o.as_surface = true;
+    Model m = before;
+    auto r = extrude(m, *in, o, ExecContext::sequential());
+    if (d == Design::kSleeve) {
+      ASSERT_FALSE(r);
+      EXPECT_EQ(r.status().code(), ErrorCode::kJointRefused);
+      EXPECT_NE(r.status().message().find("16 edges of mesh edge"), std::string::npos) << r.status().message();
+      EXPECT_NE(r.status().message().find("joint"), std::string::npos) << r.status().message();
+      EXPECT_EQ(diff_tables(before, m), "");
+      continue;
+    }
+    ASSERT_TRUE(r) << r.status().to_string();
+    ASSERT_TRUE(validate(m)) << validate(m).to_string();
+    ASSERT_EQ(r->joints.size(), 1u);
+    // The same part as without as_surface, in a surface of its own: B's
+    // nodes once more on the part's side, the part's faces all there.
+    EXPECT_EQ(m.num_faces(), plain.num_faces());
+    EXPECT_EQ(m.num_nodes(), plain.num_nodes() + r->base.size());
+    EXPECT_EQ(m.num_surfaces(), before.num_surfaces() + 1);
+    std::size_t part_faces = 0;
+    for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
+      part_faces += m.alive(FaceIdx{f}) && m.faces.surface[f] == r->part_surface;
+    EXPECT_EQ(part_faces, plain.num_faces() - before.num_faces());
+    // The joint: two mesh edges along B, one per side, each with B's edges
+    // and the same node positions.
+    const JointIdx j = m.resolve(r->joints[0]).value();
+    const auto members = m.joints.members.row(j.value);
+    ASSERT_EQ(members.size(), 2u);
+    std::vector<std::vector<Vec3d>> sides;
+    std::vector<SurfaceIdx> surfaces;
+    for (const JointMember& jm : members) {
+      const auto hs = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
+      EXPECT_EQ(hs.size(), r->base.size() - (r->base_ring ? 0 : 1));
+      surfaces.push_back(m.mesh_edges.surface[jm.mesh_edge.value]);
+      std::vector<Vec3d> p;
+      for (HalfedgeIdx h : hs) p.push_back(m.position(m.tail(h)));
+      std::sort(p.begin(), p.end(), [](const Vec3d& a, const Vec3d& b) {
+        return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+      });
+      sides.push_back(std::move(p));
+    }
+    EXPECT_NE(surfaces[0], surfaces[1]);
+    EXPECT_TRUE(surfaces[0] == r->part_surface || surfaces[1] == r->part_surface);
+    EXPECT_EQ(sides[0], sides[1]);
+  }
+}
+
 TEST(ExtrudeRecipe, OnTheReferenceBodyTheReplayIsTheOriginal) {
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) {
     const Recorded rec = record(d);
