@@ -483,6 +483,19 @@ inline int certified_side(const Vec3d& a, const PlaneFilter& f, const Vec3d& p) 
   return det > bound ? 1 : (-det > bound ? -1 : 0);
 }
 
+/// The orientation of (a, b, c) seen along `axis` (coordinates axis + 1 and
+/// axis + 2): +1 or -1 when Shewchuk's orient2d bound (3 + 16 eps) eps
+/// certifies it, 0 when the filter cannot tell.
+inline int certified_orient2(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) noexcept {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const double left = (a[i] - c[i]) * (b[j] - c[j]), right = (a[j] - c[j]) * (b[i] - c[i]);
+  const double det = left - right, sum = std::abs(left) + std::abs(right);
+  constexpr double kBound = 3.3306690738754716e-16;  // (3 + 16 eps) eps
+  if (!(sum > 1e-280) || !(sum < std::numeric_limits<double>::infinity())) return 0;
+  const double bound = kBound * sum;
+  return det > bound ? 1 : (-det > bound ? -1 : 0);
+}
+
 /// True when triangles t1 and t2 of one net certainly meet at most in the
 /// corners and edge they share: the other one's corners that are not
 /// shared lie strictly on one side of one triangle's plane, by the
@@ -504,7 +517,28 @@ bool certified_apart(const TriMesh& m, std::span<const PlaneFilter> pf, std::uin
     }
     return tested > 0;  // the same triangle twice is no certificate
   };
-  return one_side(A, t1, B) || one_side(B, t2, A);
+  if (one_side(A, t1, B) || one_side(B, t2, A)) return true;
+  // Triangles sharing an edge meet beyond it only when they are coplanar
+  // with their third corners on the same side of the edge (a fold). Third
+  // corners certainly on opposite sides of the edge, seen along an axis
+  // where A is not flat, rule that out whether or not the four corners are
+  // coplanar: the two triangles of a planar quad (coplanar up to rounding,
+  // which no plane filter can certify) need no exact test.
+  int x = -1, y = -1;
+  for (int k = 0; k < 3; ++k) {
+    const std::uint32_t a = A[static_cast<std::size_t>(k)], b = B[static_cast<std::size_t>(k)];
+    if (a != B[0] && a != B[1] && a != B[2]) x = x == -1 ? k : 3;
+    if (b != A[0] && b != A[1] && b != A[2]) y = y == -1 ? k : 3;
+  }
+  if (x < 0 || x > 2 || y < 0 || y > 2) return false;  // not an edge pair
+  const PlaneFilter& f = pf[t1];
+  const int axis = std::abs(f.n[0]) >= std::abs(f.n[1]) ? (std::abs(f.n[0]) >= std::abs(f.n[2]) ? 0 : 2)
+                                                        : (std::abs(f.n[1]) >= std::abs(f.n[2]) ? 1 : 2);
+  const Vec3d& u = m.p[A[static_cast<std::size_t>((x + 1) % 3)]];
+  const Vec3d& v = m.p[A[static_cast<std::size_t>((x + 2) % 3)]];
+  const int sx = certified_orient2(u, v, m.p[A[static_cast<std::size_t>(x)]], axis);
+  const int sy = certified_orient2(u, v, m.p[B[static_cast<std::size_t>(y)]], axis);
+  return sx != 0 && sy != 0 && sx != sy;
 }
 
 }  // namespace
