@@ -5,6 +5,7 @@
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -371,10 +372,15 @@ void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx,
   auto leaf_pairs = [&](const NodePair& np, std::size_t task) {
     const Bvh::Node& x = ba.nodes[np[0]];
     const Bvh::Node& y = bb.nodes[np[1]];
+    const bool same = self && np[0] == np[1];
     for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
-      const std::uint32_t j0 = self && np[0] == np[1] ? i + 1 : y.first;  // each unordered pair once in a leaf
+      const std::array<double, 6> bi = ba.box[i];
+      // A triangle whose box misses the other leaf's box meets none of its
+      // triangles: one test instead of one per triangle there.
+      if (!same && !overlap(bi, y.box)) continue;
+      const std::uint32_t j0 = same ? i + 1 : y.first;  // each unordered pair once in a leaf
       for (std::uint32_t j = j0; j < y.first + y.count; ++j) {
-        if (!overlap(ba.box[i], bb.box[j])) continue;
+        if (!overlap(bi, bb.box[j])) continue;
         std::uint32_t ti = ba.order[i], tj = bb.order[j];
         if (self && ti > tj) std::swap(ti, tj);
         visit(task, ti, tj);
@@ -439,11 +445,116 @@ std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& /*a*/
   return pairs;
 }
 
+namespace {
+
+/// A triangle's plane for the certified side test of the self-check: the
+/// rounded normal n = (b - a) x (c - a) and, per component, the sum of the
+/// absolute values of its two products (the part of Shewchuk's orient3d
+/// permanent that does not depend on the tested point).
+struct PlaneFilter {
+  double n[3];
+  double nabs[3];
+};
+
+PlaneFilter plane_filter(const TriMesh& m, std::uint32_t t) {
+  const auto& v = m.tri[t];
+  const Vec3d& a = m.p[v[0]];
+  const double ux = m.p[v[1]].x() - a.x(), uy = m.p[v[1]].y() - a.y(), uz = m.p[v[1]].z() - a.z();
+  const double vx = m.p[v[2]].x() - a.x(), vy = m.p[v[2]].y() - a.y(), vz = m.p[v[2]].z() - a.z();
+  return {{uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx},
+          {std::abs(uy * vz) + std::abs(uz * vy), std::abs(uz * vx) + std::abs(ux * vz),
+           std::abs(ux * vy) + std::abs(uy * vx)}};
+}
+
+/// The side of p against the plane of a triangle with first corner a: +1 or
+/// -1 when certified, 0 when the filter cannot tell (then only the exact
+/// predicate decides). det = (p - a) . ((b - a) x (c - a)) is orient3d
+/// expanded along p - a: the same products as Shewchuk's expansion, so his
+/// first-stage bound (7 + 56 eps) eps times the permanent holds (every input
+/// a double, each difference rounded once).
+inline int certified_side(const Vec3d& a, const PlaneFilter& f, const Vec3d& p) noexcept {
+  const double wx = p.x() - a.x(), wy = p.y() - a.y(), wz = p.z() - a.z();
+  const double det = wx * f.n[0] + wy * f.n[1] + wz * f.n[2];
+  const double perm = std::abs(wx) * f.nabs[0] + std::abs(wy) * f.nabs[1] + std::abs(wz) * f.nabs[2];
+  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
+  // Below 1e-250 underflow could exceed the bound; infinity voids it.
+  if (!(perm > 1e-250) || !(perm < std::numeric_limits<double>::infinity())) return 0;
+  const double bound = kBound * perm;
+  return det > bound ? 1 : (-det > bound ? -1 : 0);
+}
+
+/// The orientation of (a, b, c) seen along `axis` (coordinates axis + 1 and
+/// axis + 2): +1 or -1 when Shewchuk's orient2d bound (3 + 16 eps) eps
+/// certifies it, 0 when the filter cannot tell.
+inline int certified_orient2(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) noexcept {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const double left = (a[i] - c[i]) * (b[j] - c[j]), right = (a[j] - c[j]) * (b[i] - c[i]);
+  const double det = left - right, sum = std::abs(left) + std::abs(right);
+  constexpr double kBound = 3.3306690738754716e-16;  // (3 + 16 eps) eps
+  if (!(sum > 1e-280) || !(sum < std::numeric_limits<double>::infinity())) return 0;
+  const double bound = kBound * sum;
+  return det > bound ? 1 : (-det > bound ? -1 : 0);
+}
+
+/// True when triangles t1 and t2 of one net certainly meet at most in the
+/// corners and edge they share: the other one's corners that are not
+/// shared lie strictly on one side of one triangle's plane, by the
+/// certified filter (the exact test's first rejection, without its call).
+/// False means "not known": triangles_cross decides exactly.
+bool certified_apart(const TriMesh& m, std::span<const PlaneFilter> pf, std::uint32_t t1, std::uint32_t t2) noexcept {
+  const auto& A = m.tri[t1];
+  const auto& B = m.tri[t2];
+  auto one_side = [&](const std::array<std::uint32_t, 3>& X, std::uint32_t tx, const std::array<std::uint32_t, 3>& Y) {
+    const Vec3d& a = m.p[X[0]];
+    int side = 0;
+    int tested = 0;
+    for (std::uint32_t y : Y) {
+      if (y == X[0] || y == X[1] || y == X[2]) continue;
+      const int s = certified_side(a, pf[tx], m.p[y]);
+      if (s == 0 || (side != 0 && s != side)) return false;
+      side = s;
+      ++tested;
+    }
+    return tested > 0;  // the same triangle twice is no certificate
+  };
+  if (one_side(A, t1, B) || one_side(B, t2, A)) return true;
+  // Triangles sharing an edge meet beyond it only when they are coplanar
+  // with their third corners on the same side of the edge (a fold). Third
+  // corners certainly on opposite sides of the edge, seen along an axis
+  // where A is not flat, rule that out whether or not the four corners are
+  // coplanar: the two triangles of a planar quad (coplanar up to rounding,
+  // which no plane filter can certify) need no exact test.
+  int x = -1, y = -1;
+  for (int k = 0; k < 3; ++k) {
+    const std::uint32_t a = A[static_cast<std::size_t>(k)], b = B[static_cast<std::size_t>(k)];
+    if (a != B[0] && a != B[1] && a != B[2]) x = x == -1 ? k : 3;
+    if (b != A[0] && b != A[1] && b != A[2]) y = y == -1 ? k : 3;
+  }
+  if (x < 0 || x > 2 || y < 0 || y > 2) return false;  // not an edge pair
+  const PlaneFilter& f = pf[t1];
+  const int axis = std::abs(f.n[0]) >= std::abs(f.n[1]) ? (std::abs(f.n[0]) >= std::abs(f.n[2]) ? 0 : 2)
+                                                        : (std::abs(f.n[1]) >= std::abs(f.n[2]) ? 1 : 2);
+  const Vec3d& u = m.p[A[static_cast<std::size_t>((x + 1) % 3)]];
+  const Vec3d& v = m.p[A[static_cast<std::size_t>((x + 2) % 3)]];
+  const int sx = certified_orient2(u, v, m.p[A[static_cast<std::size_t>(x)]], axis);
+  const int sy = certified_orient2(u, v, m.p[B[static_cast<std::size_t>(y)]], axis);
+  return sx != 0 && sy != 0 && sx != sy;
+}
+
+}  // namespace
+
 std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
+  // Most box-overlapping pairs of a fine net are neighbours (about 6 of 7
+  // per triangle share a corner): a certified floating-point filter on
+  // precomputed planes rejects almost all of them; only the pairs it cannot
+  // decide see the exact test, so every decision stays exact.
+  std::vector<PlaneFilter> pf(m.tri.size());
+  par::for_each_n(ctx, m.tri.size(), [&](std::size_t t) { pf[t] = plane_filter(m, static_cast<std::uint32_t>(t)); });
   std::vector<std::array<std::uint32_t, 2>> first(kMaxTasks, {kNil, kNil});
   std::size_t tasks = 0;
   dual_visit(bvh, bvh, true, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
-    if (std::array<std::uint32_t, 2>{i, j} < first[task] && triangles_cross(m, i, j)) first[task] = {i, j};
+    if (std::array<std::uint32_t, 2>{i, j} < first[task] && !certified_apart(m, pf, i, j) && triangles_cross(m, i, j))
+      first[task] = {i, j};
   });
   // The smallest crossing pair over all tasks: the same for any thread count.
   return *std::min_element(first.begin(), first.end());
