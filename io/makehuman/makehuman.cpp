@@ -38,7 +38,7 @@ std::string slurp(const std::filesystem::path& f) {
 }
 
 /// Short decimals ("-.166", "0.0265", "12"): the value exactly as
-/// std::from_chars gives it, faster (MakeHuman's targets are 2.6 million
+/// std::from_chars gives it, faster (MakeHuman's targets are 13 million
 /// such numbers, which from_chars parsed in a third of regen's start-up).
 /// Exact because the digits as an integer m <= 2^24 and 10^k for k <= 10
 /// are floats exactly, so m / 10^k is one correctly rounded float division
