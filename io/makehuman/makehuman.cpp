@@ -1,10 +1,11 @@
-#include <atelier/engine/status.h>
 #include <atelier/io/makehuman/makehuman.h>
 
 #include <charconv>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+
+#include <atelier/engine/status.h>
 
 namespace atelier::makehuman {
 
@@ -70,6 +71,7 @@ bool read_short_float(const char*& p, const char* end, float& v) noexcept {
   return true;
 }
 
+
 /// A UTF-8 byte-order mark is not part of the first line.
 std::string_view without_bom(std::string_view text) {
   if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
@@ -89,13 +91,13 @@ struct Cursor {
   }
   /// Why the last read() failed: the token is a number out of the type's
   /// range (std::from_chars leaves the value untouched then).
-  bool out_of_range = false;
   bool read(float& v) {
     skip_ws();
     out_of_range = false;
     if (read_short_float(p, end, v)) return true;
     return read<float>(v);
   }
+  bool out_of_range = false;
   template <class T>
   bool read(T& v) {
     skip_ws();
@@ -166,9 +168,7 @@ const BaseMesh::Group* BaseMesh::group(std::string_view name) const noexcept {
   return nullptr;
 }
 
-BaseMesh read_base_mesh(const std::filesystem::path& file) {
-  return parse_base_mesh(slurp(file), file);
-}
+BaseMesh read_base_mesh(const std::filesystem::path& file) { return parse_base_mesh(slurp(file), file); }
 
 BaseMesh parse_base_mesh(std::string_view text, const std::filesystem::path& file) {
   BaseMesh m;
@@ -187,15 +187,12 @@ BaseMesh parse_base_mesh(std::string_view text, const std::filesystem::path& fil
     if (key == "v") {
       float x, y, z;
       if (!c.read(x) || !c.read(y) || !c.read(z))
-        parse_error(file, line,
-                    c.out_of_range ? "vertex coordinate out of the range of a float" : "vertex needs three numbers");
+        parse_error(file, line, c.out_of_range ? "vertex coordinate out of the range of a float" : "vertex needs three numbers");
       if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) parse_error(file, line, "non-finite vertex");
       m.positions.emplace_back(x, y, z);
     } else if (key == "vt") {
       float u = 0, v = 0;
-      if (!c.read(u))
-        parse_error(file, line,
-                    c.out_of_range ? "texture coordinate out of the range of a float" : "vt needs a number");
+      if (!c.read(u)) parse_error(file, line, c.out_of_range ? "texture coordinate out of the range of a float" : "vt needs a number");
       if (!c.done() && !c.read(v))
         parse_error(file, line, c.out_of_range ? "texture coordinate out of the range of a float" : "vt needs numbers");
       if (!std::isfinite(u) || !std::isfinite(v)) parse_error(file, line, "non-finite texture coordinate");
@@ -217,8 +214,7 @@ BaseMesh parse_base_mesh(std::string_view text, const std::filesystem::path& fil
       face_vt.clear();
       while (!c.done()) {
         long long v = 0;
-        if (!c.read(v))
-          parse_error(file, line, c.out_of_range ? "face index out of range" : "face index is not an integer");
+        if (!c.read(v)) parse_error(file, line, c.out_of_range ? "face index out of range" : "face index is not an integer");
         long long t = 0;
         if (c.p < e && *c.p == '/' && c.p + 1 < e && c.p[1] != '/') {
           ++c.p;
@@ -271,8 +267,7 @@ std::map<std::string, std::vector<std::uint32_t>> read_measures(const std::files
   return parse_measures(slurp(file), file, vertex_count);
 }
 
-std::map<std::string, std::vector<std::uint32_t>> parse_measures(std::string_view text,
-                                                                 const std::filesystem::path& file,
+std::map<std::string, std::vector<std::uint32_t>> parse_measures(std::string_view text, const std::filesystem::path& file,
                                                                  std::uint32_t vertex_count) {
   nlohmann::json j;
   try {
@@ -322,8 +317,7 @@ std::vector<MeasureModifier> parse_measure_modifiers(std::string_view text, cons
       const std::string mat = at + "/modifiers/" + std::to_string(k);
       if (!m.is_object()) parse_error(file, 0, mat + ": a modifier must be an object");
       MeasureModifier mm;
-      for (auto [key, dst] :
-           {std::pair<const char*, std::string*>{"target", &mm.target}, {"min", &mm.min}, {"max", &mm.max}}) {
+      for (auto [key, dst] : {std::pair<const char*, std::string*>{"target", &mm.target}, {"min", &mm.min}, {"max", &mm.max}}) {
         const auto it = m.find(key);
         if (it == m.end()) continue;
         if (!it->is_string()) parse_error(file, 0, mat + "/" + key + ": must be a string");

@@ -1,9 +1,12 @@
-#include <atelier/engine/parallel.h>
-#include <atelier/engine/random.h>
-#include <atelier/engine/status.h>
-#include <atelier/storage/builder.h>
+// MakeHuman bodies (makehuman_body.h): the macro sliders' weights, the
+// adult sampler, the library's loading, building a body, and the reference
+// body with its feature curves.
+// Why this file is long: these share HumanLibrary's private tables (the
+// targets, their factor indices, the stature candidates and the targets'
+// chunked form), and splitting them would put those tables in a detail
+// header for no reader's gain.
 #include <atelier/systems/body/makehuman_body.h>
-#include <atelier/systems/mesh/section.h>
+
 #include <immintrin.h>
 
 #include <algorithm>
@@ -16,6 +19,12 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+
+#include <atelier/engine/parallel.h>
+#include <atelier/engine/random.h>
+#include <atelier/engine/status.h>
+#include <atelier/storage/builder.h>
+#include <atelier/systems/mesh/section.h>
 
 namespace atelier::makehuman {
 
@@ -51,25 +60,11 @@ double three_way(std::string_view level, double v) {
 }
 
 // Every factor token of the macro target names, and its index.
-constexpr std::array<std::string_view, 19> kFactorNames = {"universal",
-                                                           "male",
-                                                           "female",
-                                                           "child",
-                                                           "young",
-                                                           "old",
-                                                           "african",
-                                                           "asian",
-                                                           "caucasian",
-                                                           "minmuscle",
-                                                           "averagemuscle",
-                                                           "maxmuscle",
-                                                           "minweight",
-                                                           "averageweight",
-                                                           "maxweight",
-                                                           "minheight",
-                                                           "maxheight",
-                                                           "idealproportions",
-                                                           "uncommonproportions"};
+constexpr std::array<std::string_view, 19> kFactorNames = {
+    "universal",     "male",          "female",    "child",         "young",         "old",
+    "african",       "asian",         "caucasian", "minmuscle",     "averagemuscle", "maxmuscle",
+    "minweight",     "averageweight", "maxweight", "minheight",     "maxheight",     "idealproportions",
+    "uncommonproportions"};
 
 std::string_view target_stem(std::string_view name) {
   if (auto s = name.rfind('/'); s != std::string_view::npos) name = name.substr(s + 1);
@@ -94,8 +89,8 @@ double macro_factor(std::string_view t, const MacroParams& p) {
       const std::string_view what = t.substr(lvl.size());
       if (what == "muscle") return three_way(lvl, p.muscle);
       if (what == "weight") return three_way(lvl, p.weight);
-      if (what == "height" && lvl != "average")
-        return lvl == "max" ? std::max(0.0, 2 * p.height - 1) : std::max(0.0, 1 - 2 * p.height);
+      if (what == "height" && lvl != "average") return lvl == "max" ? std::max(0.0, 2 * p.height - 1)
+                                                                     : std::max(0.0, 1 - 2 * p.height);
     }
   }
   if (t == "idealproportions") return std::max(0.0, 2 * p.proportions - 1);
@@ -254,8 +249,8 @@ HumanLibrary HumanLibrary::load(const std::filesystem::path& dir, const ExecCont
       if (dash == std::string_view::npos) dash = name.size();
       const auto it = std::find(kFactorNames.begin(), kFactorNames.end(), name.substr(pos, dash - pos));
       if (it == kFactorNames.end())
-        throw Error(Status(ErrorCode::kParse,
-                           t.name + ": unknown macro factor '" + std::string(name.substr(pos, dash - pos)) + "'"));
+        throw Error(Status(ErrorCode::kParse, t.name + ": unknown macro factor '" +
+                                                  std::string(name.substr(pos, dash - pos)) + "'"));
       f.push_back(static_cast<std::uint8_t>(it - kFactorNames.begin()));
       pos = dash + 1;
     }
@@ -357,6 +352,7 @@ void HumanLibrary::build(const MacroParams& p, std::span<Vec3f> out) const {
   if (skin_vertices_ > 0)
     for (Vec3f& q : out) q.y() -= floor_y;
 }
+
 
 // --------------------------------------------------------- reference body
 
@@ -480,15 +476,12 @@ ReferenceBody make_reference_body(const HumanLibrary& lib, std::span<const Vec3f
     check(add_feature_curve(rb, next_id++, name, path, true));
     loops[name] = l;
   };
-  const char* torso[][2] = {{"neck-circ", "neck"},
-                            {"bust-circ", "bust"},
-                            {"underbust-circ", "underbust"},
-                            {"waist-circ", "waist"},
-                            {"hips-circ", "hip"}};
+  const char* torso[][2] = {{"neck-circ", "neck"},           {"bust-circ", "bust"}, {"underbust-circ", "underbust"},
+                            {"waist-circ", "waist"},         {"hips-circ", "hip"}};
   for (auto& t : torso) add_loop(t[1], loop_of(t[0]));
   const auto mirror = mirror_map(p);
-  const char* limbs[][2] = {{"thigh-circ", "thigh"}, {"knee-circ", "knee"},         {"calf-circ", "calf"},
-                            {"ankle-circ", "ankle"}, {"upperarm-circ", "upperarm"}, {"wrist-circ", "wrist"}};
+  const char* limbs[][2] = {{"thigh-circ", "thigh"},       {"knee-circ", "knee"},   {"calf-circ", "calf"},
+                            {"ankle-circ", "ankle"},       {"upperarm-circ", "upperarm"}, {"wrist-circ", "wrist"}};
   for (auto& t : limbs) {
     auto l = loop_of(t[0]);
     const bool left = centroid(l, p).x() > 0;  // +x is the body's left (y up, z front)
@@ -551,8 +544,8 @@ ReferenceBody make_reference_body(const HumanLibrary& lib, std::span<const Vec3f
   }
 
   // Side lines: the coronal section through the waist centroid.
-  const double y_top =
-      centroid(loops["bust"], p).y() + 0.5 * (centroid(loops["bust"], p).y() - centroid(loops["underbust"], p).y());
+  const double y_top = centroid(loops["bust"], p).y() + 0.5 * (centroid(loops["bust"], p).y() -
+                                                               centroid(loops["underbust"], p).y());
   const double y_bot = centroid(loops["hip"], p).y();
   auto cor = plane_section(m, rb.skin, Vec3d(0, 0, 1), waist_c.z(), p);
   for (int sgn : {+1, -1}) {
@@ -611,7 +604,8 @@ ReferenceBody make_reference_body(const HumanLibrary& lib, std::span<const Vec3f
       if (side && (c.y() > y_top || c.y() < y_bot - 1e-9)) continue;  // the side lines do not reach this girth
       SurfaceLocation where;
       if (!loop_crossing(m, l, p, line.n, line.d, line.accept, where)) continue;
-      check(add_feature_point(rb, pid++, std::string(g) + "_x_" + line.name, where, gid, rb.find_curve(line.name)->id));
+      check(add_feature_point(rb, pid++, std::string(g) + "_x_" + line.name, where, gid,
+                              rb.find_curve(line.name)->id));
     }
   }
   return rb;
@@ -642,9 +636,9 @@ std::vector<std::pair<std::string, std::string>> MakeHumanSource::parameters(std
     std::snprintf(b, sizeof b, "%.4f", lib_->stature(p));  // 0.1 mm
     out.emplace_back("sampled_stature_m", b);
   }
-  for (const auto& [name, v] :
-       {std::pair{"gender", p.gender}, std::pair{"age", p.age}, std::pair{"muscle", p.muscle},
-        std::pair{"weight", p.weight}, std::pair{"height", p.height}, std::pair{"proportions", p.proportions}}) {
+  for (const auto& [name, v] : {std::pair{"gender", p.gender}, std::pair{"age", p.age}, std::pair{"muscle", p.muscle},
+                                std::pair{"weight", p.weight}, std::pair{"height", p.height},
+                                std::pair{"proportions", p.proportions}}) {
     char b[32];
     std::snprintf(b, sizeof b, "%.4f", v);
     out.emplace_back(std::string("sampled_") + name + "_slider", b);

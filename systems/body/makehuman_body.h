@@ -5,12 +5,6 @@
 // Reads: the MakeHuman folder (once, at load). Writes: position arrays.
 #pragma once
 
-#include <atelier/engine/exec_context.h>
-#include <atelier/engine/math.h>
-#include <atelier/io/makehuman/makehuman.h>
-#include <atelier/systems/body/body_set.h>
-#include <atelier/systems/body/reference_body.h>
-
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -18,6 +12,12 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <atelier/engine/exec_context.h>
+#include <atelier/engine/math.h>
+#include <atelier/io/makehuman/makehuman.h>
+#include <atelier/systems/body/body_set.h>
+#include <atelier/systems/body/reference_body.h>
 
 namespace atelier::makehuman {
 
@@ -72,9 +72,7 @@ class HumanLibrary {
   [[nodiscard]] static HumanLibrary load(const std::filesystem::path& dir, const ExecContext& ctx = {});
 
   [[nodiscard]] const BaseMesh& base() const noexcept { return base_; }
-  [[nodiscard]] std::uint32_t vertex_count() const noexcept {
-    return static_cast<std::uint32_t>(base_.positions.size());
-  }
+  [[nodiscard]] std::uint32_t vertex_count() const noexcept { return static_cast<std::uint32_t>(base_.positions.size()); }
   [[nodiscard]] const std::vector<Target>& macro_targets() const noexcept { return macro_; }
   [[nodiscard]] const std::vector<Target>& measure_targets() const noexcept { return measure_; }
   [[nodiscard]] const Target* find_target(std::string_view name) const noexcept;
@@ -127,6 +125,7 @@ class HumanLibrary {
   std::vector<std::uint32_t> stature_vertices_;
   std::vector<double> stature_base_y_;
   std::vector<std::vector<std::pair<std::uint32_t, float>>> stature_dy_;
+  void stature_y(const MacroParams& p, std::vector<double>& y) const;
   // build(): each target (macro_ then measure_) as the 16-float chunks of
   // the interleaved coordinates it moves (chunk index, lane mask, values),
   // added with AVX-512 where the machine has it (the same bits as the
@@ -138,7 +137,6 @@ class HumanLibrary {
   };
   std::vector<ChunkTarget> chunks_;
   [[nodiscard]] static ChunkTarget chunk_target(const Target& t);
-  void stature_y(const MacroParams& p, std::vector<double>& y) const;
 };
 
 /// Adult `index` for a seed, drawn alone: the sliders of sample_adult(seed,

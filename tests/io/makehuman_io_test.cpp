@@ -1,13 +1,13 @@
 // The MakeHuman readers (io/makehuman) on bad input, issue 27: numbers out
 // of range, byte-order marks, files with nothing in them, whitespace-only
 // lines in a .mhclo `verts` section, JSON of the wrong shape.
-#include <atelier/io/makehuman/makehuman.h>
-#include <atelier/io/makehuman/mhclo.h>
 #include <gtest/gtest.h>
 
 #include <bit>
 #include <charconv>
 
+#include <atelier/io/makehuman/makehuman.h>
+#include <atelier/io/makehuman/mhclo.h>
 #include "io_test_support.h"
 
 using namespace atelier;
@@ -44,7 +44,7 @@ TEST(MakeHumanIo, MhcloNumbersAreCheckedWhole) {
     expect_error([&] { (void)parse_mhclo("verts 0\n" + line + "\n", "b.mhclo", 100); }, ErrorCode::kParse, frags);
   };
   bad("1 2 3 0.2 0.3 0.5 1e400 0 0", {"b.mhclo:2", "'1e400'", "out of the range"});
-  bad("1e300 2 3 0.2 0.3 0.5 0 0 0", {"b.mhclo:2", "not a vertex index"});  // was cast to long long: UB
+  bad("1e300 2 3 0.2 0.3 0.5 0 0 0", {"b.mhclo:2", "not a vertex index"});   // was cast to long long: UB
   bad("1.5", {"b.mhclo:2", "not a vertex index"});                          // was truncated to 1
   bad("1 2 3 0.2 0.3 nan 0 0 0", {"b.mhclo:2", "non-finite"});
   bad("1 2 300 0.2 0.3 0.5 0 0 0", {"b.mhclo:2", "vertex index 300 out of range"});
