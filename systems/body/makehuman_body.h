@@ -126,6 +126,17 @@ class HumanLibrary {
   std::vector<double> stature_base_y_;
   std::vector<std::vector<std::pair<std::uint32_t, float>>> stature_dy_;
   void stature_y(const MacroParams& p, std::vector<double>& y) const;
+  // build(): each target (macro_ then measure_) as the 16-float chunks of
+  // the interleaved coordinates it moves (chunk index, lane mask, values),
+  // added with AVX-512 where the machine has it (the same bits as the
+  // sparse loop); empty for a target that lists a vertex twice.
+  struct ChunkTarget {
+    std::vector<std::uint32_t> chunk;
+    std::vector<std::uint16_t> mask;
+    std::vector<float> value;  // 16 per chunk
+  };
+  std::vector<ChunkTarget> chunks_;
+  [[nodiscard]] static ChunkTarget chunk_target(const Target& t);
 };
 
 /// Adult `index` for a seed, drawn alone: the sliders of sample_adult(seed,

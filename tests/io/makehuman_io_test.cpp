@@ -3,6 +3,9 @@
 // lines in a .mhclo `verts` section, JSON of the wrong shape.
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <charconv>
+
 #include <atelier/io/makehuman/makehuman.h>
 #include <atelier/io/makehuman/mhclo.h>
 #include "io_test_support.h"
@@ -112,4 +115,45 @@ TEST(MakeHumanIo, JsonNumbersBeyondADoubleAreRefusedNamingTheFile) {
           << e.what();
     }
   }
+}
+
+TEST(MakeHumanIo, TargetNumbersAreExactlyThoseOfFromChars) {
+  // The targets' reader parses short decimals by itself (issue 26: start-up
+  // time); every value must be the float std::from_chars gives, bit for bit,
+  // including the forms that fall back to it (exponents, long mantissas,
+  // -0, a trailing point, leading zeros).
+  std::vector<std::string> words = {".026",         "-.166",       "0",        "-0",       "-.000",
+                                    "5.",           "007.50",      "16777216", "16777217", "16777215",
+                                    "123456789",    ".1234567891", "1e-3",     "-2.5E2",   "0.0000000001",
+                                    "3.4028235e38", "0.1",         "0.3",      "-0.7",     "1.0000001"};
+  std::uint64_t s = 0x9e3779b97f4a7c15ull;
+  auto next = [&] {
+    s ^= s << 13, s ^= s >> 7, s ^= s << 17;
+    return s;
+  };
+  for (int k = 0; k < 20000; ++k) {  // random decimals of 1-9 digits, 0-10 of them after the point
+    const int digits = 1 + static_cast<int>(next() % 9), frac = static_cast<int>(next() % 11);
+    std::string w = next() % 2 ? "-" : "";
+    std::string d;
+    for (int i = 0; i < digits; ++i) d += static_cast<char>('0' + next() % 10);
+    if (frac > 0 && frac <= digits)
+      d.insert(d.size() - static_cast<std::size_t>(frac), ".");
+    else if (frac > digits)
+      d = "." + std::string(static_cast<std::size_t>(frac - digits), '0') + d;
+    words.push_back(w + d);
+  }
+  std::string text;
+  for (std::size_t i = 0; i < words.size(); ++i) text += "1 " + words[i] + " 0 " + words[i] + "\r\n";
+  const Target t = parse_target(text, "r.target", 10);
+  ASSERT_EQ(t.delta.size(), words.size());
+  for (std::size_t i = 0; i < words.size(); ++i) {
+    float want = 0;
+    const auto [q, ec] = std::from_chars(words[i].data(), words[i].data() + words[i].size(), want);
+    ASSERT_EQ(ec, std::errc{}) << words[i];
+    ASSERT_EQ(q, words[i].data() + words[i].size()) << words[i];
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(t.delta[i].x()), std::bit_cast<std::uint32_t>(want)) << words[i];
+    EXPECT_EQ(std::bit_cast<std::uint32_t>(t.delta[i].z()), std::bit_cast<std::uint32_t>(want)) << words[i];
+  }
+  for (const char* bad : {"1 - 0 0\n", "1 . 0 0\n", "1 1.2.3 0 0\n", "1 0x1 0 0\n", "1 +1 0 0\n"})
+    expect_error([&] { (void)parse_target(bad, "b.target", 10); }, ErrorCode::kParse, {"b.target:1"});
 }
