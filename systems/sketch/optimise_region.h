@@ -8,15 +8,23 @@
 //
 //  1. Rounds (options.passes, Botsch-Kobbelt): split every edge longer than
 //     high L at its midpoint, collapse every edge shorter than low L (when no
-//     edge of the result would be longer than high L and no triangle turns
-//     over), swap edges towards valence 6 (4 on a border), relax.
+//     edge of the result would be longer than high L, 2 low L in the first
+//     round, in every round but the last on a region with a fold, and no
+//     triangle turns over), swap edges towards valence 6 (4 on
+//     a border), relax (after the first round only the nodes whose ring
+//     changed). Projection: from each node's last closest triangle, a walk
+//     over the region on entry; a BVH query where the walk ends farther than
+//     0.02 L, and for every projection when the region on entry has a fold
+//     (neighbouring triangles turned by more than 60 degrees).
 //  2. Repair (beyond the paper, which states no bound): a local queue of the
 //     edges still outside [low L, high L]; each is swapped, split or
 //     collapsed, or its free ends relaxed, and the edges an operator touched
 //     re-enter the queue (each edge at most once in it). Never a pass over
 //     the whole model; budget options.repair_budget operations per region
 //     edge. A stalled repair (edges left out, nothing applies) is followed
-//     by a relaxation of the region and the repair again, up to three times.
+//     by a relaxation of the region and the repair again, up to three times;
+//     edges still out then get two more rounds (the first with the wide
+//     collapses) and the repair again.
 //
 // Region: the faces given (triangles), and every face an operator creates
 // from them. An edge is editable when every face on it is a region face.
@@ -65,7 +73,9 @@ struct RegionOptimiseOptions {
 struct RegionOptimiseReport {
   std::size_t splits = 0, collapses = 0, swaps = 0, relaxed = 0;
   EdgeLengthStats before, after;
-  double max_deviation = 0;      // largest distance of a region node to the region on entry
+  // Largest distance of a region node to the region on entry (an upper
+  // bound of it where the walk projects: its local minimum).
+  double max_deviation = 0;
   std::size_t region_faces = 0;  // after
 };
 
