@@ -376,3 +376,108 @@ TEST(HelperTruth, MakeHumanHelpersOnAdults) {
       for (int s = 1; s < 3; ++s) EXPECT_LT(std::abs(v(f, s) - v(f, 0)), 0.002) << helpers[h].name << " " << s;
   }
 }
+
+TEST(HelperTruth, NearbySkinDoesNotDetermineTheHelpers) {
+  // What following the nearby skin can reach. A helper vertex moved by a
+  // fixed linear combination of the displacements of its K nearest skin
+  // vertices (detail templates, .mhclo and closest-point bindings all are,
+  // to first order in the displacement), with the least-squares weights:
+  //  * across targets: weights fitted on MakeHuman's even targets (each at
+  //    weight 1 on the default body), tested on the odd ones. No such law
+  //    follows an unseen target within 2 mm (tights) or 5 mm (skirt): the
+  //    targets slide the helpers along themselves, each its own way
+  //    (docs/performance.md, issue 26);
+  //  * across adults: weights fitted on 200 adults (sample_adults(200, 7)),
+  //    tested on the 100 of the test above (seed 2024). With K = 64 this
+  //    regression reaches 0.8 / 1.4 mm: adults are a family of a few
+  //    sliders, so the helpers are predictable from the body once fitted to
+  //    MakeHuman's own helpers, which a garment never has.
+  if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "long test (about 5 s)";
+  using namespace makehuman;
+  const fs::path dir = fs::path(ATELIER_SHARED_DATA) / "makehuman";
+  if (!fs::exists(dir / "base.obj")) GTEST_SKIP() << "MakeHuman data not found";
+  const HumanLibrary lib = HumanLibrary::load(dir);
+  const std::uint32_t nv = lib.vertex_count(), nskin = lib.skin_vertex_count();
+  std::vector<Vec3f> H0(nv);
+  lib.build(MacroParams{}, H0);
+  // Displacements from the default body, body-major (nb x nv).
+  auto of_adults = [&](const std::vector<MacroParams>& ps) {
+    std::vector<Vec3f> d(ps.size() * nv);
+    par::for_each_n({}, ps.size(), [&](std::size_t b) {
+      std::span<Vec3f> out(d.data() + b * nv, nv);
+      lib.build(ps[b], out);
+      for (std::uint32_t v = 0; v < nv; ++v) out[v] = kMakeHumanToMetres * (out[v] - H0[v]);
+    });
+    return d;
+  };
+  auto of_targets = [&](int parity) {
+    std::vector<const Target*> all;
+    for (const auto& t : lib.macro_targets()) all.push_back(&t);
+    for (const auto& t : lib.measure_targets()) all.push_back(&t);
+    std::vector<const Target*> half;
+    for (std::size_t t = static_cast<std::size_t>(parity); t < all.size(); t += 2) half.push_back(all[t]);
+    std::vector<Vec3f> d(half.size() * nv, Vec3f::Zero());
+    for (std::size_t t = 0; t < half.size(); ++t)
+      for (std::size_t k = 0; k < half[t]->index.size(); ++k)
+        d[t * nv + half[t]->index[k]] = kMakeHumanToMetres * half[t]->delta[k];
+    return d;
+  };
+  struct Split {
+    const char* name;
+    std::vector<Vec3f> train, test;
+    std::vector<std::size_t> ks;
+  };
+  Split splits[] = {{"targets", of_targets(0), of_targets(1), {3, 8, 24}},
+                    {"adults", of_adults(sample_adults(200, 7)), of_adults(sample_adults(100, 2024)), {8, 64}}};
+  for (const Split& sp : splits) {
+    const std::size_t ntr = sp.train.size() / nv, nte = sp.test.size() / nv;
+    for (const char* hname : {"helper-tights", "helper-skirt"}) {
+      const bool tights = std::string(hname) == "helper-tights";
+      const auto* grp = lib.base().group(hname);
+      ASSERT_NE(grp, nullptr);
+      std::vector<std::uint32_t> verts(grp->face_nodes.begin(), grp->face_nodes.end());
+      std::sort(verts.begin(), verts.end());
+      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      for (const std::size_t K : sp.ks) {
+        double e_train = 0, e_test = 0;
+        std::size_t counted = 0;
+        for (std::size_t i = 0; i < verts.size(); i += 3, ++counted) {
+          std::vector<std::pair<float, std::uint32_t>> near;
+          for (std::uint32_t v = 0; v < nskin; ++v) near.push_back({(H0[v] - H0[verts[i]]).squaredNorm(), v});
+          std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(K), near.end());
+          auto rows = [&](const std::vector<Vec3f>& D, std::size_t nb, Eigen::MatrixXd& A, Eigen::VectorXd& y) {
+            A.resize(3 * nb, K);
+            y.resize(3 * nb);
+            for (std::size_t b = 0; b < nb; ++b)
+              for (int ax = 0; ax < 3; ++ax) {
+                for (std::size_t j = 0; j < K; ++j) A(3 * b + ax, j) = D[b * nv + near[j].second][ax];
+                y(3 * b + ax) = D[b * nv + verts[i]][ax];
+              }
+          };
+          Eigen::MatrixXd A, At;
+          Eigen::VectorXd y, yt;
+          rows(sp.train, ntr, A, y);
+          rows(sp.test, nte, At, yt);
+          const Eigen::VectorXd w = A.colPivHouseholderQr().solve(y);
+          auto mean_norm = [](const Eigen::VectorXd& r) {
+            double s = 0;
+            for (Eigen::Index b = 0; b < r.size() / 3; ++b) s += r.segment<3>(3 * b).norm();
+            return s / static_cast<double>(r.size() / 3);
+          };
+          e_train += mean_norm(A * w - y);
+          e_test += mean_norm(At * w - yt);
+        }
+        e_train /= static_cast<double>(counted);
+        e_test /= static_cast<double>(counted);
+        std::printf("%s, fitted across %s (%zu, tested on %zu), K = %zu: mean error %.2f mm fitted, %.2f mm tested\n",
+                    hname, sp.name, ntr, nte, K, 1000 * e_train, 1000 * e_test);
+        RecordProperty(std::string(hname) + "_" + sp.name + "_K" + std::to_string(K) + "_test_mm",
+                       std::to_string(1000 * e_test));
+        if (std::string(sp.name) == "targets")
+          EXPECT_GT(e_test, tights ? 0.002 : 0.005) << hname << " K " << K;
+        else if (K == 64)  // a regression on the family beats every regeneration of the helpers
+          EXPECT_LT(e_test, tights ? 0.0015 : 0.003) << hname;
+      }
+    }
+  }
+}
