@@ -121,6 +121,9 @@ CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt) {
   c->add_option("--z-depth", opt.z_depth,
                 "the garment's layer order in an outfit, stored in the .atd (smaller is nearer the skin; a .mhclo's "
                 "z_depth by default): regen with several templates that all have one layers them by it");
+  c->add_flag("--scaled-frames", opt.scaled_frames,
+              "--garment: frames that scale with the skin (offsets grow with the local girth; closer to MakeHuman's "
+              "helpers, more clearance change: docs/performance.md), stored in the .atd");
   c->add_option("--out", opt.out, "output folder");
   return c;
 }
@@ -151,15 +154,17 @@ void encode_garment_files(const Common& common, const EncodeOptions& opt, const 
     if (b.has_z_depth) z_depth = b.z_depth;
   }
   Expected<GarmentTemplate> t = Status(ErrorCode::kInternal, "not encoded");
+  GarmentEncodeOptions encode;
+  encode.detail.scaled_frames = opt.scaled_frames;
   if (ext == ".obj") {
     // One library call: read, mapped to metres and Y up, encoded.
-    t = encode_garment_file(ref, file, {.frame = body_frame(opt.scale, opt.up)}, ctx);
+    t = encode_garment_file(ref, file, {.frame = body_frame(opt.scale, opt.up), .encode = encode}, ctx);
   } else {
     if (!g) throw Error(g.status());
     for (Vec3d& p : g->positions) p = round_to_float(p);  // float, as the .obj beside the template stores it
     auto family = GarmentFamily::of(ref);
     if (!family) throw Error(family.status());
-    t = encode_garment(*family, file.stem().string(), std::move(*g), {}, ctx);
+    t = encode_garment(*family, file.stem().string(), std::move(*g), encode, ctx);
     if (!t) t = Status(t.status().code(), file.string() + ": " + t.status().message());
   }
   if (!t) throw Error(t.status());

@@ -75,6 +75,7 @@ struct EncodeOptions {
   std::string up = "y";                     // garment (and body file) up axis: y | z
   std::filesystem::path features;           // feature-curve JSON for a body OBJ (profile templates)
   std::optional<int> z_depth;               // the garment's layer order (a .mhclo's own by default)
+  bool scaled_frames = false;               // detail template frames that scale with the skin (issue 26)
 };
 CLI::App* add_encode_subcommand(CLI::App& app, EncodeOptions& opt);
 int run_encode(const Common& common, const EncodeOptions& opt, Log& log);

@@ -172,7 +172,7 @@ Status decode_detail(const DetailEncoding& enc, const BodyPolygons& body, std::s
   if (bp.size() != body.node_count || out.size() != enc.vertex_count())
     return {ErrorCode::kMismatch, "decode_detail: position or output array has the wrong size"};
   PolygonFrames fr;
-  compute_frames(body, bp, fr, ctx, enc.reference_corners);
+  compute_frames(body, bp, fr, ctx, enc.reference_corners, enc.scaled_frames);
   decode_detail(enc, fr, out, ctx);
   return {};
 }

@@ -192,8 +192,8 @@ __attribute__((target("avx2"), always_inline)) inline void cross_x8(__m256 a0, _
 
 __attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b, const float* pos, std::size_t lanes,
                                                           std::size_t lane, std::size_t f,
-                                                          std::span<const Eigen::Vector2f> ref, float* out,
-                                                          std::size_t row_stride) {
+                                                          std::span<const Eigen::Vector2f> ref, bool scaled,
+                                                          float* out, std::size_t row_stride) {
   const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
   const std::size_t n = e - s;
   __m256 O[3];
@@ -253,8 +253,10 @@ __attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b,
   y2 = _mm256_mul_ps(y2, inv_yn);
   __m256 z[3];
   cross_x8(x0, x1, x2, y0, y1, y2, z);
+  __m256 sim = one;  // the similarity scale (scaled frames), else 1
   if (!ref.empty()) {
     __m256 sdot = zero, scross = zero;
+    float rr = 0;
     for (std::size_t k = 0; k < n; ++k) {
       const __m256 q0 = _mm256_sub_ps(P[3 * k], c0), q1 = _mm256_sub_ps(P[3 * k + 1], c1),
                    q2 = _mm256_sub_ps(P[3 * k + 2], c2);
@@ -262,6 +264,7 @@ __attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b,
       const __m256 r1 = _mm256_set1_ps(ref[s + k].x()), r2 = _mm256_set1_ps(ref[s + k].y());
       sdot = _mm256_fmadd_ps(r2, d2, _mm256_fmadd_ps(r1, d1, sdot));
       scross = _mm256_fnmadd_ps(r2, d1, _mm256_fmadd_ps(r1, d2, scross));
+      rr += ref[s + k].squaredNorm();
     }
     const __m256 r = _mm256_sqrt_ps(_mm256_fmadd_ps(scross, scross, _mm256_mul_ps(sdot, sdot)));
     const __m256 turn = _mm256_cmp_ps(r, zero, _CMP_GT_OQ);
@@ -275,9 +278,16 @@ __attribute__((target("avx2,fma"))) void polygon_frame_x8(const BodyPolygons& b,
     y1 = _mm256_blendv_ps(y1, t1, turn);
     y2 = _mm256_blendv_ps(y2, t2, turn);
     for (int i = 0; i < 3; ++i) z[i] = _mm256_blendv_ps(z[i], tz[i], turn);
+    if (scaled && rr > 0) sim = _mm256_blendv_ps(one, _mm256_mul_ps(r, _mm256_set1_ps(1.0f / rr)), turn);
   }
+  // Times 1 without scaled frames: the same bits as before.
+  const __m256 sx0 = _mm256_mul_ps(x0, sim), sx1 = _mm256_mul_ps(x1, sim), sx2 = _mm256_mul_ps(x2, sim);
+  y0 = _mm256_mul_ps(y0, sim);
+  y1 = _mm256_mul_ps(y1, sim);
+  y2 = _mm256_mul_ps(y2, sim);
+  for (int i = 0; i < 3; ++i) z[i] = _mm256_mul_ps(z[i], sim);
   const __m256 rows[12] = {_mm256_add_ps(O[0], c0),  _mm256_add_ps(O[1], c1),  _mm256_add_ps(O[2], c2),
-                           _mm256_and_ps(x0, ok1),   _mm256_and_ps(x1, ok1),   _mm256_and_ps(x2, ok1),
+                           _mm256_and_ps(sx0, ok1),  _mm256_and_ps(sx1, ok1),  _mm256_and_ps(sx2, ok1),
                            _mm256_and_ps(y0, ok2),   _mm256_and_ps(y1, ok2),   _mm256_and_ps(y2, ok2),
                            _mm256_and_ps(z[0], ok2), _mm256_and_ps(z[1], ok2), _mm256_and_ps(z[2], ok2)};
   for (std::size_t j = 0; j < 12; ++j) _mm256_store_ps(out + j * row_stride, rows[j]);
@@ -290,7 +300,8 @@ DetailDecoder::DetailDecoder(const DetailEncoding& enc, const ExecContext& ctx)
       body_node_count_(enc.body_node_count),
       topology_hash_(enc.topology_hash),
       vertex_count_(static_cast<std::uint32_t>(enc.vertex_count())),
-      reference_corners_(enc.reference_corners) {
+      reference_corners_(enc.reference_corners),
+      scaled_frames_(enc.scaled_frames) {
   const std::size_t nv = enc.vertex_count(), ne = enc.entries(), np = enc.polygon_count;
   const std::size_t tiles = (nv + kTile - 1) / kTile;
   vertex_.resize(ne);
@@ -446,13 +457,13 @@ Status decode_detail_batch(const DetailDecoder& dec, const BodyPolygons& body, c
       for (std::size_t g = 0; g < groups; ++g) {
         float* f = frame_of(frames, g, p);
         if (fast && small) {
-          polygon_frame_x8(body, tpos, lanes, g * kLanes, p, dec.reference_corners_, f, row);
+          polygon_frame_x8(body, tpos, lanes, g * kLanes, p, dec.reference_corners_, dec.scaled_frames_, f, row);
           continue;
         }
         for (std::size_t l = 0; l < kLanes; ++l) {
           const float* cl = col[g * kLanes + l];
           const SetPos pos{cl, cl + stride, cl + 2 * stride};
-          const FrameD fr = polygon_frame(body, pos, p, dec.reference_corners_);
+          const FrameD fr = polygon_frame(body, pos, p, dec.reference_corners_, dec.scaled_frames_);
           const Vec3d* v[4] = {&fr.c, &fr.x, &fr.y, &fr.z};
           for (std::size_t j = 0; j < 4; ++j)
             for (std::size_t k = 0; k < 3; ++k)

@@ -36,6 +36,8 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
       s << "encode_detail: garment vertex " << v << " is not finite";
       return Status(ErrorCode::kDegenerate, s.str());
     }
+  if (params.scaled_frames && !params.fitted_frames)
+    return Status(ErrorCode::kInvalidArgument, "encode_detail: scaled frames need fitted frames");
   std::vector<FrameD> frames(np);
   par::for_each_n(ctx, np, [&](std::size_t f) { frames[f] = polygon_frame(body, SpanPos{bp}, f); });
   std::vector<Vec3d> centroids(np);
@@ -70,6 +72,7 @@ Expected<DetailEncoding> encode_detail(const BodyPolygons& body, std::span<const
       }
     }
   }
+  enc.scaled_frames = params.scaled_frames;
   enc.polygon_count = static_cast<std::uint32_t>(np);
   enc.body_node_count = body.node_count;
   enc.topology_hash = body.topology_hash;

@@ -4,7 +4,10 @@
 // 1 if it has one, then its z_depth as an int32) and ends in the CRC-32 of
 // the native formats (io/checksum.h); it is written through an AtomicFile.
 // Version 2 files (no layer order) and version 1 files (no layer order, an
-// FNV-1a sum) are still read.
+// FNV-1a sum) are still read. Version 4 adds one byte of frame flags after
+// the layer order (bit 0: scaled frames, DetailParams::scaled_frames); it is
+// written only for an encoding with scaled frames, so files of encodings
+// without them stay version 3, readable by older builds.
 #include <atelier/systems/garment/detail_template.h>
 
 #include <array>
@@ -24,7 +27,7 @@ using namespace detail_internal;
 namespace {
 
 constexpr char kMagic[8] = {'A', 'T', 'L', 'D', 'E', 'T', 'L', '1'};
-constexpr std::uint32_t kVersion = 3;  // 2: no z_depth, 1: also an FNV-1a checksum (both read only)
+constexpr std::uint32_t kVersion = 4;  // 3: no frame flags, 2: no z_depth, 1: also an FNV-1a checksum
 
 template <class T>
 void put(std::string& s, const T& v) {
@@ -39,7 +42,7 @@ void put_vec(std::string& s, const std::vector<T>& v) {
 
 void write_detail(const DetailEncoding& enc, const std::filesystem::path& path) {
   std::string s(kMagic, 8);
-  put(s, kVersion);
+  put(s, enc.scaled_frames ? kVersion : std::uint32_t{3});
   put(s, enc.polygon_count);
   put(s, enc.body_node_count);
   put(s, enc.topology_hash);
@@ -55,6 +58,7 @@ void write_detail(const DetailEncoding& enc, const std::filesystem::path& path) 
   put_vec(s, enc.reference_corners);
   put(s, static_cast<std::uint8_t>(enc.z_depth.has_value()));
   put(s, enc.z_depth.value_or(0));
+  if (enc.scaled_frames) put(s, std::uint8_t{1});
   put(s, crc32(s));
   write_atomically(path, [&](AtomicFile& f) { f.write(s); });
 }
@@ -85,7 +89,7 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
   get(&version, 4, "version");
   if (version < 1 || version > kVersion) {
     pos -= 4;
-    fail("unsupported version " + std::to_string(version) + " (this atelier reads versions 1 to 3)");
+    fail("unsupported version " + std::to_string(version) + " (this atelier reads versions 1 to 4)");
   }
   DetailEncoding e;
   std::uint64_t nv, ne, nc;
@@ -95,7 +99,8 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
   get(&nv, 8, "header");
   get(&ne, 8, "header");
   get(&nc, 8, "header");
-  const std::size_t sum_bytes = (version == 1 ? 8 : 4) + (version >= 3 ? 5 : 0);  // with the layer order
+  // With the layer order and the frame flags.
+  const std::size_t sum_bytes = (version == 1 ? 8 : 4) + (version >= 3 ? 5 : 0) + (version >= 4 ? 1 : 0);
   // Sizes are checked against the file before anything is allocated.
   if (nv >= s.size() || ne > s.size() || nc > s.size() || s.size() - pos < (nv + 1) * 4 + ne * 20 + nc * 8 + sum_bytes)
     fail("truncated file (the sizes in the header exceed the file)");
@@ -117,6 +122,9 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
     get(&has_z, 1, "layer order");
     get(&z, 4, "layer order");
   }
+  const std::size_t flags_at = pos;
+  std::uint8_t flags = 0;
+  if (version >= 4) get(&flags, 1, "frame flags");
   const std::size_t body_end = pos;
   bool ok = false;
   if (version == 1) {
@@ -138,6 +146,15 @@ DetailEncoding read_detail_from_bytes(std::string_view s, std::string_view displ
     fail("bad layer-order flag " + std::to_string(has_z) + " (0 or 1)");
   }
   if (has_z) e.z_depth = z;
+  if (flags > 1) {
+    pos = flags_at;
+    fail("bad frame flags " + std::to_string(flags) + " (0 or 1)");
+  }
+  e.scaled_frames = flags == 1;
+  if (e.scaled_frames && nc == 0) {
+    pos = flags_at;
+    fail("scaled frames without reference corners");
+  }
   pos = row_at;
   if (e.row.front() != 0) fail("row offsets do not start at 0");
   pos = row_at + nv * 4;

@@ -46,7 +46,7 @@ BodyPolygons BodyPolygons::from_model(const Model& body, SurfaceIdx surface) {
 
 
 void compute_frames(const BodyPolygons& b, std::span<const Vec3d> p, PolygonFrames& out, const ExecContext& ctx,
-                    std::span<const Eigen::Vector2f> ref) {
+                    std::span<const Eigen::Vector2f> ref, bool scaled) {
   const std::size_t n = b.size();
   out.centroid.resize(n);
   out.x.resize(n);
@@ -55,7 +55,7 @@ void compute_frames(const BodyPolygons& b, std::span<const Vec3d> p, PolygonFram
   out.degenerate.resize(n);
   const SpanPos pos{p};
   par::for_each_n(ctx, n, [&](std::size_t f) {
-    const FrameD fr = polygon_frame(b, pos, f, ref);
+    const FrameD fr = polygon_frame(b, pos, f, ref, scaled);
     out.centroid[f] = fr.c.cast<float>();
     out.x[f] = fr.x.cast<float>();
     out.y[f] = fr.y.cast<float>();

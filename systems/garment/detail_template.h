@@ -68,8 +68,14 @@ struct PolygonFrames {
 /// numbered first, so the blend of eq. (12) maps a mirror-symmetric body and
 /// garment to a mirror-symmetric result (seed 001 Fig. 17), which anchoring
 /// at p_1 does not when polygons shear.
+///
+/// With `scaled` (and reference corners), the three axes are also scaled by
+/// the polygon's best-fit similarity scale s = |sum r_k . R d_k| / sum |r_k|^2
+/// (the Procrustes scale of the corners d_k against their reference shape
+/// r_k): see DetailParams::scaled_frames. s = 1 on the reference body.
 void compute_frames(const BodyPolygons& body, std::span<const Vec3d> positions, PolygonFrames& out,
-                    const ExecContext& ctx = {}, std::span<const Eigen::Vector2f> reference_corners = {});
+                    const ExecContext& ctx = {}, std::span<const Eigen::Vector2f> reference_corners = {},
+                    bool scaled = false);
 
 struct DetailParams {
   /// p-polygons per vertex; 0 means round(N_H / 100) (the paper's choice), at least 1.
@@ -87,6 +93,16 @@ struct DetailParams {
   /// vertices whose sets differ do not jump apart) and a mirror pair split by
   /// the cut-off cannot break symmetry. false gives eq. (10) as printed.
   bool tapered_weights = true;
+  /// Frames that scale with the skin (issue 26): each polygon's axes are
+  /// multiplied by its similarity scale against the reference body (see
+  /// compute_frames), so an offset from a p-polygon grows with the local
+  /// girth, the normal offset included. Eq. (11) blends centroids p~_c,
+  /// which do scale, with offsets that the paper's unit frames do not: on a
+  /// uniformly scaled body q~ = s c + (q - c) (c the weighted centroid of
+  /// the p-polygons, centimetres inside a limb) instead of s q. Scaled
+  /// frames give s q exactly. Needs fitted_frames. Off by default: it
+  /// changes every garment's result (docs/performance.md, issue 26).
+  bool scaled_frames = false;
 };
 
 /// The encoding: a CSR sparse matrix with rows = garment vertices.
@@ -104,6 +120,9 @@ struct DetailEncoding {
   /// Corners of every body polygon in its reference frame (fitted frames);
   /// empty in eq. (8) mode.
   std::vector<Eigen::Vector2f> reference_corners;
+  /// Frames scaled by each polygon's similarity scale (DetailParams::
+  /// scaled_frames); stored in the .atd from version 4 on.
+  bool scaled_frames = false;
   /// The garment's layer order when it has one (MakeHuman's .mhclo z_depth:
   /// smaller is nearer the skin); stored in the .atd from version 3 on.
   std::optional<std::int32_t> z_depth;
@@ -174,6 +193,7 @@ class DetailDecoder {
   std::uint64_t topology_hash_ = 0;
   std::uint32_t vertex_count_ = 0;
   std::vector<Eigen::Vector2f> reference_corners_;
+  bool scaled_frames_ = false;
   std::vector<std::uint32_t> tile_run_{0};    // tile -> first run (size tiles + 1)
   std::vector<std::uint32_t> run_polygon_;    // per run
   std::vector<std::uint32_t> used_polygons_;  // distinct run_polygon_, increasing

@@ -47,8 +47,12 @@ struct FrameD {
 //
 // `p.get(node, xyz)` gives a node's position (from a span of doubles, or a
 // body set's float columns read in place).
+//
+// With `scaled` (and `ref`), the axes are then multiplied by the corners'
+// best-fit similarity scale r / sum |r_k|^2 (DetailParams::scaled_frames).
 template <class Pos>
-FrameD polygon_frame(const BodyPolygons& b, const Pos& p, std::size_t f, std::span<const Eigen::Vector2f> ref = {}) {
+FrameD polygon_frame(const BodyPolygons& b, const Pos& p, std::size_t f, std::span<const Eigen::Vector2f> ref = {},
+                     bool scaled = false) {
   const std::uint32_t s = b.face_offsets[f], e = b.face_offsets[f + 1];
   const std::size_t n = e - s;
   constexpr std::size_t kLocal = 16;
@@ -103,8 +107,9 @@ FrameD polygon_frame(const BodyPolygons& b, const Pos& p, std::size_t f, std::sp
   y[1] *= inv_yn;
   y[2] *= inv_yn;
   double z[3] = {x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+  double sim = 1;  // similarity scale (scaled frames)
   if (!ref.empty()) {
-    double sdot = 0, scross = 0;
+    double sdot = 0, scross = 0, rr = 0;
     for (std::size_t k = 0; k < n; ++k) {
       const double q[3] = {P[3 * k] - c[0], P[3 * k + 1] - c[1], P[3 * k + 2] - c[2]};
       const double d1 = q[0] * y[0] + q[1] * y[1] + q[2] * y[2];
@@ -112,6 +117,7 @@ FrameD polygon_frame(const BodyPolygons& b, const Pos& p, std::size_t f, std::sp
       const double r1 = ref[s + k].x(), r2 = ref[s + k].y();
       sdot += r1 * d1 + r2 * d2;
       scross += r1 * d2 - r2 * d1;
+      rr += r1 * r1 + r2 * r2;
     }
     const double r = std::sqrt(sdot * sdot + scross * scross);  // sums of squared lengths: no overflow to fear
     if (r > 0) {                                                // else no preferred angle (atan2(0, 0) = 0)
@@ -121,9 +127,11 @@ FrameD polygon_frame(const BodyPolygons& b, const Pos& p, std::size_t f, std::sp
       z[1] = x[2] * y[0] - x[0] * y[2];
       z[2] = x[0] * y[1] - x[1] * y[0];
     }
+    if (scaled && r > 0 && rr > 0) sim = r / rr;
   }
-  fr.y = Vec3d(y[0], y[1], y[2]);
-  fr.z = Vec3d(z[0], z[1], z[2]);
+  fr.x *= sim;
+  fr.y = sim * Vec3d(y[0], y[1], y[2]);
+  fr.z = sim * Vec3d(z[0], z[1], z[2]);
   fr.degenerate = false;
   return fr;
 }

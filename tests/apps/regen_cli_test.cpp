@@ -249,6 +249,23 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
   r = run("encode --garment " + (d / "none.obj").string() + " --out " + (d / "g2").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("none.obj"), std::string::npos) << r.out;
+  // Scaled frames (issue 26): stored in the .atd (version 4, unit frames
+  // stay version 3), which regen then decodes with them; the garment still
+  // ends outside every body, elsewhere than with unit frames.
+  r = run("encode --scaled-frames --garment " + (encoded_templates() / "top.obj").string() + " --out " +
+          (d / "gs").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(read_bytes(d / "gs" / "top.atd").substr(8, 4), std::string("\x04\0\0\0", 4));
+  EXPECT_EQ(read_bytes(d / "g" / "top.atd").substr(8, 4), std::string("\x03\0\0\0", 4));
+  r = run("--seed 4 --threads 1 regen --template " + (d / "gs" / "top.atd").string() +
+          " --count 5 --meshes 1 --chunk 2 --out " + (d / "ts").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto reps = nlohmann::json::parse(read_bytes(d / "ts" / "report.json"));
+  EXPECT_EQ(reps["summary"]["completed"], 5) << reps.dump();
+  for (const auto& b : reps["bodies"]) EXPECT_EQ(b["templates"]["top"]["inside_nodes"], 0) << b.dump();
+  const fs::path first = fs::path("bodies") / "mannequin-00000" / "top.obj";
+  ASSERT_TRUE(fs::exists(d / "ts" / first));
+  EXPECT_NE(read_bytes(d / "ts" / first), read_bytes(d / "t1" / first));
 }
 
 TEST(RegenCli, ADirectoryOfMannequinBodiesKeepsTheMannequinFeatures) {

@@ -118,6 +118,10 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
   ASSERT_TRUE(cb0.build(family->collision, skin0));
   const auto& T = tris->triangles;
 
+  // ATELIER_DETAIL_SCALED_FRAMES=1 measures the same figures with scaled
+  // frames (DetailParams::scaled_frames, issue 26; docs/performance.md).
+  GarmentEncodeOptions encode_options;
+  encode_options.detail.scaled_frames = std::getenv("ATELIER_DETAIL_SCALED_FRAMES") != nullptr;
   std::vector<Garment> garments;
   for (const auto& e : fs::directory_iterator(mh_dir() / "clothes"))
     if (e.path().extension() == ".mhclo") {
@@ -133,7 +137,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
       g.source_sd.resize(g.source.size());
       ASSERT_TRUE(bvh0.signed_distances(g.source, g.source_sd));
       soup->positions = g.source;
-      auto made = encode_garment(*family, g.name, std::move(*soup));
+      auto made = encode_garment(*family, g.name, std::move(*soup), encode_options);
       ASSERT_TRUE(made) << made.status().to_string();
       g.tmpl = std::move(*made);
       for (const float c : g.tmpl.clearance.clearance) {
@@ -173,7 +177,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     h.verts.erase(std::unique(h.verts.begin(), h.verts.end()), h.verts.end());
     std::vector<Vec3d> src;
     for (auto v : h.verts) src.push_back(kMakeHumanToMetres * H0[v].cast<double>());
-    h.enc = std::move(*encode_detail(poly, skin0, src));
+    h.enc = std::move(*encode_detail(poly, skin0, src, encode_options.detail));
     helpers.push_back(std::move(h));
   }
 
@@ -297,7 +301,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     }
     for (const auto& h : helpers) {
       std::vector<Vec3d> out(h.verts.size());
-      compute_frames(poly, skin, fr, seq, h.enc.reference_corners);
+      compute_frames(poly, skin, fr, seq, h.enc.reference_corners, h.enc.scaled_frames);
       decode_detail(h.enc, fr, out, seq);
       double s = 0, mx = 0;
       for (std::size_t i = 0; i < h.verts.size(); ++i) {
