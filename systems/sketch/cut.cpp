@@ -262,15 +262,16 @@ std::size_t components_holding(const Model& m, const std::vector<NodeIdx>& seeds
 /// Whether the face group (faces connected across edges) holding `piece`
 /// had no boundary halfedge before the cut (a closed shell, the S of the
 /// Euler-Poincare formula). `piece_open`: the piece itself has one. Cheap
-/// cases first: an open piece, or no boundary edge in the whole model (one
+/// cases first: an open piece, or no boundary edge in the whole model (known
+/// from the triangle rows, else one
 /// pass over a column); otherwise the rest of the group is flooded from the
 /// piece's neighbours until a boundary halfedge shows up.
 bool group_closed(const Model& m, const std::vector<std::uint8_t>& in_piece, const std::vector<FaceIdx>& piece,
-                  bool piece_open) {
+                  bool piece_open, std::optional<bool> known_boundary) {
   if (piece_open) return false;
-  bool any_boundary = false;
+  bool any_boundary = known_boundary.value_or(false);
   const auto& hf = m.halfedges.face;
-  for (std::uint32_t e = 0; e < m.edges.slots.capacity() && !any_boundary; ++e)
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity() && !any_boundary && !known_boundary; ++e)
     any_boundary = m.alive(EdgeIdx{e}) && (hf[2 * e].valid() != hf[2 * e + 1].valid());
   if (!any_boundary) return true;
   std::vector<std::uint8_t> seen(m.faces.slots.capacity(), 0);
@@ -383,6 +384,7 @@ struct SeamSide {
 struct TriRows {
   static constexpr std::uint32_t kBlocked = kNone - 1, kOpen = kNone;
   bool ok = false;
+  bool boundary = false;                   // some face side has no face across (when ok)
   std::vector<std::uint32_t> adj, corner;  // 3 per face slot
 };
 TriRows tri_rows(const Model& m, const std::vector<std::uint8_t>& curve_edge) {
@@ -399,6 +401,7 @@ TriRows tri_rows(const Model& m, const std::vector<std::uint8_t>& curve_edge) {
     const std::uint8_t k = count[f.value]++;
     if (k >= 3) return t;  // a polygon
     const FaceIdx o = hf[h ^ 1];
+    t.boundary |= !o.valid();
     t.adj[3 * f.value + k] = !o.valid() ? TriRows::kOpen : curve_edge[h >> 1] ? TriRows::kBlocked : o.value;
     t.corner[3 * f.value + k] = tail[h].value;
   }
@@ -577,7 +580,7 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
       out.pieces.push_back(kept);
       out.kept_area = kept.area;
     }
-    shell_closed = group_closed(m, pc.in, pc.faces, pc.open);
+    shell_closed = group_closed(m, pc.in, pc.faces, pc.open, rows.ok ? std::optional<bool>(rows.boundary) : std::nullopt);
     rm = pc.faces;
   } else {
     const Pieces P = find_pieces(m, *rt, ctx);
