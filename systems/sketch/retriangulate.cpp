@@ -79,7 +79,7 @@ struct Plan {
   // The plan's map nodes come from one arena, released at once (their
   // mallocs and frees were a tenth of the re-triangulation of a stroke).
   std::pmr::monotonic_buffer_resource arena;
-  std::pmr::map<NodeIdx, std::uint32_t> node_pt{&arena};
+  std::vector<std::uint32_t> node_pt;  // per node slot: its point id, or kNone
   std::pmr::map<std::uint32_t, std::vector<std::pair<double, std::uint32_t>>> edge_pts{&arena};  // edge -> (u, pid)
   std::pmr::map<FanKey, std::vector<std::pair<double, std::uint32_t>>> diag_pts{&arena};  // (face, d) -> (u, pid)
   std::pmr::map<FanKey, std::vector<std::uint32_t>> fan_pts{&arena};                      // (face, fan) -> pids
@@ -93,7 +93,7 @@ struct Plan {
 
 class Planner {
  public:
-  Planner(const Model& m, double snap) : m_(m), snap_(snap) {}
+  Planner(const Model& m, double snap) : m_(m), snap_(snap) { P.node_pt.assign(m.nodes.slots.capacity(), kNone); }
   bool chords_without_cdt = true;  // RetriangulateOptions::chords_without_cdt
   std::size_t fans_without_cdt = 0;
 
@@ -205,10 +205,9 @@ class Planner {
     };
     switch (l.k) {
       case LK::kNode: {
-        auto it = P.node_pt.find(NodeIdx{l.a});
-        if (it != P.node_pt.end()) return it->second;
+        if (const std::uint32_t known = P.node_pt[l.a]; known != kNone) return known;
         const std::uint32_t id = fresh();
-        P.node_pt.emplace(NodeIdx{l.a}, id);
+        P.node_pt[l.a] = id;
         return id;
       }
       case LK::kEdge:
@@ -526,7 +525,7 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
   fp.c2[1] = Vec2d(e1.dot(ux), e1.dot(uy));
   fp.c2[2] = Vec2d(e2.dot(ux), e2.dot(uy));
   std::vector<std::uint32_t> boundary;
-  const std::uint32_t cpt[3] = {P.node_pt.at(fp.n[0]), P.node_pt.at(fp.n[1]), P.node_pt.at(fp.n[2])};
+  const std::uint32_t cpt[3] = {P.node_pt[fp.n[0].value], P.node_pt[fp.n[1].value], P.node_pt[fp.n[2].value]};
   if (pl.chords_without_cdt && chord_only(pl, fp, cons, inner, side, cpt)) {
     ++pl.fans_without_cdt;
     return {};
@@ -787,7 +786,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       const auto& cons = cit == fan_cons.end() ? none : cit->second;
       if (side[0].empty() && side[1].empty() && side[2].empty() && inner.empty() && cons.empty()) {
         fp.kept = true;
-        fp.tris.push_back({P.node_pt.at(n[0]), P.node_pt.at(n[1]), P.node_pt.at(n[2])});
+        fp.tris.push_back({P.node_pt[n[0].value], P.node_pt[n[1].value], P.node_pt[n[2].value]});
         const Vec3d e1 = m.position(n[1]) - m.position(n[0]), e2 = m.position(n[2]) - m.position(n[0]);
         const Vec3d nr = e1.cross(e2);
         const Vec3d ux = e1.normalized(), uy = nr.normalized().cross(ux);
