@@ -262,10 +262,10 @@ std::size_t components_holding(const Model& m, const std::vector<NodeIdx>& seeds
 /// Whether the face group (faces connected across edges) holding `piece`
 /// had no boundary halfedge before the cut (a closed shell, the S of the
 /// Euler-Poincare formula). `piece_open`: the piece itself has one. Cheap
-/// cases first: an open piece, or no boundary edge in the whole model (known
-/// from the triangle rows, else one
-/// pass over a column); otherwise the rest of the group is flooded from the
-/// piece's neighbours until a boundary halfedge shows up.
+/// cases first: an open piece, or no boundary edge in the whole model
+/// (`known_boundary`, from the triangle rows, else one pass over a column);
+/// otherwise the rest of the group is flooded from the piece's neighbours
+/// until a boundary halfedge shows up.
 bool group_closed(const Model& m, const std::vector<std::uint8_t>& in_piece, const std::vector<FaceIdx>& piece,
                   bool piece_open, std::optional<bool> known_boundary) {
   if (piece_open) return false;
@@ -580,7 +580,8 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
       out.pieces.push_back(kept);
       out.kept_area = kept.area;
     }
-    shell_closed = group_closed(m, pc.in, pc.faces, pc.open, rows.ok ? std::optional<bool>(rows.boundary) : std::nullopt);
+    shell_closed =
+        group_closed(m, pc.in, pc.faces, pc.open, rows.ok ? std::optional<bool>(rows.boundary) : std::nullopt);
     rm = pc.faces;
   } else {
     const Pieces P = find_pieces(m, *rt, ctx);
