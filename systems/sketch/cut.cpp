@@ -162,22 +162,33 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, Removal& out) {
     if (gone[f.value])
       return status_of(ErrorCode::kUnsupported, "cut: face ", f.value, " to remove holds ring node ", v);
   }
-  auto faceless_after = [&](HalfedgeIdx h) {
-    const FaceIdx f = m.face(h);
-    return !f.valid() || gone[f.value];
-  };
-  std::vector<std::uint8_t> edge_dies(m.edges.slots.capacity(), 0);
+  // Which edges die (both sides faceless once the faces are gone, one of
+  // them a removed face), which nodes are corners of removed faces and which
+  // keep an edge: one pass over the halfedge columns in memory order. (A
+  // walk round each removed face read them at random: most of the removal's
+  // own time on half a mesh.) The lists come out in index order.
+  const std::size_t ne = m.edges.slots.capacity(), nn = m.nodes.slots.capacity();
+  std::vector<std::uint8_t> edge_dies(ne, 0), corner(nn, 0), keeps(nn, 0);
   std::vector<EdgeIdx> dying;
-  std::vector<NodeIdx> corners;
+  {
+    const auto& hf = m.halfedges.face;
+    const auto& tail = m.halfedges.tail;
+    for (std::uint32_t e = 0; e < ne; ++e) {
+      if (!m.alive(EdgeIdx{e})) continue;
+      const FaceIdx f0 = hf[2 * e], f1 = hf[2 * e + 1];
+      const bool g0 = f0.valid() && gone[f0.value], g1 = f1.valid() && gone[f1.value];
+      const NodeIdx t0 = tail[2 * e], t1 = tail[2 * e + 1];
+      if (g0) corner[t0.value] = 1;
+      if (g1) corner[t1.value] = 1;
+      if ((g0 || g1) && (g0 || !f0.valid()) && (g1 || !f1.valid())) {
+        edge_dies[e] = 1;
+        dying.push_back(EdgeIdx{e});
+      } else {
+        keeps[t0.value] = keeps[t1.value] = 1;
+      }
+    }
+  }
   std::set<MeshEdgeIdx> trimmed;
-  for (FaceIdx f : rm)
-    m.for_each_face_halfedge(f, [&](HalfedgeIdx h) {
-      corners.push_back(m.tail(h));
-      const EdgeIdx e = edge_of(h);
-      if (edge_dies[e.value] || !faceless_after(h) || !faceless_after(twin(h))) return;
-      edge_dies[e.value] = 1;
-      dying.push_back(e);
-    });
   for (EdgeIdx e : dying) {
     const MeshEdgeIdx me = m.edges.mesh_edge[e.value];
     if (!me.valid()) continue;
@@ -186,26 +197,18 @@ Status remove_faces(Model& m, const std::vector<FaceIdx>& rm, Removal& out) {
                        me.value, " in joint ", j.value, " (a seam to another surface); cut elsewhere or partition");
     trimmed.insert(me);
   }
-  // A corner dies when all its edges die. Which nodes keep an edge: one
-  // pass over the halfedge columns in memory order, instead of a walk round
-  // every corner's ring (random reads, most of the removal's own time).
-  std::vector<std::uint8_t> keeps(m.nodes.slots.capacity(), 0);
-  {
-    const auto& tail = m.halfedges.tail;
-    const std::size_t ne = m.edges.slots.capacity();
-    for (std::size_t h = 0; h < 2 * ne; ++h)
-      if (!edge_dies[h >> 1] && m.alive(EdgeIdx{static_cast<std::uint32_t>(h >> 1)})) keeps[tail[h].value] = 1;
-  }
+  // A corner dies when all its edges die.
   std::vector<NodeIdx> dying_nodes;
-  std::vector<std::uint8_t> seen(m.nodes.slots.capacity(), 0);
-  for (NodeIdx v : corners) {
-    if (seen[v.value]) continue;
-    seen[v.value] = 1;
-    (keeps[v.value] ? out.survivors : dying_nodes).push_back(v);
+  std::vector<std::uint8_t> node_dies(nn, 0);
+  for (std::uint32_t v = 0; v < nn; ++v) {
+    if (!corner[v]) continue;
+    if (keeps[v]) {
+      out.survivors.push_back(NodeIdx{v});
+    } else {
+      dying_nodes.push_back(NodeIdx{v});
+      node_dies[v] = 1;
+    }
   }
-  std::sort(out.survivors.begin(), out.survivors.end());
-  std::vector<std::uint8_t> node_dies(m.nodes.slots.capacity(), 0);
-  for (NodeIdx v : dying_nodes) node_dies[v.value] = 1;
   std::vector<AttribNodeIdx> dead_attribs;
   const auto& an = m.attrib_nodes;
   for (std::uint32_t i = 0; i < an.slots.capacity(); ++i) {
@@ -259,15 +262,16 @@ std::size_t components_holding(const Model& m, const std::vector<NodeIdx>& seeds
 /// Whether the face group (faces connected across edges) holding `piece`
 /// had no boundary halfedge before the cut (a closed shell, the S of the
 /// Euler-Poincare formula). `piece_open`: the piece itself has one. Cheap
-/// cases first: an open piece, or no boundary edge in the whole model (one
-/// pass over a column); otherwise the rest of the group is flooded from the
-/// piece's neighbours until a boundary halfedge shows up.
+/// cases first: an open piece, or no boundary edge in the whole model
+/// (`known_boundary`, from the triangle rows, else one pass over a column);
+/// otherwise the rest of the group is flooded from the piece's neighbours
+/// until a boundary halfedge shows up.
 bool group_closed(const Model& m, const std::vector<std::uint8_t>& in_piece, const std::vector<FaceIdx>& piece,
-                  bool piece_open) {
+                  bool piece_open, std::optional<bool> known_boundary) {
   if (piece_open) return false;
-  bool any_boundary = false;
+  bool any_boundary = known_boundary.value_or(false);
   const auto& hf = m.halfedges.face;
-  for (std::uint32_t e = 0; e < m.edges.slots.capacity() && !any_boundary; ++e)
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity() && !any_boundary && !known_boundary; ++e)
     any_boundary = m.alive(EdgeIdx{e}) && (hf[2 * e].valid() != hf[2 * e + 1].valid());
   if (!any_boundary) return true;
   std::vector<std::uint8_t> seen(m.faces.slots.capacity(), 0);
@@ -370,6 +374,58 @@ struct SeamSide {
   std::uint32_t a = 0, b = 0;
 };
 
+/// Triangle faces as flat rows, built by one pass over the halfedge columns
+/// in memory order: per face slot f, its three neighbours across its sides
+/// (kBlocked across a curve edge, kOpen across a boundary) and its three
+/// corners. The picked side's flood and the area sums then read one short
+/// row per face instead of chasing next pointers and twins through the
+/// halfedge columns at random (most of their time on half a mesh). `ok` is
+/// false when a face of the model is not a triangle (the walks are used).
+struct TriRows {
+  static constexpr std::uint32_t kBlocked = kNone - 1, kOpen = kNone;
+  bool ok = false;
+  bool boundary = false;                   // some face side has no face across (when ok)
+  std::vector<std::uint32_t> adj, corner;  // 3 per face slot
+};
+TriRows tri_rows(const Model& m, const std::vector<std::uint8_t>& curve_edge) {
+  TriRows t;
+  const std::size_t nf = m.faces.slots.capacity(), nh = 2 * m.edges.slots.capacity();
+  std::vector<std::uint8_t> count(nf, 0);
+  t.adj.resize(3 * nf);
+  t.corner.resize(3 * nf);
+  const auto& hf = m.halfedges.face;
+  const auto& tail = m.halfedges.tail;
+  for (std::size_t h = 0; h < nh; ++h) {
+    const FaceIdx f = hf[h];
+    if (!f.valid()) continue;
+    const std::uint8_t k = count[f.value]++;
+    if (k >= 3) return t;  // a polygon
+    const FaceIdx o = hf[h ^ 1];
+    t.boundary |= !o.valid();
+    t.adj[3 * f.value + k] = !o.valid() ? TriRows::kOpen : curve_edge[h >> 1] ? TriRows::kBlocked : o.value;
+    t.corner[3 * f.value + k] = tail[h].value;
+  }
+  t.ok = true;
+  return t;
+}
+
+double tri_area(const Model& m, const std::uint32_t* c) {
+  const Vec3d& p0 = m.nodes.position[c[0]];
+  return 0.5 * (m.nodes.position[c[1]] - p0).cross(m.nodes.position[c[2]] - p0).norm();
+}
+
+/// Area of face f: its fan triangles (c0, c_k+1, c_k+2).
+double face_area(const Model& m, const TriRows& t, std::size_t f) {
+  if (t.ok) return tri_area(m, &t.corner[3 * f]);
+  const HalfedgeIdx h0 = m.faces.halfedge[f];
+  const Vec3d& p0 = m.position(m.tail(h0));
+  HalfedgeIdx h = m.next(h0);
+  double a = 0;
+  for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
+    a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
+  return a;
+}
+
 /// The piece holding face `start`: faces connected to it across edges that
 /// are not on a curve (in face order), and its area.
 struct OnePiece {
@@ -378,7 +434,7 @@ struct OnePiece {
   double area = 0;
   bool open = false;  // a face of the piece has a boundary halfedge
 };
-OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_t>& curve_edge) {
+OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_t>& curve_edge, const TriRows& t) {
   OnePiece p;
   const std::size_t nf = m.faces.slots.capacity();
   p.in.assign(nf, 0);
@@ -389,6 +445,18 @@ OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_
     const FaceIdx f = stack.back();
     stack.pop_back();
     ++count;
+    if (t.ok) {
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t o = t.adj[3 * f.value + k];
+        if (o == TriRows::kOpen) {
+          p.open = true;
+        } else if (o != TriRows::kBlocked && !p.in[o]) {
+          p.in[o] = 1;
+          stack.push_back(FaceIdx{o});
+        }
+      }
+      continue;
+    }
     const HalfedgeIdx h0 = m.faces.halfedge[f.value];
     HalfedgeIdx h = h0;
     do {
@@ -409,11 +477,7 @@ OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_
   for (std::uint32_t f = 0; f < nf; ++f) {
     if (!p.in[f]) continue;
     p.faces.push_back(FaceIdx{f});
-    const HalfedgeIdx h0 = m.faces.halfedge[f];
-    const Vec3d& p0 = m.position(m.tail(h0));
-    HalfedgeIdx h = m.next(h0);
-    for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
-      p.area += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
+    p.area += face_area(m, t, f);
   }
   return p;
 }
@@ -422,20 +486,15 @@ OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_
 /// `skip` (the removed piece, already measured: its faces' cycles are not
 /// read again), parallel, summed in a fixed order.
 std::pair<double, std::size_t> surface_totals(const Model& m, const std::vector<std::uint8_t>& touched,
-                                              const std::vector<std::uint8_t>& skip, const ExecContext& ctx) {
+                                              const std::vector<std::uint8_t>& skip, const TriRows& t,
+                                              const ExecContext& ctx) {
   using Acc = std::pair<double, std::size_t>;
   return par::transform_reduce(
       ctx, m.faces.slots.capacity(), Acc{0.0, 0},
       [&](std::size_t f) -> Acc {
         if (skip[f] || !m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value])
           return {0.0, 0};
-        const HalfedgeIdx h0 = m.faces.halfedge[f];
-        const Vec3d& p0 = m.position(m.tail(h0));
-        HalfedgeIdx h = m.next(h0);
-        double a = 0;
-        for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
-          a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
-        return {a, 1};
+        return {face_area(m, t, f), 1};
       },
       [](const Acc& x, const Acc& y) {
         return Acc{x.first + y.first, x.second + y.second};
@@ -492,7 +551,8 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
                         "remove");
       }
     }
-    const OnePiece pc = piece_from(m, f, curve_edge);
+    const TriRows rows = tri_rows(m, curve_edge);
+    const OnePiece pc = piece_from(m, f, curve_edge, rows);
     bool separates = false;
     for (const auto& ch : rt->chains)
       for (HalfedgeIdx h : ch) {
@@ -512,7 +572,7 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
     out.removed_area = removed.area;
     if (opt.kept_totals) {
       // The one pass over every face of the cut: on request only.
-      const auto [kept_area, kept_faces] = surface_totals(m, touched, pc.in, ctx);
+      const auto [kept_area, kept_faces] = surface_totals(m, touched, pc.in, rows, ctx);
       Piece kept;  // everything else of the surfaces the curves cross
       kept.surface = removed.surface;
       kept.faces = kept_faces;
@@ -520,7 +580,8 @@ Expected<CutResult> cut_along_curves(Model& m, std::span<const AttribEdge> curve
       out.pieces.push_back(kept);
       out.kept_area = kept.area;
     }
-    shell_closed = group_closed(m, pc.in, pc.faces, pc.open);
+    shell_closed =
+        group_closed(m, pc.in, pc.faces, pc.open, rows.ok ? std::optional<bool>(rows.boundary) : std::nullopt);
     rm = pc.faces;
   } else {
     const Pieces P = find_pieces(m, *rt, ctx);

@@ -18,6 +18,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <memory_resource>
 #include <unordered_map>
 
 namespace atelier {
@@ -75,21 +76,24 @@ struct FanPlan {
 
 struct Plan {
   std::vector<Pt> pts;
-  std::map<NodeIdx, std::uint32_t> node_pt;
-  std::map<std::uint32_t, std::vector<std::pair<double, std::uint32_t>>> edge_pts;  // edge -> (u, pid)
-  std::map<FanKey, std::vector<std::pair<double, std::uint32_t>>> diag_pts;         // (face, d) -> (u, pid)
-  std::map<FanKey, std::vector<std::uint32_t>> fan_pts;                             // (face, fan) -> pids
+  // The plan's map nodes come from one arena, released at once (their
+  // mallocs and frees were a tenth of the re-triangulation of a stroke).
+  std::pmr::monotonic_buffer_resource arena;
+  std::vector<std::uint32_t> node_pt;  // per node slot: its point id, or kNone
+  std::pmr::map<std::uint32_t, std::vector<std::pair<double, std::uint32_t>>> edge_pts{&arena};  // edge -> (u, pid)
+  std::pmr::map<FanKey, std::vector<std::pair<double, std::uint32_t>>> diag_pts{&arena};  // (face, d) -> (u, pid)
+  std::pmr::map<FanKey, std::vector<std::uint32_t>> fan_pts{&arena};                      // (face, fan) -> pids
   std::vector<Segment> segments;
   std::vector<std::vector<std::vector<std::uint32_t>>> curve_seg;  // per curve, per row pair: its segments in order
   std::vector<FaceIdx> faces;                                      // faces to replace
-  std::map<FanKey, FanPlan> fans;
-  std::unordered_map<std::uint32_t, std::vector<HalfedgeIdx>> face_hs;
+  std::pmr::map<FanKey, FanPlan> fans{&arena};
+  std::pmr::unordered_map<std::uint32_t, std::vector<HalfedgeIdx>> face_hs{&arena};
   std::size_t crossings = 0;
 };
 
 class Planner {
  public:
-  Planner(const Model& m, double snap) : m_(m), snap_(snap) {}
+  Planner(const Model& m, double snap) : m_(m), snap_(snap) { P.node_pt.assign(m.nodes.slots.capacity(), kNone); }
   bool chords_without_cdt = true;  // RetriangulateOptions::chords_without_cdt
   std::size_t fans_without_cdt = 0;
 
@@ -201,10 +205,9 @@ class Planner {
     };
     switch (l.k) {
       case LK::kNode: {
-        auto it = P.node_pt.find(NodeIdx{l.a});
-        if (it != P.node_pt.end()) return it->second;
+        if (const std::uint32_t known = P.node_pt[l.a]; known != kNone) return known;
         const std::uint32_t id = fresh();
-        P.node_pt.emplace(NodeIdx{l.a}, id);
+        P.node_pt[l.a] = id;
         return id;
       }
       case LK::kEdge:
@@ -522,7 +525,7 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
   fp.c2[1] = Vec2d(e1.dot(ux), e1.dot(uy));
   fp.c2[2] = Vec2d(e2.dot(ux), e2.dot(uy));
   std::vector<std::uint32_t> boundary;
-  const std::uint32_t cpt[3] = {P.node_pt.at(fp.n[0]), P.node_pt.at(fp.n[1]), P.node_pt.at(fp.n[2])};
+  const std::uint32_t cpt[3] = {P.node_pt[fp.n[0].value], P.node_pt[fp.n[1].value], P.node_pt[fp.n[2].value]};
   if (pl.chords_without_cdt && chord_only(pl, fp, cons, inner, side, cpt)) {
     ++pl.fans_without_cdt;
     return {};
@@ -534,7 +537,10 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
   std::vector<std::uint32_t> all = boundary;
   all.insert(all.end(), inner.begin(), inner.end());
   Cdt cdt;
-  std::map<std::uint32_t, Cdt::Vertex_handle> vh;
+  // Small maps per fan: nodes from a buffer on the stack.
+  std::array<std::byte, 8192> buf;
+  std::pmr::monotonic_buffer_resource local(buf.data(), buf.size());
+  std::pmr::map<std::uint32_t, Cdt::Vertex_handle> vh(&local);
   for (std::uint32_t pid : all) {
     const Vec3d b = pl.bary_in(pid, fp.fan);
     const Vec2d q = b[0] * fp.c2[0] + b[1] * fp.c2[1] + b[2] * fp.c2[2];
@@ -547,7 +553,7 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
     vh.emplace(pid, v);
   }
   const std::size_t nb = boundary.size();
-  std::map<std::pair<std::uint32_t, std::uint32_t>, bool> is_side;
+  std::pmr::map<std::pair<std::uint32_t, std::uint32_t>, bool> is_side(&local);
   try {
     for (std::size_t k = 0; k < nb; ++k) {
       const std::uint32_t x = boundary[k], y = boundary[(k + 1) % nb];
@@ -578,7 +584,7 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
       queue.push_back(g);
     }
   }
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  std::pmr::map<std::pair<std::uint32_t, std::uint32_t>, int> edges(&local);
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
     if (f->info() != 1) continue;
     std::array<std::uint32_t, 3> t = {f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
@@ -639,7 +645,8 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   }
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "retriangulate cancelled");
   // 2. Crossings per fan triangle.
-  std::map<FanKey, std::vector<std::uint32_t>> fan_segs;
+  std::pmr::monotonic_buffer_resource local;  // the maps below, released at once
+  std::pmr::map<FanKey, std::vector<std::uint32_t>> fan_segs(&local);
   for (std::uint32_t i = 0; i < P.segments.size(); ++i)
     if (P.segments[i].fan.first != kNone) fan_segs[P.segments[i].fan].push_back(i);
   for (const auto& [fk, segs] : fan_segs)
@@ -654,7 +661,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   {
     std::vector<std::uint32_t> split;
     for (const auto& [e, list] : P.edge_pts) split.push_back(e);
-    std::map<std::uint32_t, bool> done;
+    std::pmr::map<std::uint32_t, bool> done(&local);
     for (std::uint32_t e : split) {
       if (done.count(e)) continue;
       const MeshEdgeIdx me = m.edges.mesh_edge[e];
@@ -727,7 +734,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
     }
   }
   // Constraint sub-segments per fan.
-  std::map<FanKey, std::vector<std::pair<std::uint32_t, std::uint32_t>>> fan_cons;
+  std::pmr::map<FanKey, std::vector<std::pair<std::uint32_t, std::uint32_t>>> fan_cons(&local);
   for (const Segment& s : P.segments) {
     if (s.fan.first == kNone) continue;
     std::uint32_t prev = s.a;
@@ -779,7 +786,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
       const auto& cons = cit == fan_cons.end() ? none : cit->second;
       if (side[0].empty() && side[1].empty() && side[2].empty() && inner.empty() && cons.empty()) {
         fp.kept = true;
-        fp.tris.push_back({P.node_pt.at(n[0]), P.node_pt.at(n[1]), P.node_pt.at(n[2])});
+        fp.tris.push_back({P.node_pt[n[0].value], P.node_pt[n[1].value], P.node_pt[n[2].value]});
         const Vec3d e1 = m.position(n[1]) - m.position(n[0]), e2 = m.position(n[2]) - m.position(n[0]);
         const Vec3d nr = e1.cross(e2);
         const Vec3d ux = e1.normalized(), uy = nr.normalized().cross(ux);
@@ -905,7 +912,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
   for (FaceIdx f : faces) m.delete_face(f);
   // Split edges (now faceless on the replaced sides): e keeps its tail and
   // ends at the first point; new edges follow in order.
-  std::map<std::uint32_t, std::vector<NodeIdx>> edge_nodes;  // edge -> nodes from tail(2e) to head(2e)
+  std::pmr::map<std::uint32_t, std::vector<NodeIdx>> edge_nodes(&local);  // edge -> nodes from tail(2e) to head(2e)
   for (const auto& [e, list] : P.edge_pts) {
     const EdgeIdx ei{e};
     HalfedgeIdx h = halfedge_of(ei, 0);
@@ -927,7 +934,7 @@ Expected<RetriangulationResult> retriangulate_curves(Model& m, std::span<const A
     edge_nodes.emplace(e, std::move(chain));
   }
   // New faces.
-  std::map<FanKey, std::vector<FaceIdx>> fan_faces;
+  std::pmr::map<FanKey, std::vector<FaceIdx>> fan_faces(&local);
   for (std::size_t i = 0; i < faces.size(); ++i) {
     const FaceIdx f = faces[i];
     const std::uint32_t k = static_cast<std::uint32_t>(pl.hs(f).size());
