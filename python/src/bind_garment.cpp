@@ -129,7 +129,7 @@ vertices reads back identical.
       "encode_garment",
       [](std::shared_ptr<Family> family, const GarmentSource& garment, const OptFaces& faces,
          std::optional<std::string> name, const OptArray& edges, int z_depth, std::size_t polygons_per_vertex,
-         double scale, const std::string& up, int threads, const Progress& progress) {
+         bool scaled_frames, double scale, const std::string& up, int threads, const Progress& progress) {
         PolygonSoup soup;
         std::string default_name = "garment";
         if (py::isinstance<py::str>(garment) || py::hasattr(garment, "__fspath__")) {
@@ -155,6 +155,7 @@ vertices reads back identical.
         }
         GarmentEncodeOptions options;
         options.detail.polygons_per_vertex = polygons_per_vertex;
+        options.detail.scaled_frames = scaled_frames;
         std::vector<std::array<std::uint32_t, 2>> edge_list;
         if (!edges.is_none()) {
           PolygonSoup e;
@@ -179,8 +180,9 @@ vertices reads back identical.
         return garment_of(std::move(t), family);
       },
       py::arg("family"), py::arg("garment"), py::arg("faces") = py::none(), py::kw_only(), py::arg("name") = py::none(),
-      py::arg("edges") = py::none(), py::arg("z_depth") = 0, py::arg("polygons_per_vertex") = 0, py::arg("scale") = 1.0,
-      py::arg("up") = "y", py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("edges") = py::none(), py::arg("z_depth") = 0, py::arg("polygons_per_vertex") = 0,
+      py::arg("scaled_frames") = false, py::arg("scale") = 1.0, py::arg("up") = "y", py::arg("threads") = 0,
+      py::arg("progress") = py::none(), R"doc(
 Encodes a garment on a body family: its detail template (seed 001 section
 6), the clearance it keeps on the reference body and the edge transfer.
 
@@ -196,6 +198,11 @@ edges: (E, 2) edges in the caller's order (the edge transfer's sums follow
 z_depth: layer order when worn with others (smaller is nearer the skin).
 polygons_per_vertex: N_q, the p-polygons per vertex (0: the paper's
     N_H / 100).
+scaled_frames: offsets in frames scaled with each body polygon's size
+    (``atelier encode --scaled-frames``; DetailParams::scaled_frames): a
+    body scaled by s gives the garment scaled by s, clearance included.
+    Off by default: issue 7's clearance-change figure counts the scaled
+    clearance as error (docs/performance.md, "Closer to ground truth").
 
 Returns a GarmentTemplate. Raises ValueError for bad arrays or a garment
 the engine refuses (the message names the garment), FileNotFoundError.
