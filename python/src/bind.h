@@ -144,6 +144,9 @@ struct Garment {
 void faces_into(py::handle faces, std::size_t vertex_count, PolygonSoup& out, const char* what);
 /// A mesh argument: a Mesh, a Body, or a (vertices, faces) pair.
 [[nodiscard]] std::shared_ptr<const Mesh> mesh_from(py::handle object, const char* what);
+/// A mesh argument as a Model to edit: a copy of the Mesh's model, or the
+/// soup as one surface "mesh".
+[[nodiscard]] Model model_from(py::handle object, const char* what);
 /// A soup from vertices and faces (checked as above).
 [[nodiscard]] PolygonSoup soup_from(py::handle vertices, py::handle faces, const char* what);
 

@@ -36,12 +36,7 @@ void bind_pattern(py::module_& m) {
       "flatten",
       [](const MeshLike& mesh, const std::optional<std::vector<std::string>>& surfaces, const OptArray& grain,
          bool allow_holes, bool free_seams, int threads, const Progress& progress) {
-        const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
-        Model model;
-        if (in->model)
-          model = *in->model;
-        else
-          (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+        Model model = model_from(mesh, "mesh");
         FlattenOptions o;
         o.allow_holes = allow_holes;
         o.seam_lengths = !free_seams;
@@ -123,12 +118,7 @@ with the engine's message (a piece with holes, an unknown surface, ...).
       "made_to_measure_pattern",
       [](const MeshLike& mesh, const std::string& out, const std::optional<std::vector<std::pair<std::string, double>>>& lines,
          bool svg, bool dxf, bool csv, bool marked_seams, int threads, const Progress& progress) {
-        const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
-        Model model;
-        if (in->model)
-          model = *in->model;
-        else
-          (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+        Model model = model_from(mesh, "mesh");
         MadeToMeasureOptions o;
         o.files.svg = svg;
         o.files.dxf = dxf;

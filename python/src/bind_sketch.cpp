@@ -105,12 +105,7 @@ void bind_sketch(py::module_& m) {
       "sketch",
       [](const MeshLike& mesh, const Strokes& strokes, const std::optional<std::vector<std::string>>& surfaces,
          bool keep_going, int threads, const Progress& progress) {
-        const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
-        Model model;
-        if (in->model)
-          model = *in->model;
-        else
-          (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
+        Model model = model_from(mesh, "mesh");
         const StrokeFile file = strokes_arg(strokes);
         atelier::SketchOptions so;
         so.keep_going = keep_going;
@@ -157,17 +152,6 @@ the stroke for a failed tool), FileNotFoundError for a missing file.
 
 namespace {
 
-/// The model of a Mesh or a (vertices, faces) pair (one copy).
-Model model_of(const MeshLike& mesh) {
-  const std::shared_ptr<const Mesh> in = mesh_from(mesh, "mesh");
-  Model model;
-  if (in->model)
-    model = *in->model;
-  else
-    (void)unwrap(add_polygon_surface(model, "mesh", in->soup));
-  return model;
-}
-
 /// The dict the CLI's --json writes for an extrusion.
 py::dict extrude_report(const ExtrudeReport& r, bool as_surface) {
   auto stats = [](const EdgeLengthStats& s) {
@@ -209,7 +193,7 @@ void def_extrude(py::module_& m) {
       "extrude",
       [](const MeshLike& mesh, const Strokes& strokes, std::size_t first, double pick_radius, bool optimise,
          bool as_surface, const py::object& mirror, int threads, const Progress& progress) {
-        Model model = model_of(mesh);
+        Model model = model_from(mesh, "mesh");
         const StrokeFile file = strokes_arg(strokes);
         const ExtrudeStrokes es = unwrap(extrusion_from_file(file, first));
         ExtrudeOptions eo;
@@ -286,7 +270,7 @@ void def_replay_extrusion(py::module_& m) {
       "replay_extrusion",
       [](const MeshLike& mesh, const py::object& recipe, bool optimise, bool as_surface, int threads,
          const Progress& progress) {
-        Model model = model_of(mesh);
+        Model model = model_from(mesh, "mesh");
         // The recipe: the report's dict (the JSON of --recipe-out) or a path to that file.
         ExtrusionRecipe rec;
         if (py::isinstance<py::dict>(recipe)) {

@@ -150,6 +150,16 @@ std::shared_ptr<const Mesh> mesh_from(py::handle obj, const char* what) {
                        py::str(py::type::of(obj).attr("__name__")).cast<std::string>());
 }
 
+Model model_from(py::handle obj, const char* what) {
+  const std::shared_ptr<const Mesh> in = mesh_from(obj, what);
+  Model model;
+  if (in->model)
+    model = *in->model;
+  else
+    (void)unwrap(add_polygon_surface(model, what, in->soup));
+  return model;
+}
+
 std::shared_ptr<Body> Body::of(std::shared_ptr<const ReferenceBody> reference) {
   auto b = std::make_shared<Body>();
   b->skin = polygon_soup(reference->model, reference->skin);

@@ -36,6 +36,18 @@ struct Pieces {
 /// Union-find over face slots (storage/union_find.h).
 using FaceSets = UnionFind;
 
+/// Area of face f from its fan triangles (c0, c_k+1, c_k+2), summed in
+/// halfedge order.
+double fan_area(const Model& m, std::size_t f) {
+  const HalfedgeIdx h0 = m.faces.halfedge[f];
+  const Vec3d& p0 = m.position(m.tail(h0));
+  HalfedgeIdx h = m.next(h0);
+  double a = 0;
+  for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
+    a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
+  return a;
+}
+
 /// Pieces of the surfaces the curve edges lie in: one pass over the edges
 /// (union-find), one over the faces.
 Pieces find_pieces(const Model& m, const RetriangulationResult& r, const ExecContext& ctx) {
@@ -60,13 +72,7 @@ Pieces find_pieces(const Model& m, const RetriangulationResult& r, const ExecCon
   std::vector<double> area(nf, 0.0);
   par::for_each_n(ctx, nf, [&](std::size_t f) {
     if (!m.alive(FaceIdx{static_cast<std::uint32_t>(f)}) || !touched[m.faces.surface[f].value]) return;
-    const HalfedgeIdx h0 = m.faces.halfedge[f];
-    const Vec3d& p0 = m.position(m.tail(h0));
-    HalfedgeIdx h = m.next(h0);
-    double a = 0;
-    for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
-      a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
-    area[f] = a;
+    area[f] = fan_area(m, f);
   });
   P.piece_of.assign(nf, kNone);
   std::vector<std::uint32_t> comp_id(nf, kNone);
@@ -417,13 +423,7 @@ double tri_area(const Model& m, const std::uint32_t* c) {
 /// Area of face f: its fan triangles (c0, c_k+1, c_k+2).
 double face_area(const Model& m, const TriRows& t, std::size_t f) {
   if (t.ok) return tri_area(m, &t.corner[3 * f]);
-  const HalfedgeIdx h0 = m.faces.halfedge[f];
-  const Vec3d& p0 = m.position(m.tail(h0));
-  HalfedgeIdx h = m.next(h0);
-  double a = 0;
-  for (HalfedgeIdx n = m.next(h); n != h0; h = n, n = m.next(n))
-    a += 0.5 * (m.position(m.tail(h)) - p0).cross(m.position(m.tail(n)) - p0).norm();
-  return a;
+  return fan_area(m, f);
 }
 
 /// The piece holding face `start`: faces connected to it across edges that

@@ -13,6 +13,7 @@
 #include <atelier/engine/random.h>
 #include <atelier/io/checksum.h>
 #include "support/shapes.h"
+#include "systems/garment/sphere_fixture.h"
 #include <atelier/systems/body/body_set.h>
 #include <atelier/systems/body/makehuman_body.h>
 
@@ -21,31 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Body {
-  std::shared_ptr<ReferenceBody> ref;
-  BodyPolygons poly;
-  std::vector<Vec3d> pos;
-};
-
-Body sphere_body(int nu = 40, int nv = 24) {
-  Body b;
-  b.ref = shapes::body_from(shapes::uv_sphere(nu, nv));
-  b.poly = BodyPolygons::from_model(b.ref->model);
-  b.pos = skin_positions(*b.ref);
-  return b;
-}
-
-// Garment-like points: on a shell 2-8 cm outside the unit sphere.
-std::vector<Vec3d> shell_points(std::size_t n, std::uint64_t seed) {
-  SplitMix64 r(seed);
-  std::vector<Vec3d> g;
-  while (g.size() < n) {
-    Vec3d d(r.normal(), r.normal(), r.normal());
-    if (d.norm() < 1e-6) continue;
-    g.push_back(d.normalized() * r.uniform(1.02, 1.08));
-  }
-  return g;
-}
+using Body = garment_test::SphereBody;
+using garment_test::shell_points;
+using garment_test::sphere_body;
 
 std::vector<Vec3d> centroids_of(const Body& b) {
   PolygonFrames fr;

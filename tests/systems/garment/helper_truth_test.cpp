@@ -27,36 +27,16 @@
 #include <memory>
 
 #include "support/shapes.h"
+#include "systems/garment/sphere_fixture.h"
 
 using namespace atelier;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Sphere {
-  std::shared_ptr<ReferenceBody> ref;
-  BodyPolygons poly;
-  std::vector<Vec3d> pos;
-};
-
-Sphere sphere(int nu = 40, int nv = 24) {
-  Sphere b;
-  b.ref = shapes::body_from(shapes::uv_sphere(nu, nv));
-  b.poly = BodyPolygons::from_model(b.ref->model);
-  b.pos = skin_positions(*b.ref);
-  return b;
-}
-
-// Garment-like points 2-8 cm outside the unit sphere.
-std::vector<Vec3d> shell(std::size_t n, std::uint64_t seed) {
-  SplitMix64 r(seed);
-  std::vector<Vec3d> g;
-  while (g.size() < n) {
-    const Vec3d d(r.normal(), r.normal(), r.normal());
-    if (d.norm() > 1e-6) g.push_back(d.normalized() * r.uniform(1.02, 1.08));
-  }
-  return g;
-}
+using Sphere = garment_test::SphereBody;
+using garment_test::shell_points;
+using garment_test::sphere_body;
 
 double max_error(std::span<const Vec3d> a, std::span<const Vec3d> b) {
   double m = 0;
@@ -77,8 +57,8 @@ TEST(ScaledFrames, UniformScalingScalesTheGarmentExactly) {
   // A body scaled by k about any point: with scaled frames every garment
   // vertex is scaled by k about the same point (eqs. 11-12 with every frame
   // axis times k); the paper's unit frames leave the offsets unscaled.
-  const Sphere b = sphere();
-  const auto g = shell(800, 5);
+  const Sphere b = sphere_body();
+  const auto g = shell_points(800, 5);
   DetailParams scaled;
   scaled.scaled_frames = true;
   auto enc_s = encode_detail(b.poly, b.pos, g, scaled);
@@ -109,11 +89,11 @@ TEST(ScaledFrames, UniformScalingScalesTheGarmentExactly) {
 }
 
 TEST(ScaledFrames, NeedFittedFrames) {
-  const Sphere b = sphere(12, 8);
+  const Sphere b = sphere_body(12, 8);
   DetailParams p;
   p.scaled_frames = true;
   p.fitted_frames = false;
-  auto e = encode_detail(b.poly, b.pos, shell(10, 1), p);
+  auto e = encode_detail(b.poly, b.pos, shell_points(10, 1), p);
   ASSERT_FALSE(e);
   EXPECT_EQ(e.status().code(), ErrorCode::kInvalidArgument);
   EXPECT_NE(e.status().message().find("scaled frames need fitted frames"), std::string::npos);
@@ -123,8 +103,8 @@ TEST(ScaledFrames, BatchedDecodingMatchesSingle) {
   // The batched decoder computes frames in its own (AVX2) kernel: same
   // scaled frames as compute_frames, to float rounding, on bodies stretched
   // unevenly (each polygon its own scale).
-  const Sphere b = sphere();
-  const auto g = shell(1200, 8);
+  const Sphere b = sphere_body();
+  const auto g = shell_points(1200, 8);
   DetailParams scaled;
   scaled.scaled_frames = true;
   auto enc = encode_detail(b.poly, b.pos, g, scaled);
@@ -160,8 +140,8 @@ TEST(ScaledFrames, BatchedDecodingMatchesSingle) {
 }
 
 TEST(ScaledFrames, FileKeepsTheFlag) {
-  const Sphere b = sphere(16, 10);
-  const auto g = shell(50, 2);
+  const Sphere b = sphere_body(16, 10);
+  const auto g = shell_points(50, 2);
   DetailParams scaled;
   scaled.scaled_frames = true;
   auto enc_s = encode_detail(b.poly, b.pos, g, scaled);
