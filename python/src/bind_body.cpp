@@ -1,6 +1,11 @@
 // Bodies (systems/body/): the parametric mannequin (parameters in, positions
 // out), MakeHuman bodies from the shared data, a user's own body arrays, and
 // body measurements as dicts or structured arrays.
+//
+// Why this file is long: it binds the body family's four classes (Body,
+// Mannequin, MakeHuman, their parameter dtypes) with their docstrings, which
+// are most of its lines; splitting them would scatter one family's Python
+// surface over several files.
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/builder.h>
 #include <atelier/systems/body/body_file.h>
