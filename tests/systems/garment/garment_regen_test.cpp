@@ -35,6 +35,8 @@
 #include <atelier/systems/body/makehuman_body.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 
+#include "systems/garment/makehuman_helpers.h"
+
 using namespace atelier;
 using namespace atelier::makehuman;
 namespace fs = std::filesystem;
@@ -172,9 +174,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
     h.name = hname;
     const auto* grp = lib.base().group(hname);
     ASSERT_NE(grp, nullptr);
-    h.verts.assign(grp->face_nodes.begin(), grp->face_nodes.end());
-    std::sort(h.verts.begin(), h.verts.end());
-    h.verts.erase(std::unique(h.verts.begin(), h.verts.end()), h.verts.end());
+    h.verts = garment_test::group_vertices(*grp);
     std::vector<Vec3d> src;
     for (auto v : h.verts) src.push_back(kMakeHumanToMetres * H0[v].cast<double>());
     h.enc = std::move(*encode_detail(poly, skin0, src, encode_options.detail));

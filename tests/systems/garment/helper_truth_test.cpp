@@ -26,8 +26,10 @@
 #include <fstream>
 #include <memory>
 
+#include "support/run_command.h"
 #include "support/shapes.h"
 #include "systems/garment/sphere_fixture.h"
+#include "systems/garment/makehuman_helpers.h"
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -42,13 +44,6 @@ double max_error(std::span<const Vec3d> a, std::span<const Vec3d> b) {
   double m = 0;
   for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, (a[i] - b[i]).norm());
   return m;
-}
-
-fs::path tmp_dir() {
-  const char* env = std::getenv("ATELIER_TMP");
-  fs::path d = (env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests") / "helper_truth";
-  fs::create_directories(d);
-  return d;
 }
 
 }  // namespace
@@ -147,7 +142,7 @@ TEST(ScaledFrames, FileKeepsTheFlag) {
   auto enc_s = encode_detail(b.poly, b.pos, g, scaled);
   auto enc_r = encode_detail(b.poly, b.pos, g);
   ASSERT_TRUE(enc_s && enc_r);
-  const fs::path d = tmp_dir();
+  const fs::path d = atelier::testing::scratch_dir("helper_truth");
   write_detail(*enc_s, d / "s.atd");
   write_detail(*enc_r, d / "r.atd");
   auto version = [](const fs::path& p) {
@@ -220,9 +215,7 @@ void run_helpers(std::size_t n, std::vector<HelperCase>& helpers, std::vector<st
     h.name = hname;
     const auto* grp = lib.base().group(hname);
     ASSERT_NE(grp, nullptr);
-    h.verts.assign(grp->face_nodes.begin(), grp->face_nodes.end());
-    std::sort(h.verts.begin(), h.verts.end());
-    h.verts.erase(std::unique(h.verts.begin(), h.verts.end()), h.verts.end());
+    h.verts = garment_test::group_vertices(*grp);
     PolygonSoup soup;
     for (auto v : h.verts) soup.positions.push_back(kMakeHumanToMetres * H0[v].cast<double>());
     std::vector<std::uint32_t> f;
