@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support/flatten_shapes.h"
+#include "tests/support/json_file.h"
 #include "tests/support/run_command.h"
 
 namespace atelier {
@@ -20,10 +21,7 @@ using testing::run_cli;
 using testing::scratch_dir;
 namespace fs = std::filesystem;
 
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream f(p);
-  return nlohmann::json::parse(f);
-}
+using atelier::testing::read_json;
 
 TEST(FlattenCli, SkirtPiecesFilesAndFigures) {
   const fs::path d = scratch_dir("flatten_cli");

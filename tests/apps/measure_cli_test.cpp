@@ -5,6 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/json_file.h"
 #include "tests/support/run_command.h"
 
 using atelier::testing::run_cli;
@@ -34,10 +35,7 @@ void write_grid(const fs::path& p, int n, double z, double sx) {
     }
 }
 
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream f(p);
-  return nlohmann::json::parse(f);
-}
+using atelier::testing::read_json;
 
 }  // namespace
 

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "tests/support/json_file.h"
 #include "tests/support/run_command.h"
 
 using atelier::testing::run_cli;
@@ -22,10 +23,7 @@ void write_box(const fs::path& p, const double lo[3], const double hi[3]) {
   f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
 }
 
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream f(p);
-  return nlohmann::json::parse(f);
-}
+using atelier::testing::read_json;
 
 TEST(NetCli, BooleanVolumesAndReport) {
   const fs::path d = scratch_dir("net_cli_boolean");

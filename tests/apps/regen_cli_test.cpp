@@ -27,13 +27,8 @@ using atelier::testing::read_bytes;
 using atelier::testing::template_args;
 
 using CliRun = atelier::testing::CommandResult;
+using atelier::testing::run_cli;
 using atelier::testing::scratch_dir;
-CliRun run(const std::string& args) {
-  return atelier::testing::run_cli(args);
-}
-fs::path dir(const std::string& name) {
-  return scratch_dir(name);
-}
 
 }  // namespace
 
@@ -48,9 +43,11 @@ TEST(RegenCli, EncodeWritesReadableTemplates) {
 }
 
 TEST(RegenCli, ByteIdenticalForOneAndTwoThreads) {
-  const fs::path a = dir("regen_t1"), b = dir("regen_t2");
-  const CliRun r1 = run("--threads 1 --seed 5 regen" + template_args() + " --count 6 --meshes 2 --out " + a.string());
-  const CliRun r2 = run("--threads 2 --seed 5 regen" + template_args() + " --count 6 --meshes 2 --out " + b.string());
+  const fs::path a = scratch_dir("regen_t1"), b = scratch_dir("regen_t2");
+  const CliRun r1 =
+      run_cli("--threads 1 --seed 5 regen" + template_args() + " --count 6 --meshes 2 --out " + a.string());
+  const CliRun r2 =
+      run_cli("--threads 2 --seed 5 regen" + template_args() + " --count 6 --meshes 2 --out " + b.string());
   ASSERT_EQ(r1.code, 0) << r1.out;
   ASSERT_EQ(r2.code, 0) << r2.out;
   EXPECT_EQ(read_bytes(a / "report.json"), read_bytes(b / "report.json"));
@@ -71,7 +68,7 @@ TEST(RegenCli, ByteIdenticalForOneAndTwoThreads) {
 }
 
 TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
-  const fs::path out = dir("regen_kill");
+  const fs::path out = scratch_dir("regen_kill");
   const std::string cmd =
       std::string(ATELIER_CLI) + " --threads 2 regen" + template_args() + " --count 60 --chunk 4 --out " + out.string();
   const pid_t pid = fork();
@@ -111,14 +108,14 @@ TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
        {std::string("--seed 9 --threads 2 regen") + template_args() + " --count 60 --chunk 4 --out " + out.string(),
         std::string("--threads 2 regen") + template_args() + " --count 60 --chunk 4 --levels 1 --out " +
             out.string()}) {
-    const CliRun refused = run(changed);
+    const CliRun refused = run_cli(changed);
     EXPECT_EQ(refused.code, 2) << refused.out;
     EXPECT_NE(refused.out.find(changed.find("--seed") == 0 ? "seed: 1 in the folder, 9 now" : "levels"),
               std::string::npos)
         << refused.out;
     EXPECT_EQ(records(), before);
   }
-  const CliRun again = run("--threads 2 regen" + template_args() + " --count 60 --chunk 4 --out " + out.string());
+  const CliRun again = run_cli("--threads 2 regen" + template_args() + " --count 60 --chunk 4 --out " + out.string());
   ASSERT_EQ(again.code, 0) << again.out;
   EXPECT_FALSE(fs::exists(stale));
   for (const auto& e : fs::recursive_directory_iterator(out))
@@ -133,9 +130,9 @@ TEST(RegenCli, ResumeAfterAKillLosesNothingFinished) {
 }
 
 TEST(RegenCli, BadInputIsReportedWithExitCodes) {
-  const fs::path out = dir("regen_bad");
+  const fs::path out = scratch_dir("regen_bad");
   // Missing template file: bad input (3), naming the file.
-  CliRun r = run("regen --template " + (out / "nope.template.json").string() + " --count 2 --out " + out.string());
+  CliRun r = run_cli("regen --template " + (out / "nope.template.json").string() + " --count 2 --out " + out.string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("nope.template.json"), std::string::npos) << r.out;
   // A corrupted template: bad input, naming the file.
@@ -144,7 +141,7 @@ TEST(RegenCli, BadInputIsReportedWithExitCodes) {
     text.resize(text.size() / 2);
     std::ofstream(out / "half.template.json") << text;
   }
-  r = run("regen --template " + (out / "half.template.json").string() + " --count 2 --out " + out.string());
+  r = run_cli("regen --template " + (out / "half.template.json").string() + " --count 2 --out " + out.string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("half.template.json"), std::string::npos) << r.out;
   // A directory body set whose reference has another topology: refused with what to do.
@@ -154,8 +151,8 @@ TEST(RegenCli, BadInputIsReportedWithExitCodes) {
     f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
   }
   fs::copy_file(out / "objs" / "ref.obj", out / "objs" / "b1.obj");
-  r = run("regen" + template_args() + " --source " + (out / "objs").string() + " --reference " +
-          (out / "objs" / "ref.obj").string() + " --out " + (out / "run").string());
+  r = run_cli("regen" + template_args() + " --source " + (out / "objs").string() + " --reference " +
+              (out / "objs" / "ref.obj").string() + " --out " + (out / "run").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("atelier encode"), std::string::npos) << r.out;
 }
@@ -164,7 +161,7 @@ TEST(RegenCli, CountsClearancesAndLevelsOutOfRangeAreUsageErrors) {
   // Issue 27: "--count -1" used to wrap to 2^64-1 and loop forever; a
   // clearance of 1e300 made one body take minutes. Each is refused before
   // any work (exit 2) with the option named.
-  const fs::path out = dir("regen_ranges");
+  const fs::path out = scratch_dir("regen_ranges");
   const std::string tpl = " --template " + (encoded_templates() / "skirt.template.json").string();
   struct Case {
     std::string args, says;
@@ -179,27 +176,27 @@ TEST(RegenCli, CountsClearancesAndLevelsOutOfRangeAreUsageErrors) {
                                          {"--count 2 --clearance 1e300", "--clearance"},
                                          {"--count 2 --levels 99", "--levels"},
                                          {"--count 2 --levels -3", "--levels"}}) {
-    const CliRun r = run("regen" + tpl + " " + c.args + " --out " + (out / "run").string());
+    const CliRun r = run_cli("regen" + tpl + " " + c.args + " --out " + (out / "run").string());
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
     EXPECT_NE(r.out.find(c.says), std::string::npos) << c.args << "\n" << r.out;
   }
   EXPECT_FALSE(fs::exists(out / "run" / "bodies")) << "nothing is started for a usage error";
-  const CliRun b = run("bodies --count -5 --out " + (out / "bodies").string());
+  const CliRun b = run_cli("bodies --count -5 --out " + (out / "bodies").string());
   EXPECT_EQ(b.code, 2) << b.out;
 }
 
 TEST(RegenCli, TwoTemplatesOfOneNameAndAMisspeltSourceAreRefused) {
-  const fs::path out = dir("regen_names");
+  const fs::path out = scratch_dir("regen_names");
   fs::create_directories(out / "a");
   fs::copy_file(encoded_templates() / "skirt.template.json", out / "a" / "skirt.template.json",
                 fs::copy_options::overwrite_existing);
-  CliRun r = run("regen --template " + (encoded_templates() / "skirt.template.json").string() + " --template " +
-                 (out / "a" / "skirt.template.json").string() + " --count 2 --out " + (out / "run").string());
+  CliRun r = run_cli("regen --template " + (encoded_templates() / "skirt.template.json").string() + " --template " +
+                     (out / "a" / "skirt.template.json").string() + " --count 2 --out " + (out / "run").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("both named 'skirt'"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(out / "run" / "bodies" / "mannequin-00000.json")) << r.out;
   // A typo in --source names the source instead of asking for --reference.
-  r = run("bodies --source mannequinn --count 2 --out " + (out / "b").string());
+  r = run_cli("bodies --source mannequinn --count 2 --out " + (out / "b").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("'mannequinn'"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("--reference is required"), std::string::npos) << r.out;
@@ -209,15 +206,15 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
   // Any garment mesh on the reference body (here the coarse top the profile
   // encoder writes) becomes a detail template (seed 001 section 6) and is
   // regenerated, then put through the collision pass, on every body.
-  const fs::path d = dir("regen_garment");
-  CliRun r = run("encode --garment " + (encoded_templates() / "top.obj").string() + " --out " + (d / "g").string());
+  const fs::path d = scratch_dir("regen_garment");
+  CliRun r = run_cli("encode --garment " + (encoded_templates() / "top.obj").string() + " --out " + (d / "g").string());
   ASSERT_EQ(r.code, 0) << r.out;
   ASSERT_TRUE(fs::exists(d / "g" / "top.atd"));
   ASSERT_TRUE(fs::exists(d / "g" / "top.obj"));
   const std::string args =
       " --seed 4 regen --template " + (d / "g" / "top.atd").string() + " --count 5 --meshes 1 --chunk 2 --out ";
-  const CliRun r1 = run("--threads 1" + args + (d / "t1").string());
-  const CliRun r2 = run("--threads 2" + args + (d / "t2").string());
+  const CliRun r1 = run_cli("--threads 1" + args + (d / "t1").string());
+  const CliRun r2 = run_cli("--threads 2" + args + (d / "t2").string());
   ASSERT_EQ(r1.code, 0) << r1.out;
   ASSERT_EQ(r2.code, 0) << r2.out;
   EXPECT_EQ(read_bytes(d / "t1" / "report.json"), read_bytes(d / "t2" / "report.json"));
@@ -233,7 +230,8 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
   // The first body's garment mesh, with the encoded garment's face count.
   std::size_t faces_in = 0, faces_out = 0;
   {
-    std::istringstream a(read_bytes(d / "g" / "top.obj")), b(read_bytes(d / "t1" / "bodies" / "mannequin-00000" / "top.obj"));
+    std::istringstream a(read_bytes(d / "g" / "top.obj")),
+        b(read_bytes(d / "t1" / "bodies" / "mannequin-00000" / "top.obj"));
     for (std::string l; std::getline(a, l);) faces_in += l.rfind("f ", 0) == 0;
     for (std::string l; std::getline(b, l);) faces_out += l.rfind("f ", 0) == 0;
   }
@@ -242,23 +240,23 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
   // Bad input: the template without its garment mesh names what is missing.
   fs::create_directories(d / "lone");
   fs::copy_file(d / "g" / "top.atd", d / "lone" / "top.atd");
-  r = run("regen --template " + (d / "lone" / "top.atd").string() + " --count 2 --out " + (d / "bad").string());
+  r = run_cli("regen --template " + (d / "lone" / "top.atd").string() + " --count 2 --out " + (d / "bad").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("top.obj"), std::string::npos) << r.out;
   // A garment file that does not exist.
-  r = run("encode --garment " + (d / "none.obj").string() + " --out " + (d / "g2").string());
+  r = run_cli("encode --garment " + (d / "none.obj").string() + " --out " + (d / "g2").string());
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("none.obj"), std::string::npos) << r.out;
   // Scaled frames (issue 26): stored in the .atd (version 4, unit frames
   // stay version 3), which regen then decodes with them; the garment still
   // ends outside every body, elsewhere than with unit frames.
-  r = run("encode --scaled-frames --garment " + (encoded_templates() / "top.obj").string() + " --out " +
-          (d / "gs").string());
+  r = run_cli("encode --scaled-frames --garment " + (encoded_templates() / "top.obj").string() + " --out " +
+              (d / "gs").string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(read_bytes(d / "gs" / "top.atd").substr(8, 4), std::string("\x04\0\0\0", 4));
   EXPECT_EQ(read_bytes(d / "g" / "top.atd").substr(8, 4), std::string("\x03\0\0\0", 4));
-  r = run("--seed 4 --threads 1 regen --template " + (d / "gs" / "top.atd").string() +
-          " --count 5 --meshes 1 --chunk 2 --out " + (d / "ts").string());
+  r = run_cli("--seed 4 --threads 1 regen --template " + (d / "gs" / "top.atd").string() +
+              " --count 5 --meshes 1 --chunk 2 --out " + (d / "ts").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const auto reps = nlohmann::json::parse(read_bytes(d / "ts" / "report.json"));
   EXPECT_EQ(reps["summary"]["completed"], 5) << reps.dump();
@@ -271,16 +269,16 @@ TEST(RegenCli, GarmentMeshesAreEncodedAsDetailTemplatesAndRegeneratedOutsideTheB
 TEST(RegenCli, ADirectoryOfMannequinBodiesKeepsTheMannequinFeatures) {
   // OBJ files carry no features; bodies with the mannequin's topology take
   // the mannequin's, so profile templates regenerate on them.
-  const fs::path d = dir("regen_objdir");
-  CliRun r = run("--seed 2 bodies --count 3 --meshes 3 --out " + (d / "set").string());
+  const fs::path d = scratch_dir("regen_objdir");
+  CliRun r = run_cli("--seed 2 bodies --count 3 --meshes 3 --out " + (d / "set").string());
   ASSERT_EQ(r.code, 0) << r.out;
   std::vector<fs::path> objs;
   for (const auto& e : fs::directory_iterator(d / "set"))
     if (e.path().extension() == ".obj") objs.push_back(e.path());
   ASSERT_EQ(objs.size(), 3u);
   std::sort(objs.begin(), objs.end());
-  r = run("--threads 2 regen" + template_args() + " --source " + (d / "set").string() + " --reference " +
-          objs[0].string() + " --out " + (d / "run").string());
+  r = run_cli("--threads 2 regen" + template_args() + " --source " + (d / "set").string() + " --reference " +
+              objs[0].string() + " --out " + (d / "run").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const auto rep = nlohmann::json::parse(read_bytes(d / "run" / "report.json"));
   EXPECT_EQ(rep["summary"]["completed"], 3) << rep.dump();

@@ -27,17 +27,13 @@ using atelier::testing::read_bytes;
 using atelier::testing::template_args;
 
 using CliRun = atelier::testing::CommandResult;
-CliRun run(const std::string& args) {
-  return atelier::testing::run_cli(args);
-}
+using atelier::testing::run_cli;
 
 std::string skirt() {
   return " --template " + (encoded_templates("skirt") / "skirt.template.json").string();
 }
 
-bool has(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+using atelier::testing::contains;
 
 }  // namespace
 
@@ -47,13 +43,14 @@ TEST(RegenJobCli, ARerunOfAnotherJobIsRefusedNamingTheDifference) {
   const fs::path d = atelier::testing::scratch_dir("regen_job_changed");
   const fs::path s = d / "s";
   const std::string job = " regen" + skirt() + " --count 2 --out " + s.string();
-  CliRun r = run("--seed 1" + job);
+  CliRun r = run_cli("--seed 1" + job);
   ASSERT_EQ(r.code, 0) << r.out;
   ASSERT_TRUE(fs::exists(s / "job.json"));
   const std::string seed1_report = read_bytes(s / "report.json");
   // Other template contents: the skirt's file with a byte more (a blank line).
   fs::create_directories(d / "other");
-  std::ofstream(d / "other" / "skirt.template.json") << read_bytes(encoded_templates("skirt") / "skirt.template.json") << "\n";
+  std::ofstream(d / "other" / "skirt.template.json")
+      << read_bytes(encoded_templates("skirt") / "skirt.template.json") << "\n";
   struct Case {
     std::string args, names;
   };
@@ -66,53 +63,53 @@ TEST(RegenJobCli, ARerunOfAnotherJobIsRefusedNamingTheDifference) {
                          {"--seed 1 regen --template " + (d / "other" / "skirt.template.json").string() +
                               " --count 2 --out " + s.string(),
                           "templates[0].bytes"}}) {
-    r = run(c.args);
+    r = run_cli(c.args);
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
-    EXPECT_TRUE(has(r.out, c.names)) << c.args << "\n" << r.out;
-    EXPECT_TRUE(has(r.out, "--no-resume")) << r.out;
+    EXPECT_TRUE(contains(r.out, c.names)) << c.args << "\n" << r.out;
+    EXPECT_TRUE(contains(r.out, "--no-resume")) << r.out;
     EXPECT_EQ(read_bytes(s / "report.json"), seed1_report) << "a refused run leaves the folder as it was: " << c.args;
   }
   // The same job resumes; thread count and chunk size are not part of it.
-  r = run("--threads 1 --seed 1" + job + " --chunk 1");
+  r = run_cli("--threads 1 --seed 1" + job + " --chunk 1");
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_TRUE(has(r.out, "0 now, 2 from an earlier run")) << r.out;
+  EXPECT_TRUE(contains(r.out, "0 now, 2 from an earlier run")) << r.out;
   // --no-resume recomputes every body: the report is a fresh seed-2 run's.
-  r = run("--seed 2" + job + " --no-resume");
+  r = run_cli("--seed 2" + job + " --no-resume");
   ASSERT_EQ(r.code, 0) << r.out;
-  r = run("--seed 2 regen" + skirt() + " --count 2 --out " + (d / "fresh2").string());
+  r = run_cli("--seed 2 regen" + skirt() + " --count 2 --out " + (d / "fresh2").string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(read_bytes(s / "report.json"), read_bytes(d / "fresh2" / "report.json"));
   EXPECT_NE(read_bytes(s / "report.json"), seed1_report);
   EXPECT_EQ(nlohmann::json::parse(read_bytes(s / "job.json"))["seed"], 2);
   // ... and the folder is now seed 2's: seed 1 is the other job.
-  r = run("--seed 1" + job);
+  r = run_cli("--seed 1" + job);
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_TRUE(has(r.out, "seed: 2 in the folder, 1 now")) << r.out;
+  EXPECT_TRUE(contains(r.out, "seed: 2 in the folder, 1 now")) << r.out;
 }
 
 TEST(RegenJobCli, RecordsWithoutAJobAreNotTrustedAndFailedBodiesAreRetried) {
   const fs::path d = atelier::testing::scratch_dir("regen_job_retry");
   const std::string job = "--seed 3 regen" + skirt() + " --count 3 --out " + d.string();
-  CliRun r = run(job);
+  CliRun r = run_cli(job);
   ASSERT_EQ(r.code, 0) << r.out;
   const fs::path rec = d / "bodies" / "mannequin-00001.json";
   const std::string good = read_bytes(rec);
   // A failed body (its record says why) is computed again by a rerun.
   std::ofstream(rec) << R"({"body": "mannequin-00001", "ok": false, "reason": "cancelled"})";
-  r = run(job);
+  r = run_cli(job);
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_TRUE(has(r.out, "1 now, 2 from an earlier run")) << r.out;
+  EXPECT_TRUE(contains(r.out, "1 now, 2 from an earlier run")) << r.out;
   EXPECT_EQ(read_bytes(rec), good);
   EXPECT_EQ(nlohmann::json::parse(read_bytes(d / "report.json"))["summary"]["failed"], 0);
   // Records with no job.json (an older atelier, or a --no-resume run killed
   // midway) may belong to any job: refused unless --no-resume.
   fs::remove(d / "job.json");
-  r = run(job);
+  r = run_cli(job);
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_TRUE(has(r.out, "no job.json")) << r.out;
-  r = run(job + " --no-resume");
+  EXPECT_TRUE(contains(r.out, "no job.json")) << r.out;
+  r = run_cli(job + " --no-resume");
   EXPECT_EQ(r.code, 0) << r.out;
-  EXPECT_TRUE(has(r.out, "3 now, 0 from an earlier run")) << r.out;
+  EXPECT_TRUE(contains(r.out, "3 now, 0 from an earlier run")) << r.out;
   EXPECT_TRUE(fs::exists(d / "job.json"));
 }
 
@@ -126,10 +123,10 @@ TEST(RegenJobCli, AFileWhereTheOutputFolderShouldBeIsBadInputNamingIt) {
        {"regen" + skirt() + " --count 2 --out " + file.string(),
         "regen" + skirt() + " --count 2 --out " + (file / "deeper").string(), "bodies --count 2 --out " + file.string(),
         "encode --template skirt --out " + file.string(), "demo --bodies 2 --out " + file.string()}) {
-    const CliRun r = run(args);
+    const CliRun r = run_cli(args);
     EXPECT_EQ(r.code, 3) << args << "\n" << r.out;
-    EXPECT_TRUE(has(r.out, file.string() + " is a file")) << args << "\n" << r.out;
-    EXPECT_FALSE(has(r.out, "internal error")) << args << "\n" << r.out;
+    EXPECT_TRUE(contains(r.out, file.string() + " is a file")) << args << "\n" << r.out;
+    EXPECT_FALSE(contains(r.out, "internal error")) << args << "\n" << r.out;
   }
   EXPECT_EQ(read_bytes(file), "not a folder\n");
 }
@@ -141,7 +138,7 @@ TEST(RegenJobCli, AFileWhereTheOutputFolderShouldBeIsBadInputNamingIt) {
 // regenerated positions or figures are not finite has failed.
 TEST(RegenJobCli, ABodysOutcomeDoesNotDependOnWhatIsWritten) {
   const fs::path d = atelier::testing::scratch_dir("regen_job_finite");
-  CliRun r = run("--seed 2 bodies --count 2 --meshes 2 --out " + (d / "set").string());
+  CliRun r = run_cli("--seed 2 bodies --count 2 --meshes 2 --out " + (d / "set").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const fs::path ref = d / "set" / "mannequin-00000.obj";
   const fs::path far = d / "set" / "mannequin-00001.obj";
@@ -164,14 +161,14 @@ TEST(RegenJobCli, ABodysOutcomeDoesNotDependOnWhatIsWritten) {
   std::vector<nlohmann::json> records;
   for (const char* meshes : {"0", "2"}) {
     const fs::path out = d / (std::string("m") + meshes);
-    r = run("regen" + skirt() + " --source " + (d / "set").string() + " --reference " + ref.string() + " --meshes " +
-            meshes + " --out " + out.string());
+    r = run_cli("regen" + skirt() + " --source " + (d / "set").string() + " --reference " + ref.string() +
+                " --meshes " + meshes + " --out " + out.string());
     EXPECT_EQ(r.code, 1) << r.out;
     const auto rep = nlohmann::json::parse(read_bytes(out / "report.json"));
     ASSERT_EQ(rep["bodies"].size(), 2u) << rep.dump();
     EXPECT_EQ(rep["bodies"][0]["ok"], true) << rep.dump();
     EXPECT_EQ(rep["bodies"][1]["ok"], false) << rep.dump();
-    EXPECT_FALSE(has(rep.dump(), "null")) << "no non-finite figure is reported: " << rep.dump();
+    EXPECT_FALSE(contains(rep.dump(), "null")) << "no non-finite figure is reported: " << rep.dump();
     records.push_back(rep["bodies"][1]);
   }
   EXPECT_EQ(records[0], records[1]) << "the far body's outcome and reason do not depend on --meshes";
@@ -184,12 +181,12 @@ TEST(RegenJobCli, ABodysOutcomeDoesNotDependOnWhatIsWritten) {
 // figures become exactly those of the body it now equals.
 TEST(RegenJobCli, ABodyFileEditedInPlaceIsComputedAgainOnResume) {
   const fs::path d = atelier::testing::scratch_dir("regen_job_edited_body");
-  CliRun r = run("--seed 3 bodies --count 3 --meshes 3 --out " + (d / "set").string());
+  CliRun r = run_cli("--seed 3 bodies --count 3 --meshes 3 --out " + (d / "set").string());
   ASSERT_EQ(r.code, 0) << r.out;
   const fs::path ref = d / "set" / "mannequin-00000.obj";
   const std::string job = "regen" + skirt() + " --source " + (d / "set").string() + " --reference " + ref.string() +
                           " --meshes 0 --out " + (d / "o").string();
-  r = run(job);
+  r = run_cli(job);
   ASSERT_EQ(r.code, 0) << r.out;
   const auto record = [&](const char* body) {
     return nlohmann::json::parse(read_bytes(d / "o" / "bodies" / (std::string(body) + ".json")));
@@ -197,16 +194,16 @@ TEST(RegenJobCli, ABodyFileEditedInPlaceIsComputedAgainOnResume) {
   const nlohmann::json one = record("mannequin-00001"), two = record("mannequin-00002");
   ASSERT_TRUE(two.contains("input")) << two.dump();
   EXPECT_NE(one["templates"], two["templates"]) << "two different bodies";
-  r = run(job);
+  r = run_cli(job);
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_TRUE(has(r.out, "(0 now, 3 from an earlier run)")) << r.out;
+  EXPECT_TRUE(contains(r.out, "(0 now, 3 from an earlier run)")) << r.out;
 
   // mannequin-00002.obj now holds mannequin-00001's body.
   std::ofstream(d / "set" / "mannequin-00002.obj", std::ios::binary | std::ios::trunc)
       << read_bytes(d / "set" / "mannequin-00001.obj");
-  r = run(job);
+  r = run_cli(job);
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_TRUE(has(r.out, "(1 now, 2 from an earlier run)")) << r.out;
+  EXPECT_TRUE(contains(r.out, "(1 now, 2 from an earlier run)")) << r.out;
   const nlohmann::json again = record("mannequin-00002");
   EXPECT_NE(again["input"], two["input"]);
   EXPECT_EQ(again["input"]["crc32"], one["input"]["crc32"]);
@@ -233,7 +230,7 @@ TEST(RegenJobCli, BodiesAndDemoRemoveTheTemporariesOfKilledRuns) {
     const fs::path stale_sub = c.out / c.sub / ("mannequin-00000.obj.tmp." + dead + ".3");
     const fs::path live = c.out / c.sub / "other.obj.tmp.1.0";  // pid 1 is always alive
     for (const fs::path& p : {stale_top, stale_sub, live}) std::ofstream(p) << "partial";
-    const CliRun r = run(c.args);
+    const CliRun r = run_cli(c.args);
     ASSERT_EQ(r.code, 0) << c.args << "\n" << r.out;
     EXPECT_FALSE(fs::exists(stale_top)) << c.args;
     EXPECT_FALSE(fs::exists(stale_sub)) << c.args;
@@ -250,14 +247,14 @@ TEST(RegenJobCli, DemoPicksTheSamePicturesByQualityFigures) {
   std::vector<nlohmann::json> reports;
   for (const char* run_dir : {"a", "b"}) {
     const fs::path out = d / run_dir;
-    const CliRun r = run("--seed 3 demo --bodies 3 --meshes 0 --out " + out.string());
+    const CliRun r = run_cli("--seed 3 demo --bodies 3 --meshes 0 --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.out;
     std::vector<std::string> names;
     for (const auto& e : fs::directory_iterator(out / "pictures")) names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     pictures.push_back(names);
     const std::string html = read_bytes(out / "report.html");
-    EXPECT_FALSE(has(html, "_ms)")) << "a picture is chosen by a timing";
+    EXPECT_FALSE(contains(html, "_ms)")) << "a picture is chosen by a timing";
     // The report without its timings.
     nlohmann::json rep = nlohmann::json::parse(read_bytes(out / "report.json"));
     nlohmann::json flat = rep.flatten();
@@ -281,15 +278,15 @@ TEST(RegenJobCli, DemoPicksTheSamePicturesByQualityFigures) {
 TEST(RegenJobCli, RenderRefusesAPictureBeyondItsMemoryLimit) {
   const fs::path d = atelier::testing::scratch_dir("regen_job_render");
   const fs::path body = encoded_templates("skirt") / "skirt.obj";
-  CliRun r = run("render --body " + body.string() + " --view both --width 8192 --height 8192 --supersample 8 --out " +
-                 (d / "big.png").string());
+  CliRun r = run_cli("render --body " + body.string() +
+                     " --view both --width 8192 --height 8192 --supersample 8 --out " + (d / "big.png").string());
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_TRUE(has(r.out, "8192 x 8192")) << r.out;
-  EXPECT_TRUE(has(r.out, "GB of memory")) << r.out;
-  EXPECT_TRUE(has(r.out, "limit is 2.1 GB")) << r.out;
+  EXPECT_TRUE(contains(r.out, "8192 x 8192")) << r.out;
+  EXPECT_TRUE(contains(r.out, "GB of memory")) << r.out;
+  EXPECT_TRUE(contains(r.out, "limit is 2.1 GB")) << r.out;
   EXPECT_FALSE(fs::exists(d / "big.png"));
   // Within the limit it renders.
-  r = run("render --body " + body.string() + " --width 64 --height 80 --out " + (d / "small.png").string());
+  r = run_cli("render --body " + body.string() + " --width 64 --height 80 --out " + (d / "small.png").string());
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(fs::exists(d / "small.png"));
 }

@@ -24,9 +24,7 @@ using atelier::testing::template_args;
 
 using CliRun = atelier::testing::CommandResult;
 
-CliRun run(const std::string& args) {
-  return atelier::testing::run_cli(args);
-}
+using atelier::testing::run_cli;
 
 std::vector<fs::path> records(const fs::path& out) {
   std::vector<fs::path> r;
@@ -40,7 +38,7 @@ std::vector<fs::path> records(const fs::path& out) {
 
 TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
   const fs::path out = atelier::testing::scratch_dir("regen_patterns");
-  const CliRun r = run("--threads 2 regen" + template_args() + " --count 1 --patterns --out " + out.string());
+  const CliRun r = run_cli("--threads 2 regen" + template_args() + " --count 1 --patterns --out " + out.string());
   ASSERT_EQ(r.code, 0) << r.out;
   const std::map<std::string, std::size_t> pieces = {{"top", 5}, {"skirt", 1}, {"trousers", 3}};
   const auto recs = records(out);
@@ -78,7 +76,7 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
   ASSERT_EQ(rep["bodies"].size(), 1u);
   EXPECT_TRUE(rep["bodies"][0].contains("patterns"));
   // A rerun redoes nothing: every body was complete.
-  const CliRun again = run("--threads 2 regen" + template_args() + " --count 1 --patterns --out " + out.string());
+  const CliRun again = run_cli("--threads 2 regen" + template_args() + " --count 1 --patterns --out " + out.string());
   ASSERT_EQ(again.code, 0) << again.out;
   const auto timing = nlohmann::json::parse(read_bytes(out / "timing.json"));
   EXPECT_EQ(timing["skipped_complete"].get<std::size_t>(), 1u);
@@ -94,8 +92,8 @@ TEST(RegenPatternsCli, TheTopIsCutAlongItsMarkedSeamsUnlessTold) {
   for (const bool marked : {true, false}) {
     SCOPED_TRACE(marked ? "marked" : "--no-marked-seams");
     const fs::path out = atelier::testing::scratch_dir(marked ? "regen_top_marked" : "regen_top_unmarked");
-    const CliRun r = run("regen" + top + " --count 1 --patterns" + (marked ? "" : " --no-marked-seams") + " --out " +
-                         out.string());
+    const CliRun r = run_cli("regen" + top + " --count 1 --patterns" + (marked ? "" : " --no-marked-seams") +
+                             " --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.out;
     const auto recs = records(out);
     ASSERT_EQ(recs.size(), 1u);
@@ -109,10 +107,10 @@ TEST(RegenPatternsCli, TheTopIsCutAlongItsMarkedSeamsUnlessTold) {
 TEST(RegenPatternsCli, PatternsAfterARunWithoutThemRedoTheBodies) {
   const fs::path out = atelier::testing::scratch_dir("regen_patterns_late");
   const std::string skirt = " --template " + (encoded_templates() / "skirt.template.json").string();
-  const CliRun a = run("regen" + skirt + " --count 2 --out " + out.string());
+  const CliRun a = run_cli("regen" + skirt + " --count 2 --out " + out.string());
   ASSERT_EQ(a.code, 0) << a.out;
   EXPECT_FALSE(fs::exists(out / "bodies" / records(out)[0].stem() / "patterns"));
-  const CliRun b = run("regen" + skirt + " --count 2 --patterns --out " + out.string());
+  const CliRun b = run_cli("regen" + skirt + " --count 2 --patterns --out " + out.string());
   ASSERT_EQ(b.code, 0) << b.out;
   const auto timing = nlohmann::json::parse(read_bytes(out / "timing.json"));
   EXPECT_EQ(timing["regenerated_now"].get<std::size_t>(), 2u);

@@ -26,9 +26,7 @@ using atelier::testing::read_bytes;
 using atelier::testing::run_cli;
 using atelier::testing::scratch_dir;
 
-bool has(const std::string& s, const std::string& what) {
-  return s.find(what) != std::string::npos;
-}
+using atelier::testing::contains;
 
 TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
   const fs::path d = scratch_dir("regen_report_cli");
@@ -94,16 +92,16 @@ TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
   if (twice) EXPECT_EQ(read_bytes(o / "bodies.csv"), read_bytes(d / "t2" / "bodies.csv"));
 
   const std::string html = read_bytes(o / "report.html");
-  EXPECT_TRUE(has(html, "<a id=\"csv\" href=\"bodies.csv\" download>"));
-  EXPECT_TRUE(has(html, "<svg class=\"hist\" id=\"hist-skirt_strain_p95_pct\""));
-  EXPECT_TRUE(has(html, "<svg class=\"hist\" id=\"hist-skirt_min_clearance_mm\""));
-  EXPECT_TRUE(has(html, ">skirt: edge strain (95th percentile) (%)</text>"));
-  EXPECT_TRUE(has(html, "id=\"worst-skirt_min_clearance_mm\""));
-  EXPECT_TRUE(has(html, ">lowest skirt: smallest clearance (mm)</caption>"));
-  EXPECT_TRUE(has(html, ">Garment vertices inside the body (all bodies)</th>"));
-  EXPECT_TRUE(has(html, most_strained + ": clearance change (highest skirt: edge strain (95th percentile))"));
-  EXPECT_TRUE(has(html, "<span class=\"bar-min\">0 %</span>"));
-  EXPECT_FALSE(has(html, "<table id=\"rows\">"));
+  EXPECT_TRUE(contains(html, "<a id=\"csv\" href=\"bodies.csv\" download>"));
+  EXPECT_TRUE(contains(html, "<svg class=\"hist\" id=\"hist-skirt_strain_p95_pct\""));
+  EXPECT_TRUE(contains(html, "<svg class=\"hist\" id=\"hist-skirt_min_clearance_mm\""));
+  EXPECT_TRUE(contains(html, ">skirt: edge strain (95th percentile) (%)</text>"));
+  EXPECT_TRUE(contains(html, "id=\"worst-skirt_min_clearance_mm\""));
+  EXPECT_TRUE(contains(html, ">lowest skirt: smallest clearance (mm)</caption>"));
+  EXPECT_TRUE(contains(html, ">Garment vertices inside the body (all bodies)</th>"));
+  EXPECT_TRUE(contains(html, most_strained + ": clearance change (highest skirt: edge strain (95th percentile))"));
+  EXPECT_TRUE(contains(html, "<span class=\"bar-min\">0 %</span>"));
+  EXPECT_FALSE(contains(html, "<table id=\"rows\">"));
   // The strain picture's range: the largest per-vertex strain (the largest
   // of each vertex's edges) is the record's strain_max, computed apart by
   // the regeneration's quality pass.

@@ -20,11 +20,9 @@ using namespace atelier;
 namespace {
 
 using Run = atelier::testing::CommandResult;
-Run run(const std::string& args) {
-  return atelier::testing::run_cli(args);
-}
+using atelier::testing::run_cli;
 
-struct Files {
+struct SketchFiles {
   fs::path dir, mesh, strokes;
 };
 
@@ -36,8 +34,8 @@ Stroke stroke(StrokeTool t, const Camera& cam, std::vector<Vec3d> pts, bool thro
   return s;
 }
 
-Files setup(const std::string& name, bool fold = false) {
-  Files f;
+SketchFiles sketch_setup(const std::string& name, bool fold = false) {
+  SketchFiles f;
   f.dir = atelier::testing::scratch_dir(name);
   f.mesh = f.dir / "sphere.obj";
   Model m;
@@ -60,7 +58,7 @@ Files setup(const std::string& name, bool fold = false) {
   return f;
 }
 
-std::string args(const Files& f, const fs::path& out, const std::string& extra = "") {
+std::string sketch_args(const SketchFiles& f, const fs::path& out, const std::string& extra = "") {
   return "sketch --mesh " + f.mesh.string() + " --strokes " + f.strokes.string() + " --out " + out.string() + " " +
          extra;
 }
@@ -68,8 +66,8 @@ std::string args(const Files& f, const fs::path& out, const std::string& extra =
 }  // namespace
 
 TEST(SketchCli, PaintsCutsAndPartitionsIntoGroups) {
-  const Files f = setup("sketch-cli-ok");
-  auto r = run(args(f, f.dir / "out.obj", "--json " + (f.dir / "report.json").string()));
+  const SketchFiles f = sketch_setup("sketch-cli-ok");
+  auto r = run_cli(sketch_args(f, f.dir / "out.obj", "--json " + (f.dir / "report.json").string()));
   ASSERT_EQ(r.code, 0) << r.out;
   // Pieces become OBJ groups.
   const Model m = read_obj(f.dir / "out.obj");
@@ -92,7 +90,7 @@ TEST(SketchCli, PaintsCutsAndPartitionsIntoGroups) {
   EXPECT_EQ(j["tools"][2]["pieces"].size(), 2u);
   EXPECT_TRUE(j["tools"][2]["curves"][0]["closed"].get<bool>());
   // The native format keeps the painted curves and the joint.
-  auto a = run(args(f, f.dir / "out.atm"));
+  auto a = run_cli(sketch_args(f, f.dir / "out.atm"));
   ASSERT_EQ(a.code, 0) << a.out;
   const Model n = read_model(f.dir / "out.atm");
   EXPECT_TRUE(validate(n));
@@ -101,7 +99,7 @@ TEST(SketchCli, PaintsCutsAndPartitionsIntoGroups) {
 }
 
 TEST(SketchCli, BadStrokeFilesNameTheFileAndTheJsonLocation) {
-  const Files f = setup("sketch-cli-bad-strokes");
+  const SketchFiles f = sketch_setup("sketch-cli-bad-strokes");
   const fs::path out = f.dir / "out.obj";
   auto write = [&](const std::string& name, const std::string& text) {
     std::ofstream(f.dir / name) << text;
@@ -123,50 +121,50 @@ TEST(SketchCli, BadStrokeFilesNameTheFileAndTheJsonLocation) {
   };
   for (const Case& c : cases) {
     const fs::path p = write(c.name, c.text);
-    auto r = run("sketch --mesh " + f.mesh.string() + " --strokes " + p.string() + " --out " + out.string());
+    auto r = run_cli("sketch --mesh " + f.mesh.string() + " --strokes " + p.string() + " --out " + out.string());
     EXPECT_EQ(r.code, 3) << c.name << ": " << r.out;
     EXPECT_NE(r.out.find(p.string()), std::string::npos) << r.out;
     EXPECT_NE(r.out.find(c.expect), std::string::npos) << c.name << ": " << r.out;
     EXPECT_FALSE(fs::exists(out));
   }
-  auto missing = run("sketch --mesh " + f.mesh.string() + " --strokes " + (f.dir / "nope.json").string() + " --out " +
-                     out.string());
+  auto missing = run_cli("sketch --mesh " + f.mesh.string() + " --strokes " + (f.dir / "nope.json").string() +
+                         " --out " + out.string());
   EXPECT_EQ(missing.code, 3) << missing.out;
   EXPECT_NE(missing.out.find("nope.json"), std::string::npos);
 }
 
 TEST(SketchCli, BadMeshesAndOptions) {
-  const Files f = setup("sketch-cli-bad-mesh");
+  const SketchFiles f = sketch_setup("sketch-cli-bad-mesh");
   const fs::path out = f.dir / "out.obj";
   for (const char* bad : {"obj_nonmanifold_edge.obj", "obj_nan_coordinate.obj", "ply_ascii_truncated.ply"}) {
     const fs::path p = fs::path(ATELIER_TEST_DATA) / "malformed" / bad;
-    auto r = run("sketch --mesh " + p.string() + " --strokes " + f.strokes.string() + " --out " + out.string());
+    auto r = run_cli("sketch --mesh " + p.string() + " --strokes " + f.strokes.string() + " --out " + out.string());
     EXPECT_EQ(r.code, 3) << bad << ": " << r.out;
     EXPECT_NE(r.out.find(bad), std::string::npos) << r.out;
   }
-  auto nomesh = run("sketch --mesh " + (f.dir / "none.obj").string() + " --strokes " + f.strokes.string() + " --out " +
-                    out.string());
+  auto nomesh = run_cli("sketch --mesh " + (f.dir / "none.obj").string() + " --strokes " + f.strokes.string() +
+                        " --out " + out.string());
   EXPECT_EQ(nomesh.code, 3);
   EXPECT_NE(nomesh.out.find("none.obj"), std::string::npos);
-  EXPECT_EQ(run(args(f, f.dir / "out.xyz")).code, 3);
-  auto surf = run(args(f, out, "--surface collar"));
+  EXPECT_EQ(run_cli(sketch_args(f, f.dir / "out.xyz")).code, 3);
+  auto surf = run_cli(sketch_args(f, out, "--surface collar"));
   EXPECT_EQ(surf.code, 3);
   EXPECT_NE(surf.out.find("no surface named 'collar'"), std::string::npos);
-  EXPECT_EQ(run("sketch --mesh " + f.mesh.string()).code, 2);  // usage
+  EXPECT_EQ(run_cli("sketch --mesh " + f.mesh.string()).code, 2);  // usage
   EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(SketchCli, AFailingStrokeStopsOrIsSkipped) {
   // A visible-only cut of a closed sphere separates nothing.
-  const Files f = setup("sketch-cli-fail", true);
+  const SketchFiles f = sketch_setup("sketch-cli-fail", true);
   const fs::path out = f.dir / "out.obj";
-  auto r = run(args(f, out, "--json " + (f.dir / "r.json").string()));
+  auto r = run_cli(sketch_args(f, out, "--json " + (f.dir / "r.json").string()));
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("stroke 0 (cut)"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(out));
   const auto j = nlohmann::json::parse(std::ifstream(f.dir / "r.json"));
   EXPECT_FALSE(j["ok"].get<bool>());
-  auto k = run(args(f, out, "--keep-going --json " + (f.dir / "k.json").string()));
+  auto k = run_cli(sketch_args(f, out, "--keep-going --json " + (f.dir / "k.json").string()));
   EXPECT_EQ(k.code, 1) << k.out;
   EXPECT_TRUE(fs::exists(out));
   const auto jk = nlohmann::json::parse(std::ifstream(f.dir / "k.json"));

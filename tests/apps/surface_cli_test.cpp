@@ -2,15 +2,15 @@
 // crossing curves, in both the CURVE i and OBJ l formats) becomes an OBJ
 // surface, a control mesh and a JSON report; bad input exits 3 naming the
 // curve, usage errors exit 2.
-#include <gtest/gtest.h>
-
-#include <nlohmann/json.hpp>
-
-#include <fstream>
-
-#include "tests/support/run_command.h"
 #include <atelier/io/obj.h>
 #include <atelier/storage/validate.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/json_file.h"
+#include "tests/support/run_command.h"
 
 using atelier::testing::run_cli;
 using atelier::testing::scratch_dir;
@@ -46,10 +46,7 @@ void write_grid_curves(const fs::path& p, bool obj) {
     }
 }
 
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream f(p);
-  return nlohmann::json::parse(f);
-}
+using atelier::testing::read_json;
 
 }  // namespace
 

@@ -48,7 +48,7 @@ void rewrite_obj(const fs::path& in, const fs::path& out, Map map) {
   }
 }
 
-std::vector<P> vertices(const fs::path& obj) {
+std::vector<P> obj_vertices(const fs::path& obj) {
   std::istringstream text(read_bytes(obj));
   std::vector<P> v;
   for (std::string l; std::getline(text, l);)
@@ -112,7 +112,7 @@ TEST(UserBodyCli, AMannequinFamilyInCentimetresZUpEncodesAndRegeneratesAsInMetre
   // exact, and dividing by 100 gives them back).
   EXPECT_EQ(read_bytes(d / "m" / "tpl" / "top.atd"), read_bytes(d / "cm" / "tpl" / "top.atd"));
   EXPECT_EQ(read_bytes(d / "m" / "tpl" / "top.obj"), read_bytes(d / "cm" / "tpl" / "top.obj"));
-  const auto tm = vertices(d / "m" / "tpl" / "top.obj");
+  const auto tm = obj_vertices(d / "m" / "tpl" / "top.obj");
   // Each body's garment: in the files' frame, the metres/Y-up result mapped
   // (the meshes are written in float: relative 1e-6).
   const auto rep_m = nlohmann::json::parse(read_bytes(d / "m" / "run" / "report.json"));
@@ -121,8 +121,8 @@ TEST(UserBodyCli, AMannequinFamilyInCentimetresZUpEncodesAndRegeneratesAsInMetre
   ASSERT_EQ(rep_c["summary"]["completed"], 2) << rep_c.dump();
   for (const fs::path& o : objs) {
     const std::string body = o.stem().string();
-    const auto gm = vertices(d / "m" / "run" / "bodies" / body / "top.obj");
-    const auto gc = vertices(d / "cm" / "run" / "bodies" / body / "top.obj");
+    const auto gm = obj_vertices(d / "m" / "run" / "bodies" / body / "top.obj");
+    const auto gc = obj_vertices(d / "cm" / "run" / "bodies" / body / "top.obj");
     ASSERT_EQ(gm.size(), gc.size());
     ASSERT_GT(gm.size(), 10u);
     double worst = 0, moved = 0;

@@ -1,13 +1,13 @@
 // The MakeHuman readers (io/makehuman) on bad input, issue 27: numbers out
 // of range, byte-order marks, files with nothing in them, whitespace-only
 // lines in a .mhclo `verts` section, JSON of the wrong shape.
+#include <atelier/io/makehuman/makehuman.h>
+#include <atelier/io/makehuman/mhclo.h>
 #include <gtest/gtest.h>
 
 #include <bit>
 #include <charconv>
 
-#include <atelier/io/makehuman/makehuman.h>
-#include <atelier/io/makehuman/mhclo.h>
 #include "io_test_support.h"
 
 using namespace atelier;
@@ -15,7 +15,7 @@ using namespace atelier::makehuman;
 using namespace atelier::test;
 
 namespace {
-const std::string kBom = "\xEF\xBB\xBF";
+const std::string kUtf8Bom = "\xEF\xBB\xBF";
 const std::string kMhclo =
     "name shirt\nobj_file shirt.obj\nx_scale 1 2 1.5\nverts 0\n1 2 3 0.2 0.3 0.5 0.01 -0.02 0.03\n7\n"
     "4 5 6 1 0 0 0 0 0\ndelete_verts\n1 2 - 4\n";
@@ -36,7 +36,7 @@ TEST(MakeHumanIo, MhcloWhitespaceOnlyLineInsideVertsIsSkipped) {
     EXPECT_EQ(b.refs[i].offset, plain.refs[i].offset);
   }
   EXPECT_EQ(b.delete_verts, (std::vector<std::uint32_t>{1, 2, 3, 4}));
-  EXPECT_EQ(parse_mhclo(kBom + kMhclo, "bom.mhclo", 100).name, "shirt");
+  EXPECT_EQ(parse_mhclo(kUtf8Bom + kMhclo, "bom.mhclo", 100).name, "shirt");
 }
 
 TEST(MakeHumanIo, MhcloNumbersAreCheckedWhole) {
@@ -44,7 +44,7 @@ TEST(MakeHumanIo, MhcloNumbersAreCheckedWhole) {
     expect_error([&] { (void)parse_mhclo("verts 0\n" + line + "\n", "b.mhclo", 100); }, ErrorCode::kParse, frags);
   };
   bad("1 2 3 0.2 0.3 0.5 1e400 0 0", {"b.mhclo:2", "'1e400'", "out of the range"});
-  bad("1e300 2 3 0.2 0.3 0.5 0 0 0", {"b.mhclo:2", "not a vertex index"});   // was cast to long long: UB
+  bad("1e300 2 3 0.2 0.3 0.5 0 0 0", {"b.mhclo:2", "not a vertex index"});  // was cast to long long: UB
   bad("1.5", {"b.mhclo:2", "not a vertex index"});                          // was truncated to 1
   bad("1 2 3 0.2 0.3 nan 0 0 0", {"b.mhclo:2", "non-finite"});
   bad("1 2 300 0.2 0.3 0.5 0 0 0", {"b.mhclo:2", "vertex index 300 out of range"});
@@ -56,7 +56,7 @@ TEST(MakeHumanIo, MhcloNumbersAreCheckedWhole) {
 }
 
 TEST(MakeHumanIo, TargetsRefuseOutOfRangeNumbersAndAcceptEmptyTargets) {
-  const Target t = parse_target(kBom + "# c\n3 0.5 -0.25 1\n", "dir/a-b.target", 10);
+  const Target t = parse_target(kUtf8Bom + "# c\n3 0.5 -0.25 1\n", "dir/a-b.target", 10);
   EXPECT_EQ(t.name, "a-b");
   EXPECT_EQ(t.index, (std::vector<std::uint32_t>{3}));
   expect_error([] { (void)parse_target("3 1e39 0 0\n", "f.target", 10); }, ErrorCode::kParse,
@@ -70,7 +70,7 @@ TEST(MakeHumanIo, TargetsRefuseOutOfRangeNumbersAndAcceptEmptyTargets) {
 
 TEST(MakeHumanIo, BaseMeshRefusesNoGeometryAndSkipsTheMark) {
   const std::string quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\ng body\nf 1 2 3 4\n";
-  const BaseMesh a = parse_base_mesh(quad, "q.obj"), b = parse_base_mesh(kBom + quad, "qb.obj");
+  const BaseMesh a = parse_base_mesh(quad, "q.obj"), b = parse_base_mesh(kUtf8Bom + quad, "qb.obj");
   EXPECT_EQ(b.positions, a.positions);
   ASSERT_EQ(b.groups.size(), 1u);
   EXPECT_EQ(b.groups[0].face_nodes, a.groups[0].face_nodes);

@@ -1,19 +1,19 @@
+#include <atelier/io/off.h>
+#include <atelier/io/ply.h>
+#include <atelier/storage/topology.h>
 #include <gtest/gtest.h>
 
 #include <bit>
 #include <cstring>
 
-#include <atelier/io/off.h>
-#include <atelier/io/ply.h>
 #include "io_test_support.h"
-#include <atelier/storage/topology.h>
 
 using namespace atelier;
 using namespace atelier::test;
 
 namespace {
 
-const std::filesystem::path kGood = std::filesystem::path(ATELIER_TEST_DATA) / "good";
+const std::filesystem::path kGoodDir = std::filesystem::path(ATELIER_TEST_DATA) / "good";
 
 /// Big- or little-endian bytes of a scalar, built without the reader's code.
 template <class T>
@@ -37,20 +37,22 @@ std::string exotic_cube_ply(bool big) {
        "property double z\r\nproperty ushort d\r\nproperty int e\r\nproperty uint f\r\nproperty float64 g\r\n"
        "property list uint8 float32 junk\r\n"
        "element material 2\r\nproperty int16 id\r\n"
-       "element face 6\r\nproperty uint32 tag\r\nproperty list int ushort vertex_index\r\nproperty list uchar double more\r\n"
+       "element face 6\r\nproperty uint32 tag\r\nproperty list int ushort vertex_index\r\nproperty list uchar double "
+       "more\r\n"
        "end_header\n";
   for (const Vec3d& p : c.positions) {
     s += bytes_of<std::int8_t>(-3, big) + bytes_of<double>(p.x(), big) + bytes_of<std::uint8_t>(200, big) +
-         bytes_of<float>(static_cast<float>(p.y()), big) + bytes_of<std::int16_t>(-300, big) + bytes_of<double>(p.z(), big) +
-         bytes_of<std::uint16_t>(60000, big) + bytes_of<std::int32_t>(-7, big) + bytes_of<std::uint32_t>(7, big) +
-         bytes_of<double>(1e300, big) + bytes_of<std::uint8_t>(2, big) + bytes_of<float>(1.5f, big) +
-         bytes_of<float>(2.5f, big);
+         bytes_of<float>(static_cast<float>(p.y()), big) + bytes_of<std::int16_t>(-300, big) +
+         bytes_of<double>(p.z(), big) + bytes_of<std::uint16_t>(60000, big) + bytes_of<std::int32_t>(-7, big) +
+         bytes_of<std::uint32_t>(7, big) + bytes_of<double>(1e300, big) + bytes_of<std::uint8_t>(2, big) +
+         bytes_of<float>(1.5f, big) + bytes_of<float>(2.5f, big);
   }
   s += bytes_of<std::int16_t>(1, big) + bytes_of<std::int16_t>(2, big);
   for (std::size_t f = 0; f + 1 < c.offsets.size(); ++f) {
     s += bytes_of<std::uint32_t>(99, big);
     s += bytes_of<std::int32_t>(static_cast<std::int32_t>(c.offsets[f + 1] - c.offsets[f]), big);
-    for (std::uint32_t k = c.offsets[f]; k < c.offsets[f + 1]; ++k) s += bytes_of<std::uint16_t>(static_cast<std::uint16_t>(c.nodes[k]), big);
+    for (std::uint32_t k = c.offsets[f]; k < c.offsets[f + 1]; ++k)
+      s += bytes_of<std::uint16_t>(static_cast<std::uint16_t>(c.nodes[k]), big);
     s += bytes_of<std::uint8_t>(1, big) + bytes_of<double>(0.25, big);
   }
   return s;
@@ -140,7 +142,7 @@ TEST(Ply, SkipsEveryPropertyTypeInBothEndians) {
     SCOPED_TRACE(big ? "big endian" : "little endian");
     expect_is_cube(read_ply_from_string(exotic_cube_ply(big), "exotic.ply"));
   }
-  expect_is_cube(read_ply(kGood / "cube_ascii.ply"));
+  expect_is_cube(read_ply(kGoodDir / "cube_ascii.ply"));
 }
 
 TEST(Ply, UvFromVertexProperties) {
@@ -195,7 +197,7 @@ TEST(Ply, CorruptedBytesNeverCrash) {
 }
 
 TEST(Ply, EveryPrefixOfAnAsciiFileReadsOrFailsCleanly) {
-  const std::string good = slurp(kGood / "cube_ascii.ply");
+  const std::string good = slurp(kGoodDir / "cube_ascii.ply");
   for (std::size_t n = 0; n <= good.size(); ++n) {
     try {
       expect_is_cube(read_ply_from_string(std::string_view(good).substr(0, n), "cut.ply"));
@@ -210,8 +212,8 @@ TEST(Off, RoundTripIsExactAndVariantsRead) {
   TempDir dir;
   write_off(m, dir / "grid.off");
   EXPECT_EQ(diff_tables(m, read_off(dir / "grid.off")), "");
-  expect_is_cube(read_off(kGood / "cube.off"));
-  expect_is_cube(read_off(kGood / "cube_colored.off"));
+  expect_is_cube(read_off(kGoodDir / "cube.off"));
+  expect_is_cube(read_off(kGoodDir / "cube_colored.off"));
   // NOFF with normals, counts on the header line, comments between.
   const std::string noff =
       "NOFF 4 2 5 # header with counts\n"
@@ -225,7 +227,7 @@ TEST(Off, RoundTripIsExactAndVariantsRead) {
 }
 
 TEST(Off, EveryPrefixReadsOrFailsCleanly) {
-  const std::string good = slurp(kGood / "cube_colored.off");
+  const std::string good = slurp(kGoodDir / "cube_colored.off");
   std::size_t failed = 0;
   for (std::size_t n = 0; n <= good.size(); ++n) {
     try {

@@ -33,7 +33,7 @@ Model tri_grid(int n) {
   return m;
 }
 
-Model cube() {
+Model cube_model() {
   const std::vector<Vec3d> p = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
   const std::vector<std::uint32_t> idx = {0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4, 1, 2, 6, 5, 2, 3, 7, 6, 3, 0, 4, 7};
   const std::vector<std::uint32_t> off = {0, 4, 8, 12, 16, 20, 24};
@@ -125,6 +125,6 @@ TEST(BulkRemove, SameTablesAsThePrimitivesOnRandomFaceSets) {
   std::vector<FaceIdx> all;
   for (std::uint32_t f = 0; f < g.faces.slots.capacity(); ++f) all.push_back(FaceIdx{f});
   check(g, all);
-  const Model c = cube();
+  const Model c = cube_model();
   check(c, {FaceIdx{0}, FaceIdx{1}, FaceIdx{2}, FaceIdx{3}, FaceIdx{4}});
 }

@@ -45,8 +45,15 @@ inline CommandResult run_command(const std::string& command) {
   return r;
 }
 
+/// Whether `text` contains `part` (CLI output, reports).
+inline bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
 /// Runs the built atelier CLI with `args`.
-inline CommandResult run_cli(const std::string& args) { return run_command(std::string(ATELIER_CLI) + " " + args); }
+inline CommandResult run_cli(const std::string& args) {
+  return run_command(std::string(ATELIER_CLI) + " " + args);
+}
 
 /// An empty folder `name` under $ATELIER_TMP (or the system temp folder).
 inline std::filesystem::path scratch_dir(const std::string& name) {

@@ -1,3 +1,11 @@
+#include <atelier/io/obj.h>
+#include <atelier/storage/builder.h>
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/body/body_set.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/body/measure.h>
+#include <atelier/systems/mesh/section.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -5,15 +13,8 @@
 #include <fstream>
 #include <limits>
 
-#include <atelier/io/obj.h>
 #include "support/shapes.h"
-#include <atelier/storage/builder.h>
-#include <atelier/storage/topology.h>
-#include <atelier/systems/body/body_set.h>
-#include <atelier/systems/body/makehuman_body.h>
-#include <atelier/systems/body/measure.h>
-#include <atelier/systems/mesh/section.h>
-#include <atelier/storage/validate.h>
+#include "tests/support/shared_data.h"
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -28,7 +29,9 @@ fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
-std::shared_ptr<ReferenceBody> ball(int nu = 12, int nv = 8) { return shapes::body_from(shapes::uv_sphere(nu, nv)); }
+std::shared_ptr<ReferenceBody> ball(int nu = 12, int nv = 8) {
+  return shapes::body_from(shapes::uv_sphere(nu, nv));
+}
 
 }  // namespace
 
@@ -134,16 +137,16 @@ TEST(MeshSection, CutsASphereInACircle) {
 }
 
 namespace {
-fs::path mh_dir() { return fs::path(ATELIER_SHARED_DATA) / "makehuman"; }
+using atelier::testing::makehuman_dir;
 const std::shared_ptr<const makehuman::HumanLibrary>& mh_lib() {
-  static auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(mh_dir()));
+  static auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(makehuman_dir()));
   return lib;
 }
 }  // namespace
 
-#define REQUIRE_MAKEHUMAN()                                                              \
-  if (!fs::exists(mh_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " \
-                                                        << mh_dir() << " (../shared/data absent)"
+#define REQUIRE_MAKEHUMAN()                      \
+  if (!fs::exists(makehuman_dir() / "base.obj")) \
+  GTEST_SKIP() << "MakeHuman data not found at " << makehuman_dir() << " (../shared/data absent)"
 
 TEST(MakeHumanReference, SkinIsClosedAndFeaturesAreComplete) {
   REQUIRE_MAKEHUMAN();

@@ -1,19 +1,19 @@
+#include <atelier/engine/status.h>
+#include <atelier/io/makehuman/makehuman.h>
+#include <atelier/systems/body/makehuman_body.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
-#include <filesystem>
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
 #include <memory>
 
-#include <unistd.h>
-
-#include <atelier/engine/status.h>
-#include <atelier/io/makehuman/makehuman.h>
-#include <atelier/systems/body/makehuman_body.h>
+#include "tests/support/shared_data.h"
 
 using namespace atelier;
 using namespace atelier::makehuman;
@@ -21,16 +21,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path mh_dir() { return fs::path(ATELIER_SHARED_DATA) / "makehuman"; }
+using atelier::testing::makehuman_dir;
 
 const HumanLibrary& library() {
-  static const HumanLibrary lib = HumanLibrary::load(mh_dir());
+  static const HumanLibrary lib = HumanLibrary::load(makehuman_dir());
   return lib;
 }
 
-#define REQUIRE_MAKEHUMAN()                                                              \
-  if (!fs::exists(mh_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " \
-                                                        << mh_dir() << " (../shared/data absent)"
+#define REQUIRE_MAKEHUMAN()                      \
+  if (!fs::exists(makehuman_dir() / "base.obj")) \
+  GTEST_SKIP() << "MakeHuman data not found at " << makehuman_dir() << " (../shared/data absent)"
 
 fs::path temp_file(const std::string& name, const std::string& text) {
   const char* env = std::getenv("ATELIER_TMP");
@@ -138,7 +138,7 @@ TEST(MakeHumanMixing, ASampledSourceDrawsTheBodiesOfTheList) {
 
 TEST(MakeHumanMixing, ASampledSourceMakesTheBodiesOfItsList) {
   REQUIRE_MAKEHUMAN();
-  auto lib = std::make_shared<const HumanLibrary>(HumanLibrary::load(mh_dir()));
+  auto lib = std::make_shared<const HumanLibrary>(HumanLibrary::load(makehuman_dir()));
   auto ref = std::make_shared<const ReferenceBody>(make_reference_body(*lib));
   const MakeHumanSource listed(lib, sample_adults(*lib, 3, 21), ref);
   const MakeHumanSource sampled(lib, 100'000'000, 21, ref);
@@ -230,7 +230,7 @@ TEST(MakeHumanBody, ASingleMeasureTargetReproducesItsFileDisplacements) {
   lib.build(p, b);
   // Independent parse of the target file.
   std::map<std::uint32_t, Vec3f> expect;
-  std::ifstream in(mh_dir() / "targets" / "measure" / "measure-waist-circ-incr.target");
+  std::ifstream in(makehuman_dir() / "targets" / "measure" / "measure-waist-circ-incr.target");
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#') continue;
@@ -268,7 +268,7 @@ TEST(MakeHumanBody, DefaultBodyIsBasePlusTheDefaultMacroBlend) {
 
 TEST(MakeHumanBody, MeasuresAreValidLoopsOnTheSkin) {
   REQUIRE_MAKEHUMAN();
-  const auto m = read_measures(mh_dir() / "measures.json", library().vertex_count());
+  const auto m = read_measures(makehuman_dir() / "measures.json", library().vertex_count());
   for (const char* name : {"neck-circ", "bust-circ", "underbust-circ", "waist-circ", "hips-circ", "thigh-circ",
                            "knee-circ", "ankle-circ"}) {
     ASSERT_TRUE(m.count(name)) << name;
@@ -325,7 +325,8 @@ TEST(MakeHumanStature, BodiesStandOnTheFloorAndTheStatureModelIsTheMeshExtent) {
   src.generate(0, 6, set, fails, {});
   ASSERT_TRUE(fails.empty());
   double ref_lo = std::numeric_limits<double>::infinity();
-  for (std::uint32_t v = 0; v < lib.skin_vertex_count(); ++v) ref_lo = std::min(ref_lo, ref->model.nodes.position[v].y());
+  for (std::uint32_t v = 0; v < lib.skin_vertex_count(); ++v)
+    ref_lo = std::min(ref_lo, ref->model.nodes.position[v].y());
   EXPECT_NEAR(ref_lo, 0.0, 1e-9);
   for (std::size_t b = 0; b < set.size(); ++b) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;

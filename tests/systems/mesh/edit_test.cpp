@@ -1,6 +1,10 @@
 // High-level edit operators on the shared fixtures: validate() after every
 // call, Euler-Poincare terms preserved, split/collapse round trips compared
 // as geometric face sets, joint members kept equal and coincident.
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/mesh/edit.h>
+#include <atelier/systems/mesh/euler.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,24 +12,19 @@
 #include <random>
 #include <set>
 
-#include <atelier/storage/topology.h>
 #include "support/fixtures.h"
-#include <atelier/systems/mesh/edit.h>
-#include <atelier/systems/mesh/euler.h>
-#include <atelier/storage/validate.h>
+#include "tests/support/expect.h"
 
 using namespace atelier;
 
 namespace {
 
-template <class T>
-T ok(Expected<T> e) {
-  if (!e) throw Error(e.status());
-  return std::move(e).value();
-}
+using atelier::testing::ok;
 
 using Key = std::array<double, 3>;
-Key key(const Vec3d& p) { return {p.x(), p.y(), p.z()}; }
+Key key(const Vec3d& p) {
+  return {p.x(), p.y(), p.z()};
+}
 
 /// Faces as sets of corner positions, per surface: independent of slots.
 std::multiset<std::pair<std::uint32_t, std::vector<Key>>> face_set(const Model& m) {
@@ -154,8 +153,8 @@ TEST(Edit, JointSplitKeepsMembersEqualAndCoincident) {
       // Faces stay triangles in every surface.
       for (std::uint32_t x = 0; x < m.faces.slots.capacity(); ++x)
         if (m.alive(FaceIdx{x})) {
-        EXPECT_EQ(m.face_degree(FaceIdx{x}), 3u);
-      }
+          EXPECT_EQ(m.face_degree(FaceIdx{x}), 3u);
+        }
     }
     // Collapse a joint edge: every member loses one edge, nodes stay coincident.
     const auto chain = m.mesh_edges.halfedges.row(f.members[1].idx.value);
@@ -332,7 +331,8 @@ TEST(Edit, AttributesFollowSwapAndSplit) {
   Model& m = g.model;
   const HalfedgeIdx h = m.find_halfedge(g.node(0, 0), g.node(1, 1));
   const SurfaceIdx s = g.surface.idx;
-  const AttribNodeIdx fa = m.new_attrib_node(s, AttribNodeKind::kFace, m.face(h).value, Vec3d(0.6, 0.3, 0.1), Vec3d::Zero());
+  const AttribNodeIdx fa =
+      m.new_attrib_node(s, AttribNodeKind::kFace, m.face(h).value, Vec3d(0.6, 0.3, 0.1), Vec3d::Zero());
   const AttribNodeIdx ea = m.new_attrib_node(s, AttribNodeKind::kEdge, h.value, Vec3d(0.3, 0, 0), Vec3d::Zero());
   const Vec3d pf = m.attrib_position_on_surface(fa), pe = m.attrib_position_on_surface(ea);
   ASSERT_TRUE(edge_swap(m, m.handle(edge_of(h))));

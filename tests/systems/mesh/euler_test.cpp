@@ -1,16 +1,17 @@
 // Extended Euler operators: Euler-Poincare deltas against an independent
 // recount (count_topology), exact inverses (diff_tables), error codes, and a
 // random build/undo property test.
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/mesh/euler.h>
 #include <gtest/gtest.h>
 
 #include <array>
 #include <functional>
 #include <random>
 
-#include <atelier/storage/topology.h>
 #include "support/fixtures.h"
-#include <atelier/systems/mesh/euler.h>
-#include <atelier/storage/validate.h>
+#include "tests/support/expect.h"
 
 using namespace atelier;
 
@@ -24,7 +25,9 @@ struct Snap {
   TopologyCounts t;
   std::int64_t h;
 };
-Snap snap(const Model& m) { return {count_topology(m), m.complex_holes}; }
+Snap snap(const Model& m) {
+  return {count_topology(m), m.complex_holes};
+}
 
 void expect_delta(const Snap& a, const Model& m, const Delta& d, const char* what) {
   const Snap b = snap(m);
@@ -39,17 +42,13 @@ void expect_delta(const Snap& a, const Model& m, const Delta& d, const char* wha
   EXPECT_TRUE(v) << what << ": " << v.to_string();
 }
 
-#define ASSERT_OK(expr)                                        \
-  do {                                                         \
-    const auto& r_ = (expr);                                   \
+#define ASSERT_OK(expr)                                          \
+  do {                                                           \
+    const auto& r_ = (expr);                                     \
     ASSERT_TRUE(r_) << #expr << ": " << r_.status().to_string(); \
   } while (0)
 
-template <class T>
-T ok(Expected<T> e) {
-  if (!e) throw Error(e.status());
-  return std::move(e).value();
-}
+using atelier::testing::ok;
 
 }  // namespace
 
@@ -59,8 +58,10 @@ TEST(Euler, FixturesAreValid) {
   EXPECT_TRUE(validate(fixtures::tetrahedron()));
   EXPECT_TRUE(validate(fixtures::octahedron()));
   EXPECT_TRUE(validate(fixtures::grid_patch(4, 3).model));
-  for (int k : {3, 5}) EXPECT_TRUE(validate(fixtures::fan(k, 4).model)) << validate(fixtures::fan(k, 4).model).to_string();
-  EXPECT_TRUE(validate(fixtures::inner_edge_joint(4).model)) << validate(fixtures::inner_edge_joint(4).model).to_string();
+  for (int k : {3, 5})
+    EXPECT_TRUE(validate(fixtures::fan(k, 4).model)) << validate(fixtures::fan(k, 4).model).to_string();
+  EXPECT_TRUE(validate(fixtures::inner_edge_joint(4).model))
+      << validate(fixtures::inner_edge_joint(4).model).to_string();
   auto inc = fixtures::incomplete();
   EXPECT_TRUE(validate(inc.model)) << validate(inc.model).to_string();
   const auto t = count_topology(inc.model);
@@ -284,8 +285,10 @@ TEST(Euler, SplitMovesEdgeAndFaceAttributes) {
   const SurfaceIdx s = g.surface.idx;
   auto pos_of = [&](HalfedgeIdx x, double u) { return (1 - u) * m.position(m.tail(x)) + u * m.position(m.head(x)); };
   const AttribNodeIdx e1 = m.new_attrib_node(s, AttribNodeKind::kEdge, h.value, Vec3d(0.25, 0, 0), pos_of(h, 0.25));
-  const AttribNodeIdx e2 = m.new_attrib_node(s, AttribNodeKind::kEdge, twin(h).value, Vec3d(0.1, 0, 0), pos_of(twin(h), 0.1));
-  const AttribNodeIdx fa = m.new_attrib_node(s, AttribNodeKind::kFace, m.face(h).value, Vec3d(0.2, 0.3, 0.5), Vec3d::Zero());
+  const AttribNodeIdx e2 =
+      m.new_attrib_node(s, AttribNodeKind::kEdge, twin(h).value, Vec3d(0.1, 0, 0), pos_of(twin(h), 0.1));
+  const AttribNodeIdx fa =
+      m.new_attrib_node(s, AttribNodeKind::kFace, m.face(h).value, Vec3d(0.2, 0.3, 0.5), Vec3d::Zero());
   const AttribNodeIdx list[3] = {e1, e2, fa};
   (void)m.new_attrib_edge(s, 7, list);
   ASSERT_TRUE(validate(m)) << validate(m).to_string();
@@ -335,8 +338,9 @@ TEST(Euler, ErrorCodes) {
   // Parallel edge, wrong Chole/complex classification.
   EXPECT_EQ(make_edge_Chole(m, m.handle(NodeIdx{0}), m.handle(NodeIdx{1})).status().code(), ErrorCode::kTopology);
   EXPECT_EQ(make_edge_Chole(m, m.handle(NodeIdx{0}), m.handle(NodeIdx{3})).status().code(), ErrorCode::kTopology);
-  EXPECT_EQ(make_edge_kill_complex(m, m.handle(NodeIdx{0}), m.handle(NodeIdx{2})).status().code(), ErrorCode::kTopology);
-  EXPECT_EQ(kill_edge_Chole(m, inc.wires[1]).status().code(), ErrorCode::kTopology);  // a bridge
+  EXPECT_EQ(make_edge_kill_complex(m, m.handle(NodeIdx{0}), m.handle(NodeIdx{2})).status().code(),
+            ErrorCode::kTopology);
+  EXPECT_EQ(kill_edge_Chole(m, inc.wires[1]).status().code(), ErrorCode::kTopology);          // a bridge
   EXPECT_EQ(kill_edge_Chole(m, m.handle(EdgeIdx{0})).status().code(), ErrorCode::kTopology);  // bounds a face
   // Ring node joined to a face corner.
   EXPECT_EQ(make_edge_Chole(m, inc.ring, m.handle(NodeIdx{0})).status().code(), ErrorCode::kTopology);
@@ -388,7 +392,9 @@ struct RandomBuilder {
   }
   static Status st(const Status& s) { return s; }
   template <class T>
-  static Status st(const Expected<T>& e) { return e.status(); }
+  static Status st(const Expected<T>& e) {
+    return e.status();
+  }
 
   /// A closed chain of faceless halfedges found by a random walk, or empty.
   std::vector<HalfedgeIdx> find_cycle() {
@@ -429,14 +435,16 @@ struct RandomBuilder {
     switch (op) {
       case 0: {
         auto r = make_vertex_complex(m, m.handle(SurfaceIdx{0}), rpos());
-        if ((s = r.status())) undo.push_back([i = r->idx](Model& x) { return st(kill_vertex_complex(x, x.handle(i))); });
+        if ((s = r.status()))
+          undo.push_back([i = r->idx](Model& x) { return st(kill_vertex_complex(x, x.handle(i))); });
         break;
       }
       case 1:
       case 2: {
         if (nodes.empty()) break;
         auto r = make_vertex_edge(m, m.handle(pick(nodes)), rpos());
-        if ((s = r.status())) undo.push_back([i = r->node.idx](Model& x) { return st(kill_vertex_edge(x, x.handle(i))); });
+        if ((s = r.status()))
+          undo.push_back([i = r->node.idx](Model& x) { return st(kill_vertex_edge(x, x.handle(i))); });
         break;
       }
       case 3:
@@ -457,7 +465,8 @@ struct RandomBuilder {
           break;
         }
         auto r3 = make_edge_kill_ring(m, a, b);
-        if ((s = r3.status())) undo.push_back([i = r3->idx](Model& x) { return st(kill_edge_make_ring(x, x.handle(i))); });
+        if ((s = r3.status()))
+          undo.push_back([i = r3->idx](Model& x) { return st(kill_edge_make_ring(x, x.handle(i))); });
         break;
       }
       case 5:
@@ -465,7 +474,8 @@ struct RandomBuilder {
         const auto cyc = find_cycle();
         if (cyc.empty()) break;
         auto r = make_face_kill_Chole(m, cyc);
-        if ((s = r.status())) undo.push_back([i = r->idx](Model& x) { return st(kill_face_make_Chole(x, x.handle(i))); });
+        if ((s = r.status()))
+          undo.push_back([i = r->idx](Model& x) { return st(kill_face_make_Chole(x, x.handle(i))); });
         break;
       }
       case 7: {

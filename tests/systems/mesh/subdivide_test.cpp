@@ -1,5 +1,9 @@
 // Uniform 1-to-4 split: analytic counts, exact midpoints, orientation,
 // joints, attribute remapping, determinism and parity with the naive split.
+#include <atelier/storage/builder.h>
+#include <atelier/storage/topology.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/mesh/subdivide.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,10 +11,7 @@
 #include <random>
 #include <vector>
 
-#include <atelier/storage/builder.h>
-#include <atelier/storage/topology.h>
-#include <atelier/systems/mesh/subdivide.h>
-#include <atelier/storage/validate.h>
+#include "tests/support/expect.h"
 
 using namespace atelier;
 
@@ -76,7 +77,7 @@ Vec3d newell(const Model& m, FaceIdx f) {
 /// Canonical face set: corner positions in cycle order, rotated to start at
 /// the smallest; sorted. Equal sets mean the same faces with the same
 /// orientation, whatever their indices.
-std::vector<std::vector<std::array<double, 3>>> face_set(const Model& m) {
+std::vector<std::vector<std::array<double, 3>>> face_positions(const Model& m) {
   std::vector<std::vector<std::array<double, 3>>> out;
   for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
     if (!m.alive(FaceIdx{f})) continue;
@@ -94,7 +95,8 @@ std::vector<std::vector<std::array<double, 3>>> face_set(const Model& m) {
 
 NodeIdx node_at(const Model& m, SurfaceIdx s, const Vec3d& p) {
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-    if (m.alive(NodeIdx{v}) && m.nodes.surface[v] == s && (m.position(NodeIdx{v}) - p).norm() < 1e-12) return NodeIdx{v};
+    if (m.alive(NodeIdx{v}) && m.nodes.surface[v] == s && (m.position(NodeIdx{v}) - p).norm() < 1e-12)
+      return NodeIdx{v};
   ADD_FAILURE() << "no node at " << p.transpose();
   return {};
 }
@@ -166,10 +168,7 @@ void add_attributes(Model& m, std::uint32_t seed) {
   (void)m.new_attrib_node(SurfaceIdx{0}, AttribNodeKind::kVertex, 0, Vec3d::Zero(), m.position(NodeIdx{0}));
 }
 
-void expect_valid(const Model& m) {
-  const Status s = validate(m);
-  ASSERT_TRUE(s) << s.to_string();
-}
+using atelier::testing::expect_valid;
 
 }  // namespace
 
@@ -361,10 +360,8 @@ TEST(Subdivide, SplitTriangleBarycentricIsExactOnDyadics) {
   // original; dyadic coordinates make every step exact.
   const Vec3d v[3] = {{0, 0, 0}, {4, 0, 0}, {1, 3, 0}};
   const Vec3d mid[3] = {0.5 * (v[0] + v[1]), 0.5 * (v[1] + v[2]), 0.5 * (v[2] + v[0])};
-  const std::array<std::array<Vec3d, 3>, 4> child = {{{v[0], mid[0], mid[2]},
-                                                       {v[1], mid[1], mid[0]},
-                                                       {v[2], mid[2], mid[1]},
-                                                       {mid[0], mid[1], mid[2]}}};
+  const std::array<std::array<Vec3d, 3>, 4> child = {
+      {{v[0], mid[0], mid[2]}, {v[1], mid[1], mid[0]}, {v[2], mid[2], mid[1]}, {mid[0], mid[1], mid[2]}}};
   for (int i = 0; i <= 16; ++i)
     for (int j = 0; i + j <= 16; ++j) {
       const Vec3d b(i / 16.0, j / 16.0, (16 - i - j) / 16.0);
@@ -381,8 +378,9 @@ TEST(Subdivide, SplitTriangleBarycentricIsExactOnDyadics) {
 
 TEST(Subdivide, DeterministicAcrossThreadCounts) {
   Model base;
-  grid(110, 100, false, [](int i, int j) { return Vec3d(i, j, std::cos(0.1 * i) * std::sin(0.07 * j)); })
-      .add(base, "big");
+  grid(110, 100, false, [](int i, int j) {
+    return Vec3d(i, j, std::cos(0.1 * i) * std::sin(0.07 * j));
+  }).add(base, "big");
   grid(20, 20, true, [](int i, int j) { return Vec3d(i, j, 10); }).add(base, "quads");
   add_attributes(base, 5);
   Model a = base, b = base;
@@ -421,7 +419,7 @@ TEST(Subdivide, ParityWithNaive) {
     expect_valid(fast);
     expect_valid(naive);
     EXPECT_EQ(rf->compacted, variant == 1);
-    EXPECT_EQ(face_set(fast), face_set(naive));
+    EXPECT_EQ(face_positions(fast), face_positions(naive));
     EXPECT_EQ(diff_tables(fast, naive), "");
     EXPECT_EQ(rf->edge_midpoint, rn->edge_midpoint);
     EXPECT_EQ(rf->face_child_begin, rn->face_child_begin);
@@ -446,8 +444,9 @@ TEST(Subdivide, FaceNodesInPolygonsKeepTheirPositions) {
   for (std::uint32_t a = 0; a < old.attrib_nodes.slots.capacity(); ++a) {
     if (old.attrib_nodes.kind[a] != AttribNodeKind::kFace) continue;
     in_polygons += old.face_degree(FaceIdx{old.attrib_nodes.element[a]}) > 3;
-    EXPECT_LT((m.attrib_position_on_surface(AttribNodeIdx{a}) - old.attrib_position_on_surface(AttribNodeIdx{a})).norm(),
-              1e-12)
+    EXPECT_LT(
+        (m.attrib_position_on_surface(AttribNodeIdx{a}) - old.attrib_position_on_surface(AttribNodeIdx{a})).norm(),
+        1e-12)
         << "attribute node " << a;
     // It lies in a child of its old face.
     const std::uint32_t f = old.attrib_nodes.element[a], g = m.attrib_nodes.element[a];

@@ -1,23 +1,21 @@
 // Face triangulation (seed 000 section 3, Fig. 5c): attributes become nodes
 // and constraint edges; the result covers the face exactly, keeps its
 // orientation and keeps the model valid.
+#include <atelier/storage/builder.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/mesh/triangulate.h>
 #include <gtest/gtest.h>
 
 #include <random>
 #include <vector>
 
-#include <atelier/storage/builder.h>
-#include <atelier/systems/mesh/triangulate.h>
-#include <atelier/storage/validate.h>
+#include "tests/support/expect.h"
 
 using namespace atelier;
 
 namespace {
 
-void expect_valid(const Model& m) {
-  const Status s = validate(m);
-  ASSERT_TRUE(s) << s.to_string();
-}
+using atelier::testing::expect_valid;
 
 Vec3d tri_normal(const Model& m, FaceIdx f) {
   std::vector<NodeIdx> c;
@@ -54,8 +52,8 @@ Square square() {
 
 AttribNodeIdx edge_node(Model& m, NodeIdx from, NodeIdx to, double u) {
   const HalfedgeIdx h = m.find_halfedge(from, to);
-  const AttribNodeIdx a = m.new_attrib_node(m.nodes.surface[from.value], AttribNodeKind::kEdge, h.value, Vec3d(u, 0, 0),
-                                            Vec3d::Zero());
+  const AttribNodeIdx a =
+      m.new_attrib_node(m.nodes.surface[from.value], AttribNodeKind::kEdge, h.value, Vec3d(u, 0, 0), Vec3d::Zero());
   m.attrib_nodes.position[a.value] = m.attrib_position_on_surface(a);
   return a;
 }

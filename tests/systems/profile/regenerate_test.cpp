@@ -1,22 +1,21 @@
 // Profile templates: authoring, encoding on a reference body, regeneration
 // by the modified variational subdivision with collision avoidance, and the
 // quality measures of every result (seed 000 section 4, seed 001 section 4).
+#include <atelier/engine/parallel.h>
+#include <atelier/storage/edge_flags.h>
+#include <atelier/storage/validate.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/profile/project_templates.h>
 #include <atelier/systems/profile/regenerate.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <memory>
 
-#include <atelier/engine/parallel.h>
-#include <atelier/storage/edge_flags.h>
-#include <atelier/storage/validate.h>
 #include "support/fixtures.h"
 #include "support/project_templates.h"
-#include <atelier/systems/body/makehuman_body.h>
-#include <atelier/systems/body/mannequin.h>
-#include <atelier/systems/profile/project_templates.h>
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -24,9 +23,7 @@ namespace fs = std::filesystem;
 namespace {
 
 using Fixture = atelier::testing::TemplateFixture;
-const Fixture& fixture() {
-  return atelier::testing::template_fixture();
-}
+using atelier::testing::template_fixture;
 
 Box3d bounds(const Model& m) {
   Box3d b;
@@ -74,7 +71,7 @@ ProfileTemplate template_over(const Model& m, const ReferenceBody& body, const V
 }  // namespace
 
 TEST(ProjectTemplates, BuildValidateAndFaceOutwards) {
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   ASSERT_EQ(f.templates.size(), 3u);
   BodyCollider col;
   ASSERT_TRUE(col.build(f.body.model, f.body.skin, skin_positions(f.body), {}, {.use_grid = false}));
@@ -113,7 +110,7 @@ TEST(ProjectTemplates, BuildValidateAndFaceOutwards) {
 }
 
 TEST(Regenerate, OnTheReferenceBodyIsCleanAndKeepsNodes) {
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto pos = skin_positions(f.body);
   for (const auto& t : f.templates) {
     BodyCollider col;
@@ -136,7 +133,7 @@ TEST(Regenerate, OnTheReferenceBodyIsCleanAndKeepsNodes) {
 }
 
 TEST(Regenerate, InterpolatesNodesAndProfilesExactly) {
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto pos = skin_positions(f.body);
   for (const auto& t : f.templates) {
     RegenParams p;
@@ -166,7 +163,7 @@ TEST(Regenerate, InterpolatesNodesAndProfilesExactly) {
 }
 
 TEST(Regenerate, Fig17ConfigurationsRefineWithoutCracks) {
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto pos = skin_positions(f.body);
   const Vec3d far(0, 3.0, 0);  // away from the body: no collision involved
   std::vector<std::pair<std::string, Model>> cases;
@@ -198,7 +195,7 @@ TEST(Regenerate, CollisionAvoidanceRemovesPenetration) {
   // The same template regenerated without collision handling penetrates the
   // body (chord midpoints and fairing cut into convex parts of the skin);
   // with it no node is inside.
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto pos = skin_positions(f.body);
   const ProfileTemplate& top = f.templates[0];
   BodyCollider col;
@@ -220,7 +217,7 @@ TEST(Regenerate, CollisionAvoidanceRemovesPenetration) {
 TEST(Regenerate, TwoHundredMannequins) {
   // Minutes under the sanitizers: `make asan` sets ATELIER_SKIP_LONG_TESTS; `make test` runs it.
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "ATELIER_SKIP_LONG_TESTS is set";
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto params = sample_mannequins(200, 2026);
   struct Worst {
     std::size_t inside = 0;
@@ -311,7 +308,7 @@ TEST(Regenerate, FiftyMakeHumanBodies) {
 }
 
 TEST(Regenerate, DeterministicAcrossThreadCounts) {
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto params = sample_mannequins(1, 77);
   const auto p = mannequin_positions(params[0], f.topo).value();
   BodyCollider col;
@@ -329,7 +326,7 @@ TEST(Regenerate, DeterministicAcrossThreadCounts) {
 TEST(Regenerate, PooledCollidersGiveTheSameResultsAsFreshOnes) {
   // A pooled collider is refitted to each new body instead of built; the
   // queries are exact, so every result must be identical to a fresh build.
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto params = sample_mannequins(3, 4242);
   const Box3d roi = bounds(f.templates);
   ColliderPool pool;
@@ -358,7 +355,7 @@ TEST(Regenerate, PooledCollidersGiveTheSameResultsAsFreshOnes) {
 }
 
 TEST(Regenerate, BadInputIsRefused) {
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const auto pos = skin_positions(f.body);
   const ProfileTemplate& t = f.templates[1];
   std::vector<Vec3d> short_pos(pos.begin(), pos.begin() + 10);
@@ -395,7 +392,7 @@ TEST(Template, SeamMarksAreSetOnTheirEdgesOnlyAndBadChainsMarkNothing) {
   // The top marks its side seams (3 edges each), shoulder seams (1 each)
   // and the yoke line at the front and back (2 each): 12 template edges;
   // the skirt and trousers mark none.
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   EXPECT_EQ(seam_edges(f.templates[0].model), 12u);
   EXPECT_EQ(seam_edges(f.templates[1].model), 0u);
   EXPECT_EQ(seam_edges(f.templates[2].model), 0u);
@@ -403,8 +400,8 @@ TEST(Template, SeamMarksAreSetOnTheirEdgesOnlyAndBadChainsMarkNothing) {
   TemplateBuilder b(f.body, "patch");
   const char* names[] = {"a", "b", "c"};
   for (int k = 0; k < 3; ++k)
-    ASSERT_TRUE(b.node_at(names[k], f.body.model.nodes.position[100u * static_cast<unsigned>(k)],
-                          NodeEncodingMode::kVertex));
+    ASSERT_TRUE(
+        b.node_at(names[k], f.body.model.nodes.position[100u * static_cast<unsigned>(k)], NodeEncodingMode::kVertex));
   const std::vector<std::vector<std::string>> faces = {{"a", "b", "c"}};
   ASSERT_TRUE(b.surface("patch", faces));
   const Status unknown = b.seam("patch", std::vector<std::string>{"a", "b", "x"});

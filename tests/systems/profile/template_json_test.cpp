@@ -2,6 +2,12 @@
 // round trip table for table and bit for bit (encodings, profiles, decoded
 // nodes, regenerated garments), and every kind of broken file is refused
 // with an Error naming the file, the JSON location and the problem.
+#include <atelier/storage/validate.h>
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/profile/feature_encoding.h>
+#include <atelier/systems/profile/project_templates.h>
+#include <atelier/systems/profile/regenerate.h>
+#include <atelier/systems/profile/template_json.h>
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -10,18 +16,11 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include <atelier/storage/validate.h>
-#include <atelier/systems/profile/feature_encoding.h>
-#include <atelier/systems/body/mannequin.h>
 #include "support/project_templates.h"
-#include <atelier/systems/profile/project_templates.h>
-#include <atelier/systems/profile/regenerate.h>
-#include <atelier/systems/profile/template_json.h>
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -30,7 +29,7 @@ using Json = nlohmann::ordered_json;
 namespace {
 
 using Fixture = atelier::testing::TemplateFixture;
-const Fixture& fixture() { return atelier::testing::template_fixture(); }
+using atelier::testing::template_fixture;
 
 fs::path scratch() {
   const char* env = std::getenv("ATELIER_TMP");
@@ -39,8 +38,12 @@ fs::path scratch() {
   return d;
 }
 
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
-bool same_bits(const Vec3d& a, const Vec3d& b) { return std::memcmp(a.data(), b.data(), 3 * sizeof(double)) == 0; }
+bool same_bits(double a, double b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+bool same_bits(const Vec3d& a, const Vec3d& b) {
+  return std::memcmp(a.data(), b.data(), 3 * sizeof(double)) == 0;
+}
 
 void expect_same_template(const ProfileTemplate& a, const ProfileTemplate& b) {
   EXPECT_EQ(diff_tables(a.model, b.model), "");
@@ -103,7 +106,7 @@ void expect_same_positions(const std::vector<Vec3d>& a, const std::vector<Vec3d>
 }  // namespace
 
 TEST(TemplateJson, ProjectTemplatesRoundTripBitExact) {
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   ASSERT_EQ(f.templates.size(), 3u);
   const std::vector<Vec3d>& body_pos = f.body.model.nodes.position;
   bool saw_bezier = false, saw_points = false, saw_joint = false, saw_n_to_one = false;
@@ -118,8 +121,7 @@ TEST(TemplateJson, ProjectTemplatesRoundTripBitExact) {
     // Writing what was read gives the same document (a fixed point).
     EXPECT_EQ(template_to_json_string(r), template_to_json_string(t));
 
-    for (const auto& p : t.profiles)
-      (p.kind == ProfileCurve::Kind::kBezier ? saw_bezier : saw_points) = true;
+    for (const auto& p : t.profiles) (p.kind == ProfileCurve::Kind::kBezier ? saw_bezier : saw_points) = true;
     saw_joint |= t.model.num_joints() > 0;
     for (const auto& e : t.encodings.nodes) saw_n_to_one |= e.mode == NodeEncodingMode::kNToOne;
 
@@ -149,7 +151,7 @@ TEST(TemplateJson, ProjectTemplatesRoundTripBitExact) {
 }
 
 TEST(TemplateJson, DocumentIsReadableAndVersioned) {
-  const ProfileTemplate& t = fixture().templates[0];
+  const ProfileTemplate& t = template_fixture().templates[0];
   const std::string text = template_to_json_string(t);
   const Json doc = Json::parse(text);
   EXPECT_EQ(doc["format"], "atelier-template");
@@ -170,7 +172,7 @@ TEST(TemplateJson, DocumentIsReadableAndVersioned) {
 TEST(TemplateJson, TombstonesAreCompactedWithTheirReferences) {
   // A template whose model lost a node and an edge: the file holds the
   // compacted model and the encodings/profiles follow their elements.
-  const ProfileTemplate& orig = fixture().templates[1];
+  const ProfileTemplate& orig = template_fixture().templates[1];
   ProfileTemplate t = orig;
   const std::size_t n0 = t.model.nodes.slots.capacity();
   const SurfaceIdx s = t.model.nodes.surface[0];
@@ -222,7 +224,7 @@ TEST(TemplateJson, MalformedFilesAreRefusedWithPreciseMessages) {
   // The trousers have joints and n-to-one nodes, the top point-list profiles,
   // the skirt Bezier profiles: pick each broken variant from a template that
   // has the part being broken.
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const std::string top = template_to_json_string(f.templates[0]);
   const std::string skirt = template_to_json_string(f.templates[1]);
   const std::string trousers = template_to_json_string(f.templates[2]);
@@ -242,14 +244,21 @@ TEST(TemplateJson, MalformedFilesAreRefusedWithPreciseMessages) {
   ASSERT_NE(with_n_to_one, nullptr);
 
   std::vector<std::pair<const std::string*, BrokenCase>> cases = {
-      {&trousers, {"missing field", on_json([](Json& j) { j["nodes"][3].erase("position"); }),
-                   {"/nodes/3", "missing field 'position'"}}},
-      {&trousers, {"wrong type", on_json([](Json& j) { j["clearance"] = "thick"; }),
-                   {"/clearance", "expected a number", "found a string"}}},
-      {&trousers, {"bad mode name", on_json([](Json& j) { j["nodes"][5]["encoding"]["mode"] = "sideways"; }),
-                   {"/nodes/5/encoding/mode", "unknown encoding mode 'sideways'"}}},
       {&trousers,
-       {"face node out of range", on_json([n_nodes](Json& j) { j["surfaces"][1]["faces"][3][0] = n_nodes + 7; }),
+       {"missing field",
+        on_json([](Json& j) { j["nodes"][3].erase("position"); }),
+        {"/nodes/3", "missing field 'position'"}}},
+      {&trousers,
+       {"wrong type",
+        on_json([](Json& j) { j["clearance"] = "thick"; }),
+        {"/clearance", "expected a number", "found a string"}}},
+      {&trousers,
+       {"bad mode name",
+        on_json([](Json& j) { j["nodes"][5]["encoding"]["mode"] = "sideways"; }),
+        {"/nodes/5/encoding/mode", "unknown encoding mode 'sideways'"}}},
+      {&trousers,
+       {"face node out of range",
+        on_json([n_nodes](Json& j) { j["surfaces"][1]["faces"][3][0] = n_nodes + 7; }),
         {"/surfaces/1/faces/3/0", "node index " + std::to_string(n_nodes + 7) + " out of range"}}},
       {&trousers,
        {"non-finite number",
@@ -259,8 +268,10 @@ TEST(TemplateJson, MalformedFilesAreRefusedWithPreciseMessages) {
           text.replace(p, q - p, "\"clearance\": 1e999");
         },
         {"at byte ", "non-finite number", "1e999"}}},
-      {&skirt, {"duplicated profile edge", on_json([](Json& j) { j["profiles"][1]["halfedge"] = j["profiles"][0]["halfedge"]; }),
-                {"/profiles/1/halfedge", "duplicated profile edge", "already has profile 0"}}},
+      {&skirt,
+       {"duplicated profile edge",
+        on_json([](Json& j) { j["profiles"][1]["halfedge"] = j["profiles"][0]["halfedge"]; }),
+        {"/profiles/1/halfedge", "duplicated profile edge", "already has profile 0"}}},
       {&trousers,
        {"joint members of different length",
         on_json([](Json& j) {
@@ -269,10 +280,11 @@ TEST(TemplateJson, MalformedFilesAreRefusedWithPreciseMessages) {
           j["mesh_edges"][me]["nodes"].erase(j["mesh_edges"][me]["nodes"].size() - 1);
         }),
         {"/joints/0/members/1", "joint members of different length"}}},
-      {&trousers, {"truncated file", [](std::string& text) { text.resize(text.size() * 2 / 3); },
-                   {"truncated file", "invalid JSON"}}},
-      {&trousers, {"wrong version", on_json([](Json& j) { j["version"] = 2; }),
-                   {"/version", "unsupported version 2"}}},
+      {&trousers,
+       {"truncated file",
+        [](std::string& text) { text.resize(text.size() * 2 / 3); },
+        {"truncated file", "invalid JSON"}}},
+      {&trousers, {"wrong version", on_json([](Json& j) { j["version"] = 2; }), {"/version", "unsupported version 2"}}},
       {&trousers,
        {"non-manifold face list",
         on_json([](Json& j) {
@@ -281,37 +293,46 @@ TEST(TemplateJson, MalformedFilesAreRefusedWithPreciseMessages) {
           faces.push_back(faces[2]);
         }),
         {"/surfaces/1/faces/", "non-manifold face list", "already bounds face"}}},
-      {&trousers, {"wrong format", on_json([](Json& j) { j["format"] = "obj"; }),
-                   {"/format", "not an atelier template"}}},
-      {&trousers, {"negative index", on_json([](Json& j) { j["nodes"][2]["surface"] = -1; }),
-                   {"/nodes/2/surface", "negative"}}},
-      {&trousers, {"position of two numbers", on_json([](Json& j) { j["nodes"][4]["position"].erase(2); }),
-                   {"/nodes/4/position", "expected 3 numbers"}}},
-      {&top, {"profile parameter outside (0, 1)",
-              on_json([](Json& j) {
-                for (auto& p : j["profiles"])
-                  if (p["kind"] == "points") {
-                    p["u"][0] = 1.5;
-                    return;
-                  }
-              }),
-              {"/u/0", "outside (0, 1)"}}},
-      {&trousers, {"edge joins a node to itself", on_json([](Json& j) { j["edges"][6][1] = j["edges"][6][0]; }),
-                   {"/edges/6", "to itself"}}},
-      {with_n_to_one, {"bad n-to-one reference", on_json([](Json& j) {
-                     for (auto& n : j["nodes"])
-                       if (n["encoding"]["mode"] == "n_to_one") {
-                         n["encoding"]["refs"][0]["node"] = j["nodes"].size();
-                         return;
-                       }
-                   }),
-                   {"/encoding/refs/0/node", "out of range"}}},
+      {&trousers,
+       {"wrong format", on_json([](Json& j) { j["format"] = "obj"; }), {"/format", "not an atelier template"}}},
+      {&trousers,
+       {"negative index", on_json([](Json& j) { j["nodes"][2]["surface"] = -1; }), {"/nodes/2/surface", "negative"}}},
+      {&trousers,
+       {"position of two numbers",
+        on_json([](Json& j) { j["nodes"][4]["position"].erase(2); }),
+        {"/nodes/4/position", "expected 3 numbers"}}},
+      {&top,
+       {"profile parameter outside (0, 1)",
+        on_json([](Json& j) {
+          for (auto& p : j["profiles"])
+            if (p["kind"] == "points") {
+              p["u"][0] = 1.5;
+              return;
+            }
+        }),
+        {"/u/0", "outside (0, 1)"}}},
+      {&trousers,
+       {"edge joins a node to itself",
+        on_json([](Json& j) { j["edges"][6][1] = j["edges"][6][0]; }),
+        {"/edges/6", "to itself"}}},
+      {with_n_to_one,
+       {"bad n-to-one reference",
+        on_json([](Json& j) {
+          for (auto& n : j["nodes"])
+            if (n["encoding"]["mode"] == "n_to_one") {
+              n["encoding"]["refs"][0]["node"] = j["nodes"].size();
+              return;
+            }
+        }),
+        {"/encoding/refs/0/node", "out of range"}}},
       {&trousers, {"not an object", [](std::string& text) { text = "[1, 2, 3]"; }, {"expected an object"}}},
       {&trousers, {"empty file", [](std::string& text) { text.clear(); }, {"invalid JSON"}}},
-      {&skirt, {"unknown profile kind", on_json([](Json& j) { j["profiles"][0]["kind"] = "spline"; }),
-                {"/profiles/0/kind", "unknown profile kind 'spline'"}}},
-      {&trousers, {"missing edge of a face", on_json([](Json& j) { j["edges"].erase(j["edges"].size() - 1); }),
-                   {"no edge"}}},
+      {&skirt,
+       {"unknown profile kind",
+        on_json([](Json& j) { j["profiles"][0]["kind"] = "spline"; }),
+        {"/profiles/0/kind", "unknown profile kind 'spline'"}}},
+      {&trousers,
+       {"missing edge of a face", on_json([](Json& j) { j["edges"].erase(j["edges"].size() - 1); }), {"no edge"}}},
   };
   ASSERT_GE(cases.size(), 12u);
 
@@ -334,14 +355,15 @@ TEST(TemplateJson, MalformedFilesAreRefusedWithPreciseMessages) {
       const std::string msg = e.what();
       EXPECT_EQ(e.status().code(), ErrorCode::kParse) << msg;
       EXPECT_NE(msg.find(path.string()), std::string::npos) << msg;
-      for (const std::string& s : c.expect) EXPECT_NE(msg.find(s), std::string::npos) << "'" << s << "' not in: " << msg;
+      for (const std::string& s : c.expect)
+        EXPECT_NE(msg.find(s), std::string::npos) << "'" << s << "' not in: " << msg;
     }
   }
 }
 
 TEST(TemplateJson, EveryTruncationIsAParseError) {
   // Never a crash, whatever prefix of a valid file is read.
-  const std::string text = template_to_json_string(fixture().templates[2]);
+  const std::string text = template_to_json_string(template_fixture().templates[2]);
   std::size_t step = text.size() / 97 + 1;
   for (std::size_t n = 0; n < text.size() - 2; n += step) {
     try {
@@ -355,7 +377,7 @@ TEST(TemplateJson, EveryTruncationIsAParseError) {
 }
 
 TEST(TemplateJson, UnwritablePathLeavesNothingBehind) {
-  const ProfileTemplate& t = fixture().templates[1];
+  const ProfileTemplate& t = template_fixture().templates[1];
   const fs::path dir = scratch() / "unwritable";
   fs::create_directories(dir);
   // A missing directory: Error naming the file, nothing created.
@@ -431,7 +453,7 @@ TEST(TemplateJson, EveryIndexChangeIsReadOrRefusedNeverACrash) {
   // and attribute indices, flags, counts) set to its neighbour value, to 0
   // and to a huge value: the reader either gives a template that validates
   // or throws Error(kParse) naming the file; it never crashes or hangs.
-  const std::string text = template_to_json_string(fixture().templates[2]);
+  const std::string text = template_to_json_string(template_fixture().templates[2]);
   const Json doc = Json::parse(text);
   std::vector<std::string> leaves;
   integer_leaves(doc, "", leaves);
@@ -465,7 +487,7 @@ TEST(TemplateJson, NumbersAndLevelsBeyondWhatRegenerationTakesAreRefusedWhenRead
   // Issue 27: a coordinate of 1e300 was accepted (a body then took minutes,
   // the point becoming inf as a float in the BVH query), and levels up to 16
   // although regeneration refuses more than 8 (every body failed, exit 1).
-  const std::string top = template_to_json_string(fixture().templates[0]);
+  const std::string top = template_to_json_string(template_fixture().templates[0]);
   const Json doc = Json::parse(top);
   auto refused = [&](const std::function<void(Json&)>& edit, const std::vector<std::string>& fragments) {
     Json j = doc;
@@ -478,8 +500,10 @@ TEST(TemplateJson, NumbersAndLevelsBeyondWhatRegenerationTakesAreRefusedWhenRead
       for (const auto& f : fragments) EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
     }
   };
-  refused([](Json& j) { j["nodes"][2]["position"][0] = 1e300; }, {"edited.template.json", "/nodes/2/position/0", "out of range"});
-  refused([](Json& j) { j["nodes"][1]["encoding"]["coords"][1] = -2e4; }, {"/nodes/1/encoding/coords/1", "out of range"});
+  refused([](Json& j) { j["nodes"][2]["position"][0] = 1e300; },
+          {"edited.template.json", "/nodes/2/position/0", "out of range"});
+  refused([](Json& j) { j["nodes"][1]["encoding"]["coords"][1] = -2e4; },
+          {"/nodes/1/encoding/coords/1", "out of range"});
   refused([](Json& j) { j["clearance"] = 1e5; }, {"/clearance", "out of range"});
   refused([](Json& j) { j["levels"] = kMaxTemplateLevels + 1; }, {"/levels", "out of range [0, 8]"});
   // The largest accepted values do read, and the largest level regenerates
@@ -487,7 +511,7 @@ TEST(TemplateJson, NumbersAndLevelsBeyondWhatRegenerationTakesAreRefusedWhenRead
   Json ok = doc;
   ok["levels"] = kMaxTemplateLevels;
   EXPECT_EQ(template_from_json_string(ok.dump(), "ok.json").levels, kMaxTemplateLevels);
-  ProfileTemplate t = fixture().templates[0];
+  ProfileTemplate t = template_fixture().templates[0];
   t.levels = kMaxTemplateLevels + 1;
   EXPECT_FALSE(validate_template(t).is_ok());
 }
@@ -495,7 +519,7 @@ TEST(TemplateJson, NumbersAndLevelsBeyondWhatRegenerationTakesAreRefusedWhenRead
 TEST(TemplateJson, ReferencesOutOfTheBodyAreFoundWhenTheTemplateIsRead) {
   // Issue 27: a feature point id or body element out of range was found per
   // body (every body failing, the message not naming the file).
-  const Fixture& f = fixture();
+  const Fixture& f = template_fixture();
   const std::string top = template_to_json_string(f.templates[0]);
   const fs::path dir = scratch();
   // The template as written reads against its body.

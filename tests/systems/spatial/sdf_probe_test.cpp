@@ -3,6 +3,9 @@
 // inside a tile with one lookup. Checked against the trilinear formula over
 // lattice values read through single-block cells, against the background
 // value far from the surface, and against the BVH's exact sign.
+#include <atelier/engine/random.h>
+#include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/spatial/sdf_grid.h>
 #include <gtest/gtest.h>
 
 #include <array>
@@ -10,23 +13,19 @@
 #include <numbers>
 #include <vector>
 
-#include <atelier/engine/random.h>
-#include <atelier/systems/spatial/body_bvh.h>
-#include <atelier/systems/spatial/sdf_grid.h>
-
 namespace atelier {
 namespace {
 
 /// Closed UV sphere (radius r, centre c), counter-clockwise from outside.
-struct Sphere {
+struct ProbeSphere {
   std::vector<Vec3d> positions;
   std::vector<Triangle> triangles;
   Vec3d c;
   double r;
 };
 
-Sphere uv_sphere(const Vec3d& c, double r, int n_lat, int n_lon) {
-  Sphere s{{}, {}, c, r};
+ProbeSphere probe_sphere(const Vec3d& c, double r, int n_lat, int n_lon) {
+  ProbeSphere s{{}, {}, c, r};
   s.positions.push_back(c + Vec3d(0, 0, r));
   for (int i = 1; i < n_lat; ++i) {
     const double th = std::numbers::pi * i / n_lat;
@@ -83,7 +82,7 @@ double trilinear_from_lattice(SdfGrid::Sampler& s, const Vec3d& p) {
 
 /// Points whose cell crosses blocks along the axes in `cross` (bit a: axis
 /// a), within `near` of the sphere when near > 0, anywhere in `box` otherwise.
-std::vector<Vec3d> crossing_points(const Sphere& s, const Box3d& box, unsigned cross, double near, std::size_t n,
+std::vector<Vec3d> crossing_points(const ProbeSphere& s, const Box3d& box, unsigned cross, double near, std::size_t n,
                                    SplitMix64& rng) {
   std::vector<Vec3d> out;
   const std::array<int, 3> lo{static_cast<int>(std::ceil(box.lo.x() / kH)),
@@ -110,7 +109,7 @@ std::vector<Vec3d> crossing_points(const Sphere& s, const Box3d& box, unsigned c
   return out;
 }
 
-void check_grid(const Sphere& s, const BodyBvh& bvh, const SdfGrid& grid, const Box3d& box) {
+void check_grid(const ProbeSphere& s, const BodyBvh& bvh, const SdfGrid& grid, const Box3d& box) {
   SdfGrid::Sampler sampler = grid.sampler();
   SplitMix64 rng(17);
   std::size_t checked = 0, tiles = 0, fallbacks = 0;
@@ -151,7 +150,7 @@ void check_grid(const Sphere& s, const BodyBvh& bvh, const SdfGrid& grid, const 
 // The sphere of both tests, its BVH, and a grid over it (the whole sphere
 // when `roi` is empty), then check_grid over `where`.
 void check_sphere_grid(std::vector<Box3d> roi, const Box3d& where) {
-  const Sphere s = uv_sphere(Vec3d(0.03, -0.02, 0.01), 0.8, 60, 90);
+  const ProbeSphere s = probe_sphere(Vec3d(0.03, -0.02, 0.01), 0.8, 60, 90);
   BodyBvh bvh;
   ASSERT_TRUE(bvh.build(s.positions, s.triangles).is_ok());
   SdfParams prm;
