@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <memory>
 #include <sstream>
 
 namespace atelier {
@@ -68,36 +69,39 @@ int point_side(const P2& u, const P2& v, const P2& q) noexcept {
   return 1;
 }
 
-/// Screen images of the nodes: snapped pixels for the predicates, exact
-/// pixels, clip w and the depth key (larger = nearer; affine in screen space
+/// The screen image of one node: snapped pixel for the predicates, exact
+/// pixel, clip w and the depth key (larger = nearer; affine in screen space
 /// along any projected segment) for the geometry.
+struct NodeImage {
+  P2 snapped;
+  Vec2d pixel;
+  double w = 0, key = 0;
+};
+
+/// The nodes on screen: for every node where its snapped pixel lies against
+/// the stroke's box (bits: left of, right of, above, below; 16: not alive,
+/// behind the eye or beyond 2^40 pixels), so that a face whose corners'
+/// codes share a bit is off the box, found with one byte per corner; and the
+/// full image only of the corners of the faces kept (most faces lie away
+/// from the stroke; projecting every node into four full columns was a
+/// fifth of painting).
 struct Screen {
   Mat4d pv;
   bool perspective = false;
-  std::vector<P2> snapped;
-  std::vector<Vec2d> pixel;
-  std::vector<double> w, key;
-  std::vector<std::uint8_t> ok;  // alive, in front of the eye, within 2^40 pixels
-  // Where the snapped pixel lies against the stroke's box (bits: left of,
-  // right of, above, below; 16: not ok): a face whose corners' codes share a
-  // bit is off the box, found with one byte per corner.
   std::vector<std::uint8_t> code;
   static constexpr std::uint8_t kNotOk = 16;
+  static constexpr std::uint8_t kImaged = 32;  // the node has an image
+  std::vector<std::uint8_t> culled;            // per face slot (culled_faces)
+  std::unique_ptr<std::uint32_t[]> slot;       // per imaged node: its image (set only where kImaged)
+  std::vector<NodeImage> images;
 
+  [[nodiscard]] const NodeImage& image(NodeIdx v) const { return images[slot[v.value]]; }
   [[nodiscard]] double key_of(const Vec3d& x) const {
     const Vec4d c = pv * Vec4d(x.x(), x.y(), x.z(), 1.0);
     return perspective ? 1.0 / c.w() : -c.z() / c.w();
   }
 };
 
-/// The screen image of one point (false when behind the eye, not finite or
-/// beyond 2^40 pixels). Painting and picking both project through here, so
-/// they see the same bits.
-struct NodeImage {
-  P2 snapped;
-  Vec2d pixel;
-  double w = 0, key = 0;
-};
 /// The first half of project_point (the same bits): clip coordinates and
 /// pixel, false exactly when project_point fails.
 bool project_xy(const Mat4d& pv, double W, double H, const Vec3d& x, Vec4d& c, double& px, double& py) {
@@ -120,6 +124,9 @@ std::uint8_t sure_code(double px, double py, double lox, double hix, double loy,
   return static_cast<std::uint8_t>(below(px, lox) | above(px, hix) << 1 | below(py, loy) << 2 | above(py, hiy) << 3);
 }
 
+/// The screen image of one point (false when behind the eye, not finite or
+/// beyond 2^40 pixels). Painting and picking both project through here, so
+/// they see the same bits.
 bool project_point(const Mat4d& pv, bool perspective, double W, double H, const Vec3d& x, NodeImage& out) {
   Vec4d c;
   double px = 0, py = 0;
@@ -131,30 +138,66 @@ bool project_point(const Mat4d& pv, bool perspective, double W, double H, const 
   return true;
 }
 
-Screen project_nodes(const Model& m, const Camera& cam, const Box3d& box, const ExecContext& ctx) {
+/// Per face slot, 1 when the face is culled: its corners' codes share an
+/// outside bit (15) or one is not projectable (`not_ok`). One pass over the
+/// halfedge columns in memory order: walking each face's cycle reads them
+/// at random, which was most of the time of a cull (the codes and the
+/// result are a byte per node and per face and stay in cache). The same
+/// halfedges as the face's cycle (halfedge face column), so the same result.
+std::vector<std::uint8_t> culled_faces(const Model& m, std::span<const std::uint8_t> code, std::uint8_t not_ok) {
+  const std::size_t nf = m.faces.slots.capacity(), ne = m.edges.slots.capacity();
+  std::vector<std::uint8_t> all(nf, 0xFF), any(nf, 0);
+  const auto& tail = m.halfedges.tail;
+  const auto& face = m.halfedges.face;
+  for (std::size_t h = 0; h < 2 * ne; ++h) {
+    const FaceIdx f = face[h];
+    if (!f.valid() || !m.alive(EdgeIdx{static_cast<std::uint32_t>(h >> 1)})) continue;
+    const std::uint8_t c = code[tail[h].value];
+    all[f.value] &= c;
+    any[f.value] |= c;
+  }
+  for (std::size_t f = 0; f < nf; ++f) all[f] = (any[f] & not_ok) || (all[f] & 15) ? 1 : 0;
+  return all;
+}
+
+Screen project_nodes(const Model& m, const Camera& cam, const Box3d& box, std::span<const std::uint8_t> surf_mask,
+                     const ExecContext& ctx) {
   Screen s;
   s.pv = cam.projection * cam.view;
   s.perspective = cam.perspective();
   const std::size_t n = m.nodes.slots.capacity();
-  s.snapped.resize(n);
-  s.pixel.resize(n);
-  s.w.resize(n);
-  s.key.resize(n);
-  s.ok.assign(n, 0);
   s.code.assign(n, Screen::kNotOk);
   const double W = cam.width, H = cam.height;
+  // The codes: the snapped pixel only (the same bits as project_point's).
   par::for_each_n(ctx, n, [&](std::size_t v) {
     if (!m.alive(NodeIdx{static_cast<std::uint32_t>(v)})) return;
-    NodeImage im;
-    if (!project_point(s.pv, s.perspective, W, H, m.nodes.position[v], im)) return;
-    s.pixel[v] = im.pixel;
-    s.snapped[v] = im.snapped;
-    s.w[v] = im.w;
-    s.key[v] = im.key;
-    s.ok[v] = 1;
-    const double x = double(im.snapped.x), y = double(im.snapped.y);
+    Vec4d c;
+    double px = 0, py = 0;
+    if (!project_xy(s.pv, W, H, m.nodes.position[v], c, px, py)) return;
+    const double x = double(std::llround(px * kSnap)), y = double(std::llround(py * kSnap));
     s.code[v] = static_cast<std::uint8_t>((x < box.lo.x()) | (x > box.hi.x()) << 1 | (y < box.lo.y()) << 2 |
                                           (y > box.hi.y()) << 3);
+  });
+  s.culled = culled_faces(m, s.code, Screen::kNotOk);
+  // The images of the kept faces' corners, numbered in face order.
+  s.slot.reset(new std::uint32_t[n]);
+  std::vector<HalfedgeIdx> hs;
+  std::vector<NodeIdx> todo;
+  for (std::size_t f = 0; f < s.culled.size(); ++f) {
+    if (s.culled[f] || !surf_mask[m.faces.surface[f].value]) continue;
+    m.face_halfedges(FaceIdx{static_cast<std::uint32_t>(f)}, hs);
+    for (HalfedgeIdx h : hs) {
+      const NodeIdx v = m.tail(h);
+      if (s.code[v.value] & Screen::kImaged) continue;
+      s.code[v.value] |= Screen::kImaged;
+      s.slot[v.value] = static_cast<std::uint32_t>(todo.size());
+      todo.push_back(v);
+    }
+  }
+  s.images.resize(todo.size());
+  par::for_each_n(ctx, todo.size(), [&](std::size_t i) {
+    // Kept faces' corners are projectable (a face with one that is not is culled).
+    (void)project_point(s.pv, s.perspective, W, H, m.position(todo[i]), s.images[i]);
   });
   return s;
 }
@@ -307,8 +350,9 @@ Vec3d pierce_weights(const Vec2d& a, const Vec2d& b, const Vec2d& c, const doubl
   return l / sum;
 }
 Vec3d pierce_weights(const Screen& s, const FanTri& t, const Vec2d& q) {
-  const double w[3] = {s.w[t.n[0].value], s.w[t.n[1].value], s.w[t.n[2].value]};
-  return pierce_weights(s.pixel[t.n[0].value], s.pixel[t.n[1].value], s.pixel[t.n[2].value], w, q);
+  const NodeImage &a = s.image(t.n[0]), &b = s.image(t.n[1]), &c = s.image(t.n[2]);
+  const double w[3] = {a.w, b.w, c.w};
+  return pierce_weights(a.pixel, b.pixel, c.pixel, w, q);
 }
 
 struct ChunkOut {
@@ -321,7 +365,7 @@ struct ChunkOut {
 /// Cuts one fan triangle with the candidate sectors.
 void cut_triangle(const Model& m, const Screen& sc, const StrokeData& sd, const FanTri& t,
                   std::span<const std::uint32_t> sectors, ChunkOut& out) {
-  const P2 c[3] = {sc.snapped[t.n[0].value], sc.snapped[t.n[1].value], sc.snapped[t.n[2].value]};
+  const P2 c[3] = {sc.image(t.n[0]).snapped, sc.image(t.n[1]).snapped, sc.image(t.n[2]).snapped};
   // Canonical side orientation: smaller node index first.
   auto side_sign = [&](int k, const P2& q) {
     const int a = k, b = (k + 1) % 3;
@@ -386,7 +430,7 @@ void cut_triangle(const Model& m, const Screen& sc, const StrokeData& sd, const 
         // corrected for perspective.
         const double ou = double(orient(p, q, U)), ov = double(orient(p, q, V));
         const double sg = ou != ov ? ou / (ou - ov) : 0.5;
-        const double a1 = (1 - sg) / sc.w[nu.value], a2 = sg / sc.w[nv.value];
+        const double a1 = (1 - sg) / sc.image(nu).w, a2 = sg / sc.image(nv).w;
         u = a2 / (a1 + a2);
       }
       u = std::clamp(u, 0.0, 1.0);
@@ -439,28 +483,6 @@ Expected<std::vector<std::uint8_t>> surface_mask(const Model& m, std::span<const
   return mask;
 }
 
-/// Per face slot, 1 when the face is culled: its corners' codes share an
-/// outside bit (15) or one is not projectable (`not_ok`). One pass over the
-/// halfedge columns in memory order: walking each face's cycle reads them
-/// at random, which was most of the time of a cull (the codes and the
-/// result are a byte per node and per face and stay in cache). The same
-/// halfedges as the face's cycle (halfedge face column), so the same result.
-std::vector<std::uint8_t> culled_faces(const Model& m, std::span<const std::uint8_t> code, std::uint8_t not_ok) {
-  const std::size_t nf = m.faces.slots.capacity(), ne = m.edges.slots.capacity();
-  std::vector<std::uint8_t> all(nf, 0xFF), any(nf, 0);
-  const auto& tail = m.halfedges.tail;
-  const auto& face = m.halfedges.face;
-  for (std::size_t h = 0; h < 2 * ne; ++h) {
-    const FaceIdx f = face[h];
-    if (!f.valid() || !m.alive(EdgeIdx{static_cast<std::uint32_t>(h >> 1)})) continue;
-    const std::uint8_t c = code[tail[h].value];
-    all[f.value] &= c;
-    any[f.value] |= c;
-  }
-  for (std::size_t f = 0; f < nf; ++f) all[f] = (any[f] & not_ok) || (all[f] & 15) ? 1 : 0;
-  return all;
-}
-
 /// Fan triangles of face f in `tris` (sides classified).
 void fan_triangles(const Model& m, FaceIdx f, std::vector<HalfedgeIdx>& hs, std::vector<FanTri>& tris) {
   m.face_halfedges(f, hs);
@@ -487,8 +509,8 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
                                 std::span<const std::uint8_t> surf_mask, const ExecContext& ctx) {
   const SegmentGrid grid(sd);
   const std::size_t nf = m.faces.slots.capacity();
-  // Cull by the faces' screen boxes first (most faces lie away from the stroke).
-  const std::vector<std::uint8_t> culled = culled_faces(m, sc.code, Screen::kNotOk);
+  // Faces culled by their screen boxes (most faces lie away from the stroke).
+  const std::vector<std::uint8_t>& culled = sc.culled;
   const std::size_t chunks = (nf + kChunk - 1) / kChunk;
   std::vector<ChunkOut> outs(chunks);
   ExecContext c = ctx;
@@ -512,7 +534,7 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
       for (const FanTri& t : tris) {
         double lox = INFINITY, loy = INFINITY, hix = -INFINITY, hiy = -INFINITY;
         for (NodeIdx v : t.n) {
-          const P2& q = sc.snapped[v.value];
+          const P2& q = sc.image(v).snapped;
           lox = std::min(lox, double(q.x));
           hix = std::max(hix, double(q.x));
           loy = std::min(loy, double(q.y));
@@ -876,7 +898,7 @@ Expected<TraceResult> trace_stroke(const Model& m, const Camera& camera, std::sp
   if (Status st = camera.check(); !st) return Status(ErrorCode::kInvalidArgument, "painting: " + st.message());
   auto sd = prepare_stroke(camera, camera.projection * camera.view, stroke);
   if (!sd) return sd.status();
-  const Screen sc = project_nodes(m, camera, sd->box2, ctx);
+  const Screen sc = project_nodes(m, camera, sd->box2, *mask, ctx);
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "painting cancelled");
   auto sec = build_section(m, sc, *sd, *mask, ctx);
   if (!sec) return sec.status();

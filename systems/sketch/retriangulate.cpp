@@ -8,9 +8,9 @@
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <atelier/engine/math.h>
 #include <atelier/engine/status_format.h>
+#include <atelier/storage/mesh_edge_chain.h>
 #include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/sketch/retriangulate.h>
-#include <atelier/storage/mesh_edge_chain.h>
 
 #include <algorithm>
 #include <array>
@@ -34,7 +34,6 @@ using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 // collinear point (it is then split there, which the edge check reports).
 using Cdt =
     CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
-
 
 enum class LK : std::uint8_t { kNode, kEdge, kDiag, kFan };
 
@@ -87,22 +86,32 @@ struct Plan {
   std::vector<std::vector<std::vector<std::uint32_t>>> curve_seg;  // per curve, per row pair: its segments in order
   std::vector<FaceIdx> faces;                                      // faces to replace
   std::pmr::map<FanKey, FanPlan> fans{&arena};
-  std::pmr::unordered_map<std::uint32_t, std::vector<HalfedgeIdx>> face_hs{&arena};
+  // Per face slot, its entry in face_hs (kNone: not read yet): the faces'
+  // cycles are read for every point located in them (a hash map here was a
+  // tenth of the re-triangulation).
+  std::vector<std::uint32_t> face_at;
+  std::vector<std::vector<HalfedgeIdx>> face_hs;
   std::size_t crossings = 0;
 };
 
 class Planner {
  public:
-  Planner(const Model& m, double snap) : m_(m), snap_(snap) { P.node_pt.assign(m.nodes.slots.capacity(), kNone); }
+  Planner(const Model& m, double snap) : m_(m), snap_(snap) {
+    P.node_pt.assign(m.nodes.slots.capacity(), kNone);
+    P.face_at.assign(m.faces.slots.capacity(), kNone);
+  }
   bool chords_without_cdt = true;  // RetriangulateOptions::chords_without_cdt
   std::size_t fans_without_cdt = 0;
 
-  const std::vector<HalfedgeIdx>& hs(FaceIdx f) {
-    auto it = P.face_hs.find(f.value);
-    if (it != P.face_hs.end()) return it->second;
-    std::vector<HalfedgeIdx> v;
-    m_.face_halfedges(f, v);
-    return P.face_hs.emplace(f.value, std::move(v)).first->second;
+  /// The face's halfedges (the span stays valid while faces are added: the
+  /// cycles' own buffers never move).
+  std::span<const HalfedgeIdx> hs(FaceIdx f) {
+    std::uint32_t& at = P.face_at[f.value];
+    if (at == kNone) {
+      at = static_cast<std::uint32_t>(P.face_hs.size());
+      m_.face_halfedges(f, P.face_hs.emplace_back());
+    }
+    return P.face_hs[at];
   }
   NodeIdx corner(FaceIdx f, std::uint32_t i) { return m_.tail(hs(f)[i]); }
   std::array<NodeIdx, 3> fan_nodes(const FanKey& k) {
@@ -309,7 +318,6 @@ class Planner {
   double snap_;
 };
 
-
 /// The curve's segments, split at the fan diagonals of polygon faces when
 /// two consecutive points share a face but no fan triangle.
 Status add_segment(Planner& pl, std::uint32_t a, std::uint32_t b, std::uint32_t curve, std::vector<std::uint32_t>& ids,
@@ -461,51 +469,161 @@ Status cross_segments(Planner& pl, const FanKey& fk, const std::vector<std::uint
   return {};
 }
 
-/// The commonest fan triangle without building a CDT: one curve segment
-/// p-q across it from one side to the next and no other point. The segment
-/// cuts off the triangle (p, X, q) at the corner X the two sides share; the
-/// quadrilateral left (q, Z, a, p) takes the diagonal that the constrained
-/// Delaunay triangulation would take: q-a unless p lies strictly inside the
-/// circle through q, Z, a (the empty-circle test, exact predicates; on a tie
-/// both diagonals are Delaunay and q-a is taken). Only when both cells are
-/// strictly convex by exact orientation tests, so that the CDT's answer is
-/// this one; anything else (false) goes to the CDT, which also reports the
-/// degenerate cases.
-bool chord_only(Planner& pl, FanPlan& fp, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& cons,
+/// The constrained Delaunay triangulation of a small fan triangle without
+/// CGAL's CDT: the fans the painted curves cross hold at most one stroke
+/// point each, and building a CDT (its vertex and face allocations, its
+/// maps) for three to six points was most of the re-triangulation.
+///
+/// The polygon (the fan's corners with the points on its sides, counter-
+/// clockwise) and at most one inner point p: with p, the fan from p (every
+/// constraint must end at p); without, the polygon is split along the
+/// constraints (chords between its points) and each part ear-clipped. Then
+/// Lawson's flips (exact empty-circle tests) of every edge that is neither a
+/// side nor a constraint until all are locally Delaunay: a constrained
+/// triangulation that is locally Delaunay is the CDT (Chew 1989; de Berg et
+/// al., Thm. 9.8 for the unconstrained case), so where the CDT is unique (no
+/// four cocircular points) these are its triangles. Every triangle is then
+/// checked (strictly counter-clockwise by exact orientation, no other point
+/// in it or on its sides); anything else (false) goes to CGAL's CDT, which
+/// also reports the degenerate cases.
+bool direct_cdt(Planner& pl, FanPlan& fp, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& cons,
                 const std::vector<std::uint32_t>& inner, const std::array<std::vector<std::uint32_t>, 3>& side,
                 const std::uint32_t (&cpt)[3]) {
-  if (!inner.empty() || cons.size() != 1) return false;
-  int k = -1;
-  for (int s = 0; s < 3; ++s)
-    if (side[s].size() == 1 && side[(s + 1) % 3].size() == 1 && side[(s + 2) % 3].empty()) k = s;
-  if (k < 0) return false;
-  const std::uint32_t p = side[k][0], q = side[(k + 1) % 3][0];
-  if (!((cons[0].first == p && cons[0].second == q) || (cons[0].first == q && cons[0].second == p))) return false;
-  const std::uint32_t a = cpt[k], x = cpt[(k + 1) % 3], z = cpt[(k + 2) % 3];
-  // The same plane coordinates as the CDT's points.
-  auto at = [&](std::uint32_t pid) {
-    const Vec3d b = pl.bary_in(pid, fp.fan);
-    const Vec2d v = b[0] * fp.c2[0] + b[1] * fp.c2[1] + b[2] * fp.c2[2];
-    return K::Point_2(v.x(), v.y());
-  };
-  const K::Point_2 P2 = at(p), Q2 = at(q), A2 = at(a), X2 = at(x), Z2 = at(z);
-  auto left = [](const K::Point_2& u, const K::Point_2& v, const K::Point_2& w) {
-    return CGAL::orientation(u, v, w) == CGAL::LEFT_TURN;
-  };
-  // The cut-off triangle and the quadrilateral, each strictly convex (p and
-  // q may lie off their sides by rounding, either way: the CDT then still
-  // has these two cells, bounded by constraints).
-  if (!left(P2, X2, Q2) || !left(Q2, Z2, A2) || !left(Z2, A2, P2) || !left(A2, P2, Q2) || !left(P2, Q2, Z2))
-    return false;
-  fp.tris.push_back({p, x, q});
-  if (CGAL::side_of_oriented_circle(Q2, Z2, A2, P2) == CGAL::ON_POSITIVE_SIDE) {
-    fp.tris.push_back({q, z, p});
-    fp.tris.push_back({z, a, p});
-  } else {
-    fp.tris.push_back({q, z, a});
-    fp.tris.push_back({q, a, p});
+  constexpr int kMax = 12;  // points; larger fans go to the CDT
+  if (inner.size() > 1) return false;
+  std::array<std::uint32_t, kMax> id{};
+  int n = 0;  // polygon points
+  for (int k = 0; k < 3; ++k) {
+    if (n + 1 + static_cast<int>(side[k].size()) + static_cast<int>(inner.size()) > kMax) return false;
+    id[n++] = cpt[k];
+    for (std::uint32_t s : side[k]) id[n++] = s;
   }
-  for (auto& t : fp.tris) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  const int np = n + static_cast<int>(inner.size());
+  if (!inner.empty()) id[n] = inner[0];
+  // The same plane coordinates as the CDT's points.
+  std::array<K::Point_2, kMax> q;
+  for (int i = 0; i < np; ++i) {
+    const Vec3d b = pl.bary_in(id[i], fp.fan);
+    const Vec2d v = b[0] * fp.c2[0] + b[1] * fp.c2[1] + b[2] * fp.c2[2];
+    q[i] = K::Point_2(v.x(), v.y());
+  }
+  auto local = [&](std::uint32_t pid) {
+    for (int i = 0; i < np; ++i)
+      if (id[i] == pid) return i;
+    return -1;
+  };
+  std::array<std::array<bool, kMax>, kMax> fixed{};  // sides and constraints
+  for (int i = 0; i < n; ++i) fixed[i][(i + 1) % n] = fixed[(i + 1) % n][i] = true;
+  std::array<std::pair<int, int>, kMax> con{};
+  int nc = 0;
+  for (const auto& [x, y] : cons) {
+    const int a = local(x), b = local(y);
+    if (a < 0 || b < 0 || a == b || nc == kMax) return false;
+    fixed[a][b] = fixed[b][a] = true;
+    con[nc++] = {a, b};
+  }
+  auto orient = [&](int a, int b, int c) { return CGAL::orientation(q[a], q[b], q[c]); };
+  using Tri = std::array<int, 3>;
+  std::array<Tri, 2 * kMax> t{};
+  int nt = 0;
+  if (np > n) {
+    // The fan from the inner point; every constraint must be one of its spokes.
+    for (int c = 0; c < nc; ++c)
+      if (con[c].first != n && con[c].second != n) return false;
+    for (int i = 0; i < n; ++i) t[nt++] = {n, i, (i + 1) % n};
+  } else {
+    // Split the polygon along the chords, then clip ears off each part.
+    std::array<std::array<int, kMax>, kMax> part{};
+    std::array<int, kMax> size{};
+    int parts = 1;
+    for (int i = 0; i < n; ++i) part[0][i] = i;
+    size[0] = n;
+    for (int c = 0; c < nc; ++c) {
+      int where = -1, ia = -1, ib = -1;
+      for (int p = 0; p < parts && where < 0; ++p) {
+        ia = ib = -1;
+        for (int i = 0; i < size[p]; ++i) {
+          if (part[p][i] == con[c].first) ia = i;
+          if (part[p][i] == con[c].second) ib = i;
+        }
+        if (ia >= 0 && ib >= 0) where = p;
+      }
+      if (where < 0) return false;
+      if (ia > ib) std::swap(ia, ib);
+      const int m = size[where];
+      if (ib - ia < 2 || ia + m - ib < 2) return false;  // a side, not a chord
+      std::array<int, kMax> rest{};
+      int r = 0;
+      for (int i = ib; i != ia; i = (i + 1) % m) rest[r++] = part[where][i];
+      rest[r++] = part[where][ia];
+      for (int i = ia; i <= ib; ++i) part[parts][i - ia] = part[where][i];
+      size[parts++] = ib - ia + 1;
+      part[where] = rest;
+      size[where] = r;
+    }
+    for (int p = 0; p < parts; ++p) {
+      std::array<int, kMax> v = part[p];
+      int m = size[p];
+      while (m > 3) {
+        int ear = -1;
+        for (int i = 0; i < m && ear < 0; ++i) {
+          const int a = v[(i + m - 1) % m], b = v[i], c = v[(i + 1) % m];
+          if (orient(a, b, c) != CGAL::LEFT_TURN) continue;
+          bool empty = true;
+          for (int j = 0; j < m && empty; ++j) {
+            const int w = v[j];
+            if (w == a || w == b || w == c) continue;
+            empty = orient(a, b, w) == CGAL::RIGHT_TURN || orient(b, c, w) == CGAL::RIGHT_TURN ||
+                    orient(c, a, w) == CGAL::RIGHT_TURN;
+          }
+          if (empty) ear = i;
+        }
+        if (ear < 0) return false;
+        t[nt++] = {v[(ear + m - 1) % m], v[ear], v[(ear + 1) % m]};
+        for (int i = ear; i + 1 < m; ++i) v[i] = v[i + 1];
+        --m;
+      }
+      t[nt++] = {v[0], v[1], v[2]};
+    }
+  }
+  // Lawson's flips: edge a-b of triangle (a, b, c) against (b, a, d).
+  for (int flips = 0;; ++flips) {
+    bool flipped = false;
+    for (int x = 0; x < nt && !flipped; ++x)
+      for (int k = 0; k < 3 && !flipped; ++k) {
+        const int a = t[x][k], b = t[x][(k + 1) % 3], c = t[x][(k + 2) % 3];
+        if (fixed[a][b]) continue;
+        for (int y = 0; y < nt; ++y) {
+          int l = 0;
+          while (l < 3 && !(t[y][l] == b && t[y][(l + 1) % 3] == a)) ++l;
+          if (l == 3) continue;
+          const int d = t[y][(l + 2) % 3];
+          if (CGAL::side_of_oriented_circle(q[a], q[b], q[c], q[d]) != CGAL::ON_POSITIVE_SIDE) break;
+          if (orient(a, d, c) != CGAL::LEFT_TURN || orient(d, b, c) != CGAL::LEFT_TURN) return false;
+          if (flips == 4 * kMax) return false;
+          t[x] = {a, d, c};
+          t[y] = {d, b, c};
+          flipped = true;
+          break;
+        }
+      }
+    if (!flipped) break;
+  }
+  // Every triangle strictly counter-clockwise with no other point in it or on it.
+  if (nt != n - 2 + 2 * (np - n)) return false;
+  for (int x = 0; x < nt; ++x) {
+    const auto [a, b, c] = t[x];
+    if (orient(a, b, c) != CGAL::LEFT_TURN) return false;
+    for (int w = 0; w < np; ++w)
+      if (w != a && w != b && w != c && orient(a, b, w) != CGAL::RIGHT_TURN && orient(b, c, w) != CGAL::RIGHT_TURN &&
+          orient(c, a, w) != CGAL::RIGHT_TURN)
+        return false;
+  }
+  for (int x = 0; x < nt; ++x) {
+    std::array<std::uint32_t, 3> r = {id[t[x][0]], id[t[x][1]], id[t[x][2]]};
+    std::rotate(r.begin(), std::min_element(r.begin(), r.end()), r.end());
+    fp.tris.push_back(r);
+  }
   std::sort(fp.tris.begin(), fp.tris.end());
   return true;
 }
@@ -526,7 +644,7 @@ Status triangulate_fan(Planner& pl, FanPlan& fp, const std::vector<std::pair<std
   fp.c2[2] = Vec2d(e2.dot(ux), e2.dot(uy));
   std::vector<std::uint32_t> boundary;
   const std::uint32_t cpt[3] = {P.node_pt[fp.n[0].value], P.node_pt[fp.n[1].value], P.node_pt[fp.n[2].value]};
-  if (pl.chords_without_cdt && chord_only(pl, fp, cons, inner, side, cpt)) {
+  if (pl.chords_without_cdt && direct_cdt(pl, fp, cons, inner, side, cpt)) {
     ++pl.fans_without_cdt;
     return {};
   }

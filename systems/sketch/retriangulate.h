@@ -11,7 +11,8 @@
 //     edge, every member's corresponding edge is split at the same
 //     parameters, so the joint stays crack-free), face points become nodes.
 //  3. Every face holding a new node, on its sides or inside, is replaced by
-//     the constrained Delaunay triangulation (CGAL, exact predicates) of each
+//     the constrained Delaunay triangulation (exact predicates; CGAL's CDT
+//     where a fan holds two or more stroke points, else built directly) of each
 //     of its fan triangles (c0, c_k+1, c_k+2) in that triangle's plane, with
 //     the curve segments as constraints: new nodes lie exactly on the surface
 //     the attribute nodes were defined on, existing nodes never move, and
@@ -55,11 +56,12 @@ struct RetriangulateOptions {
   /// Surface locations (in the model before the call) to follow through
   /// the re-triangulation, e.g. the pick of a cut; see probes below.
   std::vector<SurfaceLocation> probes;
-  /// A fan triangle crossed by one curve segment from side to side and
-  /// holding no other point is split directly (the two triangles of the
-  /// constrained Delaunay triangulation, chosen by exact predicates) instead
-  /// of building a CDT. False sends every fan through the CDT (the tests
-  /// show both give the same tables).
+  /// A fan triangle holding at most one stroke point (with its spokes) or
+  /// only chords between points on its sides is triangulated directly (a
+  /// fan or ear clipping, then Lawson's flips by exact predicates: the
+  /// constrained Delaunay triangulation) instead of building CGAL's CDT.
+  /// False sends every fan through the CDT (the tests show both give the
+  /// same tables).
   bool chords_without_cdt = true;
 };
 

@@ -6,6 +6,8 @@
 #include <atelier/systems/sketch/retriangulate.h>
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "systems/sketch/sketch_fixtures.h"
 
 using namespace atelier;
@@ -171,6 +173,111 @@ TEST(Retriangulate, ChordsWithoutACdtGiveTheCdtsTriangles) {
       expect_clean(m, direct, *a, curves);
     }
   }
+}
+
+// The fans split without CGAL's CDT (one stroke point with its spokes, or
+// chords between side points, then Lawson's flips) on random triangles:
+// one or two random curves per triangle, made of points on its sides, one
+// inside it and its corners (two curves may cross, which adds an inner
+// point with four spokes). The oracle is CGAL's CDT of the same fans
+// (`chords_without_cdt = false`): same tables (random points: no four are
+// cocircular, so the CDT is unique), or the same refusal with the model
+// unchanged; and independently of it, a valid model, the area kept to
+// 1e-12 and every new face turned as the old one (no fold).
+TEST(Retriangulate, DirectSplitsAreTheCdtOnRandomFaces) {
+  std::mt19937 rng(20);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), coord(-1.0, 1.0);
+  std::size_t direct = 0, succeeded = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    SCOPED_TRACE(trial);
+    Model m;
+    const std::vector<Vec3d> corners = {Vec3d(coord(rng), coord(rng), coord(rng)),
+                                        Vec3d(coord(rng), coord(rng), coord(rng)),
+                                        Vec3d(coord(rng), coord(rng), coord(rng))};
+    const Vec3d normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+    if (normal.norm() < 0.05) continue;
+    const std::vector<std::uint32_t> off{0, 3}, idx{0, 1, 2};
+    const Surface surface = add_polygon_surface(m, "t", PolygonSoupView{corners, off, idx}).value();
+    const SurfaceIdx s = m.resolve(surface).value();
+    FaceIdx f;
+    for (std::uint32_t x = 0; x < m.faces.slots.capacity(); ++x)
+      if (m.alive(FaceIdx{x})) f = FaceIdx{x};
+    std::vector<HalfedgeIdx> hs;
+    m.face_halfedges(f, hs);
+    auto on_side = [&](int side) {  // side i runs from corner i to corner i + 1
+      const double u = 0.05 + 0.9 * unit(rng);
+      const HalfedgeIdx h = hs[side % 3];
+      const Vec3d x = (1 - u) * m.position(m.tail(h)) + u * m.position(m.head(h));
+      return m.new_attrib_node(s, AttribNodeKind::kEdge, h.value, Vec3d(u, 0, 0), x);
+    };
+    auto inside = [&] {
+      Vec3d b(0.05 + unit(rng), 0.05 + unit(rng), 0.05 + unit(rng));
+      b /= b.sum();
+      Vec3d x = Vec3d::Zero();
+      for (int i = 0; i < 3; ++i) x += b[i] * m.position(m.tail(hs[i]));
+      return m.new_attrib_node(s, AttribNodeKind::kFace, f.value, b, x);
+    };
+    auto corner = [&](int i) {
+      const NodeIdx v = m.tail(hs[i % 3]);
+      return m.new_attrib_node(s, AttribNodeKind::kVertex, v.value, Vec3d::Zero(), m.position(v));
+    };
+    std::vector<AttribEdge> curves;
+    const int count = 1 + (trial % 3 == 2);
+    for (int c = 0; c < count; ++c) {
+      const int i = static_cast<int>(rng() % 3), j = static_cast<int>(rng() % 3);
+      std::vector<AttribNodeIdx> row;
+      switch (rng() % 5) {
+        case 0:  // across, through a stroke point (both ends may be on one side)
+          row = {on_side(i), inside(), on_side(j)};
+          break;
+        case 1:  // a chord from side to side
+          row = {on_side(i), on_side(i + 1 + j % 2)};
+          break;
+        case 2:  // from a corner to the opposite side
+          row = {corner(i), on_side(i + 1)};
+          break;
+        case 3:  // ending at a stroke point
+          row = {on_side(i), inside()};
+          break;
+        default:  // from a stroke point to a corner
+          row = {inside(), corner(i)};
+          break;
+      }
+      curves.push_back(m.handle(m.new_attrib_edge(s, -1, row)));
+    }
+    Model a = m, b = m;
+    auto ra = retriangulate_curves(a, curves);
+    auto rb = retriangulate_curves(b, curves, {.chords_without_cdt = false});
+    ASSERT_EQ(ra.has_value(), rb.has_value()) << (ra ? rb.status() : ra.status()).to_string();
+    if (!ra) {
+      EXPECT_EQ(ra.status().code(), rb.status().code());
+      EXPECT_EQ(diff_tables(a, m), "");
+      continue;
+    }
+    ++succeeded;
+    // One curve: one stroke point with its spokes, or one chord: always direct.
+    if (count == 1) {
+      EXPECT_EQ(ra->fans_without_cdt, 1u);
+    }
+    direct += ra->fans_without_cdt;
+    EXPECT_EQ(rb->fans_without_cdt, 0u);
+    ASSERT_TRUE(validate(a)) << validate(a).to_string();
+    const double a0 = fan_area(m), a1 = fan_area(a);
+    EXPECT_NEAR(a1, a0, 1e-12 * a0);
+    std::vector<NodeIdx> c;
+    for (std::uint32_t x = 0; x < a.faces.slots.capacity(); ++x) {
+      if (!a.alive(FaceIdx{x})) continue;
+      a.face_nodes(FaceIdx{x}, c);
+      ASSERT_EQ(c.size(), 3u);
+      EXPECT_GT((a.position(c[1]) - a.position(c[0])).cross(a.position(c[2]) - a.position(c[0])).dot(normal), 0.0)
+          << "face " << x << " is folded";
+    }
+    EXPECT_EQ(diff_tables(a, b), "");
+  }
+  // Most random configurations succeed; two curves (two stroke points, or a
+  // chord beside a stroke point, in one triangle) may still take the CDT.
+  EXPECT_GT(succeeded, 400u);
+  EXPECT_GT(direct, succeeded / 2);
 }
 
 TEST(Retriangulate, TwoCrossingCurvesShareOneNode) {
