@@ -449,25 +449,53 @@ std::uint32_t PointIds::find(const PointKey& k) const {
   return it != keys.end() && *it == k ? id[static_cast<std::size_t>(it - keys.begin())] : kNil;
 }
 
+namespace {
+
+// Delaunay: among the triangulations with the cut segments, the one that
+// avoids slivers. Nearly collinear cut points (a net cutting the coplanar
+// fan of a split planar polygon) would otherwise give triangles a rounding
+// of the points can fold over.
+template <class K>
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<
+    K,
+    CGAL::Triangulation_data_structure_2<CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, K>,
+                                         CGAL::Constrained_triangulation_face_base_2<K>>,
+    CGAL::No_constraint_intersection_requiring_constructions_tag>;
+
+/// A cut triangle as both triangulations see it: its net, the global id
+/// of the net's vertex 0, its corners and the projection that keeps it.
+struct CutTriangle {
+  CutTriangle(const TriMesh& a, const TriMesh& b, int side_, std::uint32_t t)
+      : m(side_ == 0 ? a : b),
+        side(side_),
+        offset(side_ == 0 ? 0u : static_cast<std::uint32_t>(a.p.size())),
+        c(corners(m, t)),
+        pr(projection_of(c[0], c[1], c[2])),
+        u(u_of(pr.axis)),
+        v(v_of(pr.axis)) {}
+  [[nodiscard]] std::uint64_t own(const PointKey& k) const noexcept { return side == 0 ? k.a : k.b; }
+  const TriMesh& m;
+  int side;
+  std::uint32_t offset;
+  std::array<Vec3d, 3> c;
+  Projection pr;
+  int u, v;
+};
+
+}  // namespace
+
 Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t, std::span<const PointKey> points,
                        std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
                        const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out) {
-  using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Ke>;
-  using Fb = CGAL::Constrained_triangulation_face_base_2<Ke>;
-  using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
-  // Delaunay: among the triangulations with the cut segments, the one that
-  // avoids slivers. Nearly collinear cut points (a net cutting the coplanar
-  // fan of a split planar polygon) would otherwise give triangles a rounding
-  // of the points can fold over.
-  using Ct =
-      CGAL::Constrained_Delaunay_triangulation_2<Ke, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
-  const TriMesh& m = side == 0 ? a : b;
-  const std::uint32_t offset = side == 0 ? 0u : static_cast<std::uint32_t>(a.p.size());
+  using Ct = Cdt<Ke>;
+  const CutTriangle ctri(a, b, side, t);
+  const TriMesh& m = ctri.m;
+  const std::uint32_t offset = ctri.offset;
   const auto& tv = m.tri[t];
-  const auto c = corners(m, t);
-  const Projection pr = projection_of(c[0], c[1], c[2]);
-  const int u = u_of(pr.axis), v = v_of(pr.axis);
-  auto own = [&](const PointKey& k) { return side == 0 ? k.a : k.b; };
+  const auto& c = ctri.c;
+  const Projection pr = ctri.pr;
+  const int u = ctri.u, v = ctri.v;
+  auto own = [&](const PointKey& k) { return ctri.own(k); };
   try {
     Ct ct;
     std::array<Ct::Vertex_handle, 3> corner;
@@ -582,20 +610,16 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
                           std::span<const PointKey> points, std::span<const std::array<PointKey, 2>> constraints,
                           const PointIds& ids, std::span<const PointBox> boxes, std::uint32_t first_new,
                           std::vector<std::array<std::uint32_t, 3>>& out) {
-  using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Ki>;
-  using Fb = CGAL::Constrained_triangulation_face_base_2<Ki>;
-  using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
-  using Ct =
-      CGAL::Constrained_Delaunay_triangulation_2<Ki, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
+  using Ct = Cdt<Ki>;
   using I = CGAL::Interval_nt<true>;
-  const TriMesh& m = side == 0 ? a : b;
+  const CutTriangle ctri(a, b, side, t);
+  const TriMesh& m = ctri.m;
   const TriMesh& other = side == 0 ? b : a;
-  const std::uint32_t offset = side == 0 ? 0u : static_cast<std::uint32_t>(a.p.size());
   const auto& tv = m.tri[t];
-  const auto c = corners(m, t);
-  const Projection pr = projection_of(c[0], c[1], c[2]);
-  const int u = u_of(pr.axis), v = v_of(pr.axis);
-  auto own = [&](const PointKey& k) { return side == 0 ? k.a : k.b; };
+  const auto& c = ctri.c;
+  const Projection pr = ctri.pr;
+  const int u = ctri.u, v = ctri.v;
+  auto own = [&](const PointKey& k) { return ctri.own(k); };
   auto theirs = [&](const PointKey& k) { return side == 0 ? k.b : k.a; };
   // Every vertex: its global id, its projected box (lo u, lo v, hi u, hi v)
   // and the double point the triangulation sees (the box's centre).
@@ -605,7 +629,7 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   };
   std::vector<Vert> vert;
   vert.reserve(points.size() + 3);
-  for (std::size_t q = 0; q < 3; ++q) vert.push_back({tv[q] + offset, {c[q][u], c[q][v], c[q][u], c[q][v]}});
+  for (std::size_t q = 0; q < 3; ++q) vert.push_back({tv[q] + ctri.offset, {c[q][u], c[q][v], c[q][u], c[q][v]}});
   std::array<std::vector<std::uint32_t>, 3> on_edge;  // indices into vert
   std::vector<std::uint32_t> inside;
   std::vector<std::pair<PointKey, std::uint32_t>> by_key;  // (key, index into vert)

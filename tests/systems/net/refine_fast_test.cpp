@@ -92,19 +92,9 @@ TEST(NetRefineFast, AgreesWithExactOnDegeneratePairs) {
   // Grid boxes (quads split around their centre: planar fans whose cut
   // points are collinear; coplanar faces; rectangles of cocircular points).
   std::uint64_t seed = 99;
-  auto next = [&] {
-    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<int>((seed >> 33) % 5);
-  };
   for (int trial = 0; trial < 24; ++trial) {
     Vec3d lo[2], hi[2];
-    for (int s = 0; s < 2; ++s)
-      for (int k = 0; k < 3; ++k) {
-        int x = next(), y = next();
-        if (x == y) y = x + 1;
-        lo[s][k] = 0.5 * std::min(x, y);
-        hi[s][k] = 0.5 * std::max(x, y);
-      }
+    net_test::grid_box_pair(seed, lo, hi);
     const PolygonSoup a = trial % 2 ? net_test::box(lo[0], hi[0]) : net_test::box_triangles(lo[0], hi[0]);
     const PolygonSoup b = trial % 3 ? net_test::box_triangles(lo[1], hi[1]) : net_test::box(lo[1], hi[1]);
     compare(a, b, kOps[trial % 4], "grid boxes " + std::to_string(trial), n);
