@@ -862,15 +862,21 @@ PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexce
 
 Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box,
                         const ExactPoints& exact, std::size_t index) {
-  // A pinned box gives the coordinates; otherwise the exact value, always
-  // evaluated (a lazy number's interval depends on whether a predicate has
-  // already forced its exact value: the output must not).
-  if (box.ok && pinned(box.b[0], box.b[3]) && pinned(box.b[1], box.b[4]) && pinned(box.b[2], box.b[5]))
+  // An edge through a triangle with a pinned box takes the box's centre;
+  // any other point its exact value rounded to nearest, always evaluated (a
+  // lazy number's interval depends on whether a predicate has already
+  // forced its exact value: the output must not).
+  const bool edge_face = dim_of(k.a) == kDimFace || dim_of(k.b) == kDimFace;
+  if (edge_face && box.ok && pinned(box.b[0], box.b[3]) && pinned(box.b[1], box.b[4]) && pinned(box.b[2], box.b[5]))
     return {centre(box.b[0], box.b[3]), centre(box.b[1], box.b[4]), centre(box.b[2], box.b[5])};
   const Ke::Point_3 pt = index < exact.p.size() && exact.ok[index] ? exact.p[index] : exact_point(a, b, k);
   auto coord = [&](const Ke::FT& x) {
-    const std::pair<double, double> iv = CGAL::to_interval(CGAL::exact(x));
-    return centre(iv.first, iv.second);
+    const auto& e = CGAL::exact(x);
+    const std::pair<double, double> iv = CGAL::to_interval(e);
+    if (!(iv.first < iv.second)) return iv.first;
+    using Q = std::decay_t<decltype(e)>;
+    const Q mid = (Q(iv.first) + Q(iv.second)) / 2;
+    return e < mid ? iv.first : (mid < e ? iv.second : centre(iv.first, iv.second));
   };
   return {coord(pt.x()), coord(pt.y()), coord(pt.z())};
 }
