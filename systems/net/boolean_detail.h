@@ -177,9 +177,9 @@ struct PointBox {
 };
 [[nodiscard]] PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexcept;
 
-/// The certified fast path of refine_triangle: the same constrained Delaunay
-/// triangulation, on the points' double coordinates (their boxes' centres)
-/// with CGAL's filtered predicates, then certified against the boxes (every
+/// The certified fast path of refine_triangle: a constrained Delaunay
+/// triangulation of the points' double coordinates (their boxes' centres,
+/// in the triangle's affine frame) with CGAL's filtered predicates, then certified against the boxes (every
 /// triangle's orientation certainly positive for any points in the boxes,
 /// every cut segment an edge, the boundary the triangle's edges with their
 /// points in certified order). False (and `out` as it was) when any check
@@ -201,8 +201,9 @@ struct PointBox {
                                      const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out);
 
 /// Coordinates of a new intersection point, rounded from its exact value.
-/// Its box's centre when the box is at most four ulps wide in every
-/// coordinate (the same bits on every run; within 2 ulps of the exact value).
+/// An edge through a triangle: its box's centre when the box is at most
+/// four ulps wide in every coordinate (within 2 ulps of the exact value);
+/// otherwise the exact value rounded to nearest.
 [[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box,
                                       const ExactPoints& exact, std::size_t index);
 
