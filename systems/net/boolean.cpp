@@ -397,12 +397,13 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   if (Status s = stage_done(ctx, "boolean: self-intersection check", 2, kStages); !s) return s;
 
   Cut cut;
-  if (Status st = cut_nets(A, bvh_a, B, bvh_b, ctx, cut); !st) return st;
+  if (Status st = cut_nets(A, bvh_a, B, bvh_b, ctx, cut, opt.exact_refinement); !st) return st;
   if (Status s = stage_done(ctx, "boolean: cut", 3, kStages); !s) return s;
   rep.candidate_pairs = cut.candidate_pairs;
   rep.intersecting_pairs = cut.intersecting_pairs;
   rep.intersection_points = cut.new_keys.size();
   rep.cut_triangles = cut.sides[0].cut.size() + cut.sides[1].cut.size();
+  rep.refined_exact = cut.refined_exact;
   auto& sides = cut.sides;
   const auto& canon = cut.canon;
   const auto& on_a = cut.on_a;
@@ -451,7 +452,11 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
           wind[i] = winding_number(other, other_bvh, s.m->p[probe[r] - s.offset]);
         } else {
           const Tri3& t = s.piece[first_piece[r]];
-          wind[i] = winding_number_centroid(other, other_bvh, A, B, {key_of(t[0]), key_of(t[1]), key_of(t[2])});
+          auto box_of = [&](std::uint32_t id) -> const PointBox* {
+            return id >= nA + nB ? &cut.new_boxes[id - nA - nB] : nullptr;
+          };
+          wind[i] = winding_number_centroid(other, other_bvh, A, B, {key_of(t[0]), key_of(t[1]), key_of(t[2])},
+                                            {box_of(t[0]), box_of(t[1]), box_of(t[2])});
         }
       } catch (const Error& e) {
         st[i] = e.status();

@@ -79,6 +79,10 @@ struct BooleanOptions {
   /// Refuse self-intersecting nets (exact test over box-overlapping pairs).
   /// Off saves about a third of the time when the caller knows.
   bool check_self_intersection = true;
+  /// Re-triangulate every cut triangle in exact arithmetic, without the
+  /// certified fast path on doubles (the reference the fast path is tested
+  /// against; the results differ at most in the diagonals chosen).
+  bool exact_refinement = false;
 };
 
 /// Valences (edge counts) of the vertices of the merged intersection
@@ -100,6 +104,7 @@ struct BooleanReport {
   std::size_t intersecting_pairs = 0;     // pairs that meet
   std::size_t intersection_points = 0;    // new points (not vertices of either net)
   std::size_t cut_triangles = 0;          // triangles re-triangulated, both nets
+  std::size_t refined_exact = 0;          // of them, by the exact triangulation (not certified on doubles)
   std::size_t merged_pairs = 0;           // paper mode: matched pairs merged to midpoints
   std::vector<std::uint32_t> seam;        // result vertices on the intersection polygons (sorted)
   ValenceStats valence;                   // paper mode

@@ -162,8 +162,34 @@ struct ExactPointsDeleter {
   void operator()(ExactPoints* p) const noexcept;
 };
 using ExactPointsPtr = std::unique_ptr<ExactPoints, ExactPointsDeleter>;
+/// Only the keys with need[i] != 0 get their lazy exact point (the others'
+/// ok stays 0): those of the cut triangles the certified fast path left to
+/// the exact one, and those whose interval box does not pin the output.
 [[nodiscard]] ExactPointsPtr make_exact_points(const TriMesh& a, const TriMesh& b, std::span<const PointKey> keys,
-                                               const ExecContext& ctx);
+                                               std::span<const std::uint8_t> need, const ExecContext& ctx);
+
+/// A box certainly holding a new intersection point (lo xyz, hi xyz), from
+/// interval arithmetic on the input doubles; ok false when no interval
+/// formula bounds it (then only the exact path uses the point).
+struct PointBox {
+  std::array<double, 6> b{};
+  bool ok = false;
+};
+[[nodiscard]] PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexcept;
+
+/// The certified fast path of refine_triangle: a constrained Delaunay
+/// triangulation of the points' double coordinates (their boxes' centres,
+/// in the triangle's affine frame) with CGAL's filtered predicates, then certified against the boxes (every
+/// triangle's orientation certainly positive for any points in the boxes,
+/// every cut segment an edge, the boundary the triangle's edges with their
+/// points in certified order). False (and `out` as it was) when any check
+/// cannot be certified: the caller then runs the exact refine_triangle.
+/// `boxes` are the new points' (id first_new + i).
+[[nodiscard]] bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
+                                        std::span<const PointKey> points,
+                                        std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
+                                        std::span<const PointBox> boxes, std::uint32_t first_new,
+                                        std::vector<std::array<std::uint32_t, 3>>& out);
 
 /// Refines triangle t of one side (0: A, 1: B) by the given intersection
 /// points (keys whose simplex on this side lies in the triangle's closure)
@@ -175,16 +201,22 @@ using ExactPointsPtr = std::unique_ptr<ExactPoints, ExactPointsDeleter>;
                                      const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out);
 
 /// Coordinates of a new intersection point, rounded from its exact value.
-[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const ExactPoints& exact,
-                                      std::size_t index);
+/// An edge through a triangle: its box's centre when the box is at most
+/// four ulps wide in every coordinate (within 2 ulps of the exact value);
+/// otherwise the exact value rounded to nearest.
+[[nodiscard]] Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box,
+                                      const ExactPoints& exact, std::size_t index);
 
 /// Winding number of the closed net m about a point: a double point not on
 /// m, or the centroid of three intersection points / vertices (exact), by an
 /// exact ray parity with deterministic directions (a direction that meets
 /// an edge or a vertex of m is replaced by the next).
 [[nodiscard]] int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q);
+/// `boxes`: each corner's PointBox when it is a new point (else nullptr),
+/// for the certified interval path tried before the exact one.
 [[nodiscard]] int winding_number_centroid(const TriMesh& m, const Bvh& bvh, const TriMesh& a, const TriMesh& b,
-                                          const std::array<PointKey, 3>& corners);
+                                          const std::array<PointKey, 3>& corners,
+                                          const std::array<const PointBox*, 3>& boxes);
 
 /// Same orientation (+1) or opposite (-1) of two coplanar triangles.
 [[nodiscard]] int coplanar_orientation(const TriMesh& a, std::uint32_t ta, const TriMesh& b, std::uint32_t tb);
@@ -219,15 +251,19 @@ struct Cut {
   std::vector<std::uint64_t> on_a, on_b;  // canonical id -> simplex of A / B holding it, or none
   std::vector<PointKey> new_keys;         // new points (id nA + nB + k)
   std::vector<Vec3d> new_points;          // their rounded coordinates
+  std::vector<PointBox> new_boxes;        // their interval boxes
   std::size_t candidate_pairs = 0, intersecting_pairs = 0;
+  std::size_t refined_exact = 0;  // cut triangles the certified fast path left to the exact triangulation
   [[nodiscard]] Vec3d position(const TriMesh& a, const TriMesh& b, std::uint32_t id) const {
     return id < nA ? a.p[id] : (id < nA + nB ? b.p[id - nA] : new_points[id - nA - nB]);
   }
 };
 
 /// Cuts A and B along their intersection (either may be open: trimming).
+/// exact_only: every cut triangle by the exact triangulation (the
+/// reference the certified fast path is tested against).
 [[nodiscard]] Status cut_nets(const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
-                              const ExecContext& ctx, Cut& out);
+                              const ExecContext& ctx, Cut& out, bool exact_only = false);
 
 /// Appends the kept pieces of one side (`keep` of its CutSide) to `out`:
 /// untouched polygons whole (n-gons stay n-gons), cut ones as triangles;

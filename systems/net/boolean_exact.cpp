@@ -41,6 +41,18 @@ Ke::Point_3 pe(const Vec3d& v) {
   return {v.x(), v.y(), v.z()};
 }
 
+/// An interval at most four ulps wide: its centre is the same bits on every
+/// run and within 2 ulps of any value inside.
+bool pinned(double lo, double hi) {
+  if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
+  for (int i = 0; i < 4 && lo < hi; ++i) lo = std::nextafter(lo, hi);
+  return lo >= hi;
+}
+
+double centre(double lo, double hi) {
+  return lo + 0.5 * (hi - lo);
+}
+
 int sgn(CGAL::Orientation o) {
   return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0);
 }
@@ -218,12 +230,13 @@ void ExactPointsDeleter::operator()(ExactPoints* p) const noexcept {
 }
 
 ExactPointsPtr make_exact_points(const TriMesh& a, const TriMesh& b, std::span<const PointKey> keys,
-                                 const ExecContext& ctx) {
+                                 std::span<const std::uint8_t> need, const ExecContext& ctx) {
   ExactPointsPtr out(new ExactPoints);
   out->first_id = static_cast<std::uint32_t>(a.p.size() + b.p.size());
   out->p.resize(keys.size());
   out->ok.assign(keys.size(), 0);
   par::for_each_n(ctx, keys.size(), [&](std::size_t i) {
+    if (!need[i]) return;
     try {
       out->p[i] = exact_point(a, b, keys[i]);
       out->ok[i] = 1;
@@ -436,25 +449,53 @@ std::uint32_t PointIds::find(const PointKey& k) const {
   return it != keys.end() && *it == k ? id[static_cast<std::size_t>(it - keys.begin())] : kNil;
 }
 
+namespace {
+
+// Delaunay: among the triangulations with the cut segments, the one that
+// avoids slivers. Nearly collinear cut points (a net cutting the coplanar
+// fan of a split planar polygon) would otherwise give triangles a rounding
+// of the points can fold over.
+template <class K>
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<
+    K,
+    CGAL::Triangulation_data_structure_2<CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, K>,
+                                         CGAL::Constrained_triangulation_face_base_2<K>>,
+    CGAL::No_constraint_intersection_requiring_constructions_tag>;
+
+/// A cut triangle as both triangulations see it: its net, the global id
+/// of the net's vertex 0, its corners and the projection that keeps it.
+struct CutTriangle {
+  CutTriangle(const TriMesh& a, const TriMesh& b, int side_, std::uint32_t t)
+      : m(side_ == 0 ? a : b),
+        side(side_),
+        offset(side_ == 0 ? 0u : static_cast<std::uint32_t>(a.p.size())),
+        c(corners(m, t)),
+        pr(projection_of(c[0], c[1], c[2])),
+        u(u_of(pr.axis)),
+        v(v_of(pr.axis)) {}
+  [[nodiscard]] std::uint64_t own(const PointKey& k) const noexcept { return side == 0 ? k.a : k.b; }
+  const TriMesh& m;
+  int side;
+  std::uint32_t offset;
+  std::array<Vec3d, 3> c;
+  Projection pr;
+  int u, v;
+};
+
+}  // namespace
+
 Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t, std::span<const PointKey> points,
                        std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
                        const ExactPoints& exact, std::vector<std::array<std::uint32_t, 3>>& out) {
-  using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, Ke>;
-  using Fb = CGAL::Constrained_triangulation_face_base_2<Ke>;
-  using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
-  // Delaunay: among the triangulations with the cut segments, the one that
-  // avoids slivers. Nearly collinear cut points (a net cutting the coplanar
-  // fan of a split planar polygon) would otherwise give triangles a rounding
-  // of the points can fold over.
-  using Ct =
-      CGAL::Constrained_Delaunay_triangulation_2<Ke, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
-  const TriMesh& m = side == 0 ? a : b;
-  const std::uint32_t offset = side == 0 ? 0u : static_cast<std::uint32_t>(a.p.size());
+  using Ct = Cdt<Ke>;
+  const CutTriangle ctri(a, b, side, t);
+  const TriMesh& m = ctri.m;
+  const std::uint32_t offset = ctri.offset;
   const auto& tv = m.tri[t];
-  const auto c = corners(m, t);
-  const Projection pr = projection_of(c[0], c[1], c[2]);
-  const int u = u_of(pr.axis), v = v_of(pr.axis);
-  auto own = [&](const PointKey& k) { return side == 0 ? k.a : k.b; };
+  const auto& c = ctri.c;
+  const Projection pr = ctri.pr;
+  const int u = ctri.u, v = ctri.v;
+  auto own = [&](const PointKey& k) { return ctri.own(k); };
   try {
     Ct ct;
     std::array<Ct::Vertex_handle, 3> corner;
@@ -565,58 +606,277 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
   return {};
 }
 
-Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const ExactPoints& exact,
-                        std::size_t index) {
-  // A value is kept when its enclosing interval is at most four ulps wide
-  // (the same bits on every run; within 2 ulps of the exact value), else
-  // the exact value is rounded.
-  auto pinned = [](double lo, double hi) {
-    if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
-    for (int i = 0; i < 4 && lo < hi; ++i) lo = std::nextafter(lo, hi);
-    return lo >= hi;
+bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
+                          std::span<const PointKey> points, std::span<const std::array<PointKey, 2>> constraints,
+                          const PointIds& ids, std::span<const PointBox> boxes, std::uint32_t first_new,
+                          std::vector<std::array<std::uint32_t, 3>>& out) {
+  using Ct = Cdt<Ki>;
+  using I = CGAL::Interval_nt<true>;
+  const CutTriangle ctri(a, b, side, t);
+  const TriMesh& m = ctri.m;
+  const TriMesh& other = side == 0 ? b : a;
+  const auto& tv = m.tri[t];
+  const auto& c = ctri.c;
+  const Projection pr = ctri.pr;
+  const int u = ctri.u, v = ctri.v;
+  auto own = [&](const PointKey& k) { return ctri.own(k); };
+  auto theirs = [&](const PointKey& k) { return side == 0 ? k.b : k.a; };
+  // Every vertex: its global id, its projected box (lo u, lo v, hi u, hi v)
+  // and the double point the triangulation sees (the box's centre).
+  struct Vert {
+    std::uint32_t id;
+    std::array<double, 4> box;
   };
+  std::vector<Vert> vert;
+  vert.reserve(points.size() + 3);
+  for (std::size_t q = 0; q < 3; ++q) vert.push_back({tv[q] + ctri.offset, {c[q][u], c[q][v], c[q][u], c[q][v]}});
+  std::array<std::vector<std::uint32_t>, 3> on_edge;  // indices into vert
+  std::vector<std::uint32_t> inside;
+  std::vector<std::pair<PointKey, std::uint32_t>> by_key;  // (key, index into vert)
+  by_key.reserve(points.size());
+  for (const PointKey& k : points) {
+    const std::uint64_t s = own(k);
+    if (dim_of(s) == kDimVertex) {
+      for (std::uint32_t q = 0; q < 3; ++q)
+        if (tv[q] == idx_of(s)) by_key.emplace_back(k, q);
+      continue;
+    }
+    const std::uint32_t id = ids.find(k);
+    if (id == kNil) return false;
+    std::array<double, 6> box3;
+    const std::uint64_t o = theirs(k);
+    if (dim_of(o) == kDimVertex) {
+      const Vec3d& x = other.p[idx_of(o)];
+      box3 = {x.x(), x.y(), x.z(), x.x(), x.y(), x.z()};
+    } else {
+      if (id < first_new || id - first_new >= boxes.size() || !boxes[id - first_new].ok) return false;
+      box3 = boxes[id - first_new].b;
+    }
+    const auto n = static_cast<std::uint32_t>(vert.size());
+    vert.push_back({id,
+                    {box3[static_cast<std::size_t>(u)], box3[static_cast<std::size_t>(v)],
+                     box3[static_cast<std::size_t>(u + 3)], box3[static_cast<std::size_t>(v + 3)]}});
+    by_key.emplace_back(k, n);
+    std::size_t slot = 3;
+    if (dim_of(s) == kDimEdge)
+      for (std::size_t q = 0; q < 3; ++q)
+        if (m.tri_edge[t][q] == idx_of(s)) slot = q;
+    (slot < 3 ? on_edge[slot] : inside).push_back(n);
+  }
+  // The triangulation runs in the triangle's own affine frame (corners
+  // (0, 0), (1, 0), (0, 1)), where a point on an edge can be put exactly on
+  // it in doubles ((l, 0), (x, 1 - x) with x = fl(1 - l), (0, y)): CGAL's
+  // triangulation must see consistent geometry. Interior points are mapped
+  // in doubles; where they land only guides the combinatorics, which are
+  // certified below on the boxes.
+  const double p0u = c[0][u], p0v = c[0][v];
+  const double e1u = c[1][u] - p0u, e1v = c[1][v] - p0v, e2u = c[2][u] - p0u, e2v = c[2][v] - p0v;
+  const double det = e1u * e2v - e1v * e2u;
+  if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
+  auto mid2 = [&](std::uint32_t i) {
+    const auto& x = vert[i].box;
+    return std::array<double, 2>{centre(x[0], x[2]) - p0u, centre(x[1], x[3]) - p0v};
+  };
+  std::vector<Ki::Point_2> frame(vert.size());
+  frame[0] = {0.0, 0.0};
+  frame[1] = {1.0, 0.0};
+  frame[2] = {0.0, 1.0};
+  for (std::uint32_t q = 0; q < 3; ++q)
+    for (std::uint32_t i : on_edge[q]) {
+      // The parameter along the edge from its first corner.
+      const auto m2 = mid2(i);
+      const double s1 = (m2[0] * e2v - m2[1] * e2u) / det, s2 = (e1u * m2[1] - e1v * m2[0]) / det;
+      const double l = q == 0 ? s1 : (q == 1 ? s2 : 1.0 - s2);
+      if (!(l > 0.0 && l < 1.0)) return false;
+      if (q == 0) {
+        frame[i] = {l, 0.0};
+      } else if (q == 1) {
+        const double x = 1.0 - l;
+        frame[i] = {x, 1.0 - x};  // x + (1 - x) == 1 exactly (Sterbenz: 1 - l or 1 - x is exact)
+      } else {
+        frame[i] = {0.0, 1.0 - l};
+      }
+    }
+  for (std::uint32_t i : inside) {
+    const auto m2 = mid2(i);
+    frame[i] = {(m2[0] * e2v - m2[1] * e2u) / det, (e1u * m2[1] - e1v * m2[0]) / det};
+  }
+  // Certified sign of the orientation of three vertices, for any points in
+  // their boxes: +1, -1, or 0 when the intervals cannot tell.
+  auto orient_box = [&](std::uint32_t i, std::uint32_t j, std::uint32_t k) {
+    const auto &p = vert[i].box, &q = vert[j].box, &r = vert[k].box;
+    const I px(p[0], p[2]), py(p[1], p[3]), qx(q[0], q[2]), qy(q[1], q[3]), rx(r[0], r[2]), ry(r[1], r[3]);
+    const I d = (qx - px) * (ry - py) - (qy - py) * (rx - px);
+    return d.inf() > 0 ? 1 : (d.sup() < 0 ? -1 : 0);
+  };
+  // Points on an edge in their certified order along it (a coordinate in
+  // which the edge is monotone; disjoint intervals).
+  std::vector<std::uint32_t> chain;  // the boundary: corner, edge points, next corner, ...
+  for (std::size_t q = 0; q < 3; ++q) {
+    auto& list = on_edge[q];
+    const Vec3d d = c[(q + 1) % 3] - c[q];
+    const int ax = std::abs(d[u]) >= std::abs(d[v]) ? 0 : 1;  // projected coordinate along the edge
+    const bool up = d[ax == 0 ? u : v] > 0;
+    auto lo = [&](std::uint32_t i) {
+      return up ? vert[i].box[static_cast<std::size_t>(ax)] : -vert[i].box[static_cast<std::size_t>(ax + 2)];
+    };
+    auto hi = [&](std::uint32_t i) {
+      return up ? vert[i].box[static_cast<std::size_t>(ax + 2)] : -vert[i].box[static_cast<std::size_t>(ax)];
+    };
+    std::sort(list.begin(), list.end(),
+              [&](std::uint32_t x, std::uint32_t y) { return lo(x) + hi(x) < lo(y) + hi(y); });
+    for (std::size_t i = 0; i + 1 < list.size(); ++i)
+      if (!(hi(list[i]) < lo(list[i + 1]))) return false;
+    chain.push_back(static_cast<std::uint32_t>(q));
+    chain.insert(chain.end(), list.begin(), list.end());
+  }
+  try {
+    Ct ct;
+    std::vector<Ct::Vertex_handle> handle(vert.size());
+    for (std::uint32_t i = 0; i < vert.size(); ++i) {
+      const std::size_t before = ct.number_of_vertices();
+      handle[i] = ct.insert(frame[i]);
+      if (ct.number_of_vertices() == before) return false;  // two points coincide in doubles
+      handle[i]->info() = i;
+    }
+    std::sort(by_key.begin(), by_key.end());
+    auto find = [&](const PointKey& k) {
+      const auto it = std::lower_bound(by_key.begin(), by_key.end(), std::pair{k, 0u});
+      return it != by_key.end() && it->first == k ? it->second : kNil;
+    };
+    std::vector<std::array<std::uint32_t, 2>> seg;
+    seg.reserve(constraints.size());
+    for (const auto& sg : constraints) {
+      const std::uint32_t i = find(sg[0]), j = find(sg[1]);
+      if (i == kNil || j == kNil) return false;
+      if (i == j) continue;
+      ct.insert_constraint(handle[i], handle[j]);
+      seg.push_back({i, j});
+    }
+    // Certificates. (1) Each cut segment is an edge (not split at a point
+    // the doubles put on it).
+    for (const auto& sg : seg) {
+      Ct::Face_handle f;
+      int j = 0;
+      if (!ct.is_edge(handle[sg[0]], handle[sg[1]], f, j)) return false;
+    }
+    // (2) The boundary is the chain of the triangle's edges, in order.
+    if (ct.number_of_vertices() != vert.size()) return false;
+    std::size_t hull = 0;
+    for (std::size_t i = 0; i < chain.size(); ++i) {
+      Ct::Face_handle f;
+      int j = 0;
+      if (!ct.is_edge(handle[chain[i]], handle[chain[(i + 1) % chain.size()]], f, j)) return false;
+      if (!ct.is_infinite(f) && !ct.is_infinite(f->neighbor(j))) return false;
+      ++hull;
+    }
+    if (ct.infinite_vertex()->degree() != hull) return false;
+    // (3) Every triangle certainly counter-clockwise for the exact points
+    // (inside their boxes): with (2), the triangles tile the triangle (a
+    // disk whose boundary goes once around is covered once by triangles of
+    // one orientation), so the result is the exact path's up to the choice
+    // of diagonals.
+    const std::size_t before = out.size();
+    for (auto f = ct.finite_faces_begin(); f != ct.finite_faces_end(); ++f) {
+      const std::uint32_t i0 = f->vertex(0)->info(), i1 = f->vertex(1)->info(), i2 = f->vertex(2)->info();
+      // Counter-clockwise in the frame is the triangle's own orientation,
+      // which the projection shows with the sign pr.sign.
+      if (orient_box(i0, i1, i2) != pr.sign) {
+        out.resize(before);
+        return false;
+      }
+      out.push_back({vert[i0].id, vert[i1].id, vert[i2].id});
+    }
+  } catch (const std::exception&) {
+    return false;  // constraints cross in doubles: the exact path decides
+  }
+  return true;
+}
+
+PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexcept {
   // An edge through a triangle (the common point of a cut): x = p + t (q -
   // p) with t = o_p / (o_p - o_q), o the orientations of the edge's ends
   // against the triangle, in interval arithmetic from the triangle's corner
-  // (no constructed plane, whose offset cancels): decides almost every
-  // point without the lazy kernel's exact fallback.
-  const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
-  if (edge_face || (dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) {
-    using I = CGAL::Interval_nt<true>;
-    const TriMesh& me = edge_face ? a : b;
-    const TriMesh& mf = edge_face ? b : a;
-    const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
-    const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
-    const Vec3d &p = me.p[ev[0]], &q = me.p[ev[1]];
-    const Vec3d &c0 = mf.p[tv[0]], &c1 = mf.p[tv[1]], &c2 = mf.p[tv[2]];
-    std::array<I, 3> u, v, wp, wq;
-    for (int j = 0; j < 3; ++j) {
-      u[static_cast<std::size_t>(j)] = I(c1[j]) - I(c0[j]);
-      v[static_cast<std::size_t>(j)] = I(c2[j]) - I(c0[j]);
-      wp[static_cast<std::size_t>(j)] = I(p[j]) - I(c0[j]);
-      wq[static_cast<std::size_t>(j)] = I(q[j]) - I(c0[j]);
+  // (no constructed plane, whose offset cancels): bounds almost every point
+  // tightly enough that the lazy kernel's exact fallback is not needed.
+  PointBox out;
+  using I = CGAL::Interval_nt<true>;
+  if (dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimEdge) {
+    // Two edges meeting in one point: x = p + s d1, s = ((r - p) x d2) . n
+    // / (n . n), n = d1 x d2 (not zero: the lines are not parallel).
+    const auto& ea = a.edge[idx_of(k.a)];
+    const auto& eb = b.edge[idx_of(k.b)];
+    const Vec3d &p = a.p[ea[0]], &q = a.p[ea[1]], &r = b.p[eb[0]], &w = b.p[eb[1]];
+    std::array<I, 3> d1, d2, rp;
+    for (std::size_t j = 0; j < 3; ++j) {
+      d1[j] = I(q[static_cast<int>(j)]) - I(p[static_cast<int>(j)]);
+      d2[j] = I(w[static_cast<int>(j)]) - I(r[static_cast<int>(j)]);
+      rp[j] = I(r[static_cast<int>(j)]) - I(p[static_cast<int>(j)]);
     }
-    const I n0 = u[1] * v[2] - u[2] * v[1], n1 = u[2] * v[0] - u[0] * v[2], n2 = u[0] * v[1] - u[1] * v[0];
-    const I op = n0 * wp[0] + n1 * wp[1] + n2 * wp[2];
-    const I oq = n0 * wq[0] + n1 * wq[1] + n2 * wq[2];
-    const I den = op - oq;
-    if (den.inf() > 0 || den.sup() < 0) {
-      const I t = op / den;
-      Vec3d x;
-      bool ok = true;
-      for (int j = 0; j < 3 && ok; ++j) {
-        const I xj = I(p[j]) + t * (I(q[j]) - I(p[j]));
-        ok = pinned(xj.inf(), xj.sup());
-        x[j] = xj.inf() + 0.5 * (xj.sup() - xj.inf());
-      }
-      if (ok) return x;
+    auto cross = [](const std::array<I, 3>& x, const std::array<I, 3>& y) {
+      return std::array<I, 3>{x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+    };
+    const auto n = cross(d1, d2), m = cross(rp, d2);
+    const I nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (!(nn.inf() > 0)) return out;
+    const I sv = (m[0] * n[0] + m[1] * n[1] + m[2] * n[2]) / nn;
+    for (std::size_t j = 0; j < 3; ++j) {
+      const I xj = I(p[static_cast<int>(j)]) + sv * d1[j];
+      if (!std::isfinite(xj.inf()) || !std::isfinite(xj.sup())) return out;
+      out.b[j] = xj.inf();
+      out.b[j + 3] = xj.sup();
     }
+    out.ok = true;
+    return out;
   }
+  const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
+  if (!edge_face && !(dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) return out;
+  const TriMesh& me = edge_face ? a : b;
+  const TriMesh& mf = edge_face ? b : a;
+  const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
+  const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
+  const Vec3d &p = me.p[ev[0]], &q = me.p[ev[1]];
+  const Vec3d &c0 = mf.p[tv[0]], &c1 = mf.p[tv[1]], &c2 = mf.p[tv[2]];
+  std::array<I, 3> u, v, wp, wq;
+  for (int j = 0; j < 3; ++j) {
+    u[static_cast<std::size_t>(j)] = I(c1[j]) - I(c0[j]);
+    v[static_cast<std::size_t>(j)] = I(c2[j]) - I(c0[j]);
+    wp[static_cast<std::size_t>(j)] = I(p[j]) - I(c0[j]);
+    wq[static_cast<std::size_t>(j)] = I(q[j]) - I(c0[j]);
+  }
+  const I n0 = u[1] * v[2] - u[2] * v[1], n1 = u[2] * v[0] - u[0] * v[2], n2 = u[0] * v[1] - u[1] * v[0];
+  const I op = n0 * wp[0] + n1 * wp[1] + n2 * wp[2];
+  const I oq = n0 * wq[0] + n1 * wq[1] + n2 * wq[2];
+  const I den = op - oq;
+  if (!(den.inf() > 0 || den.sup() < 0)) return out;
+  const I t = op / den;
+  for (int j = 0; j < 3; ++j) {
+    const I xj = I(p[j]) + t * (I(q[j]) - I(p[j]));
+    if (!std::isfinite(xj.inf()) || !std::isfinite(xj.sup())) return out;
+    out.b[static_cast<std::size_t>(j)] = xj.inf();
+    out.b[static_cast<std::size_t>(j + 3)] = xj.sup();
+  }
+  out.ok = true;
+  return out;
+}
+
+Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box,
+                        const ExactPoints& exact, std::size_t index) {
+  // An edge through a triangle with a pinned box takes the box's centre;
+  // any other point its exact value rounded to nearest, always evaluated (a
+  // lazy number's interval depends on whether a predicate has already
+  // forced its exact value: the output must not).
+  const bool edge_face = dim_of(k.a) == kDimFace || dim_of(k.b) == kDimFace;
+  if (edge_face && box.ok && pinned(box.b[0], box.b[3]) && pinned(box.b[1], box.b[4]) && pinned(box.b[2], box.b[5]))
+    return {centre(box.b[0], box.b[3]), centre(box.b[1], box.b[4]), centre(box.b[2], box.b[5])};
   const Ke::Point_3 pt = index < exact.p.size() && exact.ok[index] ? exact.p[index] : exact_point(a, b, k);
   auto coord = [&](const Ke::FT& x) {
-    const std::pair<double, double> iv = CGAL::to_interval(x);
-    if (pinned(iv.first, iv.second)) return iv.first + 0.5 * (iv.second - iv.first);
-    return CGAL::to_double(CGAL::exact(x));
+    const auto& e = CGAL::exact(x);
+    const std::pair<double, double> iv = CGAL::to_interval(e);
+    if (!(iv.first < iv.second)) return iv.first;
+    using Q = std::decay_t<decltype(e)>;
+    const Q mid = (Q(iv.first) + Q(iv.second)) / 2;
+    return e < mid ? iv.first : (mid < e ? iv.second : centre(iv.first, iv.second));
   };
   return {coord(pt.x()), coord(pt.y()), coord(pt.z())};
 }
@@ -626,7 +886,42 @@ int winding_number(const TriMesh& m, const Bvh& bvh, const Vec3d& q) {
 }
 
 int winding_number_centroid(const TriMesh& m, const Bvh& bvh, const TriMesh& a, const TriMesh& b,
-                            const std::array<PointKey, 3>& corners3) {
+                            const std::array<PointKey, 3>& corners3, const std::array<const PointBox*, 3>& boxes) {
+  // Certified first: the parity of the ray from the centroid's interval box
+  // (the corners' boxes, or their exact doubles, averaged in intervals) is
+  // the exact centroid's when every orientation is certain; the first
+  // uncertain one sends the question to the lazy exact kernel.
+  {
+    using Iv = CGAL::Interval_nt<true>;
+    using Kv = CGAL::Simple_cartesian<Iv>;
+    std::array<Iv, 3> sum{Iv(0), Iv(0), Iv(0)};
+    bool have = true;
+    for (std::size_t k = 0; k < 3 && have; ++k) {
+      const PointKey& key = corners3[k];
+      const Vec3d* x = dim_of(key.a) == kDimVertex ? &a.p[idx_of(key.a)]
+                                                   : (dim_of(key.b) == kDimVertex ? &b.p[idx_of(key.b)] : nullptr);
+      for (std::size_t j = 0; j < 3 && have; ++j) {
+        if (x != nullptr)
+          sum[j] += Iv((*x)[static_cast<int>(j)]);
+        else if (boxes[k] != nullptr && boxes[k]->ok)
+          sum[j] += Iv(boxes[k]->b[j], boxes[k]->b[j + 3]);
+        else
+          have = false;
+      }
+    }
+    if (have) {
+      const Kv::Point_3 c(sum[0] / 3, sum[1] / 3, sum[2] / 3);
+      const Vec3d cd(centre(c.x().inf(), c.x().sup()), centre(c.y().inf(), c.y().sup()),
+                     centre(c.z().inf(), c.z().sup()));
+      if (cd.allFinite()) {
+        try {
+          return winding_any<Kv>(m, bvh, c, cd);
+        } catch (const CGAL::Uncertain_conversion_exception&) {
+          // An orientation the intervals cannot decide: exact below.
+        }
+      }
+    }
+  }
   const Ke::Point_3 c =
       CGAL::centroid(exact_point(a, b, corners3[0]), exact_point(a, b, corners3[1]), exact_point(a, b, corners3[2]));
   const Vec3d cd(CGAL::to_double(c.x()), CGAL::to_double(c.y()), CGAL::to_double(c.z()));

@@ -36,7 +36,7 @@ bool in_closure(const TriMesh& m, std::uint64_t s, std::uint32_t g) {
 }  // namespace
 
 Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh& bvh_b, const ExecContext& ctx,
-                Cut& out) {
+                Cut& out, bool exact_only) {
   using Tri3 = std::array<std::uint32_t, 3>;
   // ---- pairs and their intersection points
   const auto pairs = overlapping_pairs(A, bvh_a, B, bvh_b, ctx);
@@ -148,11 +148,17 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
     }
   }
 
-  // ---- re-triangulate the cut triangles (exact), in parallel
-  const ExactPointsPtr exact = make_exact_points(A, B, new_keys, ctx);
+  // ---- re-triangulate the cut triangles, in parallel: the certified fast
+  // path on the points' interval boxes first, the exact triangulation for
+  // the triangles it cannot certify (docs/glossary.md, "certified fast path")
+  const auto first_new = nA + nB;
+  std::vector<PointBox> boxes(new_keys.size());
+  par::for_each_n(ctx, new_keys.size(), [&](std::size_t i) { boxes[i] = point_box(A, B, new_keys[i]); });
+  std::array<std::vector<std::uint8_t>, 2> slow;  // per side and cut triangle: left to the exact path
   for (CutSide& s : sides) {
     if (ctx.cancelled()) return {ErrorCode::kCancelled, "cut: cancelled"};
-    std::vector<Status> status(s.cut.size());
+    auto& to_exact = slow[static_cast<std::size_t>(s.side)];
+    to_exact.assign(s.cut.size(), 0);
     par::for_each_n(ctx, s.cut.size(), [&](std::size_t c) {
       auto& pts = s.points[c];
       std::sort(pts.begin(), pts.end());
@@ -169,9 +175,32 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
       if (trivial) {
         const auto& v = s.m->tri[t];
         out.push_back({v[0] + s.offset, v[1] + s.offset, v[2] + s.offset});
-      } else {
-        status[c] = refine_triangle(A, B, s.side, t, pts, seg, ids, *exact, out);
+      } else if (exact_only || !refine_triangle_fast(A, B, s.side, t, pts, seg, ids, boxes, first_new, out)) {
+        to_exact[c] = 1;
       }
+    });
+  }
+  // The lazy exact points of the new points the exact path will use
+  // (point_coordinates makes its own for a point its box does not pin).
+  std::vector<std::uint8_t> need(new_keys.size(), 0);
+  for (CutSide& s : sides)
+    for (std::size_t c = 0; c < s.cut.size(); ++c) {
+      if (!slow[static_cast<std::size_t>(s.side)][c]) continue;
+      ++out.refined_exact;
+      for (const PointKey& k : s.points[c]) {
+        const std::uint32_t id = ids.find(k);
+        if (id != kNil && id >= first_new) need[id - first_new] = 1;
+      }
+    }
+  const ExactPointsPtr exact = make_exact_points(A, B, new_keys, need, ctx);
+  for (CutSide& s : sides) {
+    if (ctx.cancelled()) return {ErrorCode::kCancelled, "cut: cancelled"};
+    const auto& to_exact = slow[static_cast<std::size_t>(s.side)];
+    std::vector<Status> status(s.cut.size());
+    par::for_each_n(ctx, s.cut.size(), [&](std::size_t c) {
+      auto& out = s.refined[c];
+      if (to_exact[c])
+        status[c] = refine_triangle(A, B, s.side, s.cut[c], s.points[c], s.segments[c], ids, *exact, out);
       for (auto& tri : out)
         for (auto& v : tri) v = canon[v];
     });
@@ -180,7 +209,7 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
   }
   std::vector<Vec3d> new_points(new_keys.size());
   par::for_each_n(ctx, new_keys.size(),
-                  [&](std::size_t i) { new_points[i] = point_coordinates(A, B, new_keys[i], *exact, i); });
+                  [&](std::size_t i) { new_points[i] = point_coordinates(A, B, new_keys[i], boxes[i], *exact, i); });
 
   // ---- pieces, coplanar overlaps, components
   for (CutSide& s : sides) {
@@ -292,6 +321,7 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
   out.on_b = std::move(on_b);
   out.new_keys = std::move(new_keys);
   out.new_points = std::move(new_points);
+  out.new_boxes = std::move(boxes);
   out.ids = std::move(ids);
   return {};
 }

@@ -262,19 +262,9 @@ namespace {
 /// faces all the time. Volumes against the analytic box intersection.
 TEST(NetBoolean, DegenerateGridBoxesAgreeWithAnalyticVolumes) {
   std::uint64_t seed = 12345;
-  auto next = [&] {
-    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<int>((seed >> 33) % 5);
-  };
   for (int trial = 0; trial < 60; ++trial) {
     Vec3d lo[2], hi[2];
-    for (int s = 0; s < 2; ++s)
-      for (int k = 0; k < 3; ++k) {
-        int x = next(), y = next();
-        if (x == y) y = x + 1;
-        lo[s][k] = 0.5 * std::min(x, y);
-        hi[s][k] = 0.5 * std::max(x, y);
-      }
+    net_test::grid_box_pair(seed, lo, hi);
     const PolygonSoup a = trial % 2 ? box(lo[0], hi[0]) : box_triangles(lo[0], hi[0]);
     const PolygonSoup b = trial % 3 ? box_triangles(lo[1], hi[1]) : box(lo[1], hi[1]);
     double inter = 1;

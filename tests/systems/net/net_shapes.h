@@ -8,7 +8,9 @@
 #include <atelier/storage/validate.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <string>
 
@@ -80,6 +82,23 @@ inline PolygonSoup icosphere(int level, double r, const Vec3d& centre) {
   for (const auto& x : p) s.positions.push_back(centre + r * x);
   for (const auto& x : f) s.add_face(x);
   return s;
+}
+
+/// Two random boxes on a coarse grid (steps of 0.5 in [0, 2.5]): faces
+/// coplanar, edges collinear, vertices on faces all the time. `seed` is a
+/// linear congruential state, advanced.
+inline void grid_box_pair(std::uint64_t& seed, Vec3d (&lo)[2], Vec3d (&hi)[2]) {
+  auto next = [&] {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((seed >> 33) % 5);
+  };
+  for (int s = 0; s < 2; ++s)
+    for (int k = 0; k < 3; ++k) {
+      int x = next(), y = next();
+      if (x == y) y = x + 1;
+      lo[s][k] = 0.5 * std::min(x, y);
+      hi[s][k] = 0.5 * std::max(x, y);
+    }
 }
 
 /// Builds the result into a Model: closed (no boundary), consistently
