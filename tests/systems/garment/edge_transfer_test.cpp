@@ -145,10 +145,11 @@ TEST(EdgeTransfer, SameBytesForAnyThreadCount) {
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3d)), 0);
 }
 
-// The length iterations as a fixed-point problem: Anderson acceleration
-// with the residual stop (the defaults) lands nearer the converged result
-// (2,000 plain iterations) than the former 30 plain iterations did, and
-// lowers the energy they minimise at least as far.
+// The length iterations as a fixed-point problem: with as many steps (30,
+// no residual stop), Anderson acceleration ends nearer the converged result
+// (2,000 plain steps) than plain steps do, at a lower energy. (The residual
+// stop's tolerance is set against issue 7's figures on MakeHuman garments,
+// GarmentRegeneration.MakeHumanGarmentsAgainstTheirBindingOn100Bodies.)
 TEST(EdgeTransfer, AcceleratedIterationsEndNearerTheConvergedResult) {
   const auto s = make_setup();
   std::vector<Vec3d> body2(s->body.p.size());
@@ -164,7 +165,7 @@ TEST(EdgeTransfer, AcceleratedIterationsEndNearerTheConvergedResult) {
   };
   const auto converged = run({.length_iterations = 2000, .anderson_window = 0, .length_tolerance = 0});
   const auto plain = run({.length_iterations = 30, .anderson_window = 0, .length_tolerance = 0});
-  const auto fast = run({});
+  const auto fast = run({.length_iterations = 30, .anderson_window = 3, .length_tolerance = 0});
   auto dist = [&](const std::vector<Vec3d>& g) {
     double d = 0;
     for (std::size_t v = 0; v < g.size(); ++v) d = std::max(d, (g[v] - converged[v]).norm());
