@@ -1,12 +1,12 @@
+#include <atelier/engine/parallel.h>
 #include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/mesh/normals.h>
 
+#include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cmath>
 #include <string>
-
-#include <atelier/engine/parallel.h>
-#include <atelier/systems/mesh/normals.h>
 
 namespace atelier {
 
@@ -48,8 +48,10 @@ Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
   if (body.empty()) return Status(ErrorCode::kInvalidArgument, "edge transfer: source body not built");
   if (!(params.anchor > 0) || !std::isfinite(params.anchor))
     return Status(ErrorCode::kInvalidArgument, "edge transfer: anchor must be positive");
-  if (params.length_iterations < 0 || params.length_sweeps < 0)
-    return Status(ErrorCode::kInvalidArgument, "edge transfer: length iterations and sweeps must not be negative");
+  if (params.length_iterations < 0 || params.length_sweeps < 0 || params.anderson_window < 0 ||
+      !(params.length_tolerance >= 0))
+    return Status(ErrorCode::kInvalidArgument,
+                  "edge transfer: length iterations, sweeps, Anderson window and tolerance must not be negative");
   for (std::size_t v = 0; v < n; ++v)
     if (!is_finite(source[v]))
       return Status(ErrorCode::kDegenerate, "edge transfer: garment vertex " + std::to_string(v) + " is not finite");
@@ -62,6 +64,8 @@ Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
   t.vertices = n;
   t.length_iterations = params.length_iterations;
   t.length_sweeps = params.length_sweeps;
+  t.anderson_window = params.anderson_window;
+  t.length_tolerance = params.length_tolerance;
   t.edges.assign(edges.begin(), edges.end());
   const std::size_t ne = edges.size();
   t.triangle.assign(ne, kNoTriangle);
@@ -92,6 +96,10 @@ Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
       wsum[v] += t.weight[e];
       deg[v] += t.weight[e] > 0;
     }
+  t.residual_scale.assign(n, 0.0);
+  for (std::size_t e = 0; e < ne; ++e)
+    if (t.weight[e] > 0)
+      for (std::uint32_t v : edges[e]) t.residual_scale[v] = std::max(t.residual_scale[v], std::sqrt(t.weight[e]));
   t.anchor.resize(n);
   for (std::size_t v = 0; v < n; ++v) t.anchor[v] = deg[v] > 0 ? params.anchor * wsum[v] / deg[v] : 1.0;
   t.inv_diagonal.resize(n);
@@ -138,6 +146,150 @@ Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
   t.solver = std::move(solver);
   return t;
 }
+
+namespace {
+
+// The local step: every target turned to its edge's current direction,
+// keeping its length. Returns the edge part of the energy at x,
+// sum_e w_e (|x_j - x_i| - L_e)^2 (what the turned targets leave).
+double turn_targets(const EdgeTransfer& t, std::span<const Vec3d> x, std::span<const double> length,
+                    std::span<Vec3d> target) {
+  double energy = 0;
+  for (std::size_t e = 0; e < t.edges.size(); ++e) {
+    if (t.weight[e] == 0) continue;
+    const Vec3d cur = x[t.edges[e][1]] - x[t.edges[e][0]];
+    const double l2 = cur.squaredNorm();
+    if (l2 > 0) {
+      const double l = std::sqrt(l2);
+      target[e] = (length[e] / l) * cur;
+      energy += t.weight[e] * (l - length[e]) * (l - length[e]);
+    } else {
+      energy += t.weight[e] * length[e] * length[e];
+    }
+  }
+  return energy;
+}
+
+// One Gauss-Seidel sweep of the global step in vertex order, in place: each
+// vertex moves to the minimum of the energy with its neighbours fixed.
+void gauss_seidel_sweep(const EdgeTransfer& t, std::span<const Vec3d> decoded, std::span<const Vec3d> target,
+                        std::span<Vec3d> x) {
+  for (std::size_t v = 0; v < t.vertices; ++v) {
+    Vec3d s = t.anchor[v] * decoded[v];
+    for (std::uint32_t k = t.vertex_edge_offset[v]; k < t.vertex_edge_offset[v + 1]; ++k) {
+      const std::uint32_t e = t.vertex_edge[k];
+      const auto [i, j] = t.edges[e];
+      // v = j: x_j = x_i + T_e; v = i: x_i = x_j - T_e.
+      const double w = t.weight[e];
+      s += v == j ? Vec3d(w * x[i] + w * target[e]) : Vec3d(w * x[j] - w * target[e]);
+    }
+    x[v] = s * t.inv_diagonal[v];
+  }
+}
+
+// The length iterations as a fixed-point problem x = G(x), G = one local
+// step then one Gauss-Seidel sweep, accelerated by Anderson's method
+// (Walker & Ni 2011, type II, window m) with the energy safeguard of Peng
+// et al. 2018 ("Anderson acceleration for geometry optimization and physics
+// simulation", Algorithm 1): the extrapolated point
+//   x_AA = G(x_k) - sum_j gamma_j (G(x_j+1) - G(x_j)),
+//   gamma = argmin |f_k - sum_j gamma_j (f_j+1 - f_j)|,  f = G(x) - x,
+// is kept only when it lowers the energy E(x) = sum_e w_e (|x_j - x_i| -
+// L_e)^2 + sum_v a_v |x_v - d_v|^2 below that of x_k (a plain step never
+// raises it); otherwise the plain step G(x_k) is taken and the history
+// cleared. It stops when a plain step's moves, each over the shortest rest
+// length at its vertex (the strain the step still changes), have an RMS of
+// at most length_tolerance, or after length_iterations steps; it ends on a
+// plain step's result.
+// Sequential, in a fixed order: the same bits for any thread count.
+void accelerated_length_iterations(const EdgeTransfer& t, std::span<const Vec3d> decoded,
+                                   std::span<const double> length, std::span<Vec3d> target, std::vector<Vec3d>& x) {
+  const std::size_t n = t.vertices;
+  const std::size_t m = static_cast<std::size_t>(std::max(0, t.anderson_window));
+  const double tol2 = t.length_tolerance * t.length_tolerance * static_cast<double>(n);
+  auto anchor_energy = [&](std::span<const Vec3d> y) {
+    double s = 0;
+    for (std::size_t v = 0; v < n; ++v) s += t.anchor[v] * (y[v] - decoded[v]).squaredNorm();
+    return s;
+  };
+  std::vector<Vec3d> g(n), f(n), g_prev(n), f_prev(n);
+  std::vector<Vec3d> dg(m * n), df(m * n);  // ring of m columns of n vertices
+  Eigen::MatrixXd gram(std::max<std::size_t>(m, 1), std::max<std::size_t>(m, 1));
+  std::size_t cols = 0, next = 0;  // columns held, slot of the next one
+  bool have_prev = false;
+  double energy = turn_targets(t, x, length, target) + anchor_energy(x);
+  for (int it = 0; it < t.length_iterations; ++it) {
+    std::copy(x.begin(), x.end(), g.begin());
+    gauss_seidel_sweep(t, decoded, target, g);
+    double residual = 0;  // sum over vertices of (|f_v| / shortest rest length at v)^2
+    for (std::size_t v = 0; v < n; ++v) {
+      f[v] = g[v] - x[v];
+      residual += f[v].squaredNorm() * (t.residual_scale[v] * t.residual_scale[v]);
+    }
+    if (residual <= tol2 || it + 1 == t.length_iterations) {
+      std::swap(x, g);
+      return;
+    }
+    if (m > 0 && have_prev) {
+      Vec3d* dfc = df.data() + next * n;
+      Vec3d* dgc = dg.data() + next * n;
+      for (std::size_t v = 0; v < n; ++v) {
+        dfc[v] = f[v] - f_prev[v];
+        dgc[v] = g[v] - g_prev[v];
+      }
+      cols = std::min(cols + 1, m);
+      for (std::size_t c = 0; c < cols; ++c) {
+        const Vec3d* o = df.data() + c * n;
+        double s = 0;
+        for (std::size_t v = 0; v < n; ++v) s += dfc[v].dot(o[v]);
+        gram(static_cast<Eigen::Index>(next), static_cast<Eigen::Index>(c)) = s;
+        gram(static_cast<Eigen::Index>(c), static_cast<Eigen::Index>(next)) = s;
+      }
+      next = (next + 1) % m;
+    }
+    std::swap(f_prev, f);
+    std::swap(g_prev, g);
+    have_prev = true;
+    // f_prev, g_prev now hold this step's f and G(x).
+    bool accelerated = false;
+    if (cols > 0) {
+      const auto k = static_cast<Eigen::Index>(cols);
+      Eigen::VectorXd rhs(k);
+      for (std::size_t c = 0; c < cols; ++c) {
+        const Vec3d* o = df.data() + c * n;
+        double s = 0;
+        for (std::size_t v = 0; v < n; ++v) s += o[v].dot(f_prev[v]);
+        rhs[static_cast<Eigen::Index>(c)] = s;
+      }
+      // Normal equations of the small least-squares problem, with a
+      // Tikhonov term relative to the diagonal (nearly parallel columns).
+      Eigen::MatrixXd a = gram.topLeftCorner(k, k);
+      a.diagonal() *= 1.0 + 1e-10;
+      const Eigen::VectorXd gamma = a.ldlt().solve(rhs);
+      if (gamma.allFinite()) {
+        for (std::size_t v = 0; v < n; ++v) {
+          Vec3d s = g_prev[v];
+          for (std::size_t c = 0; c < cols; ++c) s -= gamma[static_cast<Eigen::Index>(c)] * dg[c * n + v];
+          x[v] = s;
+        }
+        const double e_aa = turn_targets(t, x, length, target) + anchor_energy(x);
+        if (e_aa < energy) {
+          energy = e_aa;
+          accelerated = true;
+        } else {
+          cols = 0;
+          next = 0;
+        }
+      }
+    }
+    if (!accelerated) {
+      std::copy(g_prev.begin(), g_prev.end(), x.begin());
+      energy = turn_targets(t, x, length, target) + anchor_energy(x);
+    }
+  }
+}
+
+}  // namespace
 
 Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_points,
                            std::span<const Triangle> body_triangles, std::span<Vec3d> garment, const ExecContext& ctx) {
@@ -192,31 +344,19 @@ Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_po
   // targets' lengths never change.
   std::vector<double> length(t.edges.size());
   for (std::size_t e = 0; e < t.edges.size(); ++e) length[e] = target[e].norm();
-  for (int it = 0; it < t.length_iterations; ++it) {
-    // Sequential: between two sequential sweeps, waking the workers for a
-    // loop this short costs more than it saves.
-    for (std::size_t e = 0; e < t.edges.size(); ++e) {
-      if (t.weight[e] == 0) continue;
-      const Vec3d cur = x[t.edges[e][1]] - x[t.edges[e][0]];
-      const double l2 = cur.squaredNorm();
-      if (l2 > 0) target[e] = (length[e] / std::sqrt(l2)) * cur;
-    }
-    if (t.length_sweeps == 0) {
-      solve();
-      continue;
-    }
-    for (int sw = 0; sw < t.length_sweeps; ++sw)
-      for (std::size_t v = 0; v < n; ++v) {
-        Vec3d s = t.anchor[v] * garment[v];
-        for (std::uint32_t k = t.vertex_edge_offset[v]; k < t.vertex_edge_offset[v + 1]; ++k) {
-          const std::uint32_t e = t.vertex_edge[k];
-          const auto [i, j] = t.edges[e];
-          // v = j: x_j = x_i + T_e; v = i: x_i = x_j - T_e.
-          const double w = t.weight[e];
-          s += v == j ? Vec3d(w * x[i] + w * target[e]) : Vec3d(w * x[j] - w * target[e]);
-        }
-        x[v] = s * t.inv_diagonal[v];
+  if ((t.anderson_window > 0 || t.length_tolerance > 0) && t.length_sweeps == 1) {
+    accelerated_length_iterations(t, garment, length, target, x);
+  } else {
+    for (int it = 0; it < t.length_iterations; ++it) {
+      // Sequential: between two sequential sweeps, waking the workers for a
+      // loop this short costs more than it saves.
+      (void)turn_targets(t, x, length, target);
+      if (t.length_sweeps == 0) {
+        solve();
+        continue;
       }
+      for (int sw = 0; sw < t.length_sweeps; ++sw) gauss_seidel_sweep(t, garment, target, x);
+    }
   }
   std::copy(x.begin(), x.end(), garment.begin());
   return Status::ok();
