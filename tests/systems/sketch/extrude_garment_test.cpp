@@ -19,8 +19,11 @@
 #include <atelier/systems/spatial/collision_body.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <set>
 #include <string>
 
 #include "support/project_templates.h"
@@ -139,9 +142,7 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
   auto in = design_strokes(m, design);
   if (!in) return {in.status().to_string()};
   const std::size_t loop_size = best_loop(m, [&](const Vec3d& c) {
-                                  return design == Design::kDress    ? c.y()
-                                         : design == Design::kSleeve ? -c.x()
-                                                                     : -c.y();
+                                  return design == Design::kDress ? c.y() : design == Design::kSleeve ? -c.x() : -c.y();
                                 }).size();
   const auto checks = body_checks(body);
   if (!checks->error.empty()) return {checks->error};
@@ -149,8 +150,12 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
   o.pick_radius = 30;
   o.body = &checks->cb;
   o.clearance = 0.005;
+  if (const char* e = std::getenv("PROBE_SMOOTH")) o.body_smoothing = std::atoi(e);
+  if (const char* e = std::getenv("PROBE_SETTLE")) o.settle_rounds = std::atoi(e);
   const std::size_t cap = m.nodes.slots.capacity();
+  const auto t0 = std::chrono::steady_clock::now();
   auto r = extrude(m, *in, o, ExecContext::sequential());
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (!r) return {r.status().to_string()};
   if (Status s = validate(m); !s) return {s.to_string()};
   if (r->base.size() != loop_size) return {"B is not the loop"};
@@ -174,6 +179,10 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
     out.brute_outside += l < 0.8 * L * (1 - 1e-12) || l > 4.0 / 3.0 * L * (1 + 1e-12);
   }
   out.pushed = r->pushed;
+  if (std::getenv("PROBE_PRINT"))
+    std::printf("PROBE design %d opt %zu brute %zu pushed %zu settle_ops %zu ms %.1f edges %zu\n",
+                static_cast<int>(design), out.outside_bounds, out.brute_outside, out.pushed, r->settle_ops, ms,
+                r->after.edges);
   return out;
 }
 
@@ -210,7 +219,6 @@ void run_bodies(std::size_t n, Design design) {
     EXPECT_LE(got[i].brute_outside, design == Design::kSleeve ? 120u : 2u) << "body " << i;
   }
 }
-
 
 Expected<Model> regenerate_top(const ReferenceBody& body, const ProfileTemplate& top, const ReferenceBody& reference,
                                const Box3d& roi) {
@@ -331,13 +339,13 @@ TEST(ExtrudeGarment, DressSleeveAndCollarOnTheTopOutsideTheBodyOn100Mannequins) 
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) run_bodies(100, d);
 }
 
-TEST(ExtrudeGarment, TheDressAndCollarAsTheirOwnSurfacesAndTheSleeveRefusedOnTheCollarSeam) {
-  // `--as-surface` on the project's top (issue 21): the dress (from the hem)
-  // and the ring collar (from the collar's top edge) become surfaces of
-  // their own, joined along B. The right armhole runs 16 edges along the
-  // seam (a joint) between the top and its collar piece: a sleeve there
-  // would be a seam of three surfaces, refused by name with the model
-  // unchanged.
+TEST(ExtrudeGarment, TheDressCollarAndSleeveAsTheirOwnSurfacesTheSleeveOnAThreeSurfaceSeam) {
+  // `--as-surface` on the project's top (issue 21): the dress (from the hem),
+  // the ring collar (from the collar's top edge) and the sleeve (from the
+  // right armhole) become surfaces of their own, joined along B. The
+  // armhole runs 16 edges along the seam (a joint) between the top and its
+  // collar piece: there the sleeve joins that joint, a seam of three
+  // surfaces (seed 000's MESHJOINT, Fig. 4), the rest of B a joint of two.
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "six extrusions on the top (5 s in Release)";
   const auto& fx = atelier::testing::template_fixture();
   const ProfileTemplate& top = fx.templates[0];
@@ -355,17 +363,8 @@ TEST(ExtrudeGarment, TheDressAndCollarAsTheirOwnSurfacesAndTheSleeveRefusedOnThe
     o.as_surface = true;
     Model m = before;
     auto r = extrude(m, *in, o, ExecContext::sequential());
-    if (d == Design::kSleeve) {
-      ASSERT_FALSE(r);
-      EXPECT_EQ(r.status().code(), ErrorCode::kJointRefused);
-      EXPECT_NE(r.status().message().find("16 edges of mesh edge"), std::string::npos) << r.status().message();
-      EXPECT_NE(r.status().message().find("joint"), std::string::npos) << r.status().message();
-      EXPECT_EQ(diff_tables(before, m), "");
-      continue;
-    }
     ASSERT_TRUE(r) << r.status().to_string();
     ASSERT_TRUE(validate(m)) << validate(m).to_string();
-    ASSERT_EQ(r->joints.size(), 1u);
     // The same part as without as_surface, in a surface of its own: B's
     // nodes once more on the part's side, the part's faces all there.
     EXPECT_EQ(m.num_faces(), plain.num_faces());
@@ -375,27 +374,40 @@ TEST(ExtrudeGarment, TheDressAndCollarAsTheirOwnSurfacesAndTheSleeveRefusedOnThe
     for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
       part_faces += m.alive(FaceIdx{f}) && m.faces.surface[f] == r->part_surface;
     EXPECT_EQ(part_faces, plain.num_faces() - before.num_faces());
-    // The joint: two mesh edges along B, one per side, each with B's edges
-    // and the same node positions.
-    const JointIdx j = m.resolve(r->joints[0]).value();
-    const auto members = m.joints.members.row(j.value);
-    ASSERT_EQ(members.size(), 2u);
-    std::vector<std::vector<Vec3d>> sides;
-    std::vector<SurfaceIdx> surfaces;
-    for (const JointMember& jm : members) {
-      const auto hs = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
-      EXPECT_EQ(hs.size(), r->base.size() - (r->base_ring ? 0 : 1));
-      surfaces.push_back(m.mesh_edges.surface[jm.mesh_edge.value]);
-      std::vector<Vec3d> p;
-      for (HalfedgeIdx h : hs) p.push_back(m.position(m.tail(h)));
-      std::sort(p.begin(), p.end(), [](const Vec3d& a, const Vec3d& b) {
-        return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-      });
-      sides.push_back(std::move(p));
+    // The joints along B: each holds B's surface and the part's, every
+    // member with the same number of edges and the same node positions;
+    // together they hold each of B's edges once. The sleeve's include the
+    // collar seam (three surfaces, 16 edges).
+    const SurfaceIdx base = m.nodes.surface[r->base[0].value];
+    std::size_t along = 0, on_seam = 0;
+    ASSERT_EQ(r->joints.size(), d == Design::kSleeve ? 2u : 1u);
+    for (const Joint& joint : r->joints) {
+      const JointIdx j = m.resolve(joint).value();
+      const auto members = m.joints.members.row(j.value);
+      ASSERT_GE(members.size(), 2u);
+      std::vector<std::vector<Vec3d>> sides;
+      std::set<SurfaceIdx> surfaces;
+      const std::size_t len = m.mesh_edges.halfedges.size(members[0].mesh_edge.value);
+      for (const JointMember& jm : members) {
+        const auto hs = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
+        EXPECT_EQ(hs.size(), len);
+        surfaces.insert(m.mesh_edges.surface[jm.mesh_edge.value]);
+        std::vector<Vec3d> p;
+        for (HalfedgeIdx h : hs) p.push_back(m.position(m.tail(h)));
+        std::sort(p.begin(), p.end(), [](const Vec3d& a, const Vec3d& b) {
+          return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+        });
+        sides.push_back(std::move(p));
+      }
+      EXPECT_EQ(surfaces.size(), members.size());
+      EXPECT_TRUE(surfaces.count(base) && surfaces.count(r->part_surface));
+      for (std::size_t k = 1; k < sides.size(); ++k) EXPECT_EQ(sides[k], sides[0]);
+      along += len;
+      if (members.size() == 3) on_seam += len;
+      EXPECT_LE(members.size(), d == Design::kSleeve ? 3u : 2u);
     }
-    EXPECT_NE(surfaces[0], surfaces[1]);
-    EXPECT_TRUE(surfaces[0] == r->part_surface || surfaces[1] == r->part_surface);
-    EXPECT_EQ(sides[0], sides[1]);
+    EXPECT_EQ(along, r->base.size() - (r->base_ring ? 0 : 1));
+    EXPECT_EQ(on_seam, d == Design::kSleeve ? 16u : 0u);
   }
 }
 
@@ -422,7 +434,8 @@ TEST(ExtrudeRecipe, OnTheReferenceBodyTheReplayIsTheOriginal) {
     double worst = 0;
     for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v) {
       ASSERT_EQ(m.alive(NodeIdx{v}), rec.after.alive(NodeIdx{v}));
-      if (m.alive(NodeIdx{v})) worst = std::max(worst, (m.position(NodeIdx{v}) - rec.after.position(NodeIdx{v})).norm());
+      if (m.alive(NodeIdx{v}))
+        worst = std::max(worst, (m.position(NodeIdx{v}) - rec.after.position(NodeIdx{v})).norm());
     }
     std::vector<NodeIdx> f0, f1;
     for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
@@ -480,4 +493,11 @@ TEST(ExtrudeRecipe, DressSleeveAndCollarReplayOnAFewMannequinsWithoutStrokes) {
 TEST(ExtrudeRecipe, DressSleeveAndCollarReplayOn100MannequinsWithoutStrokes) {
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "300 regenerations (long under sanitizers)";
   replay_bodies(100);
+}
+
+TEST(ExtrudeGarmentProbe, Design) {  // PROBE (temporary)
+  const char* n = std::getenv("PROBE_N");
+  const char* d = std::getenv("PROBE_DESIGN");
+  if (!n) GTEST_SKIP();
+  run_bodies(std::atoi(n), static_cast<Design>(d ? std::atoi(d) : 1));
 }
