@@ -133,9 +133,12 @@ struct ExtrudeOptions {
   /// optimisation keeps to is not folded where the push moved nodes onto
   /// the body; after the last push, up to `settle_rounds` times, the faces
   /// around the edges then outside the bounds optimised again (B fixed)
-  /// and pushed. 0 turns either off.
-  int body_smoothing = 8;
-  int settle_rounds = 4;
+  /// and pushed. Off by default (0): on the project top's sleeve over 100
+  /// mannequins they cut the median count of edges out of bounds after the
+  /// last push from 44 to about 14, but the worst body still ends with 73
+  /// (docs/performance.md, "issue 21, sleeve8"); suggested: 8 and 4.
+  int body_smoothing = 0;
+  int settle_rounds = 0;
   /// Beyond the paper: the extruded part becomes its own MESHSURFACE joined
   /// to the base along B by MESHJOINTs (systems/sketch/extrude_surface.cpp:
   /// B's nodes and edges duplicated on the part's side, one mesh edge per
