@@ -134,9 +134,9 @@ struct ExtrudeOptions {
   /// the body; after the last push, up to `settle_rounds` times, the faces
   /// around the edges then outside the bounds optimised again (B fixed)
   /// and pushed. Off by default (0): on the project top's sleeve over 100
-  /// mannequins they cut the median count of edges out of bounds after the
-  /// last push from 44 to about 14, but the worst body still ends with 73
-  /// (docs/performance.md, "issue 21, sleeve8"); suggested: 8 and 4.
+  /// mannequins (8 and 4) they halve the median count of edges out of
+  /// bounds after the last push (44 -> 20) but the worst body gets worse
+  /// (85 -> 116; docs/performance.md, "issue 21, sleeve8").
   int body_smoothing = 0;
   int settle_rounds = 0;
   /// Beyond the paper: the extruded part becomes its own MESHSURFACE joined
