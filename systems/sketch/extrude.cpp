@@ -1,7 +1,9 @@
 // Why this file is long: the five steps of seed 002 (base curve, plane, sweep,
 // sewing, optimisation call) and the two additions beyond the paper (the
 // body push, the part as its own surface) share one transactional run();
-// the optimisation itself lives in optimise_region.cpp.
+// the optimisation itself lives in optimise_region.cpp, the passes around
+// the body push in extrude_body.cpp, the part's surface in
+// extrude_surface.cpp.
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/cut.h>
@@ -341,53 +343,6 @@ void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body,
   }
 }
 
-/// The extruded part as its own surface: partition along B (an attribute
-/// edge on B's nodes, removed again unless it is the painted base curve).
-Status split_off(Model& m, const std::vector<NodeIdx>& B, bool ring, ExtrudeReport& rep, const ExecContext& ctx) {
-  const SurfaceIdx s = m.nodes.surface[B[0].value];
-  // A stretch of B on a mesh edge that a joint already holds (the project
-  // top's right armhole runs 16 edges along the seam of its collar piece)
-  // would become a seam of three surfaces, which the partition does not make.
-  for (std::size_t i = 0; i + (ring ? 0 : 1) < B.size(); ++i) {
-    const HalfedgeIdx h = m.find_halfedge(B[i], B[(i + 1) % B.size()]);
-    if (!h.valid()) continue;
-    const MeshEdgeIdx me = m.edges.mesh_edge[edge_of(h).value];
-    if (!me.valid() || !m.mesh_edges.joint[me.value].valid()) continue;
-    std::size_t along = 0;
-    for (std::size_t k = 0; k + (ring ? 0 : 1) < B.size(); ++k)
-      if (const HalfedgeIdx g = m.find_halfedge(B[k], B[(k + 1) % B.size()]);
-          g.valid() && m.edges.mesh_edge[edge_of(g).value] == me)
-        ++along;
-    return fail(ErrorCode::kJointRefused,
-                "as a surface: the base curve runs along " + std::to_string(along) + " edges of mesh edge " +
-                    std::to_string(me.value) + ", which joint " + std::to_string(m.mesh_edges.joint[me.value].value) +
-                    " already joins to another surface; the part would make a seam of three surfaces there (extrude "
-                    "it without as_surface, or from a base off that seam)");
-  }
-  std::vector<AttribNodeIdx> an;
-  for (std::size_t i = 0; i <= B.size() - (ring ? 0 : 1); ++i) {
-    const NodeIdx v = B[i % B.size()];
-    an.push_back(m.new_attrib_node(s, AttribNodeKind::kVertex, v.value, Vec3d::Zero(), m.position(v)));
-  }
-  const AttribEdge curve = m.handle(m.new_attrib_edge(s, -1, an));
-  // The part: the faces on the side of B's halfedges that had none.
-  const FaceIdx part_face = m.face(m.find_halfedge(B[0], B[1]));
-  auto pr = partition_along_curves(m, std::span<const AttribEdge>(&curve, 1), {}, ctx);
-  if (!pr) return fail(pr.status().code(), "as a surface: " + pr.status().message());
-  if (pr->joints.empty()) return fail(ErrorCode::kInternal, "as a surface: the partition made no joint along B");
-  rep.joints = pr->joints;
-  rep.part_surface = m.faces.surface[part_face.value];
-  // The helper curve goes again: it was only the partition's input.
-  if (m.alive(curve)) {
-    const auto row = m.attrib_edges.nodes.row(curve.idx.value);
-    const std::vector<AttribNodeIdx> nodes(row.begin(), row.end());
-    m.delete_attrib_edge(curve.idx);
-    for (AttribNodeIdx a : nodes)
-      if (m.alive(a)) m.delete_attrib_node(a);
-  }
-  return {};
-}
-
 Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
   HalfedgeIdx h = m.find_halfedge(a, b);
   if (!h.valid()) h = halfedge_of(m.new_edge(a, b), 0);
@@ -404,13 +359,13 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
   const SurfaceIdx surface = m.nodes.surface[B[0].value];
   // Step 4: sewing (Figs. 7-8).
   const std::size_t faces0 = m.num_faces(), nodes0 = m.num_nodes();
-  std::vector<char> old_node(m.nodes.slots.capacity());
+  std::vector<char> old_node(m.nodes.slots.capacity()), old_face(m.faces.slots.capacity());
   for (std::uint32_t v = 0; v < old_node.size(); ++v) old_node[v] = m.alive(NodeIdx{v});
+  for (std::uint32_t f = 0; f < old_face.size(); ++f) old_face[f] = m.alive(FaceIdx{f});
   if (out) {
     out->ring = ring;
     out->old_node = old_node;
-    out->old_face.assign(m.faces.slots.capacity(), 0);
-    for (std::uint32_t f = 0; f < out->old_face.size(); ++f) out->old_face[f] = m.alive(FaceIdx{f});
+    out->old_face = old_face;
   }
   std::vector<FaceIdx> swept;
   std::vector<NodeIdx> prev = B;
@@ -447,7 +402,11 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
   m.complex_holes = count_topology(m).implied_holes();
 
   std::vector<char> pushed;
-  if (opt.body) push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
+  if (opt.body) {
+    push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
+    if (opt.optimise)
+      extrude_detail::smooth_pushed(m, old_node, pushed, *opt.body, opt.clearance, opt.push_rounds, opt.body_smoothing);
+  }
 
   // Step 5: optimisation (Fig. 9).
   std::vector<HalfedgeIdx> chain;
@@ -465,6 +424,14 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
   rep.max_deviation = oc->max_deviation;
   if (opt.body) {
     push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
+    if (opt.optimise && opt.settle_rounds > 0) {
+      auto ops = extrude_detail::settle(m, old_node, old_face, B, chain, oo, *opt.body, opt.clearance, opt.push_rounds,
+                                        opt.settle_rounds, pushed, ctx);
+      if (!ops) return fail(ops.status().code(), ops.status().message());
+      rep.settle_ops = *ops;
+      // The bounds as they end, after the last push.
+      rep.after = extrude_detail::new_edge_stats(m, old_node, oo.target, oo.low, oo.high);
+    }
     rep.min_body_distance = std::numeric_limits<double>::infinity();
     for (NodeIdx v : new_nodes(m, old_node)) {
       rep.pushed += v.value < pushed.size() && pushed[v.value];

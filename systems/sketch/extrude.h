@@ -47,7 +47,9 @@
 //
 // With options.body: new nodes pushed out of the body (see ExtrudeOptions).
 // With options.as_surface: the extruded part in its own surface, joined to
-// B's surface along B by a MESHJOINT (B's nodes stay with the base).
+// B's surface along B by MESHJOINTs (B's nodes stay with the base; where B
+// runs along a mesh edge a joint already holds, the part joins that joint,
+// a seam of three or more surfaces, seed 000 Fig. 4).
 //
 // Transactional: on any error the model is unchanged (diff_tables == "").
 // Errors: kInvalidArgument (fewer than 2 distinct or non-finite stroke
@@ -58,7 +60,9 @@
 // no area, P1*P2* parallel to n_B, a plane seen edge-on, strokes that cross
 // so that a copy collapses to a point), kNonManifold (a boundary node with
 // several boundary arcs), those of paint_stroke and cut_along_curves, and
-// kCancelled; with options.mirror also kInvalidArgument (a bad plane or
+// kCancelled; with options.as_surface also kJointRefused (B runs along one
+// mesh edge in several stretches) and kUnsupported (attribute nodes on the
+// part); with options.mirror also kInvalidArgument (a bad plane or
 // tolerance, strokes or parts that cross the plane: "drawn side: ...") and
 // kDegenerate (no mirror base curve: "mirror side: ... the mesh is not
 // symmetric there"). The single-threaded result is the result: every step runs in a
@@ -123,10 +127,27 @@ struct ExtrudeOptions {
   const CollisionBody* body = nullptr;
   double clearance = 0.002;
   int push_rounds = 4;
+  /// With a body and the optimisation (systems/sketch/extrude_body.cpp):
+  /// before it, `body_smoothing` umbrella steps on the pushed nodes and two
+  /// rings around them, each followed by the push, so that the surface the
+  /// optimisation keeps to is not folded where the push moved nodes onto
+  /// the body; after the last push, up to `settle_rounds` times, the faces
+  /// around the edges then outside the bounds optimised again (B fixed)
+  /// and pushed. Off by default (0): on the project top's sleeve over 100
+  /// mannequins (8 and 4) they halve the median count of edges out of
+  /// bounds after the last push (44 -> 20) but the worst body gets worse
+  /// (85 -> 116; docs/performance.md, "issue 21, sleeve8").
+  int body_smoothing = 0;
+  int settle_rounds = 0;
   /// Beyond the paper: the extruded part becomes its own MESHSURFACE joined
-  /// to the base along B by a MESHJOINT (partition_along_curves along B,
-  /// systems/sketch/cut.h: B's nodes and edges duplicated, one mesh edge
-  /// per side), instead of being merged into B's surface.
+  /// to the base along B by MESHJOINTs (systems/sketch/extrude_surface.cpp:
+  /// B's nodes and edges duplicated on the part's side, one mesh edge per
+  /// side and stretch of B), instead of being merged into B's surface. A
+  /// stretch of B on a mesh edge that is already in a joint (a seam to
+  /// another surface) adds the part's mesh edge to that joint, placed
+  /// clockwise about the joint direction (the joint cut at the stretch's
+  /// ends first when it runs beyond them); the rest of B gets a joint of
+  /// its own.
   bool as_surface = false;
   RetriangulateOptions retriangulate;
   /// Beyond the paper (issue 21, "mirrored pairs"): with a plane, the strokes
@@ -153,9 +174,9 @@ struct ExtrudeOptions {
 /// B's frame, P_i* as points of B's segments, the copies' similarities in
 /// that frame), filled by extrude() and replayed by replay_extrusion().
 struct ExtrusionRecipe {
-  std::vector<std::uint32_t> base;  // B's node indices in order
-  bool ring = false;                // B is a boundary loop
-  bool capped = false;              // the last copy is one vertex (closed extrusion)
+  std::vector<std::uint32_t> base;               // B's node indices in order
+  bool ring = false;                             // B is a boundary loop
+  bool capped = false;                           // the last copy is one vertex (closed extrusion)
   std::uint32_t p1_segment = 0, p2_segment = 0;  // P_i* = B[s] + t (B[s+1] - B[s])
   double p1_t = 0, p2_t = 0;
   double normal_sign = 1;  // n_p = normal_sign * unit(e x n_B)
@@ -184,7 +205,10 @@ struct ExtrudeReport {
   std::size_t faces_removed = 0;                 // by the base cut
   std::size_t swept_nodes = 0, swept_faces = 0;  // added by sweep and sewing
   std::size_t splits = 0, collapses = 0, swaps = 0;
-  EdgeLengthStats before, after;                 // of the new region, around the optimisation
+  std::size_t settle_ops = 0;  // operations of the settle rounds after the last push
+  /// Of the new region, around the optimisation; with a body and settle
+  /// rounds, `after` is of every edge with a new node after the last push.
+  EdgeLengthStats before, after;
   double max_deviation = 0;                      // of the optimised nodes from the swept surface
   std::size_t nodes_added = 0, faces_added = 0;  // net, after optimisation
   double volume_change = 0;                      // signed volume (of B's surface) after minus before

@@ -6,8 +6,10 @@
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
 #include <atelier/systems/sketch/extrude.h>
+#include <atelier/systems/sketch/optimise_region.h>
 #include <atelier/systems/spatial/collision_body.h>
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -55,6 +57,24 @@ struct BaseSide {
 [[nodiscard]] std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old);
 void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
               std::vector<char>& pushed);
+/// Before the optimisation: umbrella steps on the pushed nodes and two
+/// rings around them, each followed by the push, `rounds` times
+/// (extrude_body.cpp).
+void smooth_pushed(Model& m, const std::vector<char>& old, const std::vector<char>& pushed, const CollisionBody& body,
+                   double c, int push_rounds, int rounds);
+/// After the last push: optimise_region on the faces around edges with a
+/// new node outside [low, high] target, then the push, up to `rounds` times
+/// (extrude_body.cpp). Returns the operations applied.
+[[nodiscard]] Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::vector<char>& old_face,
+                                           std::span<const NodeIdx> B, std::span<const HalfedgeIdx> chain,
+                                           const RegionOptimiseOptions& oo, const CollisionBody& body, double c,
+                                           int push_rounds, int rounds, std::vector<char>& pushed,
+                                           const ExecContext& ctx);
+/// Lengths of the edges with a new node against [low, high] L.
+[[nodiscard]] EdgeLengthStats new_edge_stats(const Model& m, const std::vector<char>& old, double L, double low,
+                                             double high);
+/// The part (the faces on B's side that had none) as its own surface,
+/// joined along B (extrude_surface.cpp).
 [[nodiscard]] Status split_off(Model& m, const std::vector<NodeIdx>& B, bool ring, ExtrudeReport& rep,
                                const ExecContext& ctx);
 [[nodiscard]] Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b);

@@ -21,6 +21,7 @@
 
 #include <cstdlib>
 #include <memory>
+#include <set>
 #include <string>
 
 #include "support/project_templates.h"
@@ -129,7 +130,7 @@ std::unique_ptr<BodyChecks> body_checks(const ReferenceBody& body) {
 /// outside the body, and checks the new nodes against the body (BodyBvh
 /// signed distance, an oracle apart from the CollisionBody extrude uses).
 DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, const ReferenceBody& reference,
-                      const Box3d& roi, Design design) {
+                      const Box3d& roi, Design design, int body_smoothing = 0, int settle_rounds = 0) {
   DressResult out;
   const ProfileTemplate one[] = {top};
   auto regen =
@@ -139,9 +140,7 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
   auto in = design_strokes(m, design);
   if (!in) return {in.status().to_string()};
   const std::size_t loop_size = best_loop(m, [&](const Vec3d& c) {
-                                  return design == Design::kDress    ? c.y()
-                                         : design == Design::kSleeve ? -c.x()
-                                                                     : -c.y();
+                                  return design == Design::kDress ? c.y() : design == Design::kSleeve ? -c.x() : -c.y();
                                 }).size();
   const auto checks = body_checks(body);
   if (!checks->error.empty()) return {checks->error};
@@ -149,6 +148,8 @@ DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, con
   o.pick_radius = 30;
   o.body = &checks->cb;
   o.clearance = 0.005;
+  o.body_smoothing = body_smoothing;
+  o.settle_rounds = settle_rounds;
   const std::size_t cap = m.nodes.slots.capacity();
   auto r = extrude(m, *in, o, ExecContext::sequential());
   if (!r) return {r.status().to_string()};
@@ -203,14 +204,15 @@ void run_bodies(std::size_t n, Design design) {
     // regression shows. Dress and collar: at most 2 edges out (of ~2000;
     // measured at most 1). The sleeve, grown along the arm and pushed out
     // of it before the optimisation (the optimiser then keeps to a crumpled
-    // target surface), up to 39 in the optimiser's count and 82 after
+    // target surface), up to 46 in the optimiser's count and 85 after
     // extrude's last push, which moves nodes out of the body without
-    // remeshing (of ~3000 edges).
+    // remeshing (of ~800 region edges; sleeve8, 2026-11-26; the
+    // opt-in body_smoothing / settle_rounds passes do not bring the worst
+    // body down: docs/performance.md).
     EXPECT_LE(got[i].outside_bounds, design == Design::kSleeve ? 60u : 2u) << "body " << i;
     EXPECT_LE(got[i].brute_outside, design == Design::kSleeve ? 120u : 2u) << "body " << i;
   }
 }
-
 
 Expected<Model> regenerate_top(const ReferenceBody& body, const ProfileTemplate& top, const ReferenceBody& reference,
                                const Box3d& roi) {
@@ -326,18 +328,46 @@ TEST(ExtrudeGarment, DressSleeveAndCollarOnTheTopOutsideTheBodyOnAFewMannequins)
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) run_bodies(2, d);
 }
 
+TEST(ExtrudeGarment, BodySmoothingAndSettleRoundsCutTheSleevesEdgesOutOfBounds) {
+  // The opt-in passes around the body push (ExtrudeOptions::body_smoothing,
+  // settle_rounds): on the first two mannequins the sleeve ends with fewer
+  // edges out of [4/5, 4/3] L after the last push than without them, the
+  // report's count is that final one, and no node is inside the body.
+  const auto& fx = atelier::testing::template_fixture();
+  const ProfileTemplate& top = fx.templates[0];
+  const Box3d roi = bounds(top.model);
+  struct Pair {
+    std::string error;
+    DressResult plain, passes;
+  };
+  const auto got = sketch_test::on_sampled_mannequins<Pair>(2, [&](const ReferenceBody& body) {
+    return Pair{"", design_on(body, top, fx.body, roi, Design::kSleeve),
+                design_on(body, top, fx.body, roi, Design::kSleeve, 8, 4)};
+  });
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(got[i].error, "");
+    ASSERT_EQ(got[i].plain.error, "");
+    ASSERT_EQ(got[i].passes.error, "");
+    EXPECT_EQ(got[i].passes.inside, 0u) << "body " << i;
+    EXPECT_EQ(got[i].passes.outside_bounds, got[i].passes.brute_outside) << "body " << i;
+    EXPECT_LT(got[i].passes.brute_outside, got[i].plain.brute_outside) << "body " << i;
+    RecordProperty("body" + std::to_string(i),
+                   std::to_string(got[i].plain.brute_outside) + " -> " + std::to_string(got[i].passes.brute_outside));
+  }
+}
+
 TEST(ExtrudeGarment, DressSleeveAndCollarOnTheTopOutsideTheBodyOn100Mannequins) {
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "300 regenerations (long under sanitizers)";
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) run_bodies(100, d);
 }
 
-TEST(ExtrudeGarment, TheDressAndCollarAsTheirOwnSurfacesAndTheSleeveRefusedOnTheCollarSeam) {
-  // `--as-surface` on the project's top (issue 21): the dress (from the hem)
-  // and the ring collar (from the collar's top edge) become surfaces of
-  // their own, joined along B. The right armhole runs 16 edges along the
-  // seam (a joint) between the top and its collar piece: a sleeve there
-  // would be a seam of three surfaces, refused by name with the model
-  // unchanged.
+TEST(ExtrudeGarment, TheDressCollarAndSleeveAsTheirOwnSurfacesTheSleeveOnAThreeSurfaceSeam) {
+  // `--as-surface` on the project's top (issue 21): the dress (from the hem),
+  // the ring collar (from the collar's top edge) and the sleeve (from the
+  // right armhole) become surfaces of their own, joined along B. The
+  // armhole runs 16 edges along the seam (a joint) between the top and its
+  // collar piece: there the sleeve joins that joint, a seam of three
+  // surfaces (seed 000's MESHJOINT, Fig. 4), the rest of B a joint of two.
   if (std::getenv("ATELIER_SKIP_LONG_TESTS")) GTEST_SKIP() << "six extrusions on the top (5 s in Release)";
   const auto& fx = atelier::testing::template_fixture();
   const ProfileTemplate& top = fx.templates[0];
@@ -355,17 +385,8 @@ TEST(ExtrudeGarment, TheDressAndCollarAsTheirOwnSurfacesAndTheSleeveRefusedOnThe
     o.as_surface = true;
     Model m = before;
     auto r = extrude(m, *in, o, ExecContext::sequential());
-    if (d == Design::kSleeve) {
-      ASSERT_FALSE(r);
-      EXPECT_EQ(r.status().code(), ErrorCode::kJointRefused);
-      EXPECT_NE(r.status().message().find("16 edges of mesh edge"), std::string::npos) << r.status().message();
-      EXPECT_NE(r.status().message().find("joint"), std::string::npos) << r.status().message();
-      EXPECT_EQ(diff_tables(before, m), "");
-      continue;
-    }
     ASSERT_TRUE(r) << r.status().to_string();
     ASSERT_TRUE(validate(m)) << validate(m).to_string();
-    ASSERT_EQ(r->joints.size(), 1u);
     // The same part as without as_surface, in a surface of its own: B's
     // nodes once more on the part's side, the part's faces all there.
     EXPECT_EQ(m.num_faces(), plain.num_faces());
@@ -375,27 +396,41 @@ TEST(ExtrudeGarment, TheDressAndCollarAsTheirOwnSurfacesAndTheSleeveRefusedOnThe
     for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
       part_faces += m.alive(FaceIdx{f}) && m.faces.surface[f] == r->part_surface;
     EXPECT_EQ(part_faces, plain.num_faces() - before.num_faces());
-    // The joint: two mesh edges along B, one per side, each with B's edges
-    // and the same node positions.
-    const JointIdx j = m.resolve(r->joints[0]).value();
-    const auto members = m.joints.members.row(j.value);
-    ASSERT_EQ(members.size(), 2u);
-    std::vector<std::vector<Vec3d>> sides;
-    std::vector<SurfaceIdx> surfaces;
-    for (const JointMember& jm : members) {
-      const auto hs = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
-      EXPECT_EQ(hs.size(), r->base.size() - (r->base_ring ? 0 : 1));
-      surfaces.push_back(m.mesh_edges.surface[jm.mesh_edge.value]);
-      std::vector<Vec3d> p;
-      for (HalfedgeIdx h : hs) p.push_back(m.position(m.tail(h)));
-      std::sort(p.begin(), p.end(), [](const Vec3d& a, const Vec3d& b) {
-        return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-      });
-      sides.push_back(std::move(p));
+    // The joints along B: each holds B's surface and the part's, every
+    // member with the same number of edges and the same node positions;
+    // together they hold each of B's edges once. The sleeve's include the
+    // collar seam (three surfaces, 16 edges).
+    const SurfaceIdx base = m.nodes.surface[r->base[0].value];
+    std::size_t along = 0, on_seam = 0;
+    ASSERT_EQ(r->joints.size(), d == Design::kSleeve ? 2u : 1u);
+    for (const Joint& joint : r->joints) {
+      const JointIdx j = m.resolve(joint).value();
+      const auto members = m.joints.members.row(j.value);
+      ASSERT_GE(members.size(), 2u);
+      std::vector<std::vector<Vec3d>> sides;
+      std::set<SurfaceIdx> surfaces;
+      const std::size_t len = m.mesh_edges.halfedges.size(members[0].mesh_edge.value);
+      for (const JointMember& jm : members) {
+        const auto hs = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
+        EXPECT_EQ(hs.size(), len);
+        surfaces.insert(m.mesh_edges.surface[jm.mesh_edge.value]);
+        std::vector<Vec3d> p;
+        for (HalfedgeIdx h : hs) p.push_back(m.position(m.tail(h))), p.push_back(m.position(m.head(h)));
+        std::sort(p.begin(), p.end(), [](const Vec3d& a, const Vec3d& b) {
+          return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+        });
+        p.erase(std::unique(p.begin(), p.end()), p.end());
+        sides.push_back(std::move(p));
+      }
+      EXPECT_EQ(surfaces.size(), members.size());
+      EXPECT_TRUE(surfaces.count(base) && surfaces.count(r->part_surface));
+      for (std::size_t k = 1; k < sides.size(); ++k) EXPECT_EQ(sides[k], sides[0]);
+      along += len;
+      if (members.size() == 3) on_seam += len;
+      EXPECT_LE(members.size(), d == Design::kSleeve ? 3u : 2u);
     }
-    EXPECT_NE(surfaces[0], surfaces[1]);
-    EXPECT_TRUE(surfaces[0] == r->part_surface || surfaces[1] == r->part_surface);
-    EXPECT_EQ(sides[0], sides[1]);
+    EXPECT_EQ(along, r->base.size() - (r->base_ring ? 0 : 1));
+    EXPECT_EQ(on_seam, d == Design::kSleeve ? 16u : 0u);
   }
 }
 
@@ -422,7 +457,8 @@ TEST(ExtrudeRecipe, OnTheReferenceBodyTheReplayIsTheOriginal) {
     double worst = 0;
     for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v) {
       ASSERT_EQ(m.alive(NodeIdx{v}), rec.after.alive(NodeIdx{v}));
-      if (m.alive(NodeIdx{v})) worst = std::max(worst, (m.position(NodeIdx{v}) - rec.after.position(NodeIdx{v})).norm());
+      if (m.alive(NodeIdx{v}))
+        worst = std::max(worst, (m.position(NodeIdx{v}) - rec.after.position(NodeIdx{v})).norm());
     }
     std::vector<NodeIdx> f0, f1;
     for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {

@@ -8,8 +8,8 @@
 #include <atelier/engine/parallel.h>
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
-#include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/profile/regenerate.h>
 #include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/spatial/body_bvh.h>
@@ -20,8 +20,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <string>
 #include <map>
+#include <string>
 
 #include "support/project_templates.h"
 #include "systems/sketch/sampled_mannequins.h"
@@ -188,10 +188,6 @@ TEST(ExtrudeMirror, AsymmetricMeshOrStrokeAcrossThePlaneIsRefusedUnchanged) {
 
 namespace {
 
-}  // namespace
-
-namespace {
-
 struct SleevesResult {
   std::string error;
   std::size_t right = 0, left = 0, inside = 0, inside_after = 0, base = 0, loop = 0, mirror_base = 0,
@@ -215,8 +211,8 @@ SleevesResult both_sleeves_on(const ReferenceBody& body) {
   for (std::uint32_t v = 0; v < top.model.nodes.slots.capacity(); ++v)
     if (top.model.alive(NodeIdx{v})) roi.extend(top.model.position(NodeIdx{v}));
   const ProfileTemplate one[] = {top};
-  auto regen = regenerate_on_body(one, fx.body, skin_positions(body), roi, {}, {.use_grid = false},
-                                  ExecContext::sequential());
+  auto regen =
+      regenerate_on_body(one, fx.body, skin_positions(body), roi, {}, {.use_grid = false}, ExecContext::sequential());
   if (!regen) return {regen.status().to_string()};
   Model m = std::move((*regen)[0].model);
   const std::vector<NodeIdx> loop = best_loop(m, [&](const Vec3d& c) { return -c.x(); });
@@ -366,7 +362,8 @@ void sleeves_on_mannequins(std::size_t n) {
 
 TEST(ExtrudeMirror, BothSleevesOfTheTopFromOneArmholeStrokeOutsideTheBody) {
   // On the reference body. Not as_surface: see ExtrudeMirror.AsSurface* and
-  // Extrude.AsSurfaceOnTheTopsArmhole (the top's armhole is a mesh edge).
+  // ExtrudeGarment.TheDressCollarAndSleeveAsTheirOwnSurfaces* (the top's
+  // armhole runs along the collar seam).
   const SleevesResult g = both_sleeves_on(atelier::testing::template_fixture().body);
   EXPECT_FALSE(g.refused);  // symmetric to ~1.6 % of L here
   expect_both_sleeves(g, "reference body");

@@ -580,6 +580,139 @@ TEST(Extrude, AsSurfaceJoinsThePartAlongB) {
   }
 }
 
+/// A flap: a surface of its own, a strip of triangles leaving `rim` (nodes
+/// of one surface, consecutive ones joined by an edge) radially outwards in
+/// y = 0, joined to that surface by a joint along the whole rim (both mesh
+/// edges in rim order, both positive). Returns the flap's surface.
+SurfaceIdx add_flap(Model& m, const std::vector<NodeIdx>& rim) {
+  Soup s;
+  const auto k = static_cast<std::uint32_t>(rim.size());
+  for (NodeIdx v : rim) s.p.push_back(m.position(v));
+  for (NodeIdx v : rim) s.p.push_back(1.4 * m.position(v));
+  for (std::uint32_t i = 0; i + 1 < k; ++i) {
+    s.face({i, i + 1, k + i + 1});
+    s.face({i, k + i + 1, k + i});
+  }
+  const std::uint32_t first = static_cast<std::uint32_t>(m.nodes.slots.capacity());
+  const Surface flap = add_polygon_surface(m, "flap", s.view()).value();
+  std::vector<HalfedgeIdx> host, own;
+  for (std::uint32_t i = 0; i + 1 < k; ++i) {
+    host.push_back(m.find_halfedge(rim[i], rim[i + 1]));
+    own.push_back(m.find_halfedge(NodeIdx{first + i}, NodeIdx{first + i + 1}));
+  }
+  const JointMember mem[2] = {{m.new_mesh_edge(m.nodes.surface[rim[0].value], host), true},
+                              {m.new_mesh_edge(flap.idx, own), true}};
+  (void)m.new_joint(mem);
+  return flap.idx;
+}
+
+/// Checks the joints along B of an as-surface extrusion: together they hold
+/// each of B's edges once on the base's and once on the part's side; those
+/// on the flap's stretch hold the flap too, members clockwise about the
+/// joint direction (by their faces' sides, computed here from the faces).
+void expect_joints_along_b(const Model& m, const ExtrudeReport& r, SurfaceIdx base, SurfaceIdx flap,
+                           std::size_t flap_edges) {
+  const std::size_t segs = r.base.size() - (r.base_ring ? 0 : 1);
+  std::size_t along = 0, three = 0;
+  for (const Joint& j : r.joints) {
+    const auto mem = m.joints.members.row(m.resolve(j).value().value);
+    std::set<SurfaceIdx> sides;
+    for (const JointMember& jm : mem) sides.insert(m.mesh_edges.surface[jm.mesh_edge.value]);
+    EXPECT_EQ(sides.size(), mem.size());
+    EXPECT_TRUE(sides.count(base) && sides.count(r.part_surface));
+    const std::size_t len = m.mesh_edges.halfedges.size(mem[0].mesh_edge.value);
+    along += len;
+    if (mem.size() == 3) {
+      EXPECT_TRUE(sides.count(flap));
+      three += len;
+      // Clockwise (looking against the joint direction d) from member 0.
+      std::vector<double> cw;
+      Vec3d s0, d;
+      for (const JointMember& jm : mem) {
+        const auto ch = m.mesh_edges.halfedges.row(jm.mesh_edge.value);
+        const HalfedgeIdx h = ch[jm.positive ? ch.size() / 2 : ch.size() - 1 - ch.size() / 2];
+        const FaceIdx f = m.face(h).valid() ? m.face(h) : m.face(twin(h));
+        std::vector<NodeIdx> fn;
+        m.face_nodes(f, fn);
+        const Vec3d a = m.position(m.tail(h)), b = m.position(m.head(h));
+        const Vec3d dir = (jm.positive ? b - a : a - b).normalized();
+        Vec3d side = (m.position(fn[0]) + m.position(fn[1]) + m.position(fn[2])) / 3 - 0.5 * (a + b);
+        side = (side - side.dot(dir) * dir).normalized();
+        if (cw.empty()) s0 = side, d = dir;
+        EXPECT_GT(dir.dot(d), 0.99);  // the members agree on the direction
+        const double ccw = std::atan2(d.cross(s0).dot(side), s0.dot(side));
+        cw.push_back(ccw > 0 ? 2 * M_PI - ccw : -ccw);
+      }
+      EXPECT_LT(cw[1], cw[2]);
+    } else {
+      EXPECT_EQ(mem.size(), 2u);
+    }
+  }
+  EXPECT_EQ(along, segs);
+  EXPECT_EQ(three, flap_edges);
+}
+
+TEST(Extrude, AsSurfaceAlongAJointMakesASeamOfThreeSurfaces) {
+  // Seed 000's MESHJOINT orders the mesh edges of any number of surfaces
+  // (Fig. 4; Fig. 17's joints of three and more): a part grown from a base
+  // curve that runs along an existing seam joins that seam. The cup's rim
+  // (a ring B) carries a flap on 6 of its 24 edges; the half shell's top
+  // arc carries one along all its 12 edges and B is its middle 6, so the
+  // flap's joint is cut at B's ends (three joints along the arc).
+  for (bool ring : {true, false}) {
+    SCOPED_TRACE(ring ? "ring" : "arc");
+    Model m = ring ? cup() : half_shell(12);
+    const SurfaceIdx base = m.nodes.surface[0];
+    std::vector<NodeIdx> rim;
+    for (std::uint32_t i = 0; i <= (ring ? 6u : 12u); ++i) rim.push_back(NodeIdx{i});
+    const SurfaceIdx flap = add_flap(m, rim);
+    ASSERT_TRUE(validate(m)) << validate(m).to_string();
+    ExtrudeStrokes in = tube_strokes();
+    if (!ring) {
+      in.base_camera = oblique();
+      std::vector<Vec3d> arc, s0, s1;
+      for (int k = 6; k <= 18; ++k) arc.push_back(Vec3d(std::cos(M_PI * k / 24), 0, std::sin(M_PI * k / 24)));
+      in.base = project(in.base_camera, arc);
+      for (int k = 0; k <= 4; ++k) {
+        s0.push_back(arc.front() + Vec3d(0, 0.25 * k, 0));
+        s1.push_back(arc.back() + Vec3d(0, 0.25 * k, 0));
+      }
+      in.sweep = {project(in.sweep_camera, s0), project(in.sweep_camera, s1)};
+    }
+    ExtrudeOptions o;
+    o.surfaces = {base};
+    Model plain = m;
+    auto rp = extrude(plain, in, o);
+    ASSERT_TRUE(rp) << rp.status().to_string();
+    o.as_surface = true;
+    const Model before = m;
+    auto r = extrude(m, in, o);
+    ASSERT_TRUE(r) << r.status().to_string();
+    ASSERT_TRUE(validate(m)) << validate(m).to_string();
+    EXPECT_EQ(r->base.size(), ring ? 24u : 7u);
+    // The plain extrusion's faces, the part's in a surface of its own; B's
+    // nodes once more on the part's side.
+    EXPECT_EQ(m.num_faces(), plain.num_faces());
+    EXPECT_EQ(m.num_nodes(), plain.num_nodes() + r->base.size());
+    EXPECT_EQ(m.num_surfaces(), before.num_surfaces() + 1);
+    std::size_t part_faces = 0;
+    for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
+      part_faces += m.alive(FaceIdx{f}) && m.faces.surface[f] == r->part_surface;
+    EXPECT_EQ(part_faces, plain.num_faces() - before.num_faces());
+    expect_joints_along_b(m, *r, base, flap, 6);
+    EXPECT_EQ(r->joints.size(), ring ? 2u : 1u);
+    // The flap's joint off B keeps the rest of the flap's rim.
+    std::size_t flap_joined = 0;
+    for (std::uint32_t j = 0; j < m.joints.slots.capacity(); ++j)
+      if (m.alive(JointIdx{j}))
+        for (const JointMember& jm : m.joints.members.row(j))
+          if (m.mesh_edges.surface[jm.mesh_edge.value] == flap)
+            flap_joined += m.mesh_edges.halfedges.size(jm.mesh_edge.value);
+    EXPECT_EQ(flap_joined, rim.size() - 1);
+    expect_old_nodes_unchanged(before, m);
+  }
+}
+
 TEST(Extrude, ThreadsDoNotChangeABit) {
   Model a = cup(), b = cup();
   ExecContext one = ExecContext::sequential(), two;

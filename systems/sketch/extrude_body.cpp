@@ -1,0 +1,143 @@
+// The extrusion kept outside a body (issue 21, beyond seed 002, whose
+// section 6 lists collision as future work): the two passes around the
+// body push that keep the extruded part within the edge bounds of step 5.
+//
+//  - Before the optimisation, the push moves the swept nodes that lie in the
+//    body onto it (closest point + clearance): neighbouring nodes pushed to
+//    different sides of a limb, or pushed next to nodes that were not, fold
+//    the swept surface (neighbouring triangles turned by more than 60
+//    degrees), and the optimisation, which keeps to that surface, cannot
+//    make edges within bounds across a fold. smooth_pushed relaxes the
+//    pushed nodes and their neighbours (umbrella steps, each followed by the
+//    push) so that the surface the optimisation keeps to is a smooth one
+//    outside the body.
+//  - After the optimisation, the last push moves nodes again without
+//    remeshing. settle re-optimises only the faces around the edges that
+//    are then outside the bounds (optimise_region on that small region,
+//    B fixed) and pushes again, a few times.
+#include <atelier/systems/sketch/optimise_region.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "extrude_detail.h"
+
+namespace atelier::extrude_detail {
+
+namespace {
+
+bool is_new(const std::vector<char>& old, NodeIdx v) {
+  return !(v.value < old.size() && old[v.value]);
+}
+
+/// `mark` grown by `rings` rings of new nodes (over edges).
+void grow(const Model& m, const std::vector<char>& old, std::vector<char>& mark, int rings) {
+  std::vector<NodeIdx> front;
+  for (std::uint32_t v = 0; v < mark.size(); ++v)
+    if (mark[v]) front.push_back(NodeIdx{v});
+  for (int r = 0; r < rings; ++r) {
+    std::vector<NodeIdx> next;
+    for (NodeIdx v : front)
+      m.for_each_outgoing(v, [&](HalfedgeIdx h) {
+        const NodeIdx w = m.head(h);
+        if (is_new(old, w) && !mark[w.value]) mark[w.value] = 1, next.push_back(w);
+      });
+    front = std::move(next);
+  }
+}
+
+}  // namespace
+
+EdgeLengthStats new_edge_stats(const Model& m, const std::vector<char>& old, double L, double low, double high) {
+  EdgeLengthStats st;
+  st.min = INFINITY;
+  double sum = 0;
+  for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+    if (!m.alive(EdgeIdx{e})) continue;
+    const NodeIdx a = m.tail(halfedge_of(EdgeIdx{e}, 0)), b = m.tail(halfedge_of(EdgeIdx{e}, 1));
+    if (!is_new(old, a) && !is_new(old, b)) continue;
+    const double l = (m.position(a) - m.position(b)).norm();
+    ++st.edges;
+    sum += l;
+    st.min = std::min(st.min, l);
+    st.max = std::max(st.max, l);
+    st.outside += l < low * L || l > high * L;
+  }
+  if (st.edges == 0) st.min = 0;
+  st.mean = st.edges ? sum / static_cast<double>(st.edges) : 0;
+  st.within = st.edges ? 1.0 - static_cast<double>(st.outside) / static_cast<double>(st.edges) : 1;
+  return st;
+}
+
+void smooth_pushed(Model& m, const std::vector<char>& old, const std::vector<char>& pushed, const CollisionBody& body,
+                   double c, int push_rounds, int rounds) {
+  if (rounds <= 0) return;
+  std::vector<char> mark(m.nodes.slots.capacity(), 0);
+  bool any = false;
+  for (std::uint32_t v = 0; v < pushed.size() && v < mark.size(); ++v)
+    if (pushed[v] && m.alive(NodeIdx{v})) mark[v] = 1, any = true;
+  if (!any) return;
+  // The pushed nodes and two rings around them: the fold runs where pushed
+  // nodes meet unpushed ones.
+  grow(m, old, mark, 2);
+  std::vector<NodeIdx> nodes;
+  for (std::uint32_t v = 0; v < mark.size(); ++v)
+    if (mark[v]) nodes.push_back(NodeIdx{v});
+  std::vector<Vec3d> next(nodes.size());
+  std::vector<char> again;
+  for (int r = 0; r < rounds; ++r) {
+    // Jacobi umbrella step (half way to the neighbours' mean): the order of
+    // the nodes does not matter, so neither do threads.
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      Vec3d sum = Vec3d::Zero();
+      int k = 0;
+      m.for_each_outgoing(nodes[i], [&](HalfedgeIdx h) { sum += m.position(m.head(h)), ++k; });
+      const Vec3d p = m.position(nodes[i]);
+      next[i] = k ? 0.5 * p + 0.5 * sum / k : p;
+    }
+    for (std::size_t i = 0; i < nodes.size(); ++i) m.nodes.position[nodes[i].value] = next[i];
+    push_out(m, old, body, c, push_rounds, again);
+  }
+}
+
+Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::vector<char>& old_face,
+                             std::span<const NodeIdx> B, std::span<const HalfedgeIdx> chain,
+                             const RegionOptimiseOptions& oo, const CollisionBody& body, double c, int push_rounds,
+                             int rounds, std::vector<char>& pushed, const ExecContext& ctx) {
+  const double lo = oo.low * oo.target, hi = oo.high * oo.target;
+  std::size_t ops = 0;
+  for (int r = 0; r < rounds; ++r) {
+    std::vector<char> mark(m.nodes.slots.capacity(), 0);
+    bool any = false;
+    for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+      if (!m.alive(EdgeIdx{e})) continue;
+      const NodeIdx a = m.tail(halfedge_of(EdgeIdx{e}, 0)), b = m.tail(halfedge_of(EdgeIdx{e}, 1));
+      if (!is_new(old, a) && !is_new(old, b)) continue;
+      const double l = (m.position(a) - m.position(b)).norm();
+      if (l >= lo && l <= hi) continue;
+      any = true;
+      if (is_new(old, a)) mark[a.value] = 1;
+      if (is_new(old, b)) mark[b.value] = 1;
+    }
+    if (!any) break;
+    // Two rings more, so that the edge's ends are free (nodes of faces
+    // outside the region are fixed) and the region's rim is not an edge
+    // out of bounds.
+    grow(m, old, mark, 2);
+    std::vector<FaceIdx> region;
+    std::vector<NodeIdx> fn;
+    for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
+      if (!m.alive(FaceIdx{f}) || (f < old_face.size() && old_face[f])) continue;
+      m.face_nodes(FaceIdx{f}, fn);
+      if (std::any_of(fn.begin(), fn.end(), [&](NodeIdx v) { return mark[v.value] != 0; }))
+        region.push_back(FaceIdx{f});
+    }
+    auto oc = optimise_region(m, region, B, chain, oo, ctx);
+    if (!oc) return oc.status();
+    ops += oc->splits + oc->collapses + oc->swaps;
+    push_out(m, old, body, c, push_rounds, pushed);
+  }
+  return ops;
+}
+
+}  // namespace atelier::extrude_detail
