@@ -456,37 +456,35 @@ class Optimiser {
     const HalfedgeIdx h = halfedge_of(e, 0), t = halfedge_of(e, 1);  // a -> b, b -> a
     const NodeIdx a = m_.tail(h), b = m_.tail(t);
     const FaceIdx fh = m_.face(h), ft = m_.face(t);
-    HalfedgeIdx bc, ca, ad, db;
-    std::uint8_t flh = 0, flt = 0;
-    if (fh.valid()) {
-      bc = m_.next(h), ca = m_.next(bc), flh = m_.faces.flags[fh.value];
-      m_.delete_face(fh);
-    }
-    if (ft.valid()) {
-      ad = m_.next(t), db = m_.next(ad), flt = m_.faces.flags[ft.value];
-      m_.delete_face(ft);
-    }
+    // The faces' other sides: b -> c -> a and a -> d -> b.
+    const HalfedgeIdx bc = fh.valid() ? m_.next(h) : HalfedgeIdx{}, ca = fh.valid() ? m_.next(bc) : HalfedgeIdx{};
+    const HalfedgeIdx ad = ft.valid() ? m_.next(t) : HalfedgeIdx{}, db = ft.valid() ? m_.next(ad) : HalfedgeIdx{};
     const SurfaceIdx s = m_.nodes.surface[a.value];
     const NodeIdx v = m_.new_node(s, p);
     m_.nodes.in_face[v.value] = m_.nodes.in_face[a.value];
-    m_.nodes.uv[v.value] = 0.5 * (m_.nodes.uv[a.value] + m_.nodes.uv[b.value]);
-    m_.nodes.position_backup[v.value] = 0.5 * (m_.nodes.position_backup[a.value] + m_.nodes.position_backup[b.value]);
+    // Interpolated at p's parameter along a -> b, as split_edge_raw does.
+    const Vec3d ab = m_.position(b) - m_.position(a);
+    const double l2 = ab.squaredNorm();
+    const double u = l2 > 0 ? std::clamp((p - m_.position(a)).dot(ab) / l2, 0.0, 1.0) : 0.5;
+    m_.nodes.uv[v.value] = (1.0 - u) * m_.nodes.uv[a.value] + u * m_.nodes.uv[b.value];
+    m_.nodes.position_backup[v.value] =
+        (1.0 - u) * m_.nodes.position_backup[a.value] + u * m_.nodes.position_backup[b.value];
     const EdgeIdx g = m_.new_edge(v, b);
     const HalfedgeIdx gs = halfedge_of(g, 0), gt = halfedge_of(g, 1);  // v -> b, b -> v
     m_.edges.flags[g.value] = m_.edges.flags[e.value];
     m_.set_tail(t, v);  // t: v -> a, h: a -> v
-    if (fh.valid()) {
-      const EdgeIdx d = m_.new_edge(v, m_.tail(ca));
-      const HalfedgeIdx c1[3] = {gs, bc, halfedge_of(d, 1)}, c2[3] = {halfedge_of(d, 0), ca, h};
-      m_.faces.flags[m_.new_face(s, c1).value] = flh;
-      m_.faces.flags[m_.new_face(s, c2).value] = flh;
-    }
-    if (ft.valid()) {
-      const EdgeIdx d = m_.new_edge(v, m_.tail(db));
-      const HalfedgeIdx c1[3] = {t, ad, halfedge_of(d, 1)}, c2[3] = {halfedge_of(d, 0), db, gt};
-      m_.faces.flags[m_.new_face(s, c1).value] = flt;
-      m_.faces.flags[m_.new_face(s, c2).value] = flt;
-    }
+    // Each face replaced by its two halves in edit.cpp's order (delete,
+    // new edge, two faces), so that the slots are those edge_split takes.
+    auto cut = [&](FaceIdx f, const std::array<HalfedgeIdx, 5>& r) {
+      const std::uint8_t flags = m_.faces.flags[f.value];
+      m_.delete_face(f);
+      const EdgeIdx d = m_.new_edge(v, m_.tail(r[4]));
+      const HalfedgeIdx c1[3] = {r[0], r[1], halfedge_of(d, 1)}, c2[3] = {halfedge_of(d, 0), r[2], r[3]};
+      m_.faces.flags[m_.new_face(s, c1).value] = flags;
+      m_.faces.flags[m_.new_face(s, c2).value] = flags;
+    };
+    if (fh.valid()) cut(fh, {gs, bc, ca, h, ca});
+    if (ft.valid()) cut(ft, {t, ad, db, gt, db});
     return v;
   }
 
