@@ -535,14 +535,7 @@ class Optimiser {
       const HalfedgeIdx x1 = m_.next(x), x2 = m_.next(x1);
       const HalfedgeIdx rin = m_.tail(x1) == b ? x1 : x2, kin = rin == x1 ? x2 : x1, rout = twin(rin);
       m_.delete_face(m_.face(x));
-      if (const FaceIdx g = m_.face(rout); g.valid()) {
-        m_.halfedges.face[kin.value] = g;
-        m_.link_face(m_.prev(rout), kin);
-        m_.link_face(kin, m_.next(rout));
-        if (m_.faces.halfedge[g.value] == rout) m_.faces.halfedge[g.value] = kin;
-        m_.halfedges.face[rout.value] = {};
-        m_.halfedges.next[rout.value] = m_.halfedges.prev[rout.value] = {};
-      }
+      (void)edit_detail::hand_over_side(m_, rout, kin);
       m_.edges.flags[edge_of(kin).value] |= m_.edges.flags[edge_of(rin).value];
       m_.delete_edge(edge_of(rin));
     }
