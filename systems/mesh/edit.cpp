@@ -1,10 +1,9 @@
+#include <atelier/engine/status_format.h>
 #include <atelier/systems/mesh/edit.h>
+#include <atelier/systems/mesh/euler.h>
 
 #include <algorithm>
 #include <sstream>
-
-#include <atelier/engine/status_format.h>
-#include <atelier/systems/mesh/euler.h>
 
 namespace atelier {
 
@@ -195,15 +194,7 @@ void collapse_one(Model& m, HalfedgeIdx h, const Vec3d& p) {
       const EdgeIdx ke = edge_of(kin), re = edge_of(rin);
       carry.take_faces(m, std::span<const FaceIdx>(&f, 1));
       m.delete_face(f);
-      if (const FaceIdx g = m.face(rout); g.valid()) {
-        m.halfedges.face[kin.value] = g;
-        m.link_face(m.prev(rout), kin);
-        m.link_face(kin, m.next(rout));
-        if (m.faces.halfedge[g.value] == rout) m.faces.halfedge[g.value] = kin;
-        m.halfedges.face[rout.value] = {};
-        m.halfedges.next[rout.value] = m.halfedges.prev[rout.value] = {};
-        kept_faces.push_back(g);
-      }
+      if (const FaceIdx g = edit_detail::hand_over_side(m, rout, kin); g.valid()) kept_faces.push_back(g);
       if (const MeshEdgeIdx me = m.edges.mesh_edge[re.value]; me.valid()) {
         for (HalfedgeIdx& c : m.mesh_edges.halfedges.row_mut(me.value))
           if (c == rout)
@@ -264,6 +255,18 @@ void collapse_one(Model& m, HalfedgeIdx h, const Vec3d& p) {
 }
 
 }  // namespace
+
+FaceIdx edit_detail::hand_over_side(Model& m, HalfedgeIdx rout, HalfedgeIdx kin) {
+  const FaceIdx g = m.face(rout);
+  if (!g.valid()) return g;
+  m.halfedges.face[kin.value] = g;
+  m.link_face(m.prev(rout), kin);
+  m.link_face(kin, m.next(rout));
+  if (m.faces.halfedge[g.value] == rout) m.faces.halfedge[g.value] = kin;
+  m.halfedges.face[rout.value] = {};
+  m.halfedges.next[rout.value] = m.halfedges.prev[rout.value] = {};
+  return g;
+}
 
 std::vector<HalfedgeIdx> joint_corresponding_halfedges(const Model& m, HalfedgeIdx h) {
   std::vector<HalfedgeIdx> out{h};

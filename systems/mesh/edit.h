@@ -24,11 +24,11 @@
 // attribute nodes. Never model.complex_holes.
 #pragma once
 
-#include <array>
-#include <vector>
-
 #include <atelier/engine/status.h>
 #include <atelier/storage/model.h>
+
+#include <array>
+#include <vector>
 
 namespace atelier {
 
@@ -98,6 +98,12 @@ struct FaceSplitResult {
 /// triangle is cut in two through the new node, as the paper's face
 /// triangulation step does.
 [[nodiscard]] Expected<FaceSplitResult> face_split_1to4(Model& m, Face f, const EditOptions& opt = {});
+
+namespace edit_detail {
+/// One step of a collapse (Table 3): the face across rout, if any, takes kin
+/// in rout's place in its cycle, and rout is left faceless. Returns that face.
+FaceIdx hand_over_side(Model& m, HalfedgeIdx rout, HalfedgeIdx kin);
+}  // namespace edit_detail
 
 /// The halfedges corresponding to h on every mesh edge of its joint (h
 /// first), oriented so that each one's tail corresponds to tail(h). Just {h}

@@ -297,17 +297,38 @@ class Optimiser {
   NodeIdx split(EdgeIdx e) {
     const Vec3d mid = 0.5 * (m_.position(m_.tail(halfedge_of(e, 0))) + m_.position(m_.tail(halfedge_of(e, 1))));
     const NodeIdx a = m_.tail(halfedge_of(e, 0));
-    auto s = edge_split(m_, m_.handle(e), mid, eo_);
-    if (!s) return {};
+    NodeIdx n;
+    if (plain_ && !m_.edges.mesh_edge[e.value].valid()) {
+      n = split_plain(e, mid);
+    } else {
+      const bool chain = m_.edges.mesh_edge[e.value].valid();
+      auto s = edge_split(m_, m_.handle(e), mid, eo_);
+      if (!s) return {};
+      n = s->nodes.at(0).idx;
+      if (chain) constrain(n);
+    }
     ++rep_.splits;
-    const NodeIdx n = s->nodes.at(0).idx;
     report_ring(n);
     set_hint(n, a.value < hint_.size() ? hint_[a.value] : kNoTriangle);
     return n;
   }
 
+  /// Moving r to p makes no edge of r's ring (but the one to k) longer
+  /// than the collapse limit. Tested for both ends before collapse_ok's
+  /// normals: most refused collapses fail here.
+  bool collapse_short(NodeIdx r, NodeIdx k, const Vec3d& p) const {
+    if (p == m_.position(r)) return true;
+    const double lim = collapse_limit_ * collapse_limit_;
+    bool ok = true;
+    m_.for_each_outgoing(r, [&](HalfedgeIdx h) {
+      const NodeIdx w = m_.head(h);
+      ok = ok && (w == k || !((m_.position(w) - p).squaredNorm() > lim));
+    });
+    return ok;
+  }
+
   /// Moving r to p keeps every face around r (but those holding k) turned
-  /// the same way and makes no edge longer than hi.
+  /// the same way (the lengths: collapse_short).
   bool collapse_ok(NodeIdx r, NodeIdx k, const Vec3d& p) const {
     // r staying where it is (a fixed end of B, or a border end kept) changes
     // none of its edges or faces: its edges outside the region may be far
@@ -316,12 +337,10 @@ class Optimiser {
     bool ok = true;
     m_.for_each_outgoing(r, [&](HalfedgeIdx h) {
       if (!ok) return;
-      const NodeIdx w = m_.head(h);
-      if (w != k && (m_.position(w) - p).norm() > collapse_limit_) ok = false;
       const FaceIdx face = m_.face(h);
       if (!face.valid()) return;
       // Triangle (r, w, u) with u = head(next(h)).
-      const NodeIdx u = m_.head(m_.next(h));
+      const NodeIdx w = m_.head(h), u = m_.head(m_.next(h));
       if (w == k || u == k) return;
       const Vec3d n0 = tri_normal(m_.position(r), m_.position(w), m_.position(u));
       const Vec3d n1 = tri_normal(p, m_.position(w), m_.position(u));
@@ -338,13 +357,20 @@ class Optimiser {
     NodeIdx keep = a, gone = b;
     if (fixed(b)) keep = b, gone = a;
     Vec3d p = 0.5 * (m_.position(a) + m_.position(b));
+    // The region's own collapse (collapse_plain) where the generic
+    // operator's bookkeeping has nothing to do: no mesh edge at e or its
+    // ends, two triangles on e, no attribute or ring node in the model. It
+    // may keep either end.
+    const bool plain = plain_ && !m_.edges.mesh_edge[e.value].valid() && !constrained(a) && !constrained(b) &&
+                       m_.face(halfedge_of(e, 0)).valid() && m_.face(halfedge_of(e, 1)).valid();
     if (fixed(keep)) {
       p = m_.position(keep);
       // edge_collapse keeps the tail of halfedge 2e unless e is on no mesh
       // edge and only the other end is (the temporary one along the chain).
       NodeIdx kept = a;
-      if (!m_.edges.mesh_edge[e.value].valid() && on_mesh_edge(a) != on_mesh_edge(b)) kept = on_mesh_edge(a) ? a : b;
-      if (kept != keep) return NodeIdx{};
+      if (!plain && !m_.edges.mesh_edge[e.value].valid() && on_mesh_edge(a) != on_mesh_edge(b))
+        kept = on_mesh_edge(a) ? a : b;
+      if (!plain && kept != keep) return NodeIdx{};
     } else {
       const bool ba = on_border(a), bb = on_border(b);
       const bool border_edge = !m_.face(halfedge_of(e, 0)).valid() || !m_.face(halfedge_of(e, 1)).valid();
@@ -358,7 +384,8 @@ class Optimiser {
         if (cb) p = m_.position(b);
       }
     }
-    if (!collapse_ok(gone, keep, p) || !collapse_ok(keep, gone, p)) {
+    if (!collapse_short(gone, keep, p) || !collapse_short(keep, gone, p) || !collapse_ok(gone, keep, p) ||
+        !collapse_ok(keep, gone, p)) {
       // Last resort, two free inner ends: the midpoint may fold a face or
       // stretch an edge where one of the ends would not (a crease of the
       // swept surface, a pushed fold): try each end's place.
@@ -366,7 +393,8 @@ class Optimiser {
       bool found = false;
       for (const NodeIdx at : {a, b}) {
         p = m_.position(at);
-        if (collapse_ok(gone, keep, p) && collapse_ok(keep, gone, p)) {
+        if (collapse_short(gone, keep, p) && collapse_short(keep, gone, p) && collapse_ok(gone, keep, p) &&
+            collapse_ok(keep, gone, p)) {
           found = true;
           break;
         }
@@ -374,14 +402,150 @@ class Optimiser {
       if (!found) return NodeIdx{};
     }
     const Vec3d keep_pos = m_.position(keep);
-    auto res = edge_collapse(m_, m_.handle(e), p, eo_);
-    if (!res) return NodeIdx{};
-    const NodeIdx kept = res->kept.at(0).idx;
+    NodeIdx kept = keep;
+    if (plain) {
+      const HalfedgeIdx h = halfedge_of(e, m_.tail(halfedge_of(e, 0)) == keep ? 0 : 1);
+      if (!collapse_plain_ok(h)) return NodeIdx{};
+      collapse_plain(h, p);
+    } else {
+      auto res = edge_collapse(m_, m_.handle(e), p, eo_);
+      if (!res) return NodeIdx{};
+      kept = res->kept.at(0).idx;
+    }
     if (fixed(keep) && (kept != keep || m_.position(kept) != keep_pos))
       return region_error(ErrorCode::kInternal, "a collapse moved fixed node " + std::to_string(keep.value));
     ++rep_.collapses;
     report_ring(kept);
     return kept;
+  }
+
+  // ------------------------------------------- the region's own operators
+  // Split and collapse of an edge of the all-triangle region away from any
+  // mesh edge, in a model without attribute or ring nodes: the same
+  // primitives in the same order as edge_split / edge_collapse
+  // (systems/mesh/edit.cpp, Table 3) without what they do for joints,
+  // chains, polygons and attributes (a lookup of the joint, result vectors,
+  // scans of the attribute table, ring walks for mesh edges), which is
+  // most of their cost here. The model stays valid after each; optimise_region
+  // as a whole stays transactional (its copy of the model).
+
+  /// Node on a mesh edge (the generic operators keep such nodes on it).
+  bool constrained(NodeIdx v) const { return v.value < constrained_.size() && constrained_[v.value]; }
+  void constrain(NodeIdx v) {
+    if (v.value >= constrained_.size())
+      constrained_.resize(std::max<std::size_t>(m_.nodes.slots.capacity(), v.value + 1), 0);
+    constrained_[v.value] = 1;
+  }
+
+  /// After the temporary chain is made: the nodes on mesh edges, and
+  /// whether the plain operators may run at all.
+  void note_constraints() {
+    constrained_.assign(m_.nodes.slots.capacity(), 0);
+    for (std::uint32_t me = 0; me < m_.mesh_edges.slots.capacity(); ++me) {
+      if (!m_.alive(MeshEdgeIdx{me})) continue;
+      for (HalfedgeIdx h : m_.mesh_edges.halfedges.row(me))
+        if (m_.alive(h)) constrained_[m_.tail(h).value] = constrained_[m_.head(h).value] = 1;
+    }
+    plain_ = !eo_.check_ring_nodes && m_.attrib_nodes.slots.empty();
+  }
+
+  /// Splits e (no mesh edge; its faces triangles) at p: each triangle on
+  /// it becomes two through the new node and the opposite corner, as
+  /// split_one + cut_quad in edit.cpp. Returns the new node.
+  NodeIdx split_plain(EdgeIdx e, const Vec3d& p) {
+    const HalfedgeIdx h = halfedge_of(e, 0), t = halfedge_of(e, 1);  // a -> b, b -> a
+    const NodeIdx a = m_.tail(h), b = m_.tail(t);
+    const FaceIdx fh = m_.face(h), ft = m_.face(t);
+    // The faces' other sides: b -> c -> a and a -> d -> b.
+    const HalfedgeIdx bc = fh.valid() ? m_.next(h) : HalfedgeIdx{}, ca = fh.valid() ? m_.next(bc) : HalfedgeIdx{};
+    const HalfedgeIdx ad = ft.valid() ? m_.next(t) : HalfedgeIdx{}, db = ft.valid() ? m_.next(ad) : HalfedgeIdx{};
+    const SurfaceIdx s = m_.nodes.surface[a.value];
+    const NodeIdx v = m_.new_node(s, p);
+    m_.nodes.in_face[v.value] = m_.nodes.in_face[a.value];
+    // Interpolated at p's parameter along a -> b, as split_edge_raw does.
+    const Vec3d ab = m_.position(b) - m_.position(a);
+    const double l2 = ab.squaredNorm();
+    const double u = l2 > 0 ? std::clamp((p - m_.position(a)).dot(ab) / l2, 0.0, 1.0) : 0.5;
+    m_.nodes.uv[v.value] = (1.0 - u) * m_.nodes.uv[a.value] + u * m_.nodes.uv[b.value];
+    m_.nodes.position_backup[v.value] =
+        (1.0 - u) * m_.nodes.position_backup[a.value] + u * m_.nodes.position_backup[b.value];
+    const EdgeIdx g = m_.new_edge(v, b);
+    const HalfedgeIdx gs = halfedge_of(g, 0), gt = halfedge_of(g, 1);  // v -> b, b -> v
+    m_.edges.flags[g.value] = m_.edges.flags[e.value];
+    m_.set_tail(t, v);  // t: v -> a, h: a -> v
+    // Each face replaced by its two halves in edit.cpp's order (delete,
+    // new edge, two faces), so that the slots are those edge_split takes.
+    auto cut = [&](FaceIdx f, const std::array<HalfedgeIdx, 5>& r) {
+      const std::uint8_t flags = m_.faces.flags[f.value];
+      m_.delete_face(f);
+      const EdgeIdx d = m_.new_edge(v, m_.tail(r[4]));
+      const HalfedgeIdx c1[3] = {r[0], r[1], halfedge_of(d, 1)}, c2[3] = {halfedge_of(d, 0), r[2], r[3]};
+      m_.faces.flags[m_.new_face(s, c1).value] = flags;
+      m_.faces.flags[m_.new_face(s, c2).value] = flags;
+    };
+    if (fh.valid()) cut(fh, {gs, bc, ca, h, ca});
+    if (ft.valid()) cut(ft, {t, ad, db, gt, db});
+    return v;
+  }
+
+  /// edit.cpp's collapse checks for h = keep -> gone, on two triangles and
+  /// no mesh edge near: no dangling or folded face, no opposite node left
+  /// with valence 2, the two opposite nodes distinct, and the link
+  /// condition (every common neighbour of the ends opposite e).
+  bool collapse_plain_ok(HalfedgeIdx h) {
+    NodeIdx opp[2];
+    const HalfedgeIdx sides[2] = {h, twin(h)};
+    for (int k = 0; k < 2; ++k) {
+      const HalfedgeIdx x1 = m_.next(sides[k]), x2 = m_.next(x1);
+      opp[k] = m_.head(x1);
+      const FaceIdx g1 = m_.face(twin(x1)), g2 = m_.face(twin(x2));
+      if (!g1.valid() && !g2.valid()) return false;
+      if (g1.valid() && g1 == g2) return false;
+      if (valence_at_most_3(opp[k]) && !on_border(opp[k])) return false;
+    }
+    if (opp[0] == opp[1]) return false;
+    const NodeIdx a = m_.tail(h), b = m_.head(h);
+    node_stamp_.resize(std::max(node_stamp_.size(), m_.nodes.slots.capacity()), 0);
+    const std::uint32_t mark = ++tick_;
+    m_.for_each_outgoing(a, [&](HalfedgeIdx x) { node_stamp_[m_.head(x).value] = mark; });
+    bool ok = true;
+    m_.for_each_outgoing(b, [&](HalfedgeIdx x) {
+      const NodeIdx w = m_.head(x);
+      if (w != opp[0] && w != opp[1] && node_stamp_[w.value] == mark) ok = false;
+    });
+    return ok;
+  }
+
+  bool valence_at_most_3(NodeIdx v) const {
+    const HalfedgeIdx start = m_.nodes.out[v.value];
+    HalfedgeIdx h = start;
+    for (int n = 0; n < 3; ++n) {  // d steps back to start: valence d
+      h = m_.halfedges.vnext[h.value];
+      if (h == start) return true;
+    }
+    return false;
+  }
+
+  /// Collapses h = keep -> gone into keep at p (collapse_one in edit.cpp,
+  /// triangles only): each face on e goes with gone's other edge in it,
+  /// whose outer face takes keep's edge instead.
+  void collapse_plain(HalfedgeIdx h, const Vec3d& p) {
+    const NodeIdx a = m_.tail(h), b = m_.head(h);
+    for (const HalfedgeIdx x : {h, twin(h)}) {
+      const HalfedgeIdx x1 = m_.next(x), x2 = m_.next(x1);
+      const HalfedgeIdx rin = m_.tail(x1) == b ? x1 : x2, kin = rin == x1 ? x2 : x1, rout = twin(rin);
+      m_.delete_face(m_.face(x));
+      (void)edit_detail::hand_over_side(m_, rout, kin);
+      m_.edges.flags[edge_of(kin).value] |= m_.edges.flags[edge_of(rin).value];
+      m_.delete_edge(edge_of(rin));
+    }
+    m_.delete_edge(edge_of(h));
+    hs_.clear();
+    m_.for_each_outgoing(b, [&](HalfedgeIdx x) { hs_.push_back(x); });
+    for (HalfedgeIdx x : hs_) m_.set_tail(x, a);
+    m_.delete_node(b);
+    m_.nodes.position[a.value] = p;
+    ++m_.geometry_version;
   }
 
   bool on_mesh_edge(NodeIdx v) const {
@@ -458,10 +622,10 @@ class Optimiser {
     const Vec3d p = m_.position(v);
     Vec3d c = Vec3d::Zero(), n = Vec3d::Zero(), cb = Vec3d::Zero();
     int k = 0, kb = 0;
-    bool ok = true;
+    // (v is free: every face on it is a region face, since every node of
+    // a face outside the region is fixed and those faces never change)
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
       const FaceIdx f = m_.face(h), g = m_.face(twin(h));
-      if ((f.valid() && !is_region(f)) || (g.valid() && !is_region(g))) ok = false;
       const Vec3d w = m_.position(m_.head(h));
       Vec3d t = w;
       if (spring) {
@@ -474,7 +638,7 @@ class Optimiser {
       if (!f.valid() || !g.valid()) cb += t, ++kb;
       if (f.valid()) n += tri_normal(p, w, m_.position(m_.head(m_.next(h))));
     });
-    if (!ok || k == 0 || (kb != 0 && kb != 2) || !(n.norm() > 0)) return false;
+    if (k == 0 || (kb != 0 && kb != 2) || !(n.norm() > 0)) return false;
     if (kb == 2 && corner(v)) return false;
     n.normalize();
     Vec3d q;
@@ -602,8 +766,7 @@ class Optimiser {
         }
     }
     for (NodeIdx v : list) {
-      // (a listed node may have died since it was marked; relax_target
-      // refuses nodes with a face outside the region)
+      // (a listed node may have died since it was marked)
       if (!all && (!m_.alive(v) || dirty_[v.value] != want)) continue;
       Vec3d q;
       std::uint32_t tri;
@@ -810,7 +973,9 @@ class Optimiser {
   Model& m_;
   const RegionOptimiseOptions& o_;
   double lo_ = 0, hi_ = 0, collapse_limit_ = 0;
-  std::vector<char> outside_, fixed_, queued_;
+  std::vector<char> outside_, fixed_, queued_, constrained_;
+  std::vector<HalfedgeIdx> hs_;  // collapse_plain scratch
+  bool plain_ = false;
   std::vector<EdgeIdx> edges_, fresh_, scratch_;  // see region_edges()
   std::vector<NodeIdx> moved_, ring_;             // repair scratch
   std::vector<std::uint32_t> dirty_;              // per node: epoch_ of its last change
@@ -847,6 +1012,7 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
   for (HalfedgeIdx h : chain)
     free = free && h.valid() && m.alive(edge_of(h)) && !m.edges.mesh_edge[edge_of(h).value].valid();
   if (free && edits) temp = m.new_mesh_edge(m.nodes.surface[m.tail(chain[0]).value], chain);
+  opt.note_constraints();
   // Wide collapses in the first round only on a fold-free region (the
   // churn above); in every round but the last on a folded one, as before
   // (the garment sleeve ended with up to 85 edges out with one).
