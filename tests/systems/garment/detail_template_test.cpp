@@ -1,21 +1,21 @@
-#include <atelier/systems/garment/detail_template.h>
 #include <atelier/engine/cpu_features.h>
-
+#include <atelier/engine/random.h>
+#include <atelier/io/checksum.h>
+#include <atelier/systems/body/body_set.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/garment/detail_template.h>
 #include <gtest/gtest.h>
 
 #include <cstring>
-#include <limits>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 
-#include <atelier/engine/random.h>
-#include <atelier/io/checksum.h>
 #include "support/shapes.h"
 #include "systems/garment/sphere_fixture.h"
-#include <atelier/systems/body/body_set.h>
-#include <atelier/systems/body/makehuman_body.h>
+#include "tests/support/shared_data.h"
 
 using namespace atelier;
 namespace fs = std::filesystem;
@@ -713,13 +713,15 @@ TEST(DetailTemplate, FileErrorsNameTheByteOffsetOfTheBadValue) {
   };
   DetailEncoding bad_polygon = d;
   bad_polygon.polygon[2] = 2;
-  EXPECT_NE(error_of(bad_polygon, "p.atd").find("byte offset " + std::to_string(polygons_at + 8) + ": entry 2 names a polygon"),
+  EXPECT_NE(error_of(bad_polygon, "p.atd")
+                .find("byte offset " + std::to_string(polygons_at + 8) + ": entry 2 names a polygon"),
             std::string::npos)
       << error_of(bad_polygon, "p.atd");
   DetailEncoding bad_coeff = d;
   bad_coeff.c[3] = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_NE(error_of(bad_coeff, "c.atd").find("byte offset " + std::to_string(coeff_at + 4 * (2 * 4 + 3)) + ": entry 3"),
-            std::string::npos)
+  EXPECT_NE(
+      error_of(bad_coeff, "c.atd").find("byte offset " + std::to_string(coeff_at + 4 * (2 * 4 + 3)) + ": entry 3"),
+      std::string::npos)
       << error_of(bad_coeff, "c.atd");
   DetailEncoding bad_row = d;
   bad_row.row[2] = 0;  // decreasing at vertex 1
@@ -739,14 +741,12 @@ TEST(DetailTemplate, FileErrorsNameTheByteOffsetOfTheBadValue) {
 }
 
 namespace {
-fs::path mh_dir() {
-  return fs::path(ATELIER_SHARED_DATA) / "makehuman";
-}
+using atelier::testing::makehuman_dir;
 }  // namespace
 
 TEST(DetailTemplate, RealSkinPPolygonsEqualBruteForceAndHelpersRegenerate) {
-  if (!fs::exists(mh_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " << mh_dir();
-  auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(mh_dir()));
+  if (!fs::exists(makehuman_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " << makehuman_dir();
+  auto lib = std::make_shared<const makehuman::HumanLibrary>(makehuman::HumanLibrary::load(makehuman_dir()));
   const ReferenceBody ref = makehuman::make_reference_body(*lib);
   Body b;
   b.poly = BodyPolygons::from_model(ref.model);

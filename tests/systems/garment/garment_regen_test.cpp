@@ -15,6 +15,16 @@
 //    triangle under the edge's midpoint (its two edges and unit normal on the
 //    source body to the same on the new body), i.e. the stretch of an edge
 //    that followed the skin exactly; p95 over edges.
+#include <atelier/engine/parallel.h>
+#include <atelier/io/obj.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/garment/collision_pass.h>
+#include <atelier/systems/garment/detail_template.h>
+#include <atelier/systems/garment/edge_transfer.h>
+#include <atelier/systems/garment/makehuman_binding.h>
+#include <atelier/systems/garment/regenerate_garment.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/spatial/body_bvh.h>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -24,18 +34,8 @@
 #include <nlohmann/json.hpp>
 #include <numeric>
 
-#include <atelier/engine/parallel.h>
-#include <atelier/systems/garment/makehuman_binding.h>
-#include <atelier/io/obj.h>
-#include <atelier/systems/spatial/body_bvh.h>
-#include <atelier/systems/garment/collision_pass.h>
-#include <atelier/systems/garment/detail_template.h>
-#include <atelier/systems/garment/edge_transfer.h>
-#include <atelier/systems/garment/regenerate_garment.h>
-#include <atelier/systems/body/makehuman_body.h>
-#include <atelier/systems/mesh/fan_triangulation.h>
-
 #include "systems/garment/makehuman_helpers.h"
+#include "tests/support/shared_data.h"
 
 using namespace atelier;
 using namespace atelier::makehuman;
@@ -43,9 +43,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path mh_dir() {
-  return fs::path(ATELIER_SHARED_DATA) / "makehuman";
-}
+using atelier::testing::makehuman_dir;
 fs::path out_dir() {
   const char* env = std::getenv("ATELIER_TMP");
   fs::path d = env ? fs::path(env) : fs::temp_directory_path() / "atelier-tests";
@@ -65,7 +63,7 @@ struct Garment {
   std::vector<std::array<std::uint32_t, 2>> edges;
   std::vector<Vec3d> source;  // binding fit on the default body (m)
   std::vector<double> source_sd;
-  GarmentTemplate tmpl;  // encoded through the garment pipeline
+  GarmentTemplate tmpl;         // encoded through the garment pipeline
   double source_floor_rms = 0;  // RMS of (max(source clearance, min_clearance) - source clearance)
   // Per edge: the body triangle under its midpoint on the source body, and
   // the edge vector in that triangle's (edge 1, edge 2, unit normal) basis.
@@ -102,8 +100,8 @@ double maxv(const std::vector<double>& v) {
 }  // namespace
 
 TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
-  if (!fs::exists(mh_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " << mh_dir();
-  const HumanLibrary lib = HumanLibrary::load(mh_dir());
+  if (!fs::exists(makehuman_dir() / "base.obj")) GTEST_SKIP() << "MakeHuman data not found at " << makehuman_dir();
+  const HumanLibrary lib = HumanLibrary::load(makehuman_dir());
   const ReferenceBody ref = make_reference_body(lib);
   const BodyPolygons poly = BodyPolygons::from_model(ref.model);
   auto tris = fan_triangulate(ref.model);
@@ -125,7 +123,7 @@ TEST(GarmentRegeneration, MakeHumanGarmentsAgainstTheirBindingOn100Bodies) {
   GarmentEncodeOptions encode_options;
   encode_options.detail.scaled_frames = std::getenv("ATELIER_DETAIL_SCALED_FRAMES") != nullptr;
   std::vector<Garment> garments;
-  for (const auto& e : fs::directory_iterator(mh_dir() / "clothes"))
+  for (const auto& e : fs::directory_iterator(makehuman_dir() / "clothes"))
     if (e.path().extension() == ".mhclo") {
       Garment g;
       g.name = e.path().stem().string();

@@ -58,7 +58,7 @@ const Outfit& outfit(bool crotch = false) {
   return crotch ? legs : hips;
 }
 
-BodySet bodies(std::size_t n, std::uint64_t seed) {
+BodySet outfit_bodies(std::size_t n, std::uint64_t seed) {
   const Outfit& o = outfit();  // the topology and reference are the same for both
   MannequinSource src(o.topo, n, seed, o.ref);
   BodySet set(o.ref);
@@ -129,7 +129,7 @@ std::vector<std::size_t> independent_layer_count(const Outfit& o, const BodyBvh&
 
 void check_outfit(std::size_t n, std::uint64_t seed) {
   const Outfit& o = outfit();
-  const BodySet set = bodies(n, seed);
+  const BodySet set = outfit_bodies(n, seed);
   auto layered = GarmentRegenerator::create(o.family, o.layers);
   GarmentRegenOptions apart;
   apart.layers = false;
@@ -177,7 +177,7 @@ TEST(Outfit, ThreeLayersOnAHundredBodiesStayOutsideTheBodyAndEachOther) {
 // one thigh to the other). Bounded here so that a regression shows.
 TEST(Outfit, AcrossTheCrotchCreaseOnlyAFewMedialVerticesStayUnderALowerLayer) {
   const Outfit& o = outfit(true);
-  const BodySet set = bodies(10, 5);
+  const BodySet set = outfit_bodies(10, 5);
   auto layered = GarmentRegenerator::create(o.family, o.layers);
   ASSERT_TRUE(layered);
   std::vector<BodyGarments> out;
@@ -205,7 +205,7 @@ TEST(Outfit, AcrossTheCrotchCreaseOnlyAFewMedialVerticesStayUnderALowerLayer) {
 TEST(Outfit, TheLayerCounterAgreesWithBruteForceOnCrossingGarments) {
   // The engine's counter (count_inside_layer) on garments that do cross.
   const Outfit& o = outfit();
-  const BodySet set = bodies(3, 7);
+  const BodySet set = outfit_bodies(3, 7);
   const std::vector<BodyGarments> out = fitted_apart(o, set);
   ASSERT_EQ(out.size(), set.size());
   const auto tris = fan_triangulate(o.ref->model).value();
@@ -243,7 +243,7 @@ TEST(Outfit, TheLiftMovesCoveredOuterVerticesOutwardAboveTheLowerLayer) {
   // distances it returns are those of a fresh query, and afterwards the
   // counter (shown equal to brute force above) finds almost none covered.
   const Outfit& o = outfit();
-  const BodySet set = bodies(2, 11);
+  const BodySet set = outfit_bodies(2, 11);
   const std::vector<BodyGarments> out = fitted_apart(o, set);
   ASSERT_EQ(out.size(), set.size());
   const std::size_t shorts = 1, tights = 2;

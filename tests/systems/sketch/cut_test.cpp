@@ -14,18 +14,6 @@ using namespace atelier::sketch_test;
 
 namespace {
 
-double fan_area(const Model& m, SurfaceIdx only = {}) {
-  double a = 0;
-  std::vector<NodeIdx> c;
-  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
-    if (!m.alive(FaceIdx{f}) || (only.valid() && m.faces.surface[f] != only)) continue;
-    m.face_nodes(FaceIdx{f}, c);
-    for (std::size_t k = 1; k + 1 < c.size(); ++k)
-      a += 0.5 * (m.position(c[k]) - m.position(c[0])).cross(m.position(c[k + 1]) - m.position(c[0])).norm();
-  }
-  return a;
-}
-
 /// Area of the triangles of a triangle mesh clipped to the half-space
 /// n.x <= d (Sutherland-Hodgman on each triangle): the independent oracle
 /// for a plane cut.
@@ -46,12 +34,6 @@ double clipped_area(const Model& m, const Vec3d& n, double d) {
       a += 0.5 * (poly[k] - poly[0]).cross(poly[k + 1] - poly[0]).norm();
   }
   return a;
-}
-
-std::vector<AttribEdge> edges_of(const PaintResult& p) {
-  std::vector<AttribEdge> e;
-  for (const auto& c : p.curves) e.insert(e.end(), c.edges.begin(), c.edges.end());
-  return e;
 }
 
 std::vector<Vec2d> ring_stroke(const Camera& cam, const Vec3d& c, double r, int n = 36) {

@@ -33,13 +33,6 @@ using namespace atelier::sketch_test;
 
 namespace {
 
-Box3d bounds(const Model& m) {
-  Box3d b;
-  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-    if (m.alive(NodeIdx{v})) b.extend(m.position(NodeIdx{v}));
-  return b;
-}
-
 enum class Design { kDress, kSleeve, kCollar };
 
 struct DressResult {

@@ -46,7 +46,7 @@ std::pair<NodeIdx, double> nearest_node(const Model& m, const Vec3d& p) {
 }
 
 /// Every edge with two faces, each face running through one direction.
-void expect_closed_oriented(const Model& m, std::int64_t chi) {
+void expect_one_closed_oriented_shell(const Model& m, std::int64_t chi) {
   for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
     if (!m.alive(EdgeIdx{e})) continue;
     const HalfedgeIdx h = halfedge_of(EdgeIdx{e}, 0);
@@ -56,18 +56,6 @@ void expect_closed_oriented(const Model& m, std::int64_t chi) {
   const TopologyCounts t = count_topology(m);
   EXPECT_EQ(t.nodes - t.edges + t.faces, chi);
   EXPECT_EQ(t.shells, 1);
-}
-
-double signed_volume(const Model& m) {
-  double v = 0;
-  std::vector<NodeIdx> f;
-  for (std::uint32_t i = 0; i < m.faces.slots.capacity(); ++i) {
-    if (!m.alive(FaceIdx{i})) continue;
-    m.face_nodes(FaceIdx{i}, f);
-    for (std::size_t k = 1; k + 1 < f.size(); ++k)
-      v += m.position(f[0]).dot(m.position(f[k]).cross(m.position(f[k + 1]))) / 6.0;
-  }
-  return v;
 }
 
 /// A ring painted on the sphere around the direction Q z (radius rr, seen
@@ -116,7 +104,7 @@ TEST(ExtrudeMirror, ClosedExtrusionOnASphereIsTheExactReflection) {
   EXPECT_EQ(m.num_nodes() - sphere.num_nodes(), 2 * (single.num_nodes() - sphere.num_nodes()));
   EXPECT_EQ(m.num_faces() - sphere.num_faces(), 2 * (single.num_faces() - sphere.num_faces()));
   EXPECT_EQ(r->mirror_nodes, r1->nodes_added);
-  expect_closed_oriented(m, 2);
+  expect_one_closed_oriented_shell(m, 2);
   // Outward: each part adds volume, the pair twice one part.
   const double dv1 = signed_volume(single) - signed_volume(sphere), dv = signed_volume(m) - signed_volume(sphere);
   EXPECT_GT(dv1, 0);

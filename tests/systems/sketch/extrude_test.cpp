@@ -153,18 +153,6 @@ double procrustes_residual(const std::vector<Vec3d>& a, const std::vector<Vec3d>
   return worst;
 }
 
-double signed_volume(const Model& m) {
-  double v = 0;
-  std::vector<NodeIdx> f;
-  for (std::uint32_t i = 0; i < m.faces.slots.capacity(); ++i) {
-    if (!m.alive(FaceIdx{i})) continue;
-    m.face_nodes(FaceIdx{i}, f);
-    for (std::size_t k = 1; k + 1 < f.size(); ++k)
-      v += m.position(f[0]).dot(m.position(f[k]).cross(m.position(f[k + 1]))) / 6.0;
-  }
-  return v;
-}
-
 }  // namespace
 
 TEST(Extrude, DomeOnCupIsOnTheSphereWithCountsAndSimilarCopies) {

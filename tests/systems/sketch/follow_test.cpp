@@ -20,9 +20,8 @@
 #include <atelier/systems/sketch/transfer.h>
 #include <gtest/gtest.h>
 
-#include <limits>
-
 #include <filesystem>
+#include <limits>
 #include <mutex>
 
 #include "support/project_templates.h"
@@ -35,7 +34,7 @@ namespace fs = std::filesystem;
 namespace {
 
 /// Curves painted on the reference result, and where the cut's pick is.
-struct Design {
+struct PaintedDesign {
   std::vector<AttribEdge> cut, seam;
   std::optional<SurfaceLocation> pick;
 };
@@ -49,7 +48,7 @@ struct Outcome {
   friend bool operator==(const Outcome&, const Outcome&) = default;
 };
 
-Expected<Outcome> apply_design(Model& m, const Design& d) {
+Expected<Outcome> apply_design(Model& m, const PaintedDesign& d) {
   Outcome o;
   auto c = cut_along_curves(m, d.cut, {.pick = d.pick});
   if (!c) return c.status();
@@ -63,8 +62,8 @@ Expected<Outcome> apply_design(Model& m, const Design& d) {
 }
 
 /// Copies the design's curves from the painted reference onto `m`.
-Expected<Design> transfer_design(const Model& from, const Design& d, Model& m) {
-  Design out;
+Expected<PaintedDesign> transfer_design(const Model& from, const PaintedDesign& d, Model& m) {
+  PaintedDesign out;
   auto c = transfer_curves(from, d.cut, m);
   if (!c) return c.status();
   auto s = transfer_curves(from, d.seam, m);
@@ -73,19 +72,6 @@ Expected<Design> transfer_design(const Model& from, const Design& d, Model& m) {
   out.seam = *s;
   out.pick = d.pick;
   return out;
-}
-
-std::vector<AttribEdge> edges_of(const PaintResult& p) {
-  std::vector<AttribEdge> e;
-  for (const auto& c : p.curves) e.insert(e.end(), c.edges.begin(), c.edges.end());
-  return e;
-}
-
-Box3d bounds(const Model& m) {
-  Box3d b;
-  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-    if (m.alive(NodeIdx{v})) b.extend(m.position(NodeIdx{v}));
-  return b;
 }
 
 }  // namespace
@@ -132,7 +118,7 @@ TEST(FollowGarment, TopNecklineAndSeamOn100Mannequins) {
   ASSERT_EQ(seam->curves.size(), 2u);
   auto pick = locate_pixel(m0, cam, cam.project(Vec3d(0, 1.42, 0.09)).head<2>(), top_only);
   ASSERT_TRUE(pick);
-  const Design design{edges_of(*neck), edges_of(*seam), pick->location};
+  const PaintedDesign design{edges_of(*neck), edges_of(*seam), pick->location};
   EXPECT_TRUE(validate(m0));
   Model ref_cut = m0;
   auto expect = apply_design(ref_cut, design);
@@ -225,13 +211,13 @@ TEST(FollowGarment, MakeHumanGarmentThroughTheDetailTemplate) {
   float sole = std::numeric_limits<float>::infinity();
   for (std::uint32_t v = 0; v < lib.skin_vertex_count(); ++v) sole = std::min(sole, lib.base().positions[v].y());
   const double up = -kMakeHumanToMetres * sole;
-  auto knee = paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, -0.35 + up, 0), Vec3d(0.6, -0.33 + up, 0)}),
-                           {.through = true});
+  auto knee =
+      paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, -0.35 + up, 0), Vec3d(0.6, -0.33 + up, 0)}), {.through = true});
   ASSERT_TRUE(knee) << knee.status().to_string();
-  auto waist = paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, 0.02 + up, 0), Vec3d(0.6, 0.0 + up, 0)}),
-                            {.through = true});
+  auto waist =
+      paint_stroke(m0, cam, project(cam, {Vec3d(-0.6, 0.02 + up, 0), Vec3d(0.6, 0.0 + up, 0)}), {.through = true});
   ASSERT_TRUE(waist) << waist.status().to_string();
-  const Design design{edges_of(*knee), edges_of(*waist), std::nullopt};
+  const PaintedDesign design{edges_of(*knee), edges_of(*waist), std::nullopt};
   Model ref_cut = m0;
   auto expect = apply_design(ref_cut, design);
   ASSERT_TRUE(expect) << expect.status().to_string();

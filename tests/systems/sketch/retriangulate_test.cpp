@@ -15,24 +15,6 @@ using namespace atelier::sketch_test;
 
 namespace {
 
-double fan_area(const Model& m) {
-  double a = 0;
-  std::vector<NodeIdx> c;
-  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
-    if (!m.alive(FaceIdx{f})) continue;
-    m.face_nodes(FaceIdx{f}, c);
-    for (std::size_t k = 1; k + 1 < c.size(); ++k)
-      a += 0.5 * (m.position(c[k]) - m.position(c[0])).cross(m.position(c[k + 1]) - m.position(c[0])).norm();
-  }
-  return a;
-}
-
-std::vector<AttribEdge> edges_of(const PaintResult& p) {
-  std::vector<AttribEdge> e;
-  for (const auto& c : p.curves) e.insert(e.end(), c.edges.begin(), c.edges.end());
-  return e;
-}
-
 /// Old nodes unmoved, area kept, every chain a connected path of mesh edges
 /// whose nodes are the curve's attribute nodes.
 void expect_clean(const Model& before, const Model& after, const RetriangulationResult& r,

@@ -6,6 +6,7 @@
 #include <atelier/storage/builder.h>
 #include <atelier/storage/model.h>
 #include <atelier/systems/mesh/subdivide.h>
+#include <atelier/systems/sketch/paint.h>
 #include <atelier/systems/view/camera.h>
 
 #include <algorithm>
@@ -149,6 +150,48 @@ std::vector<NodeIdx> best_loop(const Model& m, F score) {
     }
   }
   return best;
+}
+
+/// The painted curves' attribute edges, in curve order.
+inline std::vector<AttribEdge> edges_of(const PaintResult& p) {
+  std::vector<AttribEdge> e;
+  for (const auto& c : p.curves) e.insert(e.end(), c.edges.begin(), c.edges.end());
+  return e;
+}
+
+/// Sum of the faces' fan areas (of surface `only` when given).
+inline double fan_area(const Model& m, SurfaceIdx only = {}) {
+  double a = 0;
+  std::vector<NodeIdx> c;
+  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f) {
+    if (!m.alive(FaceIdx{f}) || (only.valid() && m.faces.surface[f] != only)) continue;
+    m.face_nodes(FaceIdx{f}, c);
+    for (std::size_t k = 1; k + 1 < c.size(); ++k)
+      a += 0.5 * (m.position(c[k]) - m.position(c[0])).cross(m.position(c[k + 1]) - m.position(c[0])).norm();
+  }
+  return a;
+}
+
+/// Volume enclosed by a closed, consistently oriented model (divergence
+/// theorem over the faces' fans; positive when the faces face outwards).
+inline double signed_volume(const Model& m) {
+  double v = 0;
+  std::vector<NodeIdx> f;
+  for (std::uint32_t i = 0; i < m.faces.slots.capacity(); ++i) {
+    if (!m.alive(FaceIdx{i})) continue;
+    m.face_nodes(FaceIdx{i}, f);
+    for (std::size_t k = 1; k + 1 < f.size(); ++k)
+      v += m.position(f[0]).dot(m.position(f[k]).cross(m.position(f[k + 1]))) / 6.0;
+  }
+  return v;
+}
+
+/// Bounding box of the live nodes.
+inline Box3d bounds(const Model& m) {
+  Box3d b;
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
+    if (m.alive(NodeIdx{v})) b.extend(m.position(NodeIdx{v}));
+  return b;
 }
 
 }  // namespace atelier::sketch_test
