@@ -382,13 +382,7 @@ TEST(ExtrudeGarment, TheDressCollarAndSleeveAsTheirOwnSurfacesTheSleeveOnAThreeS
     ASSERT_TRUE(validate(m)) << validate(m).to_string();
     // The same part as without as_surface, in a surface of its own: B's
     // nodes once more on the part's side, the part's faces all there.
-    EXPECT_EQ(m.num_faces(), plain.num_faces());
-    EXPECT_EQ(m.num_nodes(), plain.num_nodes() + r->base.size());
-    EXPECT_EQ(m.num_surfaces(), before.num_surfaces() + 1);
-    std::size_t part_faces = 0;
-    for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
-      part_faces += m.alive(FaceIdx{f}) && m.faces.surface[f] == r->part_surface;
-    EXPECT_EQ(part_faces, plain.num_faces() - before.num_faces());
+    expect_part_in_its_own_surface(m, plain, before, *r);
     // The joints along B: each holds B's surface and the part's, every
     // member with the same number of edges and the same node positions;
     // together they hold each of B's edges once. The sleeve's include the

@@ -680,13 +680,7 @@ TEST(Extrude, AsSurfaceAlongAJointMakesASeamOfThreeSurfaces) {
     EXPECT_EQ(r->base.size(), ring ? 24u : 7u);
     // The plain extrusion's faces, the part's in a surface of its own; B's
     // nodes once more on the part's side.
-    EXPECT_EQ(m.num_faces(), plain.num_faces());
-    EXPECT_EQ(m.num_nodes(), plain.num_nodes() + r->base.size());
-    EXPECT_EQ(m.num_surfaces(), before.num_surfaces() + 1);
-    std::size_t part_faces = 0;
-    for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
-      part_faces += m.alive(FaceIdx{f}) && m.faces.surface[f] == r->part_surface;
-    EXPECT_EQ(part_faces, plain.num_faces() - before.num_faces());
+    expect_part_in_its_own_surface(m, plain, before, *r);
     expect_joints_along_b(m, *r, base, flap, 6);
     EXPECT_EQ(r->joints.size(), ring ? 2u : 1u);
     // The flap's joint off B keeps the rest of the flap's rim.

@@ -6,8 +6,10 @@
 #include <atelier/storage/builder.h>
 #include <atelier/storage/model.h>
 #include <atelier/systems/mesh/subdivide.h>
+#include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/paint.h>
 #include <atelier/systems/view/camera.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -192,6 +194,20 @@ inline Box3d bounds(const Model& m) {
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
     if (m.alive(NodeIdx{v})) b.extend(m.position(NodeIdx{v}));
   return b;
+}
+
+/// The as-surface extrusion gave the plain extrusion's part in a surface of
+/// its own: the same faces, B's nodes once more on the part's side, one more
+/// surface, and every face the plain extrusion added in the part's surface.
+inline void expect_part_in_its_own_surface(const Model& m, const Model& plain, const Model& before,
+                                           const ExtrudeReport& r) {
+  EXPECT_EQ(m.num_faces(), plain.num_faces());
+  EXPECT_EQ(m.num_nodes(), plain.num_nodes() + r.base.size());
+  EXPECT_EQ(m.num_surfaces(), before.num_surfaces() + 1);
+  std::size_t part_faces = 0;
+  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
+    part_faces += m.alive(FaceIdx{f}) && m.faces.surface[f] == r.part_surface;
+  EXPECT_EQ(part_faces, plain.num_faces() - before.num_faces());
 }
 
 }  // namespace atelier::sketch_test
