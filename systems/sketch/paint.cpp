@@ -182,7 +182,7 @@ Screen project_nodes(const Model& m, const Camera& cam, const Box3d& box, std::s
   // The images of the kept faces' corners, numbered in face order.
   s.slot.reset(new std::uint32_t[n]);
   std::vector<HalfedgeIdx> hs;
-  std::vector<NodeIdx> todo;
+  std::vector<NodeIdx> kept_corners;
   for (std::size_t f = 0; f < s.culled.size(); ++f) {
     if (s.culled[f] || !surf_mask[m.faces.surface[f].value]) continue;
     m.face_halfedges(FaceIdx{static_cast<std::uint32_t>(f)}, hs);
@@ -190,14 +190,14 @@ Screen project_nodes(const Model& m, const Camera& cam, const Box3d& box, std::s
       const NodeIdx v = m.tail(h);
       if (s.code[v.value] & Screen::kImaged) continue;
       s.code[v.value] |= Screen::kImaged;
-      s.slot[v.value] = static_cast<std::uint32_t>(todo.size());
-      todo.push_back(v);
+      s.slot[v.value] = static_cast<std::uint32_t>(kept_corners.size());
+      kept_corners.push_back(v);
     }
   }
-  s.images.resize(todo.size());
-  par::for_each_n(ctx, todo.size(), [&](std::size_t i) {
+  s.images.resize(kept_corners.size());
+  par::for_each_n(ctx, kept_corners.size(), [&](std::size_t i) {
     // Kept faces' corners are projectable (a face with one that is not is culled).
-    (void)project_point(s.pv, s.perspective, W, H, m.position(todo[i]), s.images[i]);
+    (void)project_point(s.pv, s.perspective, W, H, m.position(kept_corners[i]), s.images[i]);
   });
   return s;
 }
