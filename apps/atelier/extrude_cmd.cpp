@@ -1,7 +1,6 @@
 #include "extrude_cmd.h"
 
 #include <atelier/io/atomic_file.h>
-#include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/extrude_recipe.h>
 #include <atelier/systems/spatial/collision_body.h>
@@ -108,6 +107,12 @@ CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
   c->add_option("--body", opt.body, "closed body mesh (OBJ, PLY, OFF or .atm) the extruded part is kept outside of");
   c->add_option("--clearance", opt.clearance, "with --body: distance kept from the body (model units)")
       ->check(CLI::NonNegativeNumber);
+  c->add_option("--body-smoothing", opt.body_smoothing,
+                "with --body: umbrella steps on the pushed nodes before the optimisation (default 0: off)")
+      ->check(CLI::Range(0, 100));
+  c->add_option("--settle-rounds", opt.settle_rounds,
+                "with --body: rounds re-optimising around edges out of bounds after the last push (default 0)")
+      ->check(CLI::Range(0, 100));
   auto* mx = c->add_option("--mirror", opt.mirror,
                            "also extrude the mirror image across the plane through the origin normal to this axis "
                            "(x: the body's sagittal plane)")
@@ -144,6 +149,8 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
   eo.optimise = !opt.no_optimise;
   eo.as_surface = opt.as_surface;
   eo.clearance = opt.clearance;
+  eo.body_smoothing = opt.body_smoothing;
+  eo.settle_rounds = opt.settle_rounds;
   if (!opt.mirror.empty()) {
     SymmetryPlane p;
     p.normal = Vec3d::Unit(opt.mirror == "x" ? 0 : opt.mirror == "y" ? 1 : 2);
@@ -159,12 +166,7 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
   CollisionBody body;
   if (!opt.body.empty()) {
     body_model = read_mesh_file(opt.body);
-    auto tris = fan_triangulate(body_model);
-    if (!tris) throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + tris.status().message()));
-    auto topo =
-        CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body_model.nodes.slots.capacity()));
-    if (!topo) throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + topo.status().message()));
-    if (Status s = body.build(*topo, body_model.nodes.position); !s)
+    if (Status s = collision_body_of(body_model, body); !s)
       throw Error(Status(ErrorCode::kInvalidArgument, opt.body.string() + ": " + s.message()));
     eo.body = &body;
   }

@@ -31,6 +31,8 @@ struct ExtrudeCmdOptions {
   bool as_surface = false;
   std::filesystem::path body;  // a closed mesh the extruded part is kept outside of
   double clearance = 0.002;
+  int body_smoothing = 0;  // ExtrudeOptions::body_smoothing
+  int settle_rounds = 0;   // ExtrudeOptions::settle_rounds
   std::string mirror;        // "x", "y" or "z": the plane through the origin normal to that axis
   std::string mirror_plane;  // "px,py,pz,nx,ny,nz"
 };

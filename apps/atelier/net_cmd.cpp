@@ -68,6 +68,8 @@ CLI::App* add_boolean_subcommand(CLI::App& app, NetBooleanOptions& opt) {
   c->add_option("--json", opt.json, "report: volumes, areas, intersection polygons, valences");
   c->add_option("--seam-out", opt.seam_out, "write the result's vertex indices on the intersection polygons");
   c->add_flag("--no-self-check", opt.no_self_check, "skip the self-intersection test of the inputs");
+  c->add_flag("--exact-refinement", opt.exact_refinement,
+              "re-triangulate every cut triangle exactly (no certified double fast path)");
   return c;
 }
 
@@ -79,6 +81,7 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
   o.join = need(parse_boolean_join(opt.join));
   o.rule = need(parse_connect_rule(opt.rule));
   o.check_self_intersection = !opt.no_self_check;
+  o.exact_refinement = opt.exact_refinement;
   check_mesh_output(opt.out);
   const PolygonSoup a = read_net(opt.a), b = read_net(opt.b);
   const BooleanReport r = named(net_boolean(a, b, o, common.context()), opt.a, opt.b);
@@ -101,6 +104,7 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
     j["intersecting_pairs"] = r.intersecting_pairs;
     j["intersection_points"] = r.intersection_points;
     j["cut_triangles"] = r.cut_triangles;
+    j["refined_exact"] = r.refined_exact;
     j["faces"] = r.result.face_count();
     j["vertices"] = r.result.positions.size();
     if (o.mode == BooleanMode::kPaper) {

@@ -23,6 +23,7 @@ struct NetBooleanOptions {
   std::string join = "cut";
   std::string rule = "a";
   bool no_self_check = false;
+  bool exact_refinement = false;  // BooleanOptions::exact_refinement
 };
 struct NetTrimOptions {
   std::filesystem::path mesh, curve, out, json, band_out;

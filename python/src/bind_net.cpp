@@ -52,7 +52,7 @@ void bind_net(py::module_& m) {
       "boolean",
       [](const MeshLike& a, const MeshLike& b, const std::string& op, const std::string& mode,
          const std::string& correspondence, const std::string& join, const std::string& rule, bool self_check,
-         int threads, const Progress& progress) {
+         bool exact_refinement, int threads, const Progress& progress) {
         BooleanOptions o;
         o.op = unwrap(parse_boolean_op(op));
         o.mode = unwrap(parse_boolean_mode(mode));
@@ -60,6 +60,7 @@ void bind_net(py::module_& m) {
         o.join = unwrap(parse_boolean_join(join));
         o.rule = unwrap(parse_connect_rule(rule));
         o.check_self_intersection = self_check;
+        o.exact_refinement = exact_refinement;
         const PolygonSoup sa = net_arg(a, "a"), sb = net_arg(b, "b");
         BooleanReport r = named(
             run_long(progress, threads, [&](const ExecContext& ctx) { return net_boolean(sa, sb, o, ctx); }), "a", "b");
@@ -71,6 +72,7 @@ void bind_net(py::module_& m) {
         rep["intersecting_pairs"] = r.intersecting_pairs;
         rep["intersection_points"] = r.intersection_points;
         rep["cut_triangles"] = r.cut_triangles;
+        rep["refined_exact"] = r.refined_exact;
         const auto seam_size = static_cast<py::ssize_t>(r.seam.size());
         rep["seam"] = adopt(std::move(r.seam), {seam_size});
         if (o.mode == BooleanMode::kPaper) {
@@ -88,7 +90,8 @@ void bind_net(py::module_& m) {
       },
       py::arg("a"), py::arg("b"), py::kw_only(), py::arg("op") = "union", py::arg("mode") = "exact",
       py::arg("correspondence") = "visual", py::arg("join") = "cut", py::arg("rule") = "a",
-      py::arg("self_check") = true, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("self_check") = true, py::arg("exact_refinement") = false, py::arg("threads") = 0,
+      py::arg("progress") = py::none(), R"doc(
 Union, intersection or difference of two closed nets (``atelier boolean``; seed 004).
 
 a, b: the nets, each a Mesh (``read_mesh``) or a (vertices, faces) pair;
@@ -99,12 +102,16 @@ correspondence: paper mode: "visual", "topological", "window2", "window4".
 join: "cut" (section 3) or "meshes" (connecting meshes, section 4).
 rule: with join="meshes": "a", "b", "c" (triangles) or "i", "ii", "iii" (quads).
 self_check: test the inputs for self-intersections first.
+exact_refinement: re-triangulate every cut triangle with the exact
+    constrained triangulation instead of the certified double fast path
+    (``--exact-refinement``; the results differ at most in the diagonals).
 
 Returns (vertices, faces, report): the result's (n, 3) float64 vertices and
 faces (views onto the result, zero copy; the same bits as the CLI for the
 same files), and a dict: ``volume`` and ``area`` (``a``, ``b``,
 ``result``), ``intersection_polygons``, ``candidate_pairs``,
 ``intersecting_pairs``, ``intersection_points``, ``cut_triangles``,
+``refined_exact`` (of them, those the exact triangulation re-triangulated),
 ``seam`` (uint32 result vertices on the intersection polygons, for
 ``round_off``), and in paper mode ``merged_pairs`` and ``valence``.
 Long call (GIL released, Ctrl-C cancels). Raises ValueError with the

@@ -12,6 +12,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <cerrno>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -153,7 +154,7 @@ the stroke for a failed tool), FileNotFoundError for a missing file.
 namespace {
 
 /// The dict the CLI's --json writes for an extrusion.
-py::dict extrude_report(const ExtrudeReport& r, bool as_surface) {
+py::dict extrude_report(const ExtrudeReport& r, bool as_surface, bool with_body) {
   auto stats = [](const EdgeLengthStats& s) {
     return py::dict(py::arg("edges") = s.edges, py::arg("mean") = s.mean, py::arg("min") = s.min,
                     py::arg("max") = s.max, py::arg("within") = s.within, py::arg("outside") = s.outside);
@@ -178,6 +179,11 @@ py::dict extrude_report(const ExtrudeReport& r, bool as_surface) {
   rep["volume_change"] = r.volume_change;
   rep["max_deviation"] = r.max_deviation;
   if (as_surface) rep["joints"] = r.joints.size();
+  if (with_body) {
+    rep["pushed"] = r.pushed;
+    rep["inside_after"] = r.inside_after;
+    rep["min_body_distance"] = r.min_body_distance;
+  }
   if (r.mirrored) {
     rep["mirrored"] = true;
     rep["mirror_base_nodes"] = r.mirror_base.size();
@@ -188,11 +194,28 @@ py::dict extrude_report(const ExtrudeReport& r, bool as_surface) {
   return rep;
 }
 
+/// body, clearance, body_smoothing, settle_rounds: ExtrudeOptions' body
+/// fields, as the CLI's --body, --clearance, --body-smoothing and
+/// --settle-rounds. `body_model` and `body` must outlive the extrusion.
+void set_body(const OptMeshLike& body_arg, double clearance, int body_smoothing, int settle_rounds,
+              Model& body_model, CollisionBody& body, ExtrudeOptions& eo) {
+  if (!(clearance >= 0) || !std::isfinite(clearance)) value_error("clearance: a finite number >= 0");
+  if (body_smoothing < 0 || settle_rounds < 0) value_error("body_smoothing, settle_rounds: counts >= 0");
+  eo.clearance = clearance;
+  eo.body_smoothing = body_smoothing;
+  eo.settle_rounds = settle_rounds;
+  if (body_arg.is_none()) return;
+  body_model = model_from(body_arg, "body");
+  if (Status st = collision_body_of(body_model, body); !st) value_error("body: " + st.message());
+  eo.body = &body;
+}
+
 void def_extrude(py::module_& m) {
   m.def(
       "extrude",
       [](const MeshLike& mesh, const Strokes& strokes, std::size_t first, double pick_radius, bool optimise,
-         bool as_surface, const py::object& mirror, int threads, const Progress& progress) {
+         bool as_surface, const py::object& mirror, const OptMeshLike& body_arg, double clearance, int body_smoothing,
+         int settle_rounds, int threads, const Progress& progress) {
         Model model = model_from(mesh, "mesh");
         const StrokeFile file = strokes_arg(strokes);
         const ExtrudeStrokes es = unwrap(extrusion_from_file(file, first));
@@ -200,6 +223,9 @@ void def_extrude(py::module_& m) {
         eo.pick_radius = pick_radius;
         eo.optimise = optimise;
         eo.as_surface = as_surface;
+        Model body_model;
+        CollisionBody body;
+        set_body(body_arg, clearance, body_smoothing, settle_rounds, body_model, body, eo);
         // mirror: None, "x" / "y" / "z" (the plane through the origin normal
         // to that axis), or (px, py, pz, nx, ny, nz), as the CLI's --mirror
         // and --mirror-plane.
@@ -220,7 +246,7 @@ void def_extrude(py::module_& m) {
         }
         const ExtrudeReport r =
             unwrap(run_long(progress, threads, [&](const ExecContext& ctx) { return extrude(model, es, eo, ctx); }));
-        py::dict rep = extrude_report(r, as_surface);
+        py::dict rep = extrude_report(r, as_surface, eo.body != nullptr);
         // The recipe (extrude_recipe.h) of an open extrusion, to grow the
         // same part on another mesh of this topology (replay_extrusion);
         // None for a painted and cut base or a mirrored pair, which have none.
@@ -231,8 +257,9 @@ void def_extrude(py::module_& m) {
         return py::make_tuple(mesh_of(std::move(model)), rep);
       },
       py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("first") = 0, py::arg("pick_radius") = 12.0,
-      py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("mirror") = py::none(), py::arg("threads") = 0,
-      py::arg("progress") = py::none(), R"doc(
+      py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("mirror") = py::none(),
+      py::arg("body") = py::none(), py::arg("clearance") = 0.002, py::arg("body_smoothing") = 0,
+      py::arg("settle_rounds") = 0, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Extrudes a surface or a cavity from a mesh by sketched strokes (``atelier extrude``; seed 002).
 
 mesh: a Mesh (``read_mesh``) or a (vertices, faces) pair.
@@ -252,6 +279,16 @@ mirror: None (default), "x" (the body's sagittal plane x = 0), "y", "z", or
     The mirror part is the exact reflection of the drawn one; raises
     ValueError ("mirror side: ... not symmetric there", "drawn side: ...
     crosses the symmetry plane") with the mesh unchanged.
+body: None, or a closed body (Mesh, Body or (vertices, faces)) the
+    extruded part is kept outside of, ``clearance`` (model units) from it
+    (``--body``, ``--clearance``): a sleeve grown from a garment on a
+    mannequin. The report then has ``pushed``, ``inside_after`` and
+    ``min_body_distance``.
+body_smoothing, settle_rounds: with a body, the two passes around the push
+    (``--body-smoothing``, ``--settle-rounds``; ExtrudeOptions): umbrella
+    steps on the pushed nodes before the optimisation, and rounds that
+    optimise again around edges out of bounds after the last push. 0 (off)
+    by default.
 
 Returns (mesh, report): the result as a Mesh and the dict the CLI's --json
 writes (``copies``, ``swept_nodes``, ``swept_faces``, ``splits``,
@@ -268,8 +305,8 @@ NaN, a degenerate plane), FileNotFoundError for a missing file.
 void def_replay_extrusion(py::module_& m) {
   m.def(
       "replay_extrusion",
-      [](const MeshLike& mesh, const py::object& recipe, bool optimise, bool as_surface, int threads,
-         const Progress& progress) {
+      [](const MeshLike& mesh, const py::object& recipe, bool optimise, bool as_surface, const OptMeshLike& body_arg,
+         double clearance, int body_smoothing, int settle_rounds, int threads, const Progress& progress) {
         Model model = model_from(mesh, "mesh");
         // The recipe: the report's dict (the JSON of --recipe-out) or a path to that file.
         ExtrusionRecipe rec;
@@ -292,14 +329,18 @@ void def_replay_extrusion(py::module_& m) {
         ExtrudeOptions eo;
         eo.optimise = optimise;
         eo.as_surface = as_surface;
+        Model body_model;
+        CollisionBody body;
+        set_body(body_arg, clearance, body_smoothing, settle_rounds, body_model, body, eo);
         const ExtrudeReport r = unwrap(
             run_long(progress, threads, [&](const ExecContext& ctx) { return replay_extrusion(model, rec, eo, ctx); }));
-        py::dict rep = extrude_report(r, as_surface);
+        py::dict rep = extrude_report(r, as_surface, eo.body != nullptr);
         (void)model.compact();
         return py::make_tuple(mesh_of(std::move(model)), rep);
       },
       py::arg("mesh"), py::arg("recipe"), py::kw_only(), py::arg("optimise") = true, py::arg("as_surface") = false,
-      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("body") = py::none(), py::arg("clearance") = 0.002, py::arg("body_smoothing") = 0,
+      py::arg("settle_rounds") = 0, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Grows a recorded extrusion again on another mesh (``atelier extrude
 --replay``; systems/sketch/extrude_recipe.h): the part drawn once (a sleeve
 from an armhole, a dress from a hem) on each body's garment without
@@ -309,7 +350,8 @@ mesh: a Mesh or a (vertices, faces) pair with the topology of the mesh the
     recipe was recorded on (the same base nodes, joined by boundary edges).
 recipe: ``report["recipe"]`` of ``extrude`` (a dict), or the path of a file
     written by ``atelier extrude --recipe-out``.
-optimise, as_surface: as for ``extrude``.
+optimise, as_surface, body, clearance, body_smoothing, settle_rounds: as for
+    ``extrude`` (a sleeve replayed on another mannequin kept outside it).
 
 The copies of B follow B's position, orientation and size on this mesh (a
 similarity of the drawn part; on the recorded mesh, the drawn part itself

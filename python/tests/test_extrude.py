@@ -155,3 +155,52 @@ def test_a_bad_recipe_is_refused_naming_what_is_wrong(scratch):
         atelier.replay_extrusion((v, f), scratch / "none.json")
     with pytest.raises(TypeError):
         atelier.replay_extrusion((v, f), 42)
+
+
+def closed_box(lo, hi):
+    """A closed, outward triangulated box."""
+    v = np.array([[hi[0] if k & 1 else lo[0], hi[1] if k & 2 else lo[1], hi[2] if k & 4 else lo[2]]
+                  for k in range(8)])
+    f = [[0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5], [0, 1, 5], [0, 5, 4],
+         [2, 6, 7], [2, 7, 3], [0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6]]
+    return v, f
+
+
+def test_a_body_keeps_the_dome_outside_and_the_cli_gives_the_same_file(scratch):
+    """body= (``--body``): a box the dome's top enters. Without it nodes are
+    inside the box; with it none is (checked here against the box itself),
+    the report says what was pushed, and with the two passes around the push
+    (body_smoothing, settle_rounds) the CLI's flags give the same file bytes."""
+    v, f = cup()
+    lo, hi = (-0.3, 0.6, -0.3), (0.3, 1.2, 0.3)
+
+    def inside(points):
+        p = np.asarray(points)
+        return np.count_nonzero(np.all((p > np.array(lo)) & (p < np.array(hi)), axis=1))
+
+    free, rep0 = atelier.extrude((v, f), strokes())
+    assert inside(free.vertices) > 0 and "inside_after" not in rep0
+    mesh, rep = atelier.extrude((v, f), strokes(), body=closed_box(lo, hi), clearance=0.01)
+    assert rep["pushed"] > 0 and rep["inside_after"] == 0 and rep["min_body_distance"] > 0
+    assert inside(mesh.vertices) == 0
+    smooth, rep2 = atelier.extrude((v, f), strokes(), body=closed_box(lo, hi), clearance=0.01, body_smoothing=3,
+                                   settle_rounds=2, threads=2)
+    assert rep2["inside_after"] == 0 and inside(smooth.vertices) == 0
+    assert not np.array_equal(np.asarray(smooth.vertices), np.asarray(mesh.vertices))  # the passes ran
+    atelier.write_mesh(scratch / "cup.obj", v, f)
+    atelier.write_mesh(scratch / "box.obj", *closed_box(lo, hi))
+    (scratch / "strokes.json").write_text(json.dumps(strokes()))
+    run_cli("--threads", 1, "extrude", "--mesh", scratch / "cup.obj", "--strokes", scratch / "strokes.json",
+            "--out", scratch / "cli.obj", "--body", scratch / "box.obj", "--clearance", 0.01,
+            "--body-smoothing", 3, "--settle-rounds", 2, "--json", scratch / "cli.json")
+    atelier.write_mesh(scratch / "py.obj", smooth)
+    assert (scratch / "py.obj").read_bytes() == (scratch / "cli.obj").read_bytes()
+    theirs = json.loads((scratch / "cli.json").read_text())
+    assert theirs["pushed"] == rep2["pushed"] and theirs["inside_after"] == 0
+    # A replayed dome is kept outside the same way.
+    again, rep3 = atelier.replay_extrusion((v, f), rep0["recipe"], body=closed_box(lo, hi), clearance=0.01)
+    assert rep3["inside_after"] == 0 and inside(again.vertices) == 0
+    with pytest.raises(ValueError, match="body"):
+        atelier.extrude((v, f), strokes(), body=(np.zeros((3, 3)), [[0, 1, 1]]))
+    with pytest.raises(ValueError, match="clearance"):
+        atelier.extrude((v, f), strokes(), body=closed_box(lo, hi), clearance=float("nan"))

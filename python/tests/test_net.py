@@ -2,6 +2,8 @@
 systems/net, seed 004): volumes against the analytic boxes, the same bits
 as `atelier boolean` for the same files, a trimmed plane against the
 polygon's area, and a ValueError with the engine's message for bad input."""
+import json
+
 import numpy as np
 import pytest
 
@@ -72,6 +74,29 @@ def test_union_of_disjoint_boxes_and_same_bits_as_the_cli(scratch):
     theirs_v, theirs_f = atelier.read_mesh(scratch / "out.obj")
     assert ours_v.tobytes() == theirs_v.tobytes()
     assert polygons(ours_f) == polygons(theirs_f)
+
+
+def test_exact_refinement_same_volume_every_cut_triangle_exact_as_the_cli(scratch):
+    """exact_refinement (``--exact-refinement``): every cut triangle goes to
+    the exact triangulation (the default's certified fast path takes them
+    all on these boxes), the same volume to the last bits the analytic one
+    allows, and the CLI reports the same counts for the same files."""
+    v, f, fast = atelier.boolean(A, B, op="union")
+    ev, ef, exact = atelier.boolean(A, B, op="union", exact_refinement=True)
+    assert fast["cut_triangles"] > 0
+    assert fast["refined_exact"] < fast["cut_triangles"]
+    assert exact["refined_exact"] == exact["cut_triangles"] == fast["cut_triangles"]
+    assert abs(volume(ev, ef) - (2 - OVERLAP)) < 1e-12 and set(edge_uses(ef).values()) == {2}
+    atelier.write_mesh(scratch / "a.obj", *A)
+    atelier.write_mesh(scratch / "b.obj", *B)
+    run_cli("--threads", 1, "boolean", scratch / "a.obj", scratch / "b.obj", "--out", scratch / "out.obj",
+            "--exact-refinement", "--json", scratch / "r.json")
+    theirs = json.loads((scratch / "r.json").read_text())
+    assert theirs["refined_exact"] == theirs["cut_triangles"] == exact["cut_triangles"]
+    mine_v, mine_f, _ = atelier.boolean(atelier.read_mesh(scratch / "a.obj"), atelier.read_mesh(scratch / "b.obj"),
+                                        exact_refinement=True, threads=1)
+    tv, tf = atelier.read_mesh(scratch / "out.obj")
+    assert mine_v.tobytes() == tv.tobytes() and polygons(mine_f) == polygons(tf)
 
 
 def plane_and_ellipse(n=12):

@@ -238,6 +238,13 @@ struct ExtrudeReport {
 /// the file only. kInvalidArgument when no such run starts there.
 [[nodiscard]] Expected<ExtrudeStrokes> extrusion_from_file(const StrokeFile& file, std::size_t first = 0);
 
+/// The body an extrusion is kept outside of (ExtrudeOptions::body), from a
+/// closed mesh: its faces fanned into triangles, the collision topology and
+/// the committed BVH (the garment family's CollisionBody). Reads `body`;
+/// writes `out` only on success. kInvalidArgument naming the cause (no
+/// faces, a degenerate or out-of-range face).
+[[nodiscard]] Status collision_body_of(const Model& body, CollisionBody& out);
+
 /// Extrudes (see above).
 [[nodiscard]] Expected<ExtrudeReport> extrude(Model& model, const ExtrudeStrokes& strokes,
                                               const ExtrudeOptions& options = {}, const ExecContext& ctx = {});

@@ -15,6 +15,8 @@
 //    remeshing. settle re-optimises only the faces around the edges that
 //    are then outside the bounds (optimise_region on that small region,
 //    B fixed) and pushes again, a few times.
+#include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/optimise_region.h>
 
 #include <algorithm>
@@ -141,3 +143,20 @@ Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::
 }
 
 }  // namespace atelier::extrude_detail
+
+namespace atelier {
+
+Status collision_body_of(const Model& body, CollisionBody& out) {
+  auto refused = [](const Status& s) { return Status(ErrorCode::kInvalidArgument, s.message()); };
+  auto tris = fan_triangulate(body);
+  if (!tris) return refused(tris.status());
+  if (tris->triangles.empty()) return Status(ErrorCode::kInvalidArgument, "the body has no faces");
+  auto topo = CollisionTopology::build(tris->triangles, static_cast<std::uint32_t>(body.nodes.slots.capacity()));
+  if (!topo) return refused(topo.status());
+  CollisionBody built;
+  if (Status s = built.build(*topo, body.nodes.position); !s) return refused(s);
+  out = std::move(built);
+  return {};
+}
+
+}  // namespace atelier
