@@ -124,6 +124,20 @@ std::uint8_t sure_code(double px, double py, double lox, double hix, double loy,
   return static_cast<std::uint8_t>(below(px, lox) | above(px, hix) << 1 | below(py, loy) << 2 | above(py, hiy) << 3);
 }
 
+/// Where llround(x) lies against [lo, hi] (integer-valued, below 2^63 in
+/// magnitude; bits: 1 below, 2 above), rounding only near the ends: llround
+/// is monotonic and keeps integers, so an x inside [lo, hi] snaps inside,
+/// and one beyond sure_code's margins snaps outside. The same bits as
+/// rounding every x (painting's codes rounded two coordinates of every node,
+/// a libm call each).
+int snapped_side(double x, double lo, double hi) {
+  if (x >= lo && x <= hi) return 0;
+  if (x < lo - 1.0 - std::abs(lo) * 1e-15) return 1;
+  if (x > hi + 1.0 + std::abs(hi) * 1e-15) return 2;
+  const double r = double(std::llround(x));
+  return (r < lo) | (r > hi) << 1;
+}
+
 /// The screen image of one point (false when behind the eye, not finite or
 /// beyond 2^40 pixels). Painting and picking both project through here, so
 /// they see the same bits.
@@ -174,9 +188,8 @@ Screen project_nodes(const Model& m, const Camera& cam, const Box3d& box, std::s
     Vec4d c;
     double px = 0, py = 0;
     if (!project_xy(s.pv, W, H, m.nodes.position[v], c, px, py)) return;
-    const double x = double(std::llround(px * kSnap)), y = double(std::llround(py * kSnap));
-    s.code[v] = static_cast<std::uint8_t>((x < box.lo.x()) | (x > box.hi.x()) << 1 | (y < box.lo.y()) << 2 |
-                                          (y > box.hi.y()) << 3);
+    s.code[v] = static_cast<std::uint8_t>(snapped_side(px * kSnap, box.lo.x(), box.hi.x()) |
+                                          snapped_side(py * kSnap, box.lo.y(), box.hi.y()) << 2);
   });
   s.culled = culled_faces(m, s.code, Screen::kNotOk);
   // The images of the kept faces' corners, numbered in face order.
