@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <set>
 
@@ -387,18 +388,24 @@ struct SeamSide {
 /// row per face instead of chasing next pointers and twins through the
 /// halfedge columns at random (most of their time on half a mesh). `ok` is
 /// false when a face of the model is not a triangle (the walks are used).
+/// A face's neighbours and corners share one row (the pass writes a face's
+/// three halfedges at different times: one cache line to come back to, not
+/// two), and the rows are not cleared first: every live face writes all of
+/// its row, and only live faces' rows are read.
 struct TriRows {
   static constexpr std::uint32_t kBlocked = kNone - 1, kOpen = kNone;
+  struct Row {
+    std::uint32_t adj[3], corner[3];
+  };
   bool ok = false;
-  bool boundary = false;                   // some face side has no face across (when ok)
-  std::vector<std::uint32_t> adj, corner;  // 3 per face slot
+  bool boundary = false;        // some face side has no face across (when ok)
+  std::unique_ptr<Row[]> rows;  // per face slot
 };
 TriRows tri_rows(const Model& m, const std::vector<std::uint8_t>& curve_edge) {
   TriRows t;
   const std::size_t nf = m.faces.slots.capacity(), nh = 2 * m.edges.slots.capacity();
   std::vector<std::uint8_t> count(nf, 0);
-  t.adj.resize(3 * nf);
-  t.corner.resize(3 * nf);
+  t.rows = std::make_unique_for_overwrite<TriRows::Row[]>(nf);
   const auto& hf = m.halfedges.face;
   const auto& tail = m.halfedges.tail;
   for (std::size_t h = 0; h < nh; ++h) {
@@ -408,8 +415,9 @@ TriRows tri_rows(const Model& m, const std::vector<std::uint8_t>& curve_edge) {
     if (k >= 3) return t;  // a polygon
     const FaceIdx o = hf[h ^ 1];
     t.boundary |= !o.valid();
-    t.adj[3 * f.value + k] = !o.valid() ? TriRows::kOpen : curve_edge[h >> 1] ? TriRows::kBlocked : o.value;
-    t.corner[3 * f.value + k] = tail[h].value;
+    TriRows::Row& r = t.rows[f.value];
+    r.adj[k] = !o.valid() ? TriRows::kOpen : curve_edge[h >> 1] ? TriRows::kBlocked : o.value;
+    r.corner[k] = tail[h].value;
   }
   t.ok = true;
   return t;
@@ -422,7 +430,7 @@ double tri_area(const Model& m, const std::uint32_t* c) {
 
 /// Area of face f: its fan triangles (c0, c_k+1, c_k+2).
 double face_area(const Model& m, const TriRows& t, std::size_t f) {
-  if (t.ok) return tri_area(m, &t.corner[3 * f]);
+  if (t.ok) return tri_area(m, t.rows[f].corner);
   return fan_area(m, f);
 }
 
@@ -447,7 +455,7 @@ OnePiece piece_from(const Model& m, FaceIdx start, const std::vector<std::uint8_
     ++count;
     if (t.ok) {
       for (int k = 0; k < 3; ++k) {
-        const std::uint32_t o = t.adj[3 * f.value + k];
+        const std::uint32_t o = t.rows[f.value].adj[k];
         if (o == TriRows::kOpen) {
           p.open = true;
         } else if (o != TriRows::kBlocked && !p.in[o]) {

@@ -124,6 +124,20 @@ std::uint8_t sure_code(double px, double py, double lox, double hix, double loy,
   return static_cast<std::uint8_t>(below(px, lox) | above(px, hix) << 1 | below(py, loy) << 2 | above(py, hiy) << 3);
 }
 
+/// Where llround(x) lies against [lo, hi] (integer-valued, below 2^63 in
+/// magnitude; bits: 1 below, 2 above), rounding only near the ends: llround
+/// is monotonic and keeps integers, so an x inside [lo, hi] snaps inside,
+/// and one beyond sure_code's margins snaps outside. The same bits as
+/// rounding every x (painting's codes rounded two coordinates of every node,
+/// a libm call each).
+int snapped_side(double x, double lo, double hi) {
+  if (x >= lo && x <= hi) return 0;
+  if (x < lo - 1.0 - std::abs(lo) * 1e-15) return 1;
+  if (x > hi + 1.0 + std::abs(hi) * 1e-15) return 2;
+  const double r = double(std::llround(x));
+  return (r < lo) | (r > hi) << 1;
+}
+
 /// The screen image of one point (false when behind the eye, not finite or
 /// beyond 2^40 pixels). Painting and picking both project through here, so
 /// they see the same bits.
@@ -174,9 +188,8 @@ Screen project_nodes(const Model& m, const Camera& cam, const Box3d& box, std::s
     Vec4d c;
     double px = 0, py = 0;
     if (!project_xy(s.pv, W, H, m.nodes.position[v], c, px, py)) return;
-    const double x = double(std::llround(px * kSnap)), y = double(std::llround(py * kSnap));
-    s.code[v] = static_cast<std::uint8_t>((x < box.lo.x()) | (x > box.hi.x()) << 1 | (y < box.lo.y()) << 2 |
-                                          (y > box.hi.y()) << 3);
+    s.code[v] = static_cast<std::uint8_t>(snapped_side(px * kSnap, box.lo.x(), box.hi.x()) |
+                                          snapped_side(py * kSnap, box.lo.y(), box.hi.y()) << 2);
   });
   s.culled = culled_faces(m, s.code, Screen::kNotOk);
   // The images of the kept faces' corners, numbered in face order.
@@ -252,8 +265,10 @@ class SegmentGrid {
     n_ = std::clamp<int>(static_cast<int>(std::sqrt(double(s.segments())) * 2), 1, 256);
     cell_ = ext / n_ * (1 + 1e-9);
     cells_.resize(std::size_t(n_) * n_);
+    seg_box_.reserve(s.segments());
     for (std::size_t i = 0; i < s.segments(); ++i) {
       const P2 a = s.snapped[i], b = s.snapped[i + 1];
+      seg_box_.push_back({P2{std::min(a.x, b.x), std::min(a.y, b.y)}, P2{std::max(a.x, b.x), std::max(a.y, b.y)}});
       const int x0 = cx(double(std::min(a.x, b.x))), x1 = cx(double(std::max(a.x, b.x)));
       const int y0 = cy(double(std::min(a.y, b.y))), y1 = cy(double(std::max(a.y, b.y)));
       for (int y = y0; y <= y1; ++y)
@@ -261,16 +276,28 @@ class SegmentGrid {
     }
     box_ = s.box2;
   }
-  /// Segments whose cells overlap the box [lo, hi] (sorted, unique) into out.
-  void query(double lox, double loy, double hix, double hiy, std::vector<std::uint32_t>& out) const {
+  /// Segments whose cells overlap the box [lo, hi] of snapped pixels and
+  /// whose own boxes are not strictly apart from it (sorted, unique) into
+  /// out. A segment strictly apart (a gap of at least one snapped unit on
+  /// one axis) cannot meet a triangle inside the box, even translated by the
+  /// infinitesimal (e, e^2) of node_side and point_side: its line crossings
+  /// would fall outside the segment and no end would pierce, so cut_triangle
+  /// would make nothing of it. Most cells' candidates end here, before the
+  /// exact side tests (a stroke spanning the mesh has wide cells).
+  void query(const P2& lo, const P2& hi, std::vector<std::uint32_t>& out) const {
     out.clear();
+    const double lox = double(lo.x), loy = double(lo.y), hix = double(hi.x), hiy = double(hi.y);
     if (hix < box_.lo.x() || lox > box_.hi.x() || hiy < box_.lo.y() || loy > box_.hi.y()) return;
     const int x0 = cx(lox), x1 = cx(hix), y0 = cy(loy), y1 = cy(hiy);
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const auto& c = cells_[std::size_t(y) * n_ + x];
-        out.insert(out.end(), c.begin(), c.end());
-      }
+      for (int x = x0; x <= x1; ++x)
+        for (std::uint32_t i : cells_[std::size_t(y) * n_ + x]) {
+          const auto& b = seg_box_[i];
+          if (b[1].x < lo.x || b[0].x > hi.x || b[1].y < lo.y || b[0].y > hi.y) continue;
+          out.push_back(i);
+        }
+    // One cell's list is already increasing (segments are added in order).
+    if (x0 == x1 && y0 == y1) return;
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
   }
@@ -282,6 +309,7 @@ class SegmentGrid {
   int n_ = 1;
   Box3d box_;
   std::vector<std::vector<std::uint32_t>> cells_;
+  std::vector<std::array<P2, 2>> seg_box_;  // per segment: snapped lo, hi
 };
 
 // ------------------------------------------------------------ the section
@@ -532,15 +560,13 @@ Expected<Section> build_section(const Model& m, const Screen& sc, const StrokeDa
         return;
       }
       for (const FanTri& t : tris) {
-        double lox = INFINITY, loy = INFINITY, hix = -INFINITY, hiy = -INFINITY;
-        for (NodeIdx v : t.n) {
-          const P2& q = sc.image(v).snapped;
-          lox = std::min(lox, double(q.x));
-          hix = std::max(hix, double(q.x));
-          loy = std::min(loy, double(q.y));
-          hiy = std::max(hiy, double(q.y));
+        P2 lo = sc.image(t.n[0]).snapped, hi = lo;
+        for (int k = 1; k < 3; ++k) {
+          const P2& q = sc.image(t.n[k]).snapped;
+          lo = {std::min(lo.x, q.x), std::min(lo.y, q.y)};
+          hi = {std::max(hi.x, q.x), std::max(hi.y, q.y)};
         }
-        grid.query(lox, loy, hix, hiy, sectors);
+        grid.query(lo, hi, sectors);
         if (!sectors.empty()) cut_triangle(m, sc, sd, t, sectors, out);
         if (!out.status) return;
       }
