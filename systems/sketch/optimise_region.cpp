@@ -314,39 +314,39 @@ class Optimiser {
   }
 
   /// Moving r to p makes no edge of r's ring (but the one to k) longer
-  /// than the collapse limit. Tested for both ends before collapse_ok's
-  /// normals: most refused collapses fail here.
-  bool collapse_short(NodeIdx r, NodeIdx k, const Vec3d& p) const {
+  /// than the collapse limit (tested for both ends before the normals: most
+  /// refused collapses fail there) and keeps every face around r (but those
+  /// holding k) turned the same way. r staying where it is (a fixed end of
+  /// B, or a border end kept) changes none of its edges or faces: its edges
+  /// outside the region may be far longer than hi and must not veto the
+  /// collapse.
+  bool collapse_ring_ok(NodeIdx r, NodeIdx k, const Vec3d& p) const {
     if (p == m_.position(r)) return true;
     const double lim = collapse_limit_ * collapse_limit_;
-    bool ok = true;
-    m_.for_each_outgoing(r, [&](HalfedgeIdx h) {
-      const NodeIdx w = m_.head(h);
-      ok = ok && (w == k || !((m_.position(w) - p).squaredNorm() > lim));
-    });
-    return ok;
-  }
-
-  /// Moving r to p keeps every face around r (but those holding k) turned
-  /// the same way (the lengths: collapse_short).
-  bool collapse_ok(NodeIdx r, NodeIdx k, const Vec3d& p) const {
-    // r staying where it is (a fixed end of B, or a border end kept) changes
-    // none of its edges or faces: its edges outside the region may be far
-    // longer than hi and must not veto the collapse.
-    if (p == m_.position(r)) return true;
+    const Vec3d& pr = m_.position(r);
     bool ok = true;
     m_.for_each_outgoing(r, [&](HalfedgeIdx h) {
       if (!ok) return;
-      const FaceIdx face = m_.face(h);
-      if (!face.valid()) return;
+      const NodeIdx w = m_.head(h);
+      if (w == k) return;  // (its face holds k too)
+      const Vec3d& pw = m_.position(w);
+      if ((pw - p).squaredNorm() > lim) {
+        ok = false;
+        return;
+      }
       // Triangle (r, w, u) with u = head(next(h)).
-      const NodeIdx w = m_.head(h), u = m_.head(m_.next(h));
-      if (w == k || u == k) return;
-      const Vec3d n0 = tri_normal(m_.position(r), m_.position(w), m_.position(u));
-      const Vec3d n1 = tri_normal(p, m_.position(w), m_.position(u));
-      if (!(n0.dot(n1) > 0.2 * n0.norm() * n1.norm())) ok = false;
+      if (!m_.face(h).valid()) return;
+      const NodeIdx u = m_.head(m_.next(h));
+      if (u == k) return;
+      const Vec3d& pu = m_.position(u);
+      const Vec3d n0 = tri_normal(pr, pw, pu), n1 = tri_normal(p, pw, pu);
+      ok = n0.dot(n1) > 0.2 * n0.norm() * n1.norm();
     });
     return ok;
+  }
+  /// Both ends of a collapse of gone into keep at p pass collapse_ring_ok.
+  bool collapse_fits(NodeIdx gone, NodeIdx keep, const Vec3d& p) const {
+    return collapse_ring_ok(gone, keep, p) && collapse_ring_ok(keep, gone, p);
   }
 
   /// Collapses e (B's end, or a border end, kept in place); returns the kept
@@ -384,8 +384,7 @@ class Optimiser {
         if (cb) p = m_.position(b);
       }
     }
-    if (!collapse_short(gone, keep, p) || !collapse_short(keep, gone, p) || !collapse_ok(gone, keep, p) ||
-        !collapse_ok(keep, gone, p)) {
+    if (!collapse_fits(gone, keep, p)) {
       // Last resort, two free inner ends: the midpoint may fold a face or
       // stretch an edge where one of the ends would not (a crease of the
       // swept surface, a pushed fold): try each end's place.
@@ -393,8 +392,7 @@ class Optimiser {
       bool found = false;
       for (const NodeIdx at : {a, b}) {
         p = m_.position(at);
-        if (collapse_short(gone, keep, p) && collapse_short(keep, gone, p) && collapse_ok(gone, keep, p) &&
-            collapse_ok(keep, gone, p)) {
+        if (collapse_fits(gone, keep, p)) {
           found = true;
           break;
         }
@@ -583,15 +581,24 @@ class Optimiser {
     return false;
   }
 
+  /// How much closer to valence 6 (4 on a border) the swap of e brings its
+  /// four nodes. One ring walk per node gives both its degree and whether
+  /// it is on a border (the swap pass tests every region edge).
   int valence_gain(EdgeIdx e) const {
     const HalfedgeIdx h = halfedge_of(e, 0), t = halfedge_of(e, 1);
     const NodeIdx a = m_.tail(h), b = m_.tail(t), x = m_.head(m_.next(h)), y = m_.head(m_.next(t));
-    auto dev = [&](NodeIdx v, int delta) {
+    auto gain = [&](NodeIdx v, int delta) {
       if (fixed(v)) return 0;
-      const int want = on_border(v) ? 4 : 6;
-      return std::abs(static_cast<int>(m_.degree(v)) + delta - want);
+      int degree = 0;
+      bool border = false;
+      m_.for_each_outgoing(v, [&](HalfedgeIdx g) {
+        ++degree;
+        border |= !m_.face(g).valid() || !m_.face(twin(g)).valid();
+      });
+      const int off = degree - (border ? 4 : 6);
+      return std::abs(off) - std::abs(off + delta);
     };
-    return dev(a, 0) + dev(b, 0) + dev(x, 0) + dev(y, 0) - (dev(a, -1) + dev(b, -1) + dev(x, 1) + dev(y, 1));
+    return gain(a, -1) + gain(b, -1) + gain(x, 1) + gain(y, 1);
   }
 
   /// A border node where the border turns by more than 30 degrees (or with
