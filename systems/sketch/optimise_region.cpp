@@ -33,6 +33,8 @@ Vec3d tri_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   return (b - a).cross(c - a);
 }
 
+using RingPair = std::array<NodeIdx, 2>;  // see Optimiser::no_flip_ring
+
 class Optimiser {
  public:
   Optimiser(Model& m, const RegionOptimiseOptions& o) : m_(m), o_(o) {
@@ -237,20 +239,26 @@ class Optimiser {
   }
 
   /// The editable edges: the list of the last call less the edges that
-  /// died or left the region, then those the operators made since (each
-  /// operator reports the edges around the node it made or kept), so no
-  /// pass scans the face slots. Valid until the next call.
+  /// died, then those the operators made since (each operator reports the
+  /// edges around the node it made or kept), so no pass scans the face
+  /// slots. Valid until the next call. An edge of the last list that is
+  /// still alive is still editable: the faces outside the region never
+  /// change, so an operator only ever puts region faces on an edge, and
+  /// a slot an operator reuses holds one of its own (region) edges.
   const std::vector<EdgeIdx>& region_edges() {
     stamp_.resize(m_.edges.slots.capacity(), 0);
     ++tick_;
     scratch_.clear();
-    auto take = [&](EdgeIdx e) {
-      if (e.value >= stamp_.size() || stamp_[e.value] == tick_ || !editable(e)) return;
+    for (EdgeIdx e : edges_) {
+      if (stamp_[e.value] == tick_ || !m_.alive(e)) continue;
       stamp_[e.value] = tick_;
       scratch_.push_back(e);
-    };
-    for (EdgeIdx e : edges_) take(e);
-    for (EdgeIdx e : fresh_) take(e);
+    }
+    for (EdgeIdx e : fresh_) {
+      if (e.value >= stamp_.size() || stamp_[e.value] == tick_ || !editable(e)) continue;
+      stamp_[e.value] = tick_;
+      scratch_.push_back(e);
+    }
     fresh_.clear();
     edges_.swap(scratch_);
     return edges_;
@@ -631,9 +639,11 @@ class Optimiser {
     int k = 0, kb = 0;
     // (v is free: every face on it is a region face, since every node of
     // a face outside the region is fixed and those faces never change)
+    ring_pairs_.clear();
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
       const FaceIdx f = m_.face(h), g = m_.face(twin(h));
-      const Vec3d w = m_.position(m_.head(h));
+      ring_pairs_.push_back({m_.head(h), f.valid() ? m_.head(m_.next(h)) : NodeIdx{}});
+      const Vec3d w = m_.position(ring_pairs_.back()[0]);
       Vec3d t = w;
       if (spring) {
         const Vec3d d = p - w;
@@ -643,7 +653,7 @@ class Optimiser {
       c += t;
       ++k;
       if (!f.valid() || !g.valid()) cb += t, ++kb;
-      if (f.valid()) n += tri_normal(p, w, m_.position(m_.head(m_.next(h))));
+      if (f.valid()) n += tri_normal(p, w, m_.position(ring_pairs_.back()[1]));
     });
     if (k == 0 || (kb != 0 && kb != 2) || !(n.norm() > 0)) return false;
     if (kb == 2 && corner(v)) return false;
@@ -656,8 +666,24 @@ class Optimiser {
       q = p + d - d.dot(n) * n;
     }
     if (can_project_ && !project(v, q, tri)) return false;
-    if (!no_flip(v, q, 0.5)) return false;
+    if (!no_flip_ring(p, q, ring_pairs_, 0.5)) return false;
     out = q;
+    return true;
+  }
+
+  /// no_flip of a node at p whose ring relax_target recorded: (w, u) for
+  /// each outgoing halfedge v -> w in order, u the third corner of its face
+  /// (invalid without one). The ring does not change between the targets
+  /// and the moves of a relaxation, so the moves walk this list instead of
+  /// the halfedge columns again (cold in cache by then on a large region).
+  bool no_flip_ring(const Vec3d& p, const Vec3d& q, std::span<const RingPair> ring, double cos_min) const {
+    for (const RingPair& wu : ring) {
+      if (!wu[1].valid()) continue;
+      const Vec3d& a = m_.position(wu[0]);
+      const Vec3d& b = m_.position(wu[1]);
+      const Vec3d n0 = tri_normal(p, a, b), n1 = tri_normal(q, a, b);
+      if (!(n0.dot(n1) > cos_min * n0.norm() * n1.norm())) return false;
+    }
     return true;
   }
 
@@ -750,12 +776,9 @@ class Optimiser {
   /// where they already are, so the result is nearly that of a full pass
   /// for the cost of the edited part.
   void relax_all(bool all = true) {
-    struct Move {
-      NodeIdx v;
-      Vec3d q;
-      std::uint32_t tri;
-    };
-    std::vector<Move> moves;
+    std::vector<Move>& moves = moves_;
+    moves.clear();
+    rings_.clear();
     const double settle = 0.02 * o_.target;
     const std::uint32_t want = epoch_++;
     std::vector<NodeIdx> list;
@@ -777,20 +800,26 @@ class Optimiser {
       if (!all && (!m_.alive(v) || dirty_[v.value] != want)) continue;
       Vec3d q;
       std::uint32_t tri;
-      if (relax_target(v, q, tri)) moves.push_back({v, q, tri});
+      if (relax_target(v, q, tri)) {
+        moves.push_back(
+            {v, q, tri, static_cast<std::uint32_t>(rings_.size()), static_cast<std::uint32_t>(ring_pairs_.size())});
+        rings_.insert(rings_.end(), ring_pairs_.begin(), ring_pairs_.end());
+      }
     }
     // Jacobi: targets from the old positions; re-checked against the
     // neighbours' new positions so that no face turns over.
-    for (const Move& mv : moves)
-      if (no_flip(mv.v, mv.q, 0.2)) {
+    for (const Move& mv : moves) {
+      const std::span<const RingPair> ring(rings_.data() + mv.ring_at, mv.ring_size);
+      if (no_flip_ring(m_.position(mv.v), mv.q, ring, 0.2)) {
         // A move shorter than settle L changes the neighbours' targets by
         // less than that: they need not be visited again for it.
         const bool far = (mv.q - m_.position(mv.v)).squaredNorm() > settle * settle;
         place(mv.v, mv.q, mv.tri), ++rep_.relaxed;
         if (!far) continue;
         mark(mv.v);
-        m_.for_each_outgoing(mv.v, [&](HalfedgeIdx h) { mark(m_.head(h)); });
+        for (const RingPair& wu : ring) mark(wu[0]);
       }
+    }
   }
 
   // ---------------------------------------------------------- step 1
@@ -810,8 +839,9 @@ class Optimiser {
       for (EdgeIdx e : region_edges())
         if (m_.alive(e) && length(e) < lo_ && editable(e))
           if (auto k = collapse(e); !k) return k.status();
+      // (a swap changes no other edge's editability: region_edges())
       for (EdgeIdx e : region_edges()) {
-        if (!editable(e) || !swap_ok(e, 0, hi_) || valence_gain(e) <= 0) continue;
+        if (!swap_ok(e, 0, hi_) || valence_gain(e) <= 0) continue;
         (void)swap(e);
       }
       if (o_.relax) relax_all(pass == 0);
@@ -977,6 +1007,14 @@ class Optimiser {
   RegionOptimiseReport rep_;
 
  private:
+  // relax_all's scratch, kept across rounds: the moves and their rings.
+  struct Move {
+    NodeIdx v;
+    Vec3d q;
+    std::uint32_t tri, ring_at, ring_size;
+  };
+  std::vector<Move> moves_;
+  std::vector<RingPair> ring_pairs_, rings_;
   Model& m_;
   const RegionOptimiseOptions& o_;
   double lo_ = 0, hi_ = 0, collapse_limit_ = 0;
