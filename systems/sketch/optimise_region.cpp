@@ -1065,26 +1065,36 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
   // A greedy repair can stall where every single operation makes some
   // ring worse; a relaxation of the whole region moves it out of that
   // state, and the repair runs again (at most three times more).
+  // `now` holds the statistics of the region as it is when `fresh` (each
+  // is a pass over the region's edges: not taken twice for one state).
+  EdgeLengthStats now;
+  bool fresh = false;
+  auto current = [&]() -> const EdgeLengthStats& {
+    if (!fresh) now = opt.stats(), fresh = true;
+    return now;
+  };
   auto repair = [&] {
     for (int round = 0; s && o.repair_budget > 0 && round < 4; ++round) {
       if (round > 0) {
-        if (opt.stats().outside == 0) break;
+        if (current().outside == 0) break;
         if (o.relax) opt.relax_all();
       }
       s = opt.repair(ctx);
+      fresh = false;
     }
   };
   repair();
   // Edges still out (a row too dense for collapses within hi, seen on the
   // garment tests): one more round with wide collapses, one without, and
   // the repair again. Costs nothing where the first repair succeeded.
-  if (s && o.passes > 0 && opt.stats().outside > 0) {
+  if (s && o.passes > 0 && current().outside > 0) {
     s = opt.rounds(ctx, 2, 1);
+    fresh = false;
     repair();
   }
-  if (temp.valid()) m.delete_mesh_edge(temp);
+  if (temp.valid()) m.delete_mesh_edge(temp);  // (no length or region changes)
   if (!s) return s;
-  opt.rep_.after = opt.stats();
+  opt.rep_.after = current();
   opt.rep_.max_deviation = opt.deviation();
   opt.rep_.region_faces = opt.count_region_faces();
   return opt.rep_;
