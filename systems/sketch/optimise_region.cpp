@@ -68,6 +68,13 @@ class Optimiser {
         return region_error(ErrorCode::kInvalidArgument, "fixed node " + std::to_string(v.value) + " is dead");
       fixed_[v.value] = 1;
     }
+    // Any corner of a region face on a border (see on_border)? A free
+    // corner's edges are all region face sides; a fixed one's ring is walked.
+    for (std::size_t r = 0; r < region.size() && !any_border_; ++r)
+      m_.for_each_face_halfedge(region[r], [&](HalfedgeIdx h) {
+        any_border_ =
+            any_border_ || !m_.face(twin(h)).valid() || (fixed_[m_.tail(h).value] && slow_on_border(m_.tail(h)));
+      });
     eo_.check_ring_nodes = false;
     for (std::uint32_t v = 0; v < m_.nodes.slots.capacity(); ++v)
       if (m_.alive(NodeIdx{v}) && m_.nodes.in_face[v].valid()) eo_.check_ring_nodes = true;
@@ -232,11 +239,15 @@ class Optimiser {
     return (m_.position(m_.tail(halfedge_of(e, 0))) - m_.position(m_.tail(halfedge_of(e, 1)))).norm();
   }
   bool in_bounds(double l) const { return l >= lo_ && l <= hi_; }
-  bool on_border(NodeIdx v) const {
+  bool slow_on_border(NodeIdx v) const {
     bool b = false;
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) { b |= !m_.face(h).valid() || !m_.face(twin(h)).valid(); });
     return b;
   }
+  /// v has an edge with a face on one side only. Every node asked about is
+  /// a corner of a region face; without such a node on entry there is none
+  /// ever (no operator opens a border): no walk then (the dome on the cup).
+  bool on_border(NodeIdx v) const { return any_border_ && slow_on_border(v); }
 
   /// The editable edges: the list of the last call less the edges that
   /// died, then those the operators made since (each operator reports the
@@ -601,7 +612,7 @@ class Optimiser {
       bool border = false;
       m_.for_each_outgoing(v, [&](HalfedgeIdx g) {
         ++degree;
-        border |= !m_.face(g).valid() || !m_.face(twin(g)).valid();
+        border = border || (any_border_ && (!m_.face(g).valid() || !m_.face(twin(g)).valid()));
       });
       const int off = degree - (border ? 4 : 6);
       return std::abs(off) - std::abs(off + delta);
@@ -1036,6 +1047,7 @@ class Optimiser {
   std::vector<std::uint32_t> ref_ring_offset_, ref_ring_;  // triangles around each point
   std::vector<std::uint32_t> hint_;                        // per node: a triangle of ref_ at or near its closest point
   bool can_project_ = false, tree_built_ = false, walk_ = false;
+  bool any_border_ = false;  // see on_border
 };
 
 Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, std::span<const NodeIdx> fixed,
