@@ -1119,9 +1119,18 @@ Expected<RegionOptimiseReport> optimise_region(Model& model, std::span<const Fac
                                                const RegionOptimiseOptions& options, const ExecContext& ctx) {
   if (options.passes == 0 && options.repair_budget == 0)  // statistics only: nothing to undo
     return run(model, region, fixed, fixed_chain, options, ctx);
-  Model backup = model;  // transactional
-  auto r = run(model, region, fixed, fixed_chain, options, ctx);
-  if (!r) model = std::move(backup);
+  // Transactional: the work is done on a copy, which takes the model's
+  // place on success. The copy is made into columns reserved for the
+  // region's growth (the first round's splits add up to a node per face and
+  // three edges and two faces per face before its collapses free slots):
+  // no column is reallocated and copied again while it grows.
+  const std::size_t grow = region.size();
+  Model work;
+  work.reserve(model.nodes.slots.capacity() + 2 * grow, model.edges.slots.capacity() + 4 * grow,
+               model.faces.slots.capacity() + 3 * grow);
+  work = model;
+  auto r = run(work, region, fixed, fixed_chain, options, ctx);
+  if (r) model = std::move(work);
   return r;
 }
 
