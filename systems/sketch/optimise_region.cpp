@@ -576,10 +576,11 @@ class Optimiser {
   bool swap_ok(EdgeIdx e, double min_len, double max_len, NodeIdx* xy = nullptr) const {
     const HalfedgeIdx h = halfedge_of(e, 0), t = halfedge_of(e, 1);
     if (!m_.face(h).valid() || !m_.face(t).valid()) return false;
-    if (m_.next(m_.next(m_.next(h))) != h || m_.next(m_.next(m_.next(t))) != t) return false;
+    // (the new diagonal's length first: most edges fail there)
     const NodeIdx a = m_.tail(h), b = m_.tail(t), x = m_.head(m_.next(h)), y = m_.head(m_.next(t));
     const double d = (m_.position(x) - m_.position(y)).norm();
     if (d > max_len || d < min_len) return false;
+    if (m_.next(m_.next(m_.next(h))) != h || m_.next(m_.next(m_.next(t))) != t) return false;
     const Vec3d n0 = tri_normal(m_.position(a), m_.position(b), m_.position(x)) +
                      tri_normal(m_.position(b), m_.position(a), m_.position(y));
     const Vec3d n1 = tri_normal(m_.position(x), m_.position(y), m_.position(b));
