@@ -33,6 +33,8 @@ Vec3d tri_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   return (b - a).cross(c - a);
 }
 
+using RingPair = std::array<NodeIdx, 2>;  // see Optimiser::no_flip_ring
+
 class Optimiser {
  public:
   Optimiser(Model& m, const RegionOptimiseOptions& o) : m_(m), o_(o) {
@@ -66,6 +68,13 @@ class Optimiser {
         return region_error(ErrorCode::kInvalidArgument, "fixed node " + std::to_string(v.value) + " is dead");
       fixed_[v.value] = 1;
     }
+    // Any corner of a region face on a border (see on_border)? A free
+    // corner's edges are all region face sides; a fixed one's ring is walked.
+    for (std::size_t r = 0; r < region.size() && !any_border_; ++r)
+      m_.for_each_face_halfedge(region[r], [&](HalfedgeIdx h) {
+        any_border_ =
+            any_border_ || !m_.face(twin(h)).valid() || (fixed_[m_.tail(h).value] && slow_on_border(m_.tail(h)));
+      });
     eo_.check_ring_nodes = false;
     for (std::uint32_t v = 0; v < m_.nodes.slots.capacity(); ++v)
       if (m_.alive(NodeIdx{v}) && m_.nodes.in_face[v].valid()) eo_.check_ring_nodes = true;
@@ -230,27 +239,37 @@ class Optimiser {
     return (m_.position(m_.tail(halfedge_of(e, 0))) - m_.position(m_.tail(halfedge_of(e, 1)))).norm();
   }
   bool in_bounds(double l) const { return l >= lo_ && l <= hi_; }
-  bool on_border(NodeIdx v) const {
+  bool slow_on_border(NodeIdx v) const {
     bool b = false;
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) { b |= !m_.face(h).valid() || !m_.face(twin(h)).valid(); });
     return b;
   }
+  /// v has an edge with a face on one side only. Every node asked about is
+  /// a corner of a region face; without such a node on entry there is none
+  /// ever (no operator opens a border): no walk then (the dome on the cup).
+  bool on_border(NodeIdx v) const { return any_border_ && slow_on_border(v); }
 
   /// The editable edges: the list of the last call less the edges that
-  /// died or left the region, then those the operators made since (each
-  /// operator reports the edges around the node it made or kept), so no
-  /// pass scans the face slots. Valid until the next call.
+  /// died, then those the operators made since (each operator reports the
+  /// edges around the node it made or kept), so no pass scans the face
+  /// slots. Valid until the next call. An edge of the last list that is
+  /// still alive is still editable: the faces outside the region never
+  /// change, so an operator only ever puts region faces on an edge, and
+  /// a slot an operator reuses holds one of its own (region) edges.
   const std::vector<EdgeIdx>& region_edges() {
     stamp_.resize(m_.edges.slots.capacity(), 0);
     ++tick_;
     scratch_.clear();
-    auto take = [&](EdgeIdx e) {
-      if (e.value >= stamp_.size() || stamp_[e.value] == tick_ || !editable(e)) return;
+    for (EdgeIdx e : edges_) {
+      if (stamp_[e.value] == tick_ || !m_.alive(e)) continue;
       stamp_[e.value] = tick_;
       scratch_.push_back(e);
-    };
-    for (EdgeIdx e : edges_) take(e);
-    for (EdgeIdx e : fresh_) take(e);
+    }
+    for (EdgeIdx e : fresh_) {
+      if (e.value >= stamp_.size() || stamp_[e.value] == tick_ || !editable(e)) continue;
+      stamp_[e.value] = tick_;
+      scratch_.push_back(e);
+    }
     fresh_.clear();
     edges_.swap(scratch_);
     return edges_;
@@ -314,39 +333,39 @@ class Optimiser {
   }
 
   /// Moving r to p makes no edge of r's ring (but the one to k) longer
-  /// than the collapse limit. Tested for both ends before collapse_ok's
-  /// normals: most refused collapses fail here.
-  bool collapse_short(NodeIdx r, NodeIdx k, const Vec3d& p) const {
+  /// than the collapse limit (tested for both ends before the normals: most
+  /// refused collapses fail there) and keeps every face around r (but those
+  /// holding k) turned the same way. r staying where it is (a fixed end of
+  /// B, or a border end kept) changes none of its edges or faces: its edges
+  /// outside the region may be far longer than hi and must not veto the
+  /// collapse.
+  bool collapse_ring_ok(NodeIdx r, NodeIdx k, const Vec3d& p) const {
     if (p == m_.position(r)) return true;
     const double lim = collapse_limit_ * collapse_limit_;
-    bool ok = true;
-    m_.for_each_outgoing(r, [&](HalfedgeIdx h) {
-      const NodeIdx w = m_.head(h);
-      ok = ok && (w == k || !((m_.position(w) - p).squaredNorm() > lim));
-    });
-    return ok;
-  }
-
-  /// Moving r to p keeps every face around r (but those holding k) turned
-  /// the same way (the lengths: collapse_short).
-  bool collapse_ok(NodeIdx r, NodeIdx k, const Vec3d& p) const {
-    // r staying where it is (a fixed end of B, or a border end kept) changes
-    // none of its edges or faces: its edges outside the region may be far
-    // longer than hi and must not veto the collapse.
-    if (p == m_.position(r)) return true;
+    const Vec3d& pr = m_.position(r);
     bool ok = true;
     m_.for_each_outgoing(r, [&](HalfedgeIdx h) {
       if (!ok) return;
-      const FaceIdx face = m_.face(h);
-      if (!face.valid()) return;
+      const NodeIdx w = m_.head(h);
+      if (w == k) return;  // (its face holds k too)
+      const Vec3d& pw = m_.position(w);
+      if ((pw - p).squaredNorm() > lim) {
+        ok = false;
+        return;
+      }
       // Triangle (r, w, u) with u = head(next(h)).
-      const NodeIdx w = m_.head(h), u = m_.head(m_.next(h));
-      if (w == k || u == k) return;
-      const Vec3d n0 = tri_normal(m_.position(r), m_.position(w), m_.position(u));
-      const Vec3d n1 = tri_normal(p, m_.position(w), m_.position(u));
-      if (!(n0.dot(n1) > 0.2 * n0.norm() * n1.norm())) ok = false;
+      if (!m_.face(h).valid()) return;
+      const NodeIdx u = m_.head(m_.next(h));
+      if (u == k) return;
+      const Vec3d& pu = m_.position(u);
+      const Vec3d n0 = tri_normal(pr, pw, pu), n1 = tri_normal(p, pw, pu);
+      ok = n0.dot(n1) > 0.2 * n0.norm() * n1.norm();
     });
     return ok;
+  }
+  /// Both ends of a collapse of gone into keep at p pass collapse_ring_ok.
+  bool collapse_fits(NodeIdx gone, NodeIdx keep, const Vec3d& p) const {
+    return collapse_ring_ok(gone, keep, p) && collapse_ring_ok(keep, gone, p);
   }
 
   /// Collapses e (B's end, or a border end, kept in place); returns the kept
@@ -384,8 +403,7 @@ class Optimiser {
         if (cb) p = m_.position(b);
       }
     }
-    if (!collapse_short(gone, keep, p) || !collapse_short(keep, gone, p) || !collapse_ok(gone, keep, p) ||
-        !collapse_ok(keep, gone, p)) {
+    if (!collapse_fits(gone, keep, p)) {
       // Last resort, two free inner ends: the midpoint may fold a face or
       // stretch an edge where one of the ends would not (a crease of the
       // swept surface, a pushed fold): try each end's place.
@@ -393,8 +411,7 @@ class Optimiser {
       bool found = false;
       for (const NodeIdx at : {a, b}) {
         p = m_.position(at);
-        if (collapse_short(gone, keep, p) && collapse_short(keep, gone, p) && collapse_ok(gone, keep, p) &&
-            collapse_ok(keep, gone, p)) {
+        if (collapse_fits(gone, keep, p)) {
           found = true;
           break;
         }
@@ -559,10 +576,11 @@ class Optimiser {
   bool swap_ok(EdgeIdx e, double min_len, double max_len, NodeIdx* xy = nullptr) const {
     const HalfedgeIdx h = halfedge_of(e, 0), t = halfedge_of(e, 1);
     if (!m_.face(h).valid() || !m_.face(t).valid()) return false;
-    if (m_.next(m_.next(m_.next(h))) != h || m_.next(m_.next(m_.next(t))) != t) return false;
+    // (the new diagonal's length first: most edges fail there)
     const NodeIdx a = m_.tail(h), b = m_.tail(t), x = m_.head(m_.next(h)), y = m_.head(m_.next(t));
     const double d = (m_.position(x) - m_.position(y)).norm();
     if (d > max_len || d < min_len) return false;
+    if (m_.next(m_.next(m_.next(h))) != h || m_.next(m_.next(m_.next(t))) != t) return false;
     const Vec3d n0 = tri_normal(m_.position(a), m_.position(b), m_.position(x)) +
                      tri_normal(m_.position(b), m_.position(a), m_.position(y));
     const Vec3d n1 = tri_normal(m_.position(x), m_.position(y), m_.position(b));
@@ -583,15 +601,24 @@ class Optimiser {
     return false;
   }
 
+  /// How much closer to valence 6 (4 on a border) the swap of e brings its
+  /// four nodes. One ring walk per node gives both its degree and whether
+  /// it is on a border (the swap pass tests every region edge).
   int valence_gain(EdgeIdx e) const {
     const HalfedgeIdx h = halfedge_of(e, 0), t = halfedge_of(e, 1);
     const NodeIdx a = m_.tail(h), b = m_.tail(t), x = m_.head(m_.next(h)), y = m_.head(m_.next(t));
-    auto dev = [&](NodeIdx v, int delta) {
+    auto gain = [&](NodeIdx v, int delta) {
       if (fixed(v)) return 0;
-      const int want = on_border(v) ? 4 : 6;
-      return std::abs(static_cast<int>(m_.degree(v)) + delta - want);
+      int degree = 0;
+      bool border = false;
+      m_.for_each_outgoing(v, [&](HalfedgeIdx g) {
+        ++degree;
+        border = border || (any_border_ && (!m_.face(g).valid() || !m_.face(twin(g)).valid()));
+      });
+      const int off = degree - (border ? 4 : 6);
+      return std::abs(off) - std::abs(off + delta);
     };
-    return dev(a, 0) + dev(b, 0) + dev(x, 0) + dev(y, 0) - (dev(a, -1) + dev(b, -1) + dev(x, 1) + dev(y, 1));
+    return gain(a, -1) + gain(b, -1) + gain(x, 1) + gain(y, 1);
   }
 
   /// A border node where the border turns by more than 30 degrees (or with
@@ -624,9 +651,11 @@ class Optimiser {
     int k = 0, kb = 0;
     // (v is free: every face on it is a region face, since every node of
     // a face outside the region is fixed and those faces never change)
+    ring_pairs_.clear();
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
       const FaceIdx f = m_.face(h), g = m_.face(twin(h));
-      const Vec3d w = m_.position(m_.head(h));
+      ring_pairs_.push_back({m_.head(h), f.valid() ? m_.head(m_.next(h)) : NodeIdx{}});
+      const Vec3d w = m_.position(ring_pairs_.back()[0]);
       Vec3d t = w;
       if (spring) {
         const Vec3d d = p - w;
@@ -636,7 +665,7 @@ class Optimiser {
       c += t;
       ++k;
       if (!f.valid() || !g.valid()) cb += t, ++kb;
-      if (f.valid()) n += tri_normal(p, w, m_.position(m_.head(m_.next(h))));
+      if (f.valid()) n += tri_normal(p, w, m_.position(ring_pairs_.back()[1]));
     });
     if (k == 0 || (kb != 0 && kb != 2) || !(n.norm() > 0)) return false;
     if (kb == 2 && corner(v)) return false;
@@ -649,8 +678,24 @@ class Optimiser {
       q = p + d - d.dot(n) * n;
     }
     if (can_project_ && !project(v, q, tri)) return false;
-    if (!no_flip(v, q, 0.5)) return false;
+    if (!no_flip_ring(p, q, ring_pairs_, 0.5)) return false;
     out = q;
+    return true;
+  }
+
+  /// no_flip of a node at p whose ring relax_target recorded: (w, u) for
+  /// each outgoing halfedge v -> w in order, u the third corner of its face
+  /// (invalid without one). The ring does not change between the targets
+  /// and the moves of a relaxation, so the moves walk this list instead of
+  /// the halfedge columns again (cold in cache by then on a large region).
+  bool no_flip_ring(const Vec3d& p, const Vec3d& q, std::span<const RingPair> ring, double cos_min) const {
+    for (const RingPair& wu : ring) {
+      if (!wu[1].valid()) continue;
+      const Vec3d& a = m_.position(wu[0]);
+      const Vec3d& b = m_.position(wu[1]);
+      const Vec3d n0 = tri_normal(p, a, b), n1 = tri_normal(q, a, b);
+      if (!(n0.dot(n1) > cos_min * n0.norm() * n1.norm())) return false;
+    }
     return true;
   }
 
@@ -743,12 +788,9 @@ class Optimiser {
   /// where they already are, so the result is nearly that of a full pass
   /// for the cost of the edited part.
   void relax_all(bool all = true) {
-    struct Move {
-      NodeIdx v;
-      Vec3d q;
-      std::uint32_t tri;
-    };
-    std::vector<Move> moves;
+    std::vector<Move>& moves = moves_;
+    moves.clear();
+    rings_.clear();
     const double settle = 0.02 * o_.target;
     const std::uint32_t want = epoch_++;
     std::vector<NodeIdx> list;
@@ -770,20 +812,26 @@ class Optimiser {
       if (!all && (!m_.alive(v) || dirty_[v.value] != want)) continue;
       Vec3d q;
       std::uint32_t tri;
-      if (relax_target(v, q, tri)) moves.push_back({v, q, tri});
+      if (relax_target(v, q, tri)) {
+        moves.push_back(
+            {v, q, tri, static_cast<std::uint32_t>(rings_.size()), static_cast<std::uint32_t>(ring_pairs_.size())});
+        rings_.insert(rings_.end(), ring_pairs_.begin(), ring_pairs_.end());
+      }
     }
     // Jacobi: targets from the old positions; re-checked against the
     // neighbours' new positions so that no face turns over.
-    for (const Move& mv : moves)
-      if (no_flip(mv.v, mv.q, 0.2)) {
+    for (const Move& mv : moves) {
+      const std::span<const RingPair> ring(rings_.data() + mv.ring_at, mv.ring_size);
+      if (no_flip_ring(m_.position(mv.v), mv.q, ring, 0.2)) {
         // A move shorter than settle L changes the neighbours' targets by
         // less than that: they need not be visited again for it.
         const bool far = (mv.q - m_.position(mv.v)).squaredNorm() > settle * settle;
         place(mv.v, mv.q, mv.tri), ++rep_.relaxed;
         if (!far) continue;
         mark(mv.v);
-        m_.for_each_outgoing(mv.v, [&](HalfedgeIdx h) { mark(m_.head(h)); });
+        for (const RingPair& wu : ring) mark(wu[0]);
       }
+    }
   }
 
   // ---------------------------------------------------------- step 1
@@ -803,8 +851,9 @@ class Optimiser {
       for (EdgeIdx e : region_edges())
         if (m_.alive(e) && length(e) < lo_ && editable(e))
           if (auto k = collapse(e); !k) return k.status();
+      // (a swap changes no other edge's editability: region_edges())
       for (EdgeIdx e : region_edges()) {
-        if (!editable(e) || !swap_ok(e, 0, hi_) || valence_gain(e) <= 0) continue;
+        if (!swap_ok(e, 0, hi_) || valence_gain(e) <= 0) continue;
         (void)swap(e);
       }
       if (o_.relax) relax_all(pass == 0);
@@ -970,6 +1019,14 @@ class Optimiser {
   RegionOptimiseReport rep_;
 
  private:
+  // relax_all's scratch, kept across rounds: the moves and their rings.
+  struct Move {
+    NodeIdx v;
+    Vec3d q;
+    std::uint32_t tri, ring_at, ring_size;
+  };
+  std::vector<Move> moves_;
+  std::vector<RingPair> ring_pairs_, rings_;
   Model& m_;
   const RegionOptimiseOptions& o_;
   double lo_ = 0, hi_ = 0, collapse_limit_ = 0;
@@ -991,6 +1048,7 @@ class Optimiser {
   std::vector<std::uint32_t> ref_ring_offset_, ref_ring_;  // triangles around each point
   std::vector<std::uint32_t> hint_;                        // per node: a triangle of ref_ at or near its closest point
   bool can_project_ = false, tree_built_ = false, walk_ = false;
+  bool any_border_ = false;  // see on_border
 };
 
 Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, std::span<const NodeIdx> fixed,
@@ -1020,26 +1078,36 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
   // A greedy repair can stall where every single operation makes some
   // ring worse; a relaxation of the whole region moves it out of that
   // state, and the repair runs again (at most three times more).
+  // `now` holds the statistics of the region as it is when `fresh` (each
+  // is a pass over the region's edges: not taken twice for one state).
+  EdgeLengthStats now;
+  bool fresh = false;
+  auto current = [&]() -> const EdgeLengthStats& {
+    if (!fresh) now = opt.stats(), fresh = true;
+    return now;
+  };
   auto repair = [&] {
     for (int round = 0; s && o.repair_budget > 0 && round < 4; ++round) {
       if (round > 0) {
-        if (opt.stats().outside == 0) break;
+        if (current().outside == 0) break;
         if (o.relax) opt.relax_all();
       }
       s = opt.repair(ctx);
+      fresh = false;
     }
   };
   repair();
   // Edges still out (a row too dense for collapses within hi, seen on the
   // garment tests): one more round with wide collapses, one without, and
   // the repair again. Costs nothing where the first repair succeeded.
-  if (s && o.passes > 0 && opt.stats().outside > 0) {
+  if (s && o.passes > 0 && current().outside > 0) {
     s = opt.rounds(ctx, 2, 1);
+    fresh = false;
     repair();
   }
-  if (temp.valid()) m.delete_mesh_edge(temp);
+  if (temp.valid()) m.delete_mesh_edge(temp);  // (no length or region changes)
   if (!s) return s;
-  opt.rep_.after = opt.stats();
+  opt.rep_.after = current();
   opt.rep_.max_deviation = opt.deviation();
   opt.rep_.region_faces = opt.count_region_faces();
   return opt.rep_;
@@ -1052,9 +1120,18 @@ Expected<RegionOptimiseReport> optimise_region(Model& model, std::span<const Fac
                                                const RegionOptimiseOptions& options, const ExecContext& ctx) {
   if (options.passes == 0 && options.repair_budget == 0)  // statistics only: nothing to undo
     return run(model, region, fixed, fixed_chain, options, ctx);
-  Model backup = model;  // transactional
-  auto r = run(model, region, fixed, fixed_chain, options, ctx);
-  if (!r) model = std::move(backup);
+  // Transactional: the work is done on a copy, which takes the model's
+  // place on success. The copy is made into columns reserved for the
+  // region's growth (the first round's splits add up to a node per face and
+  // three edges and two faces per face before its collapses free slots):
+  // no column is reallocated and copied again while it grows.
+  const std::size_t grow = region.size();
+  Model work;
+  work.reserve(model.nodes.slots.capacity() + 2 * grow, model.edges.slots.capacity() + 4 * grow,
+               model.faces.slots.capacity() + 3 * grow);
+  work = model;
+  auto r = run(work, region, fixed, fixed_chain, options, ctx);
+  if (r) model = std::move(work);
   return r;
 }
 
