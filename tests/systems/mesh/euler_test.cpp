@@ -442,7 +442,9 @@ struct RandomBuilder {
       case 1:
       case 2: {
         if (nodes.empty()) break;
-        auto r = make_vertex_edge(m, m.handle(pick(nodes)), rpos());
+        // The draws in a fixed order (a function's arguments have none: clang and GCC differ).
+        const Vec3d at = rpos();
+        auto r = make_vertex_edge(m, m.handle(pick(nodes)), at);
         if ((s = r.status()))
           undo.push_back([i = r->node.idx](Model& x) { return st(kill_vertex_edge(x, x.handle(i))); });
         break;
@@ -480,7 +482,8 @@ struct RandomBuilder {
       }
       case 7: {
         if (faces.empty()) break;
-        auto r = make_vertex_ring(m, m.handle(pick(faces)), rpos());
+        const Vec3d at = rpos();
+        auto r = make_vertex_ring(m, m.handle(pick(faces)), at);
         if ((s = r.status())) undo.push_back([i = r->idx](Model& x) { return st(kill_vertex_ring(x, x.handle(i))); });
         break;
       }
