@@ -689,13 +689,8 @@ class Optimiser {
   /// and the moves of a relaxation, so the moves walk this list instead of
   /// the halfedge columns again (cold in cache by then on a large region).
   bool no_flip_ring(const Vec3d& p, const Vec3d& q, std::span<const RingPair> ring, double cos_min) const {
-    for (const RingPair& wu : ring) {
-      if (!wu[1].valid()) continue;
-      const Vec3d& a = m_.position(wu[0]);
-      const Vec3d& b = m_.position(wu[1]);
-      const Vec3d n0 = tri_normal(p, a, b), n1 = tri_normal(q, a, b);
-      if (!(n0.dot(n1) > cos_min * n0.norm() * n1.norm())) return false;
-    }
+    for (const RingPair& wu : ring)
+      if (wu[1].valid() && !keeps_turn(p, q, m_.position(wu[0]), m_.position(wu[1]), cos_min)) return false;
     return true;
   }
 
@@ -705,12 +700,15 @@ class Optimiser {
     const Vec3d p = m_.position(v);
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
       if (!ok || !m_.face(h).valid()) return;
-      const Vec3d& a = m_.position(m_.head(h));
-      const Vec3d& b = m_.position(m_.head(m_.next(h)));
-      const Vec3d n0 = tri_normal(p, a, b), n1 = tri_normal(q, a, b);
-      ok = n0.dot(n1) > cos_min * n0.norm() * n1.norm();
+      ok = keeps_turn(p, q, m_.position(m_.head(h)), m_.position(m_.head(m_.next(h))), cos_min);
     });
     return ok;
+  }
+
+  /// Triangle (p, a, b) moved to (q, a, b) turns by less than acos(cos_min).
+  static bool keeps_turn(const Vec3d& p, const Vec3d& q, const Vec3d& a, const Vec3d& b, double cos_min) {
+    const Vec3d n0 = tri_normal(p, a, b), n1 = tri_normal(q, a, b);
+    return n0.dot(n1) > cos_min * n0.norm() * n1.norm();
   }
 
   /// How far v's editable ring edges are outside [lo, hi] with v at q.
