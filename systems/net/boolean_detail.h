@@ -11,7 +11,9 @@
 #include <atelier/storage/union_find.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <span>
@@ -120,6 +122,26 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
 /// (triangles_cross), or {kNil, kNil} when the mesh does not intersect itself.
 [[nodiscard]] std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh,
                                                                const ExecContext& ctx);
+
+/// The orientation of (a, b, c) seen along `axis` (coordinates axis + 1 and
+/// axis + 2): +1 or -1 when Shewchuk's orient2d bound (3 + 16 eps) eps
+/// certifies it, 0 when the filter cannot tell.
+[[nodiscard]] inline int certified_orient2(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) noexcept {
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  const double left = (a[i] - c[i]) * (b[j] - c[j]), right = (a[j] - c[j]) * (b[i] - c[i]);
+  const double det = left - right, sum = std::abs(left) + std::abs(right);
+  constexpr double kBound = 3.3306690738754716e-16;  // (3 + 16 eps) eps
+  if (!(sum > 1e-280) || !(sum < std::numeric_limits<double>::infinity())) return 0;
+  const double bound = kBound * sum;
+  return det > bound ? 1 : (-det > bound ? -1 : 0);
+}
+
+/// Per node of bvh (m's hierarchy): 1 when the node's triangles certainly
+/// form an embedded disk (self_check.cpp: a disk whose triangles all
+/// project along one axis with the same certain orientation and whose
+/// boundary projects to a certainly simple polygon), so no two of them
+/// cross and first_self_crossing skips the node's pairs with itself.
+[[nodiscard]] std::vector<std::uint8_t> embedded_nodes(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx);
 
 // ----------------------------------------------------------- exact kernel
 // All decisions below are exact (CGAL's filtered predicates on the input

@@ -342,10 +342,15 @@ namespace {
 // three of each, so tasks (the frontier plus task 0) stay below this.
 constexpr std::size_t kMaxTasks = 1024;
 
+// `skip` (self only, may be empty): nodes whose pairs with themselves are
+// not visited (embedded_nodes: no two of their triangles cross).
 template <class Visit>
-void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx, std::size_t& tasks, Visit&& visit) {
+void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx, std::size_t& tasks, Visit&& visit,
+                std::span<const std::uint8_t> skip = {}) {
   tasks = 0;
   if (ba.nodes.empty() || bb.nodes.empty()) return;
+  auto skipped = [&](std::uint32_t n) { return !skip.empty() && skip[n] != 0; };
+  if (self && skipped(0)) return;
   using NodePair = std::array<std::uint32_t, 2>;
   auto leaf = [](const Bvh::Node& n) { return n.left == kNil; };
   // Children to visit for a node pair (self: unordered pairs only).
@@ -353,9 +358,9 @@ void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx,
     const Bvh::Node& x = ba.nodes[np[0]];
     const Bvh::Node& y = bb.nodes[np[1]];
     if (self && np[0] == np[1]) {
-      push({x.left, x.left});
+      if (!skipped(x.left)) push({x.left, x.left});
       push({x.left, x.left + 1});
-      push({x.left + 1, x.left + 1});
+      if (!skipped(x.left + 1)) push({x.left + 1, x.left + 1});
       return;
     }
     // Split the node holding more triangles (a leaf never): halves the
@@ -483,19 +488,6 @@ inline int certified_side(const Vec3d& a, const PlaneFilter& f, const Vec3d& p) 
   return det > bound ? 1 : (-det > bound ? -1 : 0);
 }
 
-/// The orientation of (a, b, c) seen along `axis` (coordinates axis + 1 and
-/// axis + 2): +1 or -1 when Shewchuk's orient2d bound (3 + 16 eps) eps
-/// certifies it, 0 when the filter cannot tell.
-inline int certified_orient2(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) noexcept {
-  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-  const double left = (a[i] - c[i]) * (b[j] - c[j]), right = (a[j] - c[j]) * (b[i] - c[i]);
-  const double det = left - right, sum = std::abs(left) + std::abs(right);
-  constexpr double kBound = 3.3306690738754716e-16;  // (3 + 16 eps) eps
-  if (!(sum > 1e-280) || !(sum < std::numeric_limits<double>::infinity())) return 0;
-  const double bound = kBound * sum;
-  return det > bound ? 1 : (-det > bound ? -1 : 0);
-}
-
 /// True when triangles t1 and t2 of one net certainly meet at most in the
 /// corners and edge they share: the other one's corners that are not
 /// shared lie strictly on one side of one triangle's plane, by the
@@ -550,12 +542,19 @@ std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bv
   // decide see the exact test, so every decision stays exact.
   std::vector<PlaneFilter> pf(m.tri.size());
   par::for_each_n(ctx, m.tri.size(), [&](std::size_t t) { pf[t] = plane_filter(m, static_cast<std::uint32_t>(t)); });
+  // Patches certified embedded (self_check.cpp) are not walked inside:
+  // only their seams with each other are.
+  const std::vector<std::uint8_t> embedded = embedded_nodes(m, bvh, ctx);
   std::vector<std::array<std::uint32_t, 2>> first(kMaxTasks, {kNil, kNil});
   std::size_t tasks = 0;
-  dual_visit(bvh, bvh, true, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
-    if (std::array<std::uint32_t, 2>{i, j} < first[task] && !certified_apart(m, pf, i, j) && triangles_cross(m, i, j))
-      first[task] = {i, j};
-  });
+  dual_visit(
+      bvh, bvh, true, ctx, tasks,
+      [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+        if (std::array<std::uint32_t, 2>{i, j} < first[task] && !certified_apart(m, pf, i, j) &&
+            triangles_cross(m, i, j))
+          first[task] = {i, j};
+      },
+      embedded);
   // The smallest crossing pair over all tasks: the same for any thread count.
   return *std::min_element(first.begin(), first.end());
 }
