@@ -431,17 +431,53 @@ std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old) {
   return out;
 }
 
+namespace {
+
+/// From p inside the body along the unit direction dir until c outside it:
+/// sphere tracing (a step of the distance to the body never crosses its
+/// surface), at most `reach` far. False when it does not get out.
+bool march_out(const CollisionBody& body, const Vec3d& p, const Vec3d& dir, double c, double reach, Vec3d& out) {
+  double t = 0;
+  for (int k = 0; k < 64 && t <= reach; ++k) {
+    const BodyDistance d = body.query(p + t * dir);
+    if (d.triangle == kNoTriangle) return false;
+    if (d.distance >= c) {
+      out = p + t * dir;
+      return out.allFinite();
+    }
+    t += d.distance < 0 ? std::max(-d.distance, 0.25 * c) : c - d.distance + 1e-3 * c;
+  }
+  return false;
+}
+
+}  // namespace
+
 /// The push of the collision pass (systems/garment/collision_pass.h step 3)
 /// on the new nodes: closer than c (or inside) -> closest body point + c n.
+/// With the copies' axes (the first push of a ring B's sweep), a node inside
+/// the body whose closest point lies towards its copy's axis (a limb or the
+/// shoulder through the sleeve's wall: the closest point would take the
+/// wall inwards, to the far side of the limb from its neighbours) goes out
+/// away from the axis instead, through the body to c beyond it, when that
+/// is within the copy's radius.
 void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
-              std::vector<char>& pushed) {
+              std::vector<char>& pushed, const CopyAxes* axes) {
   const std::vector<NodeIdx> nodes = new_nodes(m, old);
   for (int r = 0; r < rounds; ++r) {
     bool any = false;
     for (NodeIdx v : nodes) {
-      const BodyDistance d = body.query(m.position(v));
+      const Vec3d p = m.position(v);
+      const BodyDistance d = body.query(p);
       if (d.triangle == kNoTriangle || !(d.distance < c * (1 - 1e-9))) continue;
-      const Vec3d q = d.closest + c * d.normal;
+      Vec3d q = d.closest + c * d.normal;
+      if (axes && d.distance < 0 && v.value < axes->normal.size() && axes->normal[v.value] != Vec3d::Zero()) {
+        const Vec3d n = axes->normal[v.value];
+        Vec3d radial = p - axes->centre[v.value];
+        radial -= radial.dot(n) * n;
+        const double rn = radial.norm();
+        Vec3d out;
+        if (rn > 0 && (q - p).dot(radial) < 0 && march_out(body, p, radial / rn, c, rn, out)) q = out;
+      }
       if (!q.allFinite()) continue;
       m.nodes.position[v.value] = q;
       if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
@@ -451,6 +487,13 @@ void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body,
     if (!any) break;
   }
 }
+
+/// refine_outside's edges: at least this long (in L; the splits of a
+/// crease halve edges round after round), at most this many rounds (on the
+/// garment sleeve the count of edges dipping into the body stops falling
+/// after 4-6).
+constexpr double kRefineShortest = 0.25;
+constexpr int kRefineRounds = 6;
 
 Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
   HalfedgeIdx h = m.find_halfedge(a, b);
@@ -490,9 +533,24 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
     swept.push_back(m.new_face(surface, cyc));
     return {};
   };
+  extrude_detail::CopyAxes axes;
   for (const auto& row : copies) {
     std::vector<NodeIdx> cur;
     for (const Vec3d& p : row) cur.push_back(m.new_node(surface, p));
+    if (opt.body && ring && row.size() >= 3) {
+      // The copy's centre and (Newell) normal: the sweep's axis at it.
+      Vec3d centre = Vec3d::Zero(), normal = Vec3d::Zero();
+      for (std::size_t t = 0; t < row.size(); ++t) {
+        centre += row[t];
+        normal += row[t].cross(row[(t + 1) % row.size()]);
+      }
+      centre /= static_cast<double>(row.size());
+      if (normal.norm() > 0) {
+        axes.centre.resize(m.nodes.slots.capacity(), Vec3d::Zero());
+        axes.normal.resize(m.nodes.slots.capacity(), Vec3d::Zero());
+        for (NodeIdx v : cur) axes.centre[v.value] = centre, axes.normal[v.value] = normal.normalized();
+      }
+    }
     for (std::size_t t = 0; t < segs; ++t) {
       const std::size_t u = (t + 1) % n;
       // Rule 2: prev[t] -> prev[u] is B's faceless direction (or negative
@@ -512,9 +570,20 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
 
   std::vector<char> pushed;
   if (opt.body) {
-    push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
-    if (opt.optimise)
+    push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed, &axes);
+    if (opt.optimise) {
       extrude_detail::smooth_pushed(m, old_node, pushed, *opt.body, opt.clearance, opt.push_rounds, opt.body_smoothing);
+      // The surface the optimisation keeps to, outside the body between the
+      // nodes too (extrude_body.cpp); its new faces join the region.
+      auto splits = extrude_detail::refine_outside(m, old_node, *opt.body, opt.clearance,
+                                                   kRefineShortest * rep.base_mean_edge, kRefineRounds, pushed);
+      if (!splits) return fail(splits.status().code(), splits.status().message());
+      if (*splits > 0) {
+        swept.clear();
+        for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
+          if (m.alive(FaceIdx{f}) && !(f < old_face.size() && old_face[f])) swept.push_back(FaceIdx{f});
+      }
+    }
   }
 
   // Step 5: optimisation (Fig. 9).

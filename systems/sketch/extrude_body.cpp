@@ -11,10 +11,19 @@
 //    pushed nodes and their neighbours (umbrella steps, each followed by the
 //    push) so that the surface the optimisation keeps to is a smooth one
 //    outside the body.
+//  - Even with every node outside, a triangle between pushed nodes can run
+//    through the body (its nodes moved apart by the push, or to either side
+//    of a crease): the optimisation, which projects onto that surface, then
+//    puts nodes inside, and the last push moved them up to 2 L and
+//    stretched their edges out of bounds (the sleeve's 1.35-1.9 L edges).
+//    refine_outside splits every new edge whose midpoint is in the body at
+//    that midpoint pushed out, a few rounds, so that the surface the
+//    optimisation keeps to runs outside the body. On by default with a body.
 //  - After the optimisation, the last push moves nodes again without
 //    remeshing. settle re-optimises only the faces around the edges that
 //    are then outside the bounds (optimise_region on that small region,
 //    B fixed) and pushes again, a few times.
+#include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/optimise_region.h>
@@ -100,6 +109,41 @@ void smooth_pushed(Model& m, const std::vector<char>& old, const std::vector<cha
     for (std::size_t i = 0; i < nodes.size(); ++i) m.nodes.position[nodes[i].value] = next[i];
     push_out(m, old, body, c, push_rounds, again);
   }
+}
+
+Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, const CollisionBody& body, double c,
+                                     double min_length, int rounds, std::vector<char>& pushed) {
+  EditOptions eo;
+  eo.check_ring_nodes = false;
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity() && !eo.check_ring_nodes; ++v)
+    eo.check_ring_nodes = m.alive(NodeIdx{v}) && m.nodes.in_face[v].valid();
+  std::size_t splits = 0;
+  std::vector<EdgeIdx> dipping;
+  for (int r = 0; r < rounds; ++r) {
+    dipping.clear();
+    for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+      if (!m.alive(EdgeIdx{e})) continue;
+      const NodeIdx a = m.tail(halfedge_of(EdgeIdx{e}, 0)), b = m.tail(halfedge_of(EdgeIdx{e}, 1));
+      if (!is_new(old, a) && !is_new(old, b)) continue;
+      const Vec3d pa = m.position(a), pb = m.position(b);
+      if ((pa - pb).norm() >= min_length && body.query(0.5 * (pa + pb)).distance < 0) dipping.push_back(EdgeIdx{e});
+    }
+    if (dipping.empty()) break;
+    // (a split leaves the other listed edges alive: each is split once)
+    for (EdgeIdx e : dipping) {
+      const NodeIdx a = m.tail(halfedge_of(e, 0)), b = m.tail(halfedge_of(e, 1));
+      const BodyDistance d = body.query(0.5 * (m.position(a) + m.position(b)));
+      const Vec3d q = d.closest + c * d.normal;
+      if (d.triangle == kNoTriangle || !q.allFinite()) continue;
+      auto sp = edge_split(m, m.handle(e), q, eo);
+      if (!sp) return sp.status();
+      const NodeIdx v = sp->nodes.at(0).idx;
+      if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
+      pushed[v.value] = 1;
+      ++splits;
+    }
+  }
+  return splits;
 }
 
 Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::vector<char>& old_face,
