@@ -321,6 +321,59 @@ TEST(ExtrudeGarment, DressSleeveAndCollarOnTheTopOutsideTheBodyOnAFewMannequins)
   for (Design d : {Design::kDress, Design::kSleeve, Design::kCollar}) run_bodies(2, d);
 }
 
+TEST(ExtrudeGarment, TheSleevesSweepDoesNotFoldBack) {
+  // The sleeve's strokes on the first two mannequins: eq. 2's greedy path
+  // took one-sided steps there that turned the copy about the stationary
+  // end, moving up to 24 of the armhole's 48 points back by 0.46-0.74 L
+  // (sleeve8's probe; docs/performance.md, sweep10). The sweep now takes a
+  // path without such steps: from the report's similarities applied to B
+  // (an independent placement of the copies), no point of B moves against
+  // the motion of the pair's midpoint by more than 0.1 L between
+  // consecutive copies, and the counts are those of K copies.
+  const auto& fx = atelier::testing::template_fixture();
+  const ProfileTemplate& top = fx.templates[0];
+  struct Folds {
+    std::string error;
+    std::size_t copies = 0, back = 0, counts_off = 0;
+    double worst = 0;
+  };
+  const auto got = sketch_test::on_sampled_mannequins<Folds>(2, [&](const ReferenceBody& body) {
+    Folds out;
+    auto m = regenerate_top(body, top, fx.body, bounds(top.model));
+    if (!m) return Folds{m.status().to_string()};
+    auto in = design_strokes(*m, Design::kSleeve);
+    if (!in) return Folds{in.status().to_string()};
+    ExtrudeOptions o;
+    o.pick_radius = 30;
+    o.optimise = false;
+    auto r = extrude(*m, *in, o, ExecContext::sequential());
+    if (!r) return Folds{r.status().to_string()};
+    if (Status s = validate(*m); !s) return Folds{s.to_string()};
+    std::vector<Vec3d> B;
+    for (NodeIdx v : r->base) B.push_back(m->position(v));
+    auto at = [&](std::size_t k, const Vec3d& p) -> Vec3d {
+      return k == 0 ? p : Vec3d(r->translations[k - 1] + r->scales[k - 1] * (r->rotations[k - 1] * p));
+    };
+    out.copies = r->copies;
+    out.counts_off = (r->swept_nodes != B.size() * r->copies) + (r->swept_faces != 2 * B.size() * r->copies);
+    for (std::size_t k = 1; k <= r->copies; ++k) {
+      const Vec3d d = (0.5 * (at(k, r->p1) + at(k, r->p2)) - 0.5 * (at(k - 1, r->p1) + at(k - 1, r->p2))).normalized();
+      for (const Vec3d& p : B) {
+        const double a = (at(k, p) - at(k - 1, p)).dot(d) / r->base_mean_edge;
+        out.back += a < -0.1;
+        out.worst = std::min(out.worst, a);
+      }
+    }
+    return out;
+  });
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(got[i].error, "") << "body " << i;
+    EXPECT_GE(got[i].copies, 10u) << "body " << i;
+    EXPECT_EQ(got[i].counts_off, 0u) << "body " << i;
+    EXPECT_EQ(got[i].back, 0u) << "body " << i << ": worst " << got[i].worst << " L";
+  }
+}
+
 TEST(ExtrudeGarment, BodySmoothingAndSettleRoundsCutTheSleevesEdgesOutOfBounds) {
   // The opt-in passes around the body push (ExtrudeOptions::body_smoothing,
   // settle_rounds): on the first two mannequins the sleeve ends with fewer
