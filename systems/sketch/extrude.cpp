@@ -604,7 +604,7 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
     push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
     if (opt.optimise && opt.settle_rounds > 0) {
       auto ops = extrude_detail::settle(m, old_node, old_face, B, chain, oo, *opt.body, opt.clearance, opt.push_rounds,
-                                        opt.settle_rounds, pushed, ctx);
+                                        opt.settle_rounds, kRefineShortest, kRefineRounds, pushed, ctx);
       if (!ops) return fail(ops.status().code(), ops.status().message());
       rep.settle_ops = *ops;
       // The bounds as they end, after the last push.

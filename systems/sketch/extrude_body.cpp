@@ -22,7 +22,7 @@
 //  - After the optimisation, the last push moves nodes again without
 //    remeshing. settle re-optimises only the faces around the edges that
 //    are then outside the bounds (optimise_region on that small region,
-//    B fixed) and pushes again, a few times.
+//    B fixed, after refine_outside) and pushes again, a few times.
 #include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
@@ -149,10 +149,17 @@ Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, con
 Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::vector<char>& old_face,
                              std::span<const NodeIdx> B, std::span<const HalfedgeIdx> chain,
                              const RegionOptimiseOptions& oo, const CollisionBody& body, double c, int push_rounds,
-                             int rounds, std::vector<char>& pushed, const ExecContext& ctx) {
+                             int rounds, double refine_shortest, int refine_rounds, std::vector<char>& pushed,
+                             const ExecContext& ctx) {
   const double lo = oo.low * oo.target, hi = oo.high * oo.target;
   std::size_t ops = 0;
   for (int r = 0; r < rounds; ++r) {
+    // The surface this round's optimisation keeps to, outside the body
+    // between the nodes too (see refine_outside): without it, the nodes it
+    // places on triangles through the body go back out with the push, and
+    // the same edges leave the bounds round after round.
+    auto splits = refine_outside(m, old, body, c, refine_shortest * oo.target, refine_rounds, pushed);
+    if (!splits) return splits.status();
     std::vector<char> mark(m.nodes.slots.capacity(), 0);
     bool any = false;
     for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {

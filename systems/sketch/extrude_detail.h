@@ -75,14 +75,15 @@ void smooth_pushed(Model& m, const std::vector<char>& old, const std::vector<cha
 /// `rounds` times (extrude_body.cpp). Returns the splits.
 [[nodiscard]] Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, const CollisionBody& body,
                                                    double c, double min_length, int rounds, std::vector<char>& pushed);
-/// After the last push: optimise_region on the faces around edges with a
-/// new node outside [low, high] target, then the push, up to `rounds` times
+/// After the last push: refine_outside (refine_shortest * target,
+/// refine_rounds), optimise_region on the faces around edges with a new
+/// node outside [low, high] target, then the push, up to `rounds` times
 /// (extrude_body.cpp). Returns the operations applied.
 [[nodiscard]] Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::vector<char>& old_face,
                                            std::span<const NodeIdx> B, std::span<const HalfedgeIdx> chain,
                                            const RegionOptimiseOptions& oo, const CollisionBody& body, double c,
-                                           int push_rounds, int rounds, std::vector<char>& pushed,
-                                           const ExecContext& ctx);
+                                           int push_rounds, int rounds, double refine_shortest, int refine_rounds,
+                                           std::vector<char>& pushed, const ExecContext& ctx);
 /// Lengths of the edges with a new node against [low, high] L.
 [[nodiscard]] EdgeLengthStats new_edge_stats(const Model& m, const std::vector<char>& old, double L, double low,
                                              double high);
