@@ -1,9 +1,9 @@
-// Why this file is long: the five steps of seed 002 (base curve, plane, sweep,
-// sewing, optimisation call) and the two additions beyond the paper (the
-// body push, the part as its own surface) share one transactional run();
-// the optimisation itself lives in optimise_region.cpp, the passes around
-// the body push in extrude_body.cpp, the part's surface in
-// extrude_surface.cpp.
+// Why this file is long: the five steps of seed 002 (base curve, plane, sweep
+// with its fold check, sewing, optimisation call) and the two additions
+// beyond the paper (the body push, the part as its own surface) share one
+// transactional run(); the optimisation itself lives in optimise_region.cpp,
+// the body push and the passes around it in extrude_body.cpp, the part's
+// surface in extrude_surface.cpp.
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/cut.h>
@@ -348,13 +348,15 @@ std::vector<Pair> sweep_two(const std::vector<Vec3d>& a, const std::vector<Vec3d
     };
     std::vector<Cell> grid(na * nb);
     grid[0].folds = 0;
-    std::vector<std::vector<Vec3d>> copy(na * nb);
-    std::vector<char> placed(na * nb, 0);
-    for (std::size_t c = 0; c < na * nb; ++c) placed[c] = cob.place({a[c / nb], b[c % nb]}, copy[c]);
-    for (std::size_t i = 0; i < na; ++i)
+    // The copies of the grid's rows i - 1 and i (two rows: a grid of copies
+    // would hold na nb |B| points).
+    std::vector<std::vector<Vec3d>> row_prev(nb), row_cur(nb);
+    std::vector<char> placed_prev(nb, 0), placed_cur(nb, 0);
+    for (std::size_t i = 0; i < na; ++i) {
+      for (std::size_t j = 0; j < nb; ++j) placed_cur[j] = cob.place({a[i], b[j]}, row_cur[j]);
       for (std::size_t j = 0; j < nb; ++j) {
         Cell& cell = grid[i * nb + j];
-        if ((i || j) && !placed[i * nb + j]) continue;  // no copy here: the path avoids it
+        if ((i || j) && !placed_cur[j]) continue;  // no copy here: the path avoids it
         const double l = (a[i] - b[j]).norm();
         for (std::uint8_t cs = 1; cs <= 3; ++cs) {
           if ((cs & 1) && i == 0) continue;
@@ -362,12 +364,17 @@ std::vector<Pair> sweep_two(const std::vector<Vec3d>& a, const std::vector<Vec3d
           const std::size_t pi = i - (cs & 1 ? 1 : 0), pj = j - (cs & 2 ? 1 : 0);
           const Cell& prev = grid[pi * nb + pj];
           if (prev.folds == std::numeric_limits<std::size_t>::max()) continue;
-          const std::size_t f = prev.folds + (placed[pi * nb + pj] && cob.folds({a[pi], b[pj]}, copy[pi * nb + pj],
-                                                                                {a[i], b[j]}, copy[i * nb + j]));
+          const bool prev_placed = pi == i ? placed_cur[pj] : placed_prev[pj];
+          const std::vector<Vec3d>& prev_copy = pi == i ? row_cur[pj] : row_prev[pj];
+          const std::size_t f =
+              prev.folds + (prev_placed && cob.folds({a[pi], b[pj]}, prev_copy, {a[i], b[j]}, row_cur[j]));
           const double len = prev.length + l;
           if (f < cell.folds || (f == cell.folds && len < cell.length)) cell = {f, len, cs};
         }
       }
+      row_prev.swap(row_cur);
+      placed_prev.swap(placed_cur);
+    }
     if (grid.back().folds != std::numeric_limits<std::size_t>::max()) {
       path.clear();
       for (std::size_t i = na - 1, j = nb - 1; i || j;) {
@@ -429,63 +436,6 @@ std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old) {
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
     if (m.alive(NodeIdx{v}) && !(v < old.size() && old[v])) out.push_back(NodeIdx{v});
   return out;
-}
-
-namespace {
-
-/// From p inside the body along the unit direction dir until c outside it:
-/// sphere tracing (a step of the distance to the body never crosses its
-/// surface), at most `reach` far. False when it does not get out.
-bool march_out(const CollisionBody& body, const Vec3d& p, const Vec3d& dir, double c, double reach, Vec3d& out) {
-  double t = 0;
-  for (int k = 0; k < 64 && t <= reach; ++k) {
-    const BodyDistance d = body.query(p + t * dir);
-    if (d.triangle == kNoTriangle) return false;
-    if (d.distance >= c) {
-      out = p + t * dir;
-      return out.allFinite();
-    }
-    t += d.distance < 0 ? std::max(-d.distance, 0.25 * c) : c - d.distance + 1e-3 * c;
-  }
-  return false;
-}
-
-}  // namespace
-
-/// The push of the collision pass (systems/garment/collision_pass.h step 3)
-/// on the new nodes: closer than c (or inside) -> closest body point + c n.
-/// With the copies' axes (the first push of a ring B's sweep), a node inside
-/// the body whose closest point lies towards its copy's axis (a limb or the
-/// shoulder through the sleeve's wall: the closest point would take the
-/// wall inwards, to the far side of the limb from its neighbours) goes out
-/// away from the axis instead, through the body to c beyond it, when that
-/// is within the copy's radius.
-void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
-              std::vector<char>& pushed, const CopyAxes* axes) {
-  const std::vector<NodeIdx> nodes = new_nodes(m, old);
-  for (int r = 0; r < rounds; ++r) {
-    bool any = false;
-    for (NodeIdx v : nodes) {
-      const Vec3d p = m.position(v);
-      const BodyDistance d = body.query(p);
-      if (d.triangle == kNoTriangle || !(d.distance < c * (1 - 1e-9))) continue;
-      Vec3d q = d.closest + c * d.normal;
-      if (axes && d.distance < 0 && v.value < axes->normal.size() && axes->normal[v.value] != Vec3d::Zero()) {
-        const Vec3d n = axes->normal[v.value];
-        Vec3d radial = p - axes->centre[v.value];
-        radial -= radial.dot(n) * n;
-        const double rn = radial.norm();
-        Vec3d out;
-        if (rn > 0 && (q - p).dot(radial) < 0 && march_out(body, p, radial / rn, c, rn, out)) q = out;
-      }
-      if (!q.allFinite()) continue;
-      m.nodes.position[v.value] = q;
-      if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
-      pushed[v.value] = 1;
-      any = true;
-    }
-    if (!any) break;
-  }
 }
 
 /// refine_outside's edges: at least this long (in L; the splits of a

@@ -1,6 +1,7 @@
 // The extrusion kept outside a body (issue 21, beyond seed 002, whose
-// section 6 lists collision as future work): the two passes around the
-// body push that keep the extruded part within the edge bounds of step 5.
+// section 6 lists collision as future work): the body push itself
+// (push_out) and the passes around it that keep the extruded part within
+// the edge bounds of step 5.
 //
 //  - Before the optimisation, the push moves the swept nodes that lie in the
 //    body onto it (closest point + clearance): neighbouring nodes pushed to
@@ -57,7 +58,60 @@ void grow(const Model& m, const std::vector<char>& old, std::vector<char>& mark,
   }
 }
 
+/// From p inside the body along the unit direction dir until c outside it:
+/// sphere tracing (a step of the distance to the body never crosses its
+/// surface), at most `reach` far. False when it does not get out.
+bool march_out(const CollisionBody& body, const Vec3d& p, const Vec3d& dir, double c, double reach, Vec3d& out) {
+  double t = 0;
+  for (int k = 0; k < 64 && t <= reach; ++k) {
+    const BodyDistance d = body.query(p + t * dir);
+    if (d.triangle == kNoTriangle) return false;
+    if (d.distance >= c) {
+      out = p + t * dir;
+      return out.allFinite();
+    }
+    t += d.distance < 0 ? std::max(-d.distance, 0.25 * c) : c - d.distance + 1e-3 * c;
+  }
+  return false;
+}
+
 }  // namespace
+
+/// The push of the collision pass (systems/garment/collision_pass.h step 3)
+/// on the new nodes: closer than c (or inside) -> closest body point + c n.
+/// With the copies' axes (the first push of a ring B's sweep), a node inside
+/// the body whose closest point lies towards its copy's axis (a limb or the
+/// shoulder through the sleeve's wall: the closest point would take the
+/// wall inwards, to the far side of the limb from its neighbours) goes out
+/// away from the axis instead, through the body to c beyond it, when that
+/// is within the copy's radius.
+void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
+              std::vector<char>& pushed, const CopyAxes* axes) {
+  const std::vector<NodeIdx> nodes = new_nodes(m, old);
+  for (int r = 0; r < rounds; ++r) {
+    bool any = false;
+    for (NodeIdx v : nodes) {
+      const Vec3d p = m.position(v);
+      const BodyDistance d = body.query(p);
+      if (d.triangle == kNoTriangle || !(d.distance < c * (1 - 1e-9))) continue;
+      Vec3d q = d.closest + c * d.normal;
+      if (axes && d.distance < 0 && v.value < axes->normal.size() && axes->normal[v.value] != Vec3d::Zero()) {
+        const Vec3d n = axes->normal[v.value];
+        Vec3d radial = p - axes->centre[v.value];
+        radial -= radial.dot(n) * n;
+        const double rn = radial.norm();
+        Vec3d out;
+        if (rn > 0 && (q - p).dot(radial) < 0 && march_out(body, p, radial / rn, c, rn, out)) q = out;
+      }
+      if (!q.allFinite()) continue;
+      m.nodes.position[v.value] = q;
+      if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
+      pushed[v.value] = 1;
+      any = true;
+    }
+    if (!any) break;
+  }
+}
 
 EdgeLengthStats new_edge_stats(const Model& m, const std::vector<char>& old, double L, double low, double high) {
   EdgeLengthStats st;
