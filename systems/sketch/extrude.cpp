@@ -1,9 +1,9 @@
-// Why this file is long: the five steps of seed 002 (base curve, plane, sweep,
-// sewing, optimisation call) and the two additions beyond the paper (the
-// body push, the part as its own surface) share one transactional run();
-// the optimisation itself lives in optimise_region.cpp, the passes around
-// the body push in extrude_body.cpp, the part's surface in
-// extrude_surface.cpp.
+// Why this file is long: the five steps of seed 002 (base curve, plane, sweep
+// with its fold check, sewing, optimisation call) and the two additions
+// beyond the paper (the body push, the part as its own surface) share one
+// transactional run(); the optimisation itself lives in optimise_region.cpp,
+// the body push and the passes around it in extrude_body.cpp, the part's
+// surface in extrude_surface.cpp.
 #include <atelier/storage/topology.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/cut.h>
@@ -251,13 +251,59 @@ std::vector<Vec3d> dedupe(std::vector<Vec3d> v) {
   return out;
 }
 
-/// (left, right) pairs of the sweep (eq. 2): every step the case with the
-/// shortest new segment; ties to the lower case.
+/// A (left, right) pair of the sweep (eq. 2): the ends of one copy of P1*P2*.
 struct Pair {
   Vec3d left, right;
 };
-std::vector<Pair> sweep_two(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
-  std::vector<Pair> out;
+
+/// Backwards motion of a point of B between consecutive copies that counts
+/// as a fold, in B's mean edge lengths: less is a sliver the optimisation
+/// removes.
+constexpr double kFoldTolerance = 0.1;
+
+/// Where a pair of the sweep puts B's points: the similarity of eq. 2 that
+/// maps P1*P2* onto (left, right) (rotation by the frames [n_p, e, n_p x e],
+/// scale by the length ratio), as run() places the copies.
+struct CopyOfBase {
+  std::span<const Vec3d> base;
+  Vec3d p1, np;
+  Mat3d f_star;
+  double chord = 1, tolerance = 0;  // backwards motion allowed: a fraction of B's mean edge
+
+  /// False when the pair's segment has no length (no copy).
+  [[nodiscard]] bool place(const Pair& q, std::vector<Vec3d>& out) const {
+    Vec3d e = q.right - q.left;
+    e -= e.dot(np) * np;
+    const double len = e.norm();
+    if (!(len > 1e-9 * chord)) return false;
+    const Vec3d u = e / len;
+    Mat3d f;
+    f << np, u, np.cross(u);
+    const Mat3d rot = (len / chord) * (f * f_star.transpose());
+    out.resize(base.size());
+    for (std::size_t t = 0; t < base.size(); ++t) out[t] = q.left + rot * (base[t] - p1);
+    return true;
+  }
+  /// A step folds when a point of B moves backwards (against the motion of
+  /// the pair's midpoint) by more than the tolerance: the new strip then
+  /// lies over the previous one. This is what eq. 2's one-sided cases do to
+  /// a non-planar B: the copy turns about the stationary end, and B's points
+  /// off the plane of the turn move back.
+  [[nodiscard]] bool folds(const Pair& from, const std::vector<Vec3d>& cf, const Pair& to,
+                           const std::vector<Vec3d>& ct) const {
+    const Vec3d d = 0.5 * (to.left + to.right) - 0.5 * (from.left + from.right);
+    const double dn = d.norm();
+    if (!(dn > 0)) return false;
+    for (std::size_t t = 0; t < cf.size(); ++t)
+      if ((ct[t] - cf[t]).dot(d) < -tolerance * dn) return true;
+    return false;
+  }
+};
+
+/// The paper's greedy sweep (eq. 2) on strokes a (left) and b (right): every
+/// step the case with the shortest new segment; ties to the lower case.
+std::vector<std::array<std::size_t, 2>> greedy_path(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
+  std::vector<std::array<std::size_t, 2>> out;
   std::size_t i = 0, j = 0;
   while (i + 1 < a.size() || j + 1 < b.size()) {
     double best = std::numeric_limits<double>::infinity();
@@ -270,8 +316,78 @@ std::vector<Pair> sweep_two(const std::vector<Vec3d>& a, const std::vector<Vec3d
     if (j + 1 < b.size()) consider(i, j + 1);                          // case 2
     if (i + 1 < a.size() && j + 1 < b.size()) consider(i + 1, j + 1);  // case 3
     i = ni, j = nj;
-    out.push_back({a[i], b[j]});
+    out.push_back({i, j});
   }
+  return out;
+}
+
+/// The sweep of two strokes. Eq. 2's greedy path when none of its steps
+/// folds (see CopyOfBase::folds); otherwise (a departure from seed 002,
+/// docs/glossary.md) the monotone path over the same stroke points with the
+/// fewest folding steps, then the smallest sum of segment lengths (eq. 2's
+/// goodness 1/l summed), found by dynamic programming over the (i, j) grid.
+std::vector<Pair> sweep_two(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b, const CopyOfBase& cob) {
+  std::vector<std::array<std::size_t, 2>> path = greedy_path(a, b);
+  std::vector<Vec3d> cf, ct;
+  const auto folding = [&](std::size_t i0, std::size_t j0, std::size_t i1, std::size_t j1) {
+    const Pair from{a[i0], b[j0]}, to{a[i1], b[j1]};
+    if (!cob.place(from, cf) || !cob.place(to, ct)) return false;  // run() refuses a collapsed copy
+    return cob.folds(from, cf, to, ct);
+  };
+  bool any = false;
+  for (std::size_t k = 0; k < path.size() && !any; ++k)
+    any = folding(k ? path[k - 1][0] : 0, k ? path[k - 1][1] : 0, path[k][0], path[k][1]);
+  if (any) {
+    // Cost to reach (i, j): (folding steps, sum of segment lengths), the
+    // grid in row-major order so that every predecessor comes first.
+    const std::size_t na = a.size(), nb = b.size();
+    struct Cell {
+      std::size_t folds = std::numeric_limits<std::size_t>::max();
+      double length = 0;
+      std::uint8_t from = 0;  // 1: (i-1, j), 2: (i, j-1), 3: (i-1, j-1)
+    };
+    std::vector<Cell> grid(na * nb);
+    grid[0].folds = 0;
+    // The copies of the grid's rows i - 1 and i (two rows: a grid of copies
+    // would hold na nb |B| points).
+    std::vector<std::vector<Vec3d>> row_prev(nb), row_cur(nb);
+    std::vector<char> placed_prev(nb, 0), placed_cur(nb, 0);
+    for (std::size_t i = 0; i < na; ++i) {
+      for (std::size_t j = 0; j < nb; ++j) placed_cur[j] = cob.place({a[i], b[j]}, row_cur[j]);
+      for (std::size_t j = 0; j < nb; ++j) {
+        Cell& cell = grid[i * nb + j];
+        if ((i || j) && !placed_cur[j]) continue;  // no copy here: the path avoids it
+        const double l = (a[i] - b[j]).norm();
+        for (std::uint8_t cs = 1; cs <= 3; ++cs) {
+          if ((cs & 1) && i == 0) continue;
+          if ((cs & 2) && j == 0) continue;
+          const std::size_t pi = i - (cs & 1 ? 1 : 0), pj = j - (cs & 2 ? 1 : 0);
+          const Cell& prev = grid[pi * nb + pj];
+          if (prev.folds == std::numeric_limits<std::size_t>::max()) continue;
+          const bool prev_placed = pi == i ? placed_cur[pj] : placed_prev[pj];
+          const std::vector<Vec3d>& prev_copy = pi == i ? row_cur[pj] : row_prev[pj];
+          const std::size_t f =
+              prev.folds + (prev_placed && cob.folds({a[pi], b[pj]}, prev_copy, {a[i], b[j]}, row_cur[j]));
+          const double len = prev.length + l;
+          if (f < cell.folds || (f == cell.folds && len < cell.length)) cell = {f, len, cs};
+        }
+      }
+      row_prev.swap(row_cur);
+      placed_prev.swap(placed_cur);
+    }
+    if (grid.back().folds != std::numeric_limits<std::size_t>::max()) {
+      path.clear();
+      for (std::size_t i = na - 1, j = nb - 1; i || j;) {
+        path.push_back({i, j});
+        const std::uint8_t cs = grid[i * nb + j].from;
+        i -= cs & 1 ? 1 : 0;
+        j -= cs & 2 ? 1 : 0;
+      }
+      std::reverse(path.begin(), path.end());
+    }
+  }
+  std::vector<Pair> out;
+  for (const auto& ij : path) out.push_back({a[ij[0]], b[ij[1]]});
   return out;
 }
 /// One stroke q: left from q.front(), right from q.back(), towards each
@@ -322,26 +438,12 @@ std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old) {
   return out;
 }
 
-/// The push of the collision pass (systems/garment/collision_pass.h step 3)
-/// on the new nodes: closer than c (or inside) -> closest body point + c n.
-void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
-              std::vector<char>& pushed) {
-  const std::vector<NodeIdx> nodes = new_nodes(m, old);
-  for (int r = 0; r < rounds; ++r) {
-    bool any = false;
-    for (NodeIdx v : nodes) {
-      const BodyDistance d = body.query(m.position(v));
-      if (d.triangle == kNoTriangle || !(d.distance < c * (1 - 1e-9))) continue;
-      const Vec3d q = d.closest + c * d.normal;
-      if (!q.allFinite()) continue;
-      m.nodes.position[v.value] = q;
-      if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
-      pushed[v.value] = 1;
-      any = true;
-    }
-    if (!any) break;
-  }
-}
+/// refine_outside's edges: at least this long (in L; the splits of a
+/// crease halve edges round after round), at most this many rounds (on the
+/// garment sleeve the count of edges dipping into the body stops falling
+/// after 4-6).
+constexpr double kRefineShortest = 0.25;
+constexpr int kRefineRounds = 6;
 
 Expected<HalfedgeIdx> halfedge_for(Model& m, NodeIdx a, NodeIdx b) {
   HalfedgeIdx h = m.find_halfedge(a, b);
@@ -381,9 +483,24 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
     swept.push_back(m.new_face(surface, cyc));
     return {};
   };
+  extrude_detail::CopyAxes axes;
   for (const auto& row : copies) {
     std::vector<NodeIdx> cur;
     for (const Vec3d& p : row) cur.push_back(m.new_node(surface, p));
+    if (opt.body && ring && row.size() >= 3) {
+      // The copy's centre and (Newell) normal: the sweep's axis at it.
+      Vec3d centre = Vec3d::Zero(), normal = Vec3d::Zero();
+      for (std::size_t t = 0; t < row.size(); ++t) {
+        centre += row[t];
+        normal += row[t].cross(row[(t + 1) % row.size()]);
+      }
+      centre /= static_cast<double>(row.size());
+      if (normal.norm() > 0) {
+        axes.centre.resize(m.nodes.slots.capacity(), Vec3d::Zero());
+        axes.normal.resize(m.nodes.slots.capacity(), Vec3d::Zero());
+        for (NodeIdx v : cur) axes.centre[v.value] = centre, axes.normal[v.value] = normal.normalized();
+      }
+    }
     for (std::size_t t = 0; t < segs; ++t) {
       const std::size_t u = (t + 1) % n;
       // Rule 2: prev[t] -> prev[u] is B's faceless direction (or negative
@@ -403,9 +520,20 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
 
   std::vector<char> pushed;
   if (opt.body) {
-    push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
-    if (opt.optimise)
+    push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed, &axes);
+    if (opt.optimise) {
       extrude_detail::smooth_pushed(m, old_node, pushed, *opt.body, opt.clearance, opt.push_rounds, opt.body_smoothing);
+      // The surface the optimisation keeps to, outside the body between the
+      // nodes too (extrude_body.cpp); its new faces join the region.
+      auto splits = extrude_detail::refine_outside(m, old_node, *opt.body, opt.clearance,
+                                                   kRefineShortest * rep.base_mean_edge, kRefineRounds, pushed);
+      if (!splits) return fail(splits.status().code(), splits.status().message());
+      if (*splits > 0) {
+        swept.clear();
+        for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
+          if (m.alive(FaceIdx{f}) && !(f < old_face.size() && old_face[f])) swept.push_back(FaceIdx{f});
+      }
+    }
   }
 
   // Step 5: optimisation (Fig. 9).
@@ -426,7 +554,7 @@ Expected<ExtrudeReport> finish(Model& m, ExtrudeReport rep, bool ring, const std
     push_out(m, old_node, *opt.body, opt.clearance, opt.push_rounds, pushed);
     if (opt.optimise && opt.settle_rounds > 0) {
       auto ops = extrude_detail::settle(m, old_node, old_face, B, chain, oo, *opt.body, opt.clearance, opt.push_rounds,
-                                        opt.settle_rounds, pushed, ctx);
+                                        opt.settle_rounds, kRefineShortest, kRefineRounds, pushed, ctx);
       if (!ops) return fail(ops.status().code(), ops.status().message());
       rep.settle_ops = *ops;
       // The bounds as they end, after the last push.
@@ -546,11 +674,14 @@ Expected<ExtrudeReport> run(Model& m, const ExtrudeStrokes& in, const ExtrudeOpt
   }
 
   // Step 3: sweep (Figs. 5-6, eq. 2).
-  const std::vector<Pair> pairs = capped ? sweep_one(proj[0]) : sweep_two(proj[0], proj[1]);
-  if (pairs.empty()) return fail(ErrorCode::kDegenerate, "the extruding stroke is too short for one copy of B");
   const Vec3d u_star = e_star / chord;
   Mat3d f_star;
   f_star << np, u_star, np.cross(u_star);
+  std::vector<Vec3d> base_points;
+  for (NodeIdx v : B) base_points.push_back(m.position(v));
+  const CopyOfBase cob{base_points, rep.p1, np, f_star, chord, kFoldTolerance * rep.base_mean_edge};
+  const std::vector<Pair> pairs = capped ? sweep_one(proj[0]) : sweep_two(proj[0], proj[1], cob);
+  if (pairs.empty()) return fail(ErrorCode::kDegenerate, "the extruding stroke is too short for one copy of B");
   std::vector<std::vector<Vec3d>> copies;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     Vec3d e = pairs[k].right - pairs[k].left;

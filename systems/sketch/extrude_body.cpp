@@ -1,6 +1,7 @@
 // The extrusion kept outside a body (issue 21, beyond seed 002, whose
-// section 6 lists collision as future work): the two passes around the
-// body push that keep the extruded part within the edge bounds of step 5.
+// section 6 lists collision as future work): the body push itself
+// (push_out) and the passes around it that keep the extruded part within
+// the edge bounds of step 5.
 //
 //  - Before the optimisation, the push moves the swept nodes that lie in the
 //    body onto it (closest point + clearance): neighbouring nodes pushed to
@@ -11,10 +12,19 @@
 //    pushed nodes and their neighbours (umbrella steps, each followed by the
 //    push) so that the surface the optimisation keeps to is a smooth one
 //    outside the body.
+//  - Even with every node outside, a triangle between pushed nodes can run
+//    through the body (its nodes moved apart by the push, or to either side
+//    of a crease): the optimisation, which projects onto that surface, then
+//    puts nodes inside, and the last push moved them up to 2 L and
+//    stretched their edges out of bounds (the sleeve's 1.35-1.9 L edges).
+//    refine_outside splits every new edge whose midpoint is in the body at
+//    that midpoint pushed out, a few rounds, so that the surface the
+//    optimisation keeps to runs outside the body. On by default with a body.
 //  - After the optimisation, the last push moves nodes again without
 //    remeshing. settle re-optimises only the faces around the edges that
 //    are then outside the bounds (optimise_region on that small region,
-//    B fixed) and pushes again, a few times.
+//    B fixed, after refine_outside) and pushes again, a few times.
+#include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
 #include <atelier/systems/sketch/optimise_region.h>
@@ -48,7 +58,60 @@ void grow(const Model& m, const std::vector<char>& old, std::vector<char>& mark,
   }
 }
 
+/// From p inside the body along the unit direction dir until c outside it:
+/// sphere tracing (a step of the distance to the body never crosses its
+/// surface), at most `reach` far. False when it does not get out.
+bool march_out(const CollisionBody& body, const Vec3d& p, const Vec3d& dir, double c, double reach, Vec3d& out) {
+  double t = 0;
+  for (int k = 0; k < 64 && t <= reach; ++k) {
+    const BodyDistance d = body.query(p + t * dir);
+    if (d.triangle == kNoTriangle) return false;
+    if (d.distance >= c) {
+      out = p + t * dir;
+      return out.allFinite();
+    }
+    t += d.distance < 0 ? std::max(-d.distance, 0.25 * c) : c - d.distance + 1e-3 * c;
+  }
+  return false;
+}
+
 }  // namespace
+
+/// The push of the collision pass (systems/garment/collision_pass.h step 3)
+/// on the new nodes: closer than c (or inside) -> closest body point + c n.
+/// With the copies' axes (the first push of a ring B's sweep), a node inside
+/// the body whose closest point lies towards its copy's axis (a limb or the
+/// shoulder through the sleeve's wall: the closest point would take the
+/// wall inwards, to the far side of the limb from its neighbours) goes out
+/// away from the axis instead, through the body to c beyond it, when that
+/// is within the copy's radius.
+void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
+              std::vector<char>& pushed, const CopyAxes* axes) {
+  const std::vector<NodeIdx> nodes = new_nodes(m, old);
+  for (int r = 0; r < rounds; ++r) {
+    bool any = false;
+    for (NodeIdx v : nodes) {
+      const Vec3d p = m.position(v);
+      const BodyDistance d = body.query(p);
+      if (d.triangle == kNoTriangle || !(d.distance < c * (1 - 1e-9))) continue;
+      Vec3d q = d.closest + c * d.normal;
+      if (axes && d.distance < 0 && v.value < axes->normal.size() && axes->normal[v.value] != Vec3d::Zero()) {
+        const Vec3d n = axes->normal[v.value];
+        Vec3d radial = p - axes->centre[v.value];
+        radial -= radial.dot(n) * n;
+        const double rn = radial.norm();
+        Vec3d out;
+        if (rn > 0 && (q - p).dot(radial) < 0 && march_out(body, p, radial / rn, c, rn, out)) q = out;
+      }
+      if (!q.allFinite()) continue;
+      m.nodes.position[v.value] = q;
+      if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
+      pushed[v.value] = 1;
+      any = true;
+    }
+    if (!any) break;
+  }
+}
 
 EdgeLengthStats new_edge_stats(const Model& m, const std::vector<char>& old, double L, double low, double high) {
   EdgeLengthStats st;
@@ -102,13 +165,55 @@ void smooth_pushed(Model& m, const std::vector<char>& old, const std::vector<cha
   }
 }
 
+Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, const CollisionBody& body, double c,
+                                     double min_length, int rounds, std::vector<char>& pushed) {
+  EditOptions eo;
+  eo.check_ring_nodes = false;
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity() && !eo.check_ring_nodes; ++v)
+    eo.check_ring_nodes = m.alive(NodeIdx{v}) && m.nodes.in_face[v].valid();
+  std::size_t splits = 0;
+  std::vector<EdgeIdx> dipping;
+  for (int r = 0; r < rounds; ++r) {
+    dipping.clear();
+    for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
+      if (!m.alive(EdgeIdx{e})) continue;
+      const NodeIdx a = m.tail(halfedge_of(EdgeIdx{e}, 0)), b = m.tail(halfedge_of(EdgeIdx{e}, 1));
+      if (!is_new(old, a) && !is_new(old, b)) continue;
+      const Vec3d pa = m.position(a), pb = m.position(b);
+      if ((pa - pb).norm() >= min_length && body.query(0.5 * (pa + pb)).distance < 0) dipping.push_back(EdgeIdx{e});
+    }
+    if (dipping.empty()) break;
+    // (a split leaves the other listed edges alive: each is split once)
+    for (EdgeIdx e : dipping) {
+      const NodeIdx a = m.tail(halfedge_of(e, 0)), b = m.tail(halfedge_of(e, 1));
+      const BodyDistance d = body.query(0.5 * (m.position(a) + m.position(b)));
+      const Vec3d q = d.closest + c * d.normal;
+      if (d.triangle == kNoTriangle || !q.allFinite()) continue;
+      auto sp = edge_split(m, m.handle(e), q, eo);
+      if (!sp) return sp.status();
+      const NodeIdx v = sp->nodes.at(0).idx;
+      if (v.value >= pushed.size()) pushed.resize(v.value + 1, 0);
+      pushed[v.value] = 1;
+      ++splits;
+    }
+  }
+  return splits;
+}
+
 Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::vector<char>& old_face,
                              std::span<const NodeIdx> B, std::span<const HalfedgeIdx> chain,
                              const RegionOptimiseOptions& oo, const CollisionBody& body, double c, int push_rounds,
-                             int rounds, std::vector<char>& pushed, const ExecContext& ctx) {
+                             int rounds, double refine_shortest, int refine_rounds, std::vector<char>& pushed,
+                             const ExecContext& ctx) {
   const double lo = oo.low * oo.target, hi = oo.high * oo.target;
   std::size_t ops = 0;
   for (int r = 0; r < rounds; ++r) {
+    // The surface this round's optimisation keeps to, outside the body
+    // between the nodes too (see refine_outside): without it, the nodes it
+    // places on triangles through the body go back out with the push, and
+    // the same edges leave the bounds round after round.
+    auto splits = refine_outside(m, old, body, c, refine_shortest * oo.target, refine_rounds, pushed);
+    if (!splits) return splits.status();
     std::vector<char> mark(m.nodes.slots.capacity(), 0);
     bool any = false;
     for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {

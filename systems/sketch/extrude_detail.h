@@ -55,21 +55,35 @@ struct BaseSide {
                                   std::vector<std::vector<Vec3d>>& copies);
 [[nodiscard]] double signed_volume(const Model& m);
 [[nodiscard]] std::vector<NodeIdx> new_nodes(const Model& m, const std::vector<char>& old);
+/// Per node slot, the centre and unit normal of the copy of a ring B the
+/// node was placed in (the sweep's axis there); a zero normal: none.
+struct CopyAxes {
+  std::vector<Vec3d> centre, normal;
+};
+/// The push of the collision pass on the new nodes (closest body point +
+/// c n). With axes, a node inside the body whose closest point lies towards
+/// its copy's axis goes out away from the axis instead (extrude.cpp).
 void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body, double c, int rounds,
-              std::vector<char>& pushed);
+              std::vector<char>& pushed, const CopyAxes* axes = nullptr);
 /// Before the optimisation: umbrella steps on the pushed nodes and two
 /// rings around them, each followed by the push, `rounds` times
 /// (extrude_body.cpp).
 void smooth_pushed(Model& m, const std::vector<char>& old, const std::vector<char>& pushed, const CollisionBody& body,
                    double c, int push_rounds, int rounds);
-/// After the last push: optimise_region on the faces around edges with a
-/// new node outside [low, high] target, then the push, up to `rounds` times
+/// After the first push: every new edge at least min_length long whose
+/// midpoint lies in the body split there, the new node pushed out, up to
+/// `rounds` times (extrude_body.cpp). Returns the splits.
+[[nodiscard]] Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, const CollisionBody& body,
+                                                   double c, double min_length, int rounds, std::vector<char>& pushed);
+/// After the last push: refine_outside (refine_shortest * target,
+/// refine_rounds), optimise_region on the faces around edges with a new
+/// node outside [low, high] target, then the push, up to `rounds` times
 /// (extrude_body.cpp). Returns the operations applied.
 [[nodiscard]] Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::vector<char>& old_face,
                                            std::span<const NodeIdx> B, std::span<const HalfedgeIdx> chain,
                                            const RegionOptimiseOptions& oo, const CollisionBody& body, double c,
-                                           int push_rounds, int rounds, std::vector<char>& pushed,
-                                           const ExecContext& ctx);
+                                           int push_rounds, int rounds, double refine_shortest, int refine_rounds,
+                                           std::vector<char>& pushed, const ExecContext& ctx);
 /// Lengths of the edges with a new node against [low, high] L.
 [[nodiscard]] EdgeLengthStats new_edge_stats(const Model& m, const std::vector<char>& old, double L, double low,
                                              double high);
