@@ -24,6 +24,7 @@ namespace {
 /// triangles below this area ratio r: zero elsewhere, infinite as a triangle
 /// collapses, so the minimiser never reaches a flip.
 constexpr double kBarrierRatio = 0.1;
+constexpr double kClearlyAbove = 2 * kBarrierRatio * (1 + 1e-9);
 
 /// Seam lengths: the initial penalty rho (times the mean stiffness), the
 /// rounds of multiplier updates at most, and the relative residual |c| / T
@@ -176,9 +177,13 @@ double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<c
   // triangle). Nearly every triangle is above r0 nearly always, and its
   // terms are exact zeros: the sums below skip them. Skipping +0 keeps the
   // bits, since a sum that starts at +0 is never -0.
+  // r = a_2D / A, or exactly kBarrierRatio when 2 a_2D is above 2 r0 A by
+  // more than rounding (r would come out at least r0: no division then).
   auto ratio = [&](std::size_t f) {
     const auto& c = t.tri[f];
-    return 0.5 * signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]) / rest.area[f];
+    const double a2 = signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]);
+    if (a2 > kClearlyAbove * rest.area[f]) return kBarrierRatio;
+    return 0.5 * a2 / rest.area[f];
   };
   auto term = [&](std::size_t f, double r) {
     if (!(r > 0)) return std::numeric_limits<double>::infinity();
@@ -260,7 +265,7 @@ double max_feasible_step(const PieceTopology& t, std::span<const Vec2d> uv, std:
     // of 2 a(s)) at s = cap keeps its area positive on [0, cap]: it has no
     // root there, so its roots need not be found (no square root, no
     // division). The margin covers the rounding of the bound.
-    if (alpha > 0 && alpha - cap * (std::abs(beta) + cap * std::abs(gamma)) > 1e-6 * alpha) return best;
+    if (alpha > 0 && (alpha - cap * (std::abs(beta) + cap * std::abs(gamma)) > 1e-6 * alpha)) return best;
     if (std::abs(gamma) <= 1e-14 * std::abs(beta)) {
       if (beta < 0) best = -alpha / beta;
       return best;
