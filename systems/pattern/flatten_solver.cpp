@@ -59,7 +59,11 @@ std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec
   struct Seg {
     std::uint32_t a, b;
   };
-  std::vector<Seg> seg;
+  // Called once per line-search step: the buffers stay with the thread.
+  thread_local std::vector<Seg> seg;
+  thread_local std::vector<std::pair<std::int64_t, std::uint32_t>> entries;  // (cell, segment)
+  thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> hits;
+  seg.clear(), entries.clear(), hits.clear();
   for (const auto& lp : t.loops)
     for (std::size_t i = 0; i < lp.size(); ++i) seg.push_back({lp[i], lp[(i + 1) % lp.size()]});
   if (seg.size() < 4) return 0;
@@ -80,7 +84,6 @@ std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec
     i = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.x() - box.min().x()) / cx), 0, nx - 1);
     j = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.y() - box.min().y()) / cy), 0, ny - 1);
   };
-  std::vector<std::pair<std::int64_t, std::uint32_t>> entries;  // (cell, segment)
   for (std::uint32_t s = 0; s < seg.size(); ++s) {
     std::int64_t i0, j0, i1, j1;
     cell_of(uv[seg[s].a], i0, j0);
@@ -97,7 +100,6 @@ std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec
     return ((d1 > 0) != (d2 > 0) || d1 == 0 || d2 == 0) && ((d3 > 0) != (d4 > 0) || d3 == 0 || d4 == 0) &&
            !(d1 == 0 && d2 == 0);  // collinear overlaps are not crossings of distinct segments here
   };
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> hits;
   for (std::size_t i = 0; i < entries.size();) {
     std::size_t j = i;
     while (j < entries.size() && entries[j].first == entries[i].first) ++j;
