@@ -4,6 +4,10 @@
 // (after Liu, Bouaziz, Kavan, "Quasi-Newton methods for real-time simulation
 // of hyperelastic materials", ACM TOG 36(3), 2017), the flip barrier and the
 // filtered line search, and the flip and overlap counts.
+// Why this file is long: the energies, the step limit and the solver that
+// calls them share the block structure of their sums and the step cap, which
+// keep every path (sequential scatter, parallel gather) at the same bits;
+// apart, those contracts would span two files.
 #include <atelier/engine/parallel.h>
 
 #include <Eigen/Dense>
@@ -178,9 +182,9 @@ double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<c
   // first two derivatives at r0, infinite at 0 (and for a flipped
   // triangle). Nearly every triangle is above r0 nearly always, and its
   // terms are exact zeros: the sums below skip them. Skipping +0 keeps the
-  // bits, since a sum that starts at +0 is never -0.
-  // r = a_2D / A, or exactly kBarrierRatio when 2 a_2D is above 2 r0 A by
-  // more than rounding (r would come out at least r0: no division then).
+  // bits, since a sum that starts at +0 is never -0. `ratio` returns r0
+  // itself, without the division, when 2 a_2D exceeds 2 r0 A by more than
+  // rounding (r would come out at least r0).
   auto ratio = [&](std::size_t f) {
     const auto& c = t.tri[f];
     const double a2 = signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]);
