@@ -14,6 +14,7 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -188,9 +189,10 @@ class Phase2Solver {
                                     std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx);
 
 /// The largest s > 0 for which uv + s dir still has every triangle CCW
-/// (infinity when no triangle ever flips along dir).
+/// (infinity when no triangle ever flips along dir); exact when below
+/// `cap`, else some value at least `cap`.
 [[nodiscard]] double max_feasible_step(const PieceTopology& t, std::span<const Vec2d> uv, std::span<const Vec2d> dir,
-                                       const ExecContext& ctx);
+                                       const ExecContext& ctx, double cap = std::numeric_limits<double>::infinity());
 
 /// Spring energy and, when `gradient` is not empty, dE/dQ per vertex.
 [[nodiscard]] double spring_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,

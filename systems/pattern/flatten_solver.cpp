@@ -4,10 +4,15 @@
 // (after Liu, Bouaziz, Kavan, "Quasi-Newton methods for real-time simulation
 // of hyperelastic materials", ACM TOG 36(3), 2017), the flip barrier and the
 // filtered line search, and the flip and overlap counts.
+// Why this file is long: the energies, the step limit and the solver that
+// calls them share the block structure of their sums and the step cap, which
+// keep every path (sequential scatter, parallel gather) at the same bits;
+// apart, those contracts would span two files.
 #include <atelier/engine/parallel.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -23,6 +28,7 @@ namespace {
 /// triangles below this area ratio r: zero elsewhere, infinite as a triangle
 /// collapses, so the minimiser never reaches a flip.
 constexpr double kBarrierRatio = 0.1;
+constexpr double kClearlyAbove = 2 * kBarrierRatio * (1 + 1e-9);
 
 /// Seam lengths: the initial penalty rho (times the mean stiffness), the
 /// rounds of multiplier updates at most, and the relative residual |c| / T
@@ -31,6 +37,15 @@ constexpr double kSeamPenalty = 100;
 constexpr double kSeamPenaltyMax = 1e2;  // rho grows tenfold per slow round, up to this times its start
 constexpr int kSeamRounds = 8;
 constexpr double kSeamTolerance = 1e-9;
+
+/// par::transform_reduce's block: the sequential paths below sum in the
+/// same blocks, so E has the same bits for any thread count.
+constexpr std::size_t kReduceBlock = 4096;
+
+/// The line search starts at min(1, 0.9 s_max): s_max is only needed
+/// exactly below 1 / 0.9, so max_feasible_step may skip the triangles that
+/// cannot flip before this.
+constexpr double kStepCap = 1.25;
 
 }  // namespace
 
@@ -48,7 +63,11 @@ std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec
   struct Seg {
     std::uint32_t a, b;
   };
-  std::vector<Seg> seg;
+  // Called once per line-search step: the buffers stay with the thread.
+  thread_local std::vector<Seg> seg;
+  thread_local std::vector<std::pair<std::int64_t, std::uint32_t>> entries;  // (cell, segment)
+  thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> hits;
+  seg.clear(), entries.clear(), hits.clear();
   for (const auto& lp : t.loops)
     for (std::size_t i = 0; i < lp.size(); ++i) seg.push_back({lp[i], lp[(i + 1) % lp.size()]});
   if (seg.size() < 4) return 0;
@@ -69,7 +88,6 @@ std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec
     i = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.x() - box.min().x()) / cx), 0, nx - 1);
     j = std::clamp<std::int64_t>(static_cast<std::int64_t>((p.y() - box.min().y()) / cy), 0, ny - 1);
   };
-  std::vector<std::pair<std::int64_t, std::uint32_t>> entries;  // (cell, segment)
   for (std::uint32_t s = 0; s < seg.size(); ++s) {
     std::int64_t i0, j0, i1, j1;
     cell_of(uv[seg[s].a], i0, j0);
@@ -86,7 +104,6 @@ std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec
     return ((d1 > 0) != (d2 > 0) || d1 == 0 || d2 == 0) && ((d3 > 0) != (d4 > 0) || d3 == 0 || d4 == 0) &&
            !(d1 == 0 && d2 == 0);  // collinear overlaps are not crossings of distinct segments here
   };
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> hits;
   for (std::size_t i = 0; i < entries.size();) {
     std::size_t j = i;
     while (j < entries.size() && entries[j].first == entries[i].first) ++j;
@@ -104,9 +121,35 @@ std::size_t count_boundary_crossings(const PieceTopology& t, std::span<const Vec
 double spring_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
                      std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx) {
   const bool want = !gradient.empty();
-  if (want) scratch.resize(t.spring.size());
+  const std::size_t ns = t.spring.size();
+  if (par::run_sequential(ctx, ns)) {
+    // One pass over the springs, the force scattered to both ends in spring
+    // order: each vertex receives its springs' terms in the order of the
+    // gather below (vs_spring is in spring order), so the gradient has the
+    // same bits; E is summed in par::transform_reduce's blocks.
+    if (want) std::fill(gradient.begin(), gradient.end(), Vec2d::Zero());
+    double e = 0;
+    for (std::size_t b0 = 0; b0 < ns; b0 += kReduceBlock) {
+      double acc = 0;
+      const std::size_t b1 = std::min(ns, b0 + kReduceBlock);
+      for (std::size_t s = b0; s < b1; ++s) {
+        const auto& sp = t.spring[s];
+        const Vec2d d = uv[sp[0]] - uv[sp[1]];
+        const double r = d.norm(), l = rest.length[s], c = rest.stiffness[s];
+        if (want) {
+          const Vec2d f = r > 0 ? Vec2d(c * (r - l) / r * d) : Vec2d::Zero();
+          gradient[sp[0]] += f;
+          gradient[sp[1]] -= f;
+        }
+        acc += 0.5 * c * (r - l) * (r - l);
+      }
+      e += acc;
+    }
+    return e;
+  }
+  if (want) scratch.resize(ns);
   const double e = par::transform_reduce(
-      ctx, t.spring.size(), 0.0,
+      ctx, ns, 0.0,
       [&](std::size_t s) {
         const auto& sp = t.spring[s];
         const Vec2d d = uv[sp[0]] - uv[sp[1]];
@@ -134,26 +177,74 @@ double spring_energy(const PieceTopology& t, const RestState& rest, std::span<co
 double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<const Vec2d> uv,
                       std::span<Vec2d> gradient, std::vector<Vec2d>& scratch, const ExecContext& ctx) {
   const bool want = !gradient.empty();
-  if (want) scratch.assign(3 * t.tri.size(), Vec2d::Zero());
+  const std::size_t nt = t.tri.size();
+  // phi(r) = -(r - r0)^2 ln(r / r0) for r = a_2D / A below r0: zero with its
+  // first two derivatives at r0, infinite at 0 (and for a flipped
+  // triangle). Nearly every triangle is above r0 nearly always, and its
+  // terms are exact zeros: the sums below skip them. Skipping +0 keeps the
+  // bits, since a sum that starts at +0 is never -0. `ratio` returns r0
+  // itself, without the division, when 2 a_2D exceeds 2 r0 A by more than
+  // rounding (r would come out at least r0).
+  auto ratio = [&](std::size_t f) {
+    const auto& c = t.tri[f];
+    const double a2 = signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]);
+    if (a2 > kClearlyAbove * rest.area[f]) return kBarrierRatio;
+    return 0.5 * a2 / rest.area[f];
+  };
+  auto term = [&](std::size_t f, double r) {
+    if (!(r > 0)) return std::numeric_limits<double>::infinity();
+    const double d = r - kBarrierRatio, lg = std::log(r / kBarrierRatio);
+    return -rest.area[f] * d * d * lg;
+  };
+  // dphi/dq_k = phi'(r) (da/dq_k) / A, the area factor cancelling against
+  // the energy's (A phi).
+  auto corner_gradient = [&](std::size_t f, double r, int k) -> Vec2d {
+    const auto& c = t.tri[f];
+    const double d = r - kBarrierRatio, lg = std::log(r / kBarrierRatio);
+    const double dphi = -2 * d * lg - d * d / r;
+    return dphi * area_gradient(uv[c[(k + 1) % 3]], uv[c[(k + 2) % 3]]);
+  };
+  if (par::run_sequential(ctx, nt)) {
+    // E in par::transform_reduce's blocks; the gradient scattered in
+    // triangle order, which is each vertex's order in vt_tri.
+    double e = 0;
+    std::size_t active = 0;
+    for (std::size_t b0 = 0; b0 < nt; b0 += kReduceBlock) {
+      double acc = 0;
+      const std::size_t b1 = std::min(nt, b0 + kReduceBlock);
+      for (std::size_t f = b0; f < b1; ++f) {
+        const double r = ratio(f);
+        if (r >= kBarrierRatio) continue;
+        acc += term(f, r);
+        ++active;
+      }
+      e += acc;
+    }
+    if (want && active && std::isfinite(e)) {
+      scratch.assign(t.vertex_count(), Vec2d::Zero());
+      for (std::size_t f = 0; f < nt; ++f) {
+        const double r = ratio(f);
+        if (r >= kBarrierRatio) continue;
+        for (int k = 0; k < 3; ++k) scratch[t.tri[f][k]] += corner_gradient(f, r, k);
+      }
+      for (std::size_t v = 0; v < t.vertex_count(); ++v) gradient[v] += scratch[v];
+    }
+    return e;
+  }
+  if (want) scratch.assign(3 * nt, Vec2d::Zero());
+  std::atomic<bool> any{false};
   const double e = par::transform_reduce(
-      ctx, t.tri.size(), 0.0,
+      ctx, nt, 0.0,
       [&](std::size_t f) {
-        const auto& c = t.tri[f];
-        const double A = rest.area[f];
-        const double r = 0.5 * signed_area2(uv[c[0]], uv[c[1]], uv[c[2]]) / A;
+        const double r = ratio(f);
         if (r >= kBarrierRatio) return 0.0;
-        if (!(r > 0)) return std::numeric_limits<double>::infinity();
-        // phi(r) = -(r - r0)^2 ln(r / r0): zero with its first two
-        // derivatives at r0, infinite at 0.
-        const double d = r - kBarrierRatio, lg = std::log(r / kBarrierRatio);
-        if (want) {
-          const double dphi = -2 * d * lg - d * d / r;  // d phi / d r; dr/dq = (da/dq) / A
-          for (int k = 0; k < 3; ++k) scratch[3 * f + k] = dphi * area_gradient(uv[c[(k + 1) % 3]], uv[c[(k + 2) % 3]]);
-        }
-        return -A * d * d * lg;
+        any.store(true, std::memory_order_relaxed);
+        if (want && r > 0)
+          for (int k = 0; k < 3; ++k) scratch[3 * f + k] = corner_gradient(f, r, k);
+        return term(f, r);
       },
       [](double a, double b) { return a + b; });
-  if (want && std::isfinite(e)) {
+  if (want && any.load() && std::isfinite(e)) {
     par::for_each_n(ctx, t.vertex_count(), [&](std::size_t v) {
       Vec2d g = Vec2d::Zero();
       for (std::uint32_t k = t.vt_off[v]; k < t.vt_off[v + 1]; ++k) {
@@ -168,29 +259,38 @@ double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<c
 }
 
 double max_feasible_step(const PieceTopology& t, std::span<const Vec2d> uv, std::span<const Vec2d> dir,
-                         const ExecContext& ctx) {
-  return par::transform_reduce(
-      ctx, t.tri.size(), std::numeric_limits<double>::infinity(),
-      [&](std::size_t f) {
-        // 2 a(s) = cross(e1 + s f1, e2 + s f2) = alpha + beta s + gamma s^2.
-        const auto& c = t.tri[f];
-        const Vec2d e1 = uv[c[1]] - uv[c[0]], e2 = uv[c[2]] - uv[c[0]];
-        const Vec2d f1 = dir[c[1]] - dir[c[0]], f2 = dir[c[2]] - dir[c[0]];
-        const double alpha = cross2(e1, e2), beta = cross2(e1, f2) + cross2(f1, e2), gamma = cross2(f1, f2);
-        double best = std::numeric_limits<double>::infinity();
-        if (std::abs(gamma) <= 1e-14 * std::abs(beta)) {
-          if (beta < 0) best = -alpha / beta;
-          return best;
-        }
-        const double disc = beta * beta - 4 * alpha * gamma;
-        if (disc < 0) return best;
-        // Stable roots: q = -(beta + sign(beta) sqrt(disc)) / 2; roots q / gamma, alpha / q.
-        const double q = -0.5 * (beta + std::copysign(std::sqrt(disc), beta));
-        for (double root : {q / gamma, q != 0 ? alpha / q : std::numeric_limits<double>::infinity()})
-          if (root > 0) best = std::min(best, root);
-        return best;
-      },
-      [](double a, double b) { return std::min(a, b); });
+                         const ExecContext& ctx, double cap) {
+  auto root = [&](std::size_t f) {
+    // 2 a(s) = cross(e1 + s f1, e2 + s f2) = alpha + beta s + gamma s^2.
+    const auto& c = t.tri[f];
+    const Vec2d e1 = uv[c[1]] - uv[c[0]], e2 = uv[c[2]] - uv[c[0]];
+    const Vec2d f1 = dir[c[1]] - dir[c[0]], f2 = dir[c[2]] - dir[c[0]];
+    const double alpha = cross2(e1, e2), beta = cross2(e1, f2) + cross2(f1, e2), gamma = cross2(f1, f2);
+    double best = std::numeric_limits<double>::infinity();
+    // A CCW triangle with alpha - |beta| s - |gamma| s^2 > 0 (a lower bound
+    // of 2 a(s)) at s = cap keeps its area positive on [0, cap]: it has no
+    // root there, so its roots need not be found (no square root, no
+    // division). The margin covers the rounding of the bound.
+    if (alpha > 0 && (alpha - cap * (std::abs(beta) + cap * std::abs(gamma)) > 1e-6 * alpha)) return best;
+    if (std::abs(gamma) <= 1e-14 * std::abs(beta)) {
+      if (beta < 0) best = -alpha / beta;
+      return best;
+    }
+    const double disc = beta * beta - 4 * alpha * gamma;
+    if (disc < 0) return best;
+    // Stable roots: q = -(beta + sign(beta) sqrt(disc)) / 2; roots q / gamma, alpha / q.
+    const double q = -0.5 * (beta + std::copysign(std::sqrt(disc), beta));
+    for (double x : {q / gamma, q != 0 ? alpha / q : std::numeric_limits<double>::infinity()})
+      if (x > 0) best = std::min(best, x);
+    return best;
+  };
+  if (par::run_sequential(ctx, t.tri.size())) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t f = 0; f < t.tri.size(); ++f) best = std::min(best, root(f));
+    return best;
+  }
+  return par::transform_reduce(ctx, t.tri.size(), std::numeric_limits<double>::infinity(), root,
+                               [](double a, double b) { return std::min(a, b); });
 }
 
 void Phase2Solver::analyze(const PieceTopology& t) {
@@ -446,7 +546,7 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
       // Filtered line search: start below the largest step that keeps every
       // triangle CCW, then backtrack (Armijo). The overlap guard refuses a
       // step that makes the boundary cross itself more than at the start.
-      const double limit = max_feasible_step(t, x, p, ctx);
+      const double limit = max_feasible_step(t, x, p, ctx, kStepCap);
       double step = std::min(1.0, 0.9 * limit);
       if (step < 1) ++stats.rejected_steps;
       bool accepted = false;
@@ -521,7 +621,7 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
       flat(p).setZero();
       for (std::size_t i = 0; i < kc; ++i) flat(p) -= mu[static_cast<Eigen::Index>(i)] * cflat(Z[i]);
       if (!p.empty() && !cflat(p).allFinite()) break;
-      double step = std::min(1.0, 0.9 * max_feasible_step(t, x, p, ctx));
+      double step = std::min(1.0, 0.9 * max_feasible_step(t, x, p, ctx, kStepCap));
       const double barrier_now = barrier_energy(t, rest, x, {}, tscratch, ctx);
       bool accepted = false;
       std::vector<double> ct;

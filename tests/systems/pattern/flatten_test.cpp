@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -236,6 +237,36 @@ TEST(Flatten, SameBitsForOneAndTwoThreads) {
   const auto a = flatten_positions(s, one), b = flatten_positions(s, two);
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec2d)), 0);
+}
+
+TEST(Flatten, SameBitsForOneAndTwoThreadsWhereTheFlipGuardActs) {
+  // Phase 2's sequential paths (one scatter pass over springs and over the
+  // triangles under the barrier, the step limit found only below 1.25) and
+  // its parallel ones (per-vertex gathers, every triangle's roots) give the
+  // same bits, also on pieces where the flip barrier and the step limit act.
+  const PolygonSoup saddle = flatten_shapes::grid(24, 24, [](int i, int j) {
+    const double x = -1 + i / 12.0, y = -1 + j / 12.0;
+    return Vec3d(x, y, x * x - y * y);
+  });
+  const PolygonSoup hemisphere = flatten_shapes::spherical_cap(12, M_PI / 2, 0.2);
+  ExecContext two;
+  two.threads = 2;
+  two.sequential_threshold = 1;
+  two.grain = 16;
+  int limited = 0;
+  for (const PolygonSoup* s : {&saddle, &hemisphere}) {
+    PieceFlattening p1, p2;
+    const auto a = flatten_positions(*s, ExecContext::sequential(), &p1), b = flatten_positions(*s, two, &p2);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec2d)), 0);
+    EXPECT_EQ(p1.iterations, p2.iterations);
+    EXPECT_EQ(p1.rejected_steps, p2.rejected_steps);
+    EXPECT_EQ(p1.energy, p2.energy);
+    limited += p1.rejected_steps > 0 ? 1 : 0;
+    std::printf("  iterations %d, steps limited or refused %d, Tutte start %d\n", p1.iterations, p1.rejected_steps,
+                p1.tutte_fallback ? 1 : 0);
+  }
+  EXPECT_GT(limited, 0);  // the step limit acted on at least one of them
 }
 
 TEST(Flatten, WarmStartFromAnotherBodyConvergesToTheColdResult) {
