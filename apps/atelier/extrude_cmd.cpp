@@ -111,7 +111,7 @@ CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
                 "with --body: umbrella steps on the pushed nodes before the optimisation (default 0: off)")
       ->check(CLI::Range(0, 100));
   c->add_option("--settle-rounds", opt.settle_rounds,
-                "with --body: rounds re-optimising around edges out of bounds after the last push (default 0)")
+                "with --body: rounds re-optimising around edges out of bounds after the last push (default 4; 0: off)")
       ->check(CLI::Range(0, 100));
   auto* mx = c->add_option("--mirror", opt.mirror,
                            "also extrude the mirror image across the plane through the origin normal to this axis "
@@ -171,8 +171,8 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
     eo.body = &body;
   }
   Expected<ExtrudeReport> r = !opt.replay.empty() ? replay_extrusion(m, *recipe, eo, common.context())
-                              : in                 ? extrude(m, *in, eo, common.context())
-                                                   : Expected<ExtrudeReport>(in.status());
+                              : in                ? extrude(m, *in, eo, common.context())
+                                                  : Expected<ExtrudeReport>(in.status());
   Expected<ExtrusionRecipe> out_recipe = ExtrusionRecipe{};
   if (r && !opt.recipe_out.empty()) out_recipe = extrusion_recipe(m, *r);
   const Status st = r ? Status{} : r.status();

@@ -123,7 +123,8 @@ std::unique_ptr<BodyChecks> body_checks(const ReferenceBody& body) {
 /// outside the body, and checks the new nodes against the body (BodyBvh
 /// signed distance, an oracle apart from the CollisionBody extrude uses).
 DressResult design_on(const ReferenceBody& body, const ProfileTemplate& top, const ReferenceBody& reference,
-                      const Box3d& roi, Design design, int body_smoothing = 0, int settle_rounds = 0) {
+                      const Box3d& roi, Design design, int body_smoothing = ExtrudeOptions{}.body_smoothing,
+                      int settle_rounds = ExtrudeOptions{}.settle_rounds) {
   DressResult out;
   const ProfileTemplate one[] = {top};
   auto regen =
@@ -388,7 +389,7 @@ TEST(ExtrudeGarment, BodySmoothingAndSettleRoundsCutTheSleevesEdgesOutOfBounds) 
     DressResult plain, settle, both;
   };
   const auto got = sketch_test::on_sampled_mannequins<Runs>(2, [&](const ReferenceBody& body) {
-    return Runs{"", design_on(body, top, fx.body, roi, Design::kSleeve),
+    return Runs{"", design_on(body, top, fx.body, roi, Design::kSleeve, 0, 0),
                 design_on(body, top, fx.body, roi, Design::kSleeve, 0, 4),
                 design_on(body, top, fx.body, roi, Design::kSleeve, 8, 4)};
   });
