@@ -171,8 +171,8 @@ int run_extrude(const Common& common, const ExtrudeCmdOptions& opt, Log& log) {
     eo.body = &body;
   }
   Expected<ExtrudeReport> r = !opt.replay.empty() ? replay_extrusion(m, *recipe, eo, common.context())
-                              : in                ? extrude(m, *in, eo, common.context())
-                                                  : Expected<ExtrudeReport>(in.status());
+                              : in                 ? extrude(m, *in, eo, common.context())
+                                                   : Expected<ExtrudeReport>(in.status());
   Expected<ExtrusionRecipe> out_recipe = ExtrusionRecipe{};
   if (r && !opt.recipe_out.empty()) out_recipe = extrusion_recipe(m, *r);
   const Status st = r ? Status{} : r.status();

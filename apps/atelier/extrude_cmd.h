@@ -27,7 +27,7 @@ namespace atelier::cli {
 struct ExtrudeCmdOptions {
   std::filesystem::path mesh, strokes, out, json;
   std::filesystem::path recipe_out, replay;  // write the recipe / replay one instead of strokes
-  std::size_t first = 0;                     // index of the run's first (base) stroke
+  std::size_t first = 0;  // index of the run's first (base) stroke
   double pick_radius = 12.0;
   bool no_optimise = false;
   bool as_surface = false;

@@ -197,8 +197,8 @@ py::dict extrude_report(const ExtrudeReport& r, bool as_surface, bool with_body)
 /// body, clearance, body_smoothing, settle_rounds: ExtrudeOptions' body
 /// fields, as the CLI's --body, --clearance, --body-smoothing and
 /// --settle-rounds. `body_model` and `body` must outlive the extrusion.
-void set_body(const OptMeshLike& body_arg, double clearance, int body_smoothing, int settle_rounds, Model& body_model,
-              CollisionBody& body, ExtrudeOptions& eo) {
+void set_body(const OptMeshLike& body_arg, double clearance, int body_smoothing, int settle_rounds,
+              Model& body_model, CollisionBody& body, ExtrudeOptions& eo) {
   if (!(clearance >= 0) || !std::isfinite(clearance)) value_error("clearance: a finite number >= 0");
   if (body_smoothing < 0 || settle_rounds < 0) value_error("body_smoothing, settle_rounds: counts >= 0");
   eo.clearance = clearance;
@@ -251,17 +251,16 @@ void def_extrude(py::module_& m) {
         // same part on another mesh of this topology (replay_extrusion);
         // None for a painted and cut base or a mirrored pair, which have none.
         const Expected<ExtrusionRecipe> recipe = extrusion_recipe(model, r);
-        rep["recipe"] =
-            recipe ? py::module_::import("json").attr("loads")(extrusion_recipe_json(*recipe)) : py::object(py::none());
+        rep["recipe"] = recipe ? py::module_::import("json").attr("loads")(extrusion_recipe_json(*recipe))
+                               : py::object(py::none());
         (void)model.compact();
         return py::make_tuple(mesh_of(std::move(model)), rep);
       },
       py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("first") = 0, py::arg("pick_radius") = 12.0,
       py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("mirror") = py::none(),
       py::arg("body") = py::none(), py::arg("clearance") = 0.002,
-      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing,
-      py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds, py::arg("threads") = 0,
-      py::arg("progress") = py::none(), R"doc(
+      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing, py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
+      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Extrudes a surface or a cavity from a mesh by sketched strokes (``atelier extrude``; seed 002).
 
 mesh: a Mesh (``read_mesh``) or a (vertices, faces) pair.
@@ -342,9 +341,8 @@ void def_replay_extrusion(py::module_& m) {
       },
       py::arg("mesh"), py::arg("recipe"), py::kw_only(), py::arg("optimise") = true, py::arg("as_surface") = false,
       py::arg("body") = py::none(), py::arg("clearance") = 0.002,
-      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing,
-      py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds, py::arg("threads") = 0,
-      py::arg("progress") = py::none(), R"doc(
+      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing, py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
+      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Grows a recorded extrusion again on another mesh (``atelier extrude
 --replay``; systems/sketch/extrude_recipe.h): the part drawn once (a sleeve
 from an armhole, a dress from a hem) on each body's garment without
