@@ -259,7 +259,8 @@ void def_extrude(py::module_& m) {
       py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("first") = 0, py::arg("pick_radius") = 12.0,
       py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("mirror") = py::none(),
       py::arg("body") = py::none(), py::arg("clearance") = 0.002,
-      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing, py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
+      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing,
+      py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
       py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Extrudes a surface or a cavity from a mesh by sketched strokes (``atelier extrude``; seed 002).
 
@@ -341,7 +342,8 @@ void def_replay_extrusion(py::module_& m) {
       },
       py::arg("mesh"), py::arg("recipe"), py::kw_only(), py::arg("optimise") = true, py::arg("as_surface") = false,
       py::arg("body") = py::none(), py::arg("clearance") = 0.002,
-      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing, py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
+      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing,
+      py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
       py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Grows a recorded extrusion again on another mesh (``atelier extrude
 --replay``; systems/sketch/extrude_recipe.h): the part drawn once (a sleeve
