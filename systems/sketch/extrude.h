@@ -133,12 +133,12 @@ struct ExtrudeOptions {
   /// optimisation keeps to is not folded where the push moved nodes onto
   /// the body; after the last push, up to `settle_rounds` times, the faces
   /// around the edges then outside the bounds optimised again (B fixed)
-  /// and pushed. body_smoothing is off by default (0); settle_rounds is on
-  /// (4): on the project top's sleeve over 100 mannequins it brings the
-  /// edges out of bounds after the last push from 0 / 8 / 60 (min / median /
-  /// max per body) to 0 / 1 / 32 (docs/performance.md, "issue 21, sweep10"
-  /// and "issue 21, sweep11"); 0 turns it off.
-  int body_smoothing = 0;
+  /// and pushed. On by default (8 and 4): on the project top's sleeve over
+  /// 100 mannequins they bring the edges out of bounds after the last push
+  /// from 0 / 8 / 60 (min / median / max per body; 1188 in all) to 0 / 0 / 30
+  /// (193), with the open end's chamfers collapsing in optimise_region
+  /// (docs/performance.md, "issue 21, sweep11"); 0 turns either off.
+  int body_smoothing = 8;
   int settle_rounds = 4;
   /// Beyond the paper: the extruded part becomes its own MESHSURFACE joined
   /// to the base along B by MESHJOINTs (systems/sketch/extrude_surface.cpp:
