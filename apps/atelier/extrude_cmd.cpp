@@ -111,7 +111,7 @@ CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
                 "with --body: umbrella steps on the pushed nodes before the optimisation (default 8; 0: off)")
       ->check(CLI::Range(0, 100));
   c->add_option("--settle-rounds", opt.settle_rounds,
-                "with --body: rounds re-optimising around edges out of bounds after the last push (default 4; 0: off)")
+                "with --body: rounds re-optimising around edges out of bounds after the last push (default 8; 0: off)")
       ->check(CLI::Range(0, 100));
   auto* mx = c->add_option("--mirror", opt.mirror,
                            "also extrude the mirror image across the plane through the origin normal to this axis "

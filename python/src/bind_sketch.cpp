@@ -290,7 +290,7 @@ body_smoothing, settle_rounds: with a body, the two passes around the push
     (``--body-smoothing``, ``--settle-rounds``; ExtrudeOptions): umbrella
     steps on the pushed nodes before the optimisation, and rounds that
     optimise again around edges out of bounds after the last push. By
-    default body_smoothing 8 and settle_rounds 4 (ExtrudeOptions; 0: off).
+    default body_smoothing 8 and settle_rounds 8 (ExtrudeOptions; 0: off).
 
 Returns (mesh, report): the result as a Mesh and the dict the CLI's --json
 writes (``copies``, ``swept_nodes``, ``swept_faces``, ``splits``,

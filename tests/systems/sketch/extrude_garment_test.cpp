@@ -198,11 +198,11 @@ void run_bodies(std::size_t n, Design design) {
     // regression shows (sweep11, 2026-11-26; docs/performance.md). With the
     // default settle rounds the optimiser's count is the one after the last
     // push. Dress and collar: at most 1 edge out (of ~2000; one dress body
-    // has 1). The sleeve (~800 new nodes): at most 30 (median 0, 69 bodies
+    // has 1). The sleeve (~800 new nodes): at most 31 (median 0, 90 bodies
     // of 100 at 0; sweep10's default 60, median 8). What is left lies where
     // the shoulder or the upper arm runs through the sleeve's first copies
     // and the push squeezes them onto it (6 bodies over 10).
-    EXPECT_LE(got[i].outside_bounds, design == Design::kSleeve ? 30u : 1u) << "body " << i;
+    EXPECT_LE(got[i].outside_bounds, design == Design::kSleeve ? 31u : 1u) << "body " << i;
     EXPECT_EQ(got[i].outside_bounds, got[i].brute_outside) << "body " << i;
   }
 }
