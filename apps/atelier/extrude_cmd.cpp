@@ -108,10 +108,10 @@ CLI::App* add_extrude_subcommand(CLI::App& app, ExtrudeCmdOptions& opt) {
   c->add_option("--clearance", opt.clearance, "with --body: distance kept from the body (model units)")
       ->check(CLI::NonNegativeNumber);
   c->add_option("--body-smoothing", opt.body_smoothing,
-                "with --body: umbrella steps on the pushed nodes before the optimisation (default 0: off)")
+                "with --body: umbrella steps on the pushed nodes before the optimisation (default 8; 0: off)")
       ->check(CLI::Range(0, 100));
   c->add_option("--settle-rounds", opt.settle_rounds,
-                "with --body: rounds re-optimising around edges out of bounds after the last push (default 0)")
+                "with --body: rounds re-optimising around edges out of bounds after the last push (default 8; 0: off)")
       ->check(CLI::Range(0, 100));
   auto* mx = c->add_option("--mirror", opt.mirror,
                            "also extrude the mirror image across the plane through the origin normal to this axis "

@@ -13,6 +13,8 @@
 // mesh: no mesh is written, the --json report holds the error), 4 internal.
 #pragma once
 
+#include <atelier/systems/sketch/extrude.h>
+
 #include <CLI/CLI.hpp>
 #include <cstddef>
 #include <filesystem>
@@ -31,8 +33,8 @@ struct ExtrudeCmdOptions {
   bool as_surface = false;
   std::filesystem::path body;  // a closed mesh the extruded part is kept outside of
   double clearance = 0.002;
-  int body_smoothing = 0;  // ExtrudeOptions::body_smoothing
-  int settle_rounds = 0;   // ExtrudeOptions::settle_rounds
+  int body_smoothing = ExtrudeOptions{}.body_smoothing;  // the library's defaults
+  int settle_rounds = ExtrudeOptions{}.settle_rounds;
   std::string mirror;        // "x", "y" or "z": the plane through the origin normal to that axis
   std::string mirror_plane;  // "px,py,pz,nx,ny,nz"
 };

@@ -258,8 +258,10 @@ void def_extrude(py::module_& m) {
       },
       py::arg("mesh"), py::arg("strokes"), py::kw_only(), py::arg("first") = 0, py::arg("pick_radius") = 12.0,
       py::arg("optimise") = true, py::arg("as_surface") = false, py::arg("mirror") = py::none(),
-      py::arg("body") = py::none(), py::arg("clearance") = 0.002, py::arg("body_smoothing") = 0,
-      py::arg("settle_rounds") = 0, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("body") = py::none(), py::arg("clearance") = 0.002,
+      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing,
+      py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
+      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Extrudes a surface or a cavity from a mesh by sketched strokes (``atelier extrude``; seed 002).
 
 mesh: a Mesh (``read_mesh``) or a (vertices, faces) pair.
@@ -287,8 +289,8 @@ body: None, or a closed body (Mesh, Body or (vertices, faces)) the
 body_smoothing, settle_rounds: with a body, the two passes around the push
     (``--body-smoothing``, ``--settle-rounds``; ExtrudeOptions): umbrella
     steps on the pushed nodes before the optimisation, and rounds that
-    optimise again around edges out of bounds after the last push. 0 (off)
-    by default.
+    optimise again around edges out of bounds after the last push. By
+    default body_smoothing 8 and settle_rounds 8 (ExtrudeOptions; 0: off).
 
 Returns (mesh, report): the result as a Mesh and the dict the CLI's --json
 writes (``copies``, ``swept_nodes``, ``swept_faces``, ``splits``,
@@ -339,8 +341,10 @@ void def_replay_extrusion(py::module_& m) {
         return py::make_tuple(mesh_of(std::move(model)), rep);
       },
       py::arg("mesh"), py::arg("recipe"), py::kw_only(), py::arg("optimise") = true, py::arg("as_surface") = false,
-      py::arg("body") = py::none(), py::arg("clearance") = 0.002, py::arg("body_smoothing") = 0,
-      py::arg("settle_rounds") = 0, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("body") = py::none(), py::arg("clearance") = 0.002,
+      py::arg("body_smoothing") = ExtrudeOptions{}.body_smoothing,
+      py::arg("settle_rounds") = ExtrudeOptions{}.settle_rounds,
+      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Grows a recorded extrusion again on another mesh (``atelier extrude
 --replay``; systems/sketch/extrude_recipe.h): the part drawn once (a sleeve
 from an armhole, a dress from a hem) on each body's garment without

@@ -397,8 +397,14 @@ class Optimiser {
       if (bb && !ba) p = m_.position(b);
       if (ba && bb && !border_edge) return NodeIdx{};
       if (ba && bb) {  // along the border: a corner keeps its place
-        const bool ca = corner(a), cb = corner(b);
-        if (ca && cb) return NodeIdx{};
+        bool ca = corner(a), cb = corner(b);
+        // Two corners at the ends of one short border edge (a chamfer of
+        // the free end, e.g. the last copy of a B with a short edge between
+        // two turns) meet at the edge's midpoint when each turns by less
+        // than 60 degrees: the border then turns once, by about their sum,
+        // and the free end keeps its outline to within half the edge.
+        if (ca && cb && !(border_edge && chamfer(a) && chamfer(b))) return NodeIdx{};
+        if (ca && cb) ca = cb = false;
         if (ca) p = m_.position(a);
         if (cb) p = m_.position(b);
       }
@@ -623,7 +629,12 @@ class Optimiser {
 
   /// A border node where the border turns by more than 30 degrees (or with
   /// other than two border edges): its position is kept.
-  bool corner(NodeIdx v) const {
+  bool corner(NodeIdx v) const { return !(border_turn_cos(v) > std::cos(M_PI / 6)); }
+  /// A corner whose border turns by less than 60 degrees (two border edges).
+  bool chamfer(NodeIdx v) const { return border_turn_cos(v) > 0.5; }
+  /// Cosine of the border's turn at v (1 off the border; -2 with other than
+  /// two border edges).
+  double border_turn_cos(NodeIdx v) const {
     Vec3d nb[2];
     int kb = 0;
     m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
@@ -631,10 +642,11 @@ class Optimiser {
       if (kb < 2) nb[kb] = m_.position(m_.head(h));
       ++kb;
     });
-    if (kb == 0) return false;
-    if (kb != 2) return true;
+    if (kb == 0) return 1;
+    if (kb != 2) return -2;
     const Vec3d p = m_.position(v), d0 = p - nb[0], d1 = nb[1] - p;
-    return !(d0.dot(d1) > std::cos(M_PI / 6) * d0.norm() * d1.norm());
+    const double den = d0.norm() * d1.norm();
+    return den > 0 ? d0.dot(d1) / den : -2;
   }
 
   /// Relaxation target of v (not applied). Inner nodes: the centroid of
