@@ -7,6 +7,7 @@
 // bit for bit against the model on entry. (Not against the edit operators:
 // next to fixed nodes the own collapse may keep the other end, as
 // docs/glossary.md says, so the two differ on a fixed outline.)
+// sweep11: the chamfer rule of the free border, on a stepped flat sheet.
 #include <atelier/storage/model.h>
 #include <atelier/storage/validate.h>
 #include <atelier/systems/sketch/optimise_region.h>
@@ -103,6 +104,78 @@ TEST(OptimiseRegion, ClosedCapMeetsTheBoundsAndKeepsTheRestBitForBit) {
     ++kept;
   }
   EXPECT_GT(kept, 1000u);
+}
+
+/// A flat 10 x 10 triangle grid over the unit square (L = 0.1), whose top
+/// border steps up at x = 0.4 by a short edge (0.64 L) with a turn of
+/// `turn_deg` at each of its ends; the bottom row fixed (a B).
+struct SteppedSheet {
+  Model m;
+  std::vector<FaceIdx> region;
+  std::vector<NodeIdx> bottom;
+  Vec3d p4, p5;  // the short border edge's ends
+};
+SteppedSheet stepped_sheet(double turn_deg) {
+  SteppedSheet s;
+  const double len = 0.064, a = turn_deg * M_PI / 180;
+  s.p4 = Vec3d(0.4, 1, 0);
+  s.p5 = s.p4 + len * Vec3d(std::cos(a), std::sin(a), 0);
+  auto g = grid(
+      10, 10,
+      [&](double u, double v) {
+        if (v < 1) return Vec3d(u, v, 0);
+        if (u < 0.45) return Vec3d(u, 1, 0);
+        if (u < 0.55) return s.p5;  // node 5 of the top row
+        return Vec3d(u, s.p5.y(), 0);
+      },
+      true);
+  (void)add_polygon_surface(s.m, "sheet", g.view()).value();
+  for (std::uint32_t i = 0; i < s.m.faces.slots.capacity(); ++i)
+    if (s.m.alive(FaceIdx{i})) s.region.push_back(FaceIdx{i});
+  for (std::uint32_t v = 0; v < s.m.nodes.slots.capacity(); ++v)
+    if (s.m.alive(NodeIdx{v}) && s.m.position(NodeIdx{v}).y() == 0) s.bottom.push_back(NodeIdx{v});
+  return s;
+}
+
+bool has_node_at(const Model& m, const Vec3d& p) {
+  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
+    if (m.alive(NodeIdx{v}) && m.position(NodeIdx{v}) == p) return true;
+  return false;
+}
+
+TEST(OptimiseRegion, AShortBorderEdgeBetweenTwoGentleCornersIsCollapsedSharpCornersStay) {
+  // sweep11's chamfer rule: the free border's corners (turns over 30
+  // degrees) keep their places, except the two ends of one short border
+  // edge when each turns by less than 60 degrees: they meet at the edge's
+  // midpoint (the sleeve's open end). Without the rule the 0.64 L edge
+  // stays (a border edge cannot be swapped, a split shortens it).
+  RegionOptimiseOptions o;
+  o.target = 0.1;
+  {
+    SteppedSheet s = stepped_sheet(40);
+    const Model before = s.m;
+    auto r = optimise_region(s.m, s.region, s.bottom, {}, o);
+    ASSERT_TRUE(r) << r.status().to_string();
+    ASSERT_TRUE(validate(s.m)) << validate(s.m).to_string();
+    EXPECT_GE(r->before.outside, 1u);
+    EXPECT_EQ(r->after.outside, 0u);
+    EXPECT_FALSE(has_node_at(s.m, s.p4));
+    EXPECT_FALSE(has_node_at(s.m, s.p5));
+    EXPECT_TRUE(has_node_at(s.m, 0.5 * (s.p4 + s.p5)));  // the corners met at the midpoint
+    // The square's corners and B (the bottom row), bit for bit.
+    EXPECT_TRUE(has_node_at(s.m, Vec3d(0, 1, 0)));
+    EXPECT_TRUE(has_node_at(s.m, Vec3d(1, s.p5.y(), 0)));
+    for (NodeIdx v : s.bottom) ASSERT_EQ(s.m.position(v), before.position(v));
+  }
+  {
+    SteppedSheet s = stepped_sheet(70);  // sharp: both corners stay, the edge stays short
+    auto r = optimise_region(s.m, s.region, s.bottom, {}, o);
+    ASSERT_TRUE(r) << r.status().to_string();
+    ASSERT_TRUE(validate(s.m)) << validate(s.m).to_string();
+    EXPECT_TRUE(has_node_at(s.m, s.p4));
+    EXPECT_TRUE(has_node_at(s.m, s.p5));
+    EXPECT_GE(r->after.outside, 1u);
+  }
 }
 
 }  // namespace
