@@ -172,7 +172,10 @@ Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, con
   for (std::uint32_t v = 0; v < m.nodes.slots.capacity() && !eo.check_ring_nodes; ++v)
     eo.check_ring_nodes = m.alive(NodeIdx{v}) && m.nodes.in_face[v].valid();
   std::size_t splits = 0;
-  std::vector<EdgeIdx> dipping;
+  // Each dipping edge with the body's answer at its midpoint: a split
+  // leaves the other listed edges alive with the same ends, so each is
+  // split once, at the point found when it was listed.
+  std::vector<std::pair<EdgeIdx, BodyDistance>> dipping;
   for (int r = 0; r < rounds; ++r) {
     dipping.clear();
     for (std::uint32_t e = 0; e < m.edges.slots.capacity(); ++e) {
@@ -180,13 +183,12 @@ Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, con
       const NodeIdx a = m.tail(halfedge_of(EdgeIdx{e}, 0)), b = m.tail(halfedge_of(EdgeIdx{e}, 1));
       if (!is_new(old, a) && !is_new(old, b)) continue;
       const Vec3d pa = m.position(a), pb = m.position(b);
-      if ((pa - pb).norm() >= min_length && body.query(0.5 * (pa + pb)).distance < 0) dipping.push_back(EdgeIdx{e});
+      if (!((pa - pb).norm() >= min_length)) continue;
+      const BodyDistance d = body.query(0.5 * (pa + pb));
+      if (d.distance < 0) dipping.emplace_back(EdgeIdx{e}, d);
     }
     if (dipping.empty()) break;
-    // (a split leaves the other listed edges alive: each is split once)
-    for (EdgeIdx e : dipping) {
-      const NodeIdx a = m.tail(halfedge_of(e, 0)), b = m.tail(halfedge_of(e, 1));
-      const BodyDistance d = body.query(0.5 * (m.position(a) + m.position(b)));
+    for (const auto& [e, d] : dipping) {
       const Vec3d q = d.closest + c * d.normal;
       if (d.triangle == kNoTriangle || !q.allFinite()) continue;
       auto sp = edge_split(m, m.handle(e), q, eo);

@@ -397,14 +397,17 @@ class Optimiser {
       if (bb && !ba) p = m_.position(b);
       if (ba && bb && !border_edge) return NodeIdx{};
       if (ba && bb) {  // along the border: a corner keeps its place
-        bool ca = corner(a), cb = corner(b);
-        // Two corners at the ends of one short border edge (a chamfer of
-        // the free end, e.g. the last copy of a B with a short edge between
-        // two turns) meet at the edge's midpoint when each turns by less
-        // than 60 degrees: the border then turns once, by about their sum,
-        // and the free end keeps its outline to within half the edge.
-        if (ca && cb && !(border_edge && chamfer(a) && chamfer(b))) return NodeIdx{};
-        if (ca && cb) ca = cb = false;
+        const double ta = border_turn_cos(a), tb = border_turn_cos(b);
+        bool ca = is_corner(ta), cb = is_corner(tb);
+        if (ca && cb) {
+          // Two corners at the ends of one short border edge (a chamfer of
+          // the free end, e.g. the last copy of a B with a short edge between
+          // two turns) meet at the edge's midpoint when each turns by less
+          // than 60 degrees: the border then turns once, by about their sum,
+          // and the free end keeps its outline to within half the edge.
+          if (!(is_chamfer(ta) && is_chamfer(tb))) return NodeIdx{};
+          ca = cb = false;
+        }
         if (ca) p = m_.position(a);
         if (cb) p = m_.position(b);
       }
@@ -629,9 +632,10 @@ class Optimiser {
 
   /// A border node where the border turns by more than 30 degrees (or with
   /// other than two border edges): its position is kept.
-  bool corner(NodeIdx v) const { return !(border_turn_cos(v) > std::cos(M_PI / 6)); }
+  bool corner(NodeIdx v) const { return is_corner(border_turn_cos(v)); }
+  static bool is_corner(double turn_cos) { return !(turn_cos > std::cos(M_PI / 6)); }
   /// A corner whose border turns by less than 60 degrees (two border edges).
-  bool chamfer(NodeIdx v) const { return border_turn_cos(v) > 0.5; }
+  static bool is_chamfer(double turn_cos) { return turn_cos > 0.5; }
   /// Cosine of the border's turn at v (1 off the border; -2 with other than
   /// two border edges).
   double border_turn_cos(NodeIdx v) const {
