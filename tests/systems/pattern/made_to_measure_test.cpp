@@ -47,6 +47,22 @@ std::vector<RegenResult> regen_on(const MannequinParams& p, std::size_t only = S
   return std::move(*r);
 }
 
+/// The index of project template `name`.
+std::size_t template_index(const std::string& name) {
+  const auto& ts = testing::template_fixture().templates;
+  std::size_t k = 0;
+  while (k < ts.size() && ts[k].name != name) ++k;
+  return k;
+}
+
+/// Template `name` regenerated on the first n of sample_mannequins(n, 2026).
+std::vector<Model> sampled_garments(const std::string& name, std::size_t n) {
+  const std::size_t k = template_index(name);
+  std::vector<Model> out;
+  for (const auto& p : sample_mannequins(n, 2026)) out.push_back(regen_on(p, k)[0].model);
+  return out;
+}
+
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("atelier_mtm_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
@@ -192,11 +208,8 @@ TEST(MadeToMeasure, PreparedPatternsGiveTheSameBitsInAnyOrderAndThreadCount) {
   // and the same as the one-shot's; sewable and flip-free. Then with warm
   // starts from the reference: still the same bits in any order.
   const auto& f = testing::template_fixture();
-  std::size_t skirt = 0;
-  while (f.templates[skirt].name != "skirt") ++skirt;
-  const auto params = sample_mannequins(3, 2026);
-  std::vector<Model> garments;
-  for (const auto& p : params) garments.push_back(regen_on(p)[skirt].model);
+  const std::size_t skirt = template_index("skirt");
+  const std::vector<Model> garments = sampled_garments("skirt", 3);
   MadeToMeasureOptions o;
   o.files.svg = o.files.dxf = o.csv = false;
   o.warm_start = false;
@@ -277,12 +290,7 @@ TEST(MadeToMeasure, WarmStartsFromTheReferenceCutTheSlowPiecesIterations) {
   // the same pieces take at most half the iterations and end at an E no
   // worse; every piece stays flip-free with its seams sewable. Independent
   // expectation: the cold flattening of the same garment.
-  const auto& f = testing::template_fixture();
-  std::size_t top = 0;
-  while (f.templates[top].name != "top") ++top;
-  const auto params = sample_mannequins(4, 2026);
-  std::vector<Model> garments;
-  for (const auto& p : params) garments.push_back(regen_on(p, top)[0].model);
+  std::vector<Model> garments = sampled_garments("top", 4);
   MadeToMeasureOptions o;
   o.files.svg = o.files.dxf = o.csv = false;
   MadeToMeasurePatterns warm, cold;
@@ -334,12 +342,9 @@ TEST(MadeToMeasure, AStalledWarmStartGivesTheColdBits) {
   // first steps is cut by the flip guard: the warm start is given up after
   // a few iterations and the leg flattened cold, with exactly the cold bits.
   // The waistband starts warm.
-  const auto& f = testing::template_fixture();
-  std::size_t trousers = 0;
-  while (f.templates[trousers].name != "trousers") ++trousers;
-  const auto params = sample_mannequins(2, 2026);
-  const Model reference = regen_on(params[0], trousers)[0].model;
-  const Model garment = regen_on(params[1], trousers)[0].model;
+  const std::vector<Model> garments = sampled_garments("trousers", 2);
+  const Model& reference = garments[0];
+  const Model& garment = garments[1];
   MadeToMeasureOptions o;
   o.files.svg = o.files.dxf = o.csv = false;
   MadeToMeasurePatterns warm, cold;
