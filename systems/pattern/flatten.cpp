@@ -25,6 +25,9 @@ namespace {
 /// Phase 2 from a warm start is given up after this many step-limited
 /// iterations in a row from its start (SolverParams::stall_window).
 constexpr int kWarmStallWindow = 24;
+/// A warm start whose seams end further than this (relative) from their
+/// lengths is given up too; cold flattenings end within 1.2e-4.
+constexpr double kWarmSeamTolerance = 1e-3;
 
 [[nodiscard]] std::string surface_label(const Model& m, SurfaceIdx s) {
   return "surface '" + m.surfaces.name[s.value] + "' (" + std::to_string(s.value) + ")";
@@ -523,9 +526,14 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
   prm.stall_window = warm ? kWarmStallWindow : 0;
   if (!I.solver.run(t, *rest, prm, q, stats, ctx, warm, &I.seams.lengths))
     return Status(ErrorCode::kInternal, "flatten: " + I.label + ": the spring Laplacian could not be factored");
-  if (stats.stalled) {
-    // The warm start pressed triangles into a flip on every step: start
-    // again cold, as if there had been no warm start (the same bits).
+  // A warm start that stalled (it pressed triangles into a flip on every
+  // step), or that ended with a seam off its length by more than
+  // kWarmSeamTolerance of the shortest target (its line search gave up: a
+  // leg on some bodies), is given up: the piece starts again cold, as if
+  // there had been no warm start (the same bits).
+  double shortest = std::numeric_limits<double>::infinity();
+  for (double target : I.seams.lengths.target) shortest = std::min(shortest, target);
+  if (stats.stalled || (warm && stats.seam_residual > kWarmSeamTolerance * shortest)) {
     out.warm_abandoned_iterations = stats.iterations;
     stats = SolverStats{};
     prm.stall_window = 0;

@@ -154,8 +154,9 @@ struct PieceFlattening {
   int iterations = 0;        // phase 2 iterations
   int rejected_steps = 0;    // steps cut short by the flip or overlap guard
   bool warm_started = false;
-  /// A warm start given up (its first iterations all cut by the flip guard:
-  /// the piece was then flattened cold) after this many iterations; 0 if not.
+  /// A warm start given up (its first iterations all cut by the flip guard,
+  /// or its seams left off their lengths: the piece was then flattened
+  /// cold) after this many iterations; 0 if not.
   int warm_abandoned_iterations = 0;
   bool tutte_fallback = false;
   bool reused_factor = false;  // a warm start kept the previous body's factor
