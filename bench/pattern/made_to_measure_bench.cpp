@@ -14,9 +14,11 @@
 //  * ..._Prepared: the same with MadeToMeasurePatterns (made_to_measure.h),
 //    prepared once per template on the first sampled body's garment (not
 //    timed): seams opened once, flattening built once per piece topology,
-//    every body warm-started from that reference (pattern, seam multipliers,
-//    Cholesky factor).
-// Counter bodies_per_s (items_per_second).
+//    every body warm-started from that reference (its pattern fitted to the
+//    body, seam multipliers, Cholesky factor; MadeToMeasureOptions::
+//    warm_start, the default).
+// Counters bodies_per_s (items_per_second); iterations_per_body (phase 2
+// L-BFGS iterations of all pieces per body) and warm_pieces_per_body.
 #include <atelier/engine/parallel.h>
 #include <atelier/systems/body/mannequin.h>
 #include <atelier/systems/pattern/made_to_measure.h>
@@ -70,12 +72,21 @@ const std::vector<std::vector<RegenResult>>& regenerated() {
   return r;
 }
 
-Status patterns(const std::vector<RegenResult>& garments, bool files, const fs::path& dir) {
+/// Phase 2 figures of one body's pattern sets.
+struct Tally {
+  long iterations = 0, warm = 0;
+  void add(const MadeToMeasureReport& r) {
+    for (const PieceFlattening& p : r.files.flattening.pieces) iterations += p.iterations, warm += p.warm_started;
+  }
+};
+
+Status patterns(const std::vector<RegenResult>& garments, bool files, const fs::path& dir, Tally& tally) {
   MadeToMeasureOptions o;
   o.files.svg = o.files.dxf = o.csv = files;
   for (std::size_t k = 0; k < garments.size(); ++k) {
     auto rep = write_made_to_measure_pattern(garments[k].model, o, dir / std::to_string(k), ExecContext::sequential());
     if (!rep) return rep.status();
+    tally.add(*rep);
     if (rep->flipped) return Status(ErrorCode::kInternal, "flipped triangles");
   }
   return {};
@@ -94,11 +105,12 @@ const std::vector<MadeToMeasurePatterns>& prepared(bool files) {
   return files ? with : without;
 }
 
-Status patterns_prepared(const std::vector<RegenResult>& garments, bool files, const fs::path& dir) {
+Status patterns_prepared(const std::vector<RegenResult>& garments, bool files, const fs::path& dir, Tally& tally) {
   const auto& p = prepared(files);
   for (std::size_t k = 0; k < garments.size(); ++k) {
     auto rep = p[k].write(garments[k].model, dir / std::to_string(k), ExecContext::sequential());
     if (!rep) return rep.status();
+    tally.add(*rep);
     if (rep->flipped) return Status(ErrorCode::kInternal, "flipped triangles");
   }
   return {};
@@ -119,6 +131,7 @@ void run(benchmark::State& st, bool do_regen, bool do_patterns, bool files, bool
   const fs::path dir = fs::temp_directory_path() / ("atelier_mtm_bench_" + std::to_string(::getpid()));
   ColliderPool pool;
   std::vector<std::string> errors(kBodies);
+  std::vector<Tally> tally(kBodies);
   for (auto _ : st) {
     par::for_each_n(ctx, kBodies, [&](std::size_t i) {
       const std::vector<RegenResult>* g = &regenerated()[i];
@@ -132,8 +145,8 @@ void run(benchmark::State& st, bool do_regen, bool do_patterns, bool files, bool
         g = &*fresh;
       }
       if (do_patterns)
-        if (Status s = reuse ? patterns_prepared(*g, files, dir / std::to_string(i))
-                             : patterns(*g, files, dir / std::to_string(i));
+        if (Status s = reuse ? patterns_prepared(*g, files, dir / std::to_string(i), tally[i])
+                             : patterns(*g, files, dir / std::to_string(i), tally[i]);
             !s)
           errors[i] = s.to_string();
     });
@@ -147,6 +160,13 @@ void run(benchmark::State& st, bool do_regen, bool do_patterns, bool files, bool
   st.SetItemsProcessed(static_cast<std::int64_t>(st.iterations() * kBodies));
   st.counters["bodies_per_s"] =
       benchmark::Counter(static_cast<double>(st.iterations() * kBodies), benchmark::Counter::kIsRate);
+  if (do_patterns) {
+    long it = 0, warm = 0;
+    for (const Tally& t : tally) it += t.iterations, warm += t.warm;
+    const double runs = static_cast<double>(st.iterations() * kBodies);
+    st.counters["iterations_per_body"] = static_cast<double>(it) / runs;
+    st.counters["warm_pieces_per_body"] = static_cast<double>(warm) / runs;
+  }
 }
 
 void BM_MadeToMeasure_Patterns(benchmark::State& st) {

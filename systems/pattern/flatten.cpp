@@ -22,6 +22,13 @@ using namespace pattern_detail;
 
 namespace {
 
+/// Phase 2 from a warm start is given up after this many step-limited
+/// iterations in a row from its start (SolverParams::stall_window).
+constexpr int kWarmStallWindow = 24;
+/// A warm start whose seams end further than this (relative) from their
+/// lengths is given up too; cold flattenings end within 1.2e-4.
+constexpr double kWarmSeamTolerance = 1e-3;
+
 [[nodiscard]] std::string surface_label(const Model& m, SurfaceIdx s) {
   return "surface '" + m.surfaces.name[s.value] + "' (" + std::to_string(s.value) + ")";
 }
@@ -491,7 +498,13 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
       q[v] = uv[t.node[v].value];
       finite = finite && q[v].allFinite();
     }
-    warm = finite && count_flipped(t, q, ctx) == 0 && count_boundary_crossings(t, q) == 0;
+    // The start fitted to this body's lengths (another body's pattern is
+    // off by the change of size), then checked: an affine map with det > 0
+    // keeps a flip-free, crossing-free start so, up to rounding.
+    if (finite && count_flipped(t, q, ctx) == 0 && count_boundary_crossings(t, q) == 0) {
+      fit_warm_start(t, *rest, q);
+      warm = count_flipped(t, q, ctx) == 0 && count_boundary_crossings(t, q) == 0;
+    }
   }
   std::uint32_t seed = I.seed_tri;
   if (seed == kNone) {
@@ -499,17 +512,36 @@ Expected<PieceFlattening> Flattener::flatten(std::span<const Vec3d> positions, s
     for (std::uint32_t f = 1; f < t.tri.size(); ++f)
       if (rest->area[f] > rest->area[seed]) seed = f;
   }
-  if (!warm) {
+  // The cold start: phase 1, or Tutte's embedding where it leaves a flip or
+  // a crossing; multipliers carry over only with the pattern they belong to.
+  auto cold_start = [&] {
     run_phase1(t, *rest, seed, prm, q, stats);
     if (count_flipped(t, q, ctx) > 0 || count_boundary_crossings(t, q) > 0) {
       tutte_embedding(t, *rest, q);
       stats.tutte_fallback = true;
     }
-  }
-  // Multipliers carry over only with the pattern they belong to.
-  if (!warm) std::fill(I.seams.lengths.lambda.begin(), I.seams.lengths.lambda.end(), 0.0);
+    std::fill(I.seams.lengths.lambda.begin(), I.seams.lengths.lambda.end(), 0.0);
+  };
+  if (!warm) cold_start();
+  prm.stall_window = warm ? kWarmStallWindow : 0;
   if (!I.solver.run(t, *rest, prm, q, stats, ctx, warm, &I.seams.lengths))
     return Status(ErrorCode::kInternal, "flatten: " + I.label + ": the spring Laplacian could not be factored");
+  // A warm start that stalled (it pressed triangles into a flip on every
+  // step), or that ended with a seam off its length by more than
+  // kWarmSeamTolerance of the shortest target (its line search gave up: a
+  // leg on some bodies), is given up: the piece starts again cold, as if
+  // there had been no warm start (the same bits).
+  double shortest = std::numeric_limits<double>::infinity();
+  for (double target : I.seams.lengths.target) shortest = std::min(shortest, target);
+  if (stats.stalled || (warm && stats.seam_residual > kWarmSeamTolerance * shortest)) {
+    out.warm_abandoned_iterations = stats.iterations;
+    stats = SolverStats{};
+    prm.stall_window = 0;
+    warm = false;
+    cold_start();
+    if (!I.solver.run(t, *rest, prm, q, stats, ctx, false, &I.seams.lengths))
+      return Status(ErrorCode::kInternal, "flatten: " + I.label + ": the spring Laplacian could not be factored");
+  }
   place(t, positions, q, I.opt.grain);
   out.distortion = distortion(t, positions, q, &out.stretch, ctx);
   for (const Vec2d& x : q)

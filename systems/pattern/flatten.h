@@ -154,6 +154,10 @@ struct PieceFlattening {
   int iterations = 0;        // phase 2 iterations
   int rejected_steps = 0;    // steps cut short by the flip or overlap guard
   bool warm_started = false;
+  /// A warm start given up (its first iterations all cut by the flip guard,
+  /// or its seams left off their lengths: the piece was then flattened
+  /// cold) after this many iterations; 0 if not.
+  int warm_abandoned_iterations = 0;
   bool tutte_fallback = false;
   bool reused_factor = false;  // a warm start kept the previous body's factor
   /// Seam lengths (FlattenOptions::seam_lengths): the constrained joint
@@ -174,10 +178,13 @@ struct FlattenReport {
 /// per topology (checks, triangles, springs, the symbolic Cholesky
 /// analysis), then flatten() for each set of positions, e.g. each
 /// regenerated body's garment. With `warm_start`, a flip-free pattern already
-/// in `uv` (the previous body's) replaces phase 1, and phase 2 keeps the
-/// previous body's Cholesky factor as its preconditioner when no stiffness
-/// moved by more than 25% (the minimiser is the same; only the path to it
-/// differs).
+/// in `uv` (another body's), fitted by one affine map to this body's rest
+/// lengths, replaces phase 1, and phase 2 keeps the previous body's
+/// Cholesky factor as its preconditioner when no stiffness moved by more
+/// than 25% (the minimiser is the same; only the path to it differs). A
+/// warm start whose first 24 steps are all cut by the flip guard, or whose
+/// seams end off their lengths, is given up for the cold start
+/// (PieceFlattening::warm_abandoned_iterations; the cold bits).
 class Flattener {
  public:
   Flattener();

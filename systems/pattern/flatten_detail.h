@@ -109,6 +109,10 @@ struct SolverParams {
   int max_iterations = 400;
   double tolerance = 1e-7;  // relative energy decrease that ends phase 2
   int memory = 8;           // L-BFGS pairs
+  /// Warm starts only (0: off): phase 2 gives up (SolverStats::stalled)
+  /// when each of its first `stall_window` iterations had its step cut by
+  /// the flip guard: a start that keeps pressing triangles into a flip.
+  int stall_window = 0;
 };
 
 struct SolverStats {
@@ -119,6 +123,7 @@ struct SolverStats {
   int rejected_steps = 0;       // line-search halvings refused by the flip / overlap guard
   bool tutte_fallback = false;  // phase 1 left flips: phase 2 started from a Tutte embedding
   bool reused_factor = false;   // phase 2 kept the previous body's factor
+  bool stalled = false;         // gave up after SolverParams::stall_window limited steps (uv unchanged)
   int seam_rounds = 0;          // augmented-Lagrangian rounds (seam lengths)
   int seam_projections = 0;     // projection steps onto the seam lengths
   double seam_residual = 0;     // largest |L_2d - target| after phase 2
@@ -134,6 +139,14 @@ void run_phase1(const PieceTopology& t, const RestState& rest, std::uint32_t see
 /// length spacing): flip-free by Tutte's theorem. The fallback start of
 /// phase 2 when phase 1 leaves flipped triangles.
 void tutte_embedding(const PieceTopology& t, const RestState& rest, std::vector<Vec2d>& uv);
+
+/// A warm start (another body's pattern of the same piece) fitted to this
+/// body's rest lengths: the symmetric 2x2 map A minimising the spring
+/// energy sum 1/2 C (|A d_ij| - l_ij)^2 (Gauss-Newton from the best uniform
+/// scale), applied about the centroid. det A > 0, so the start keeps its
+/// orientation and a boundary that does not cross itself. Implemented in
+/// flatten_warm.cpp.
+void fit_warm_start(const PieceTopology& t, const RestState& rest, std::vector<Vec2d>& uv);
 
 /// Signed areas of the 2D triangles (positive when CCW).
 [[nodiscard]] std::size_t count_flipped(const PieceTopology& t, std::span<const Vec2d> uv, const ExecContext& ctx);

@@ -514,6 +514,13 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
   for (std::size_t s = 0; s < t.spring.size(); ++s) scale += 0.5 * rest.stiffness[s] * rest.length[s] * rest.length[s];
   const double tiny = 1e-28 * scale;
 
+  // A warm start is given up (stats.stalled) when each of the first
+  // prm.stall_window iterations of the first round had its step cut by the
+  // flip limit: it presses triangles into a flip on every step, and such a
+  // start crawls to the iteration cap (docs/glossary.md, warm starts).
+  int cut_run = 0;
+  bool watch_stall = prm.stall_window > 0;
+
   // L-BFGS from x for at most `budget` iterations; returns those done.
   auto lbfgs = [&](int budget) {
     double e = objective(x, g);
@@ -549,6 +556,14 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
       const double limit = max_feasible_step(t, x, p, ctx, kStepCap);
       double step = std::min(1.0, 0.9 * limit);
       if (step < 1) ++stats.rejected_steps;
+      if (watch_stall) {
+        cut_run = step < 1 ? cut_run + 1 : 0;
+        watch_stall = cut_run > 0;
+        if (cut_run >= prm.stall_window) {
+          stats.stalled = true;
+          break;
+        }
+      }
       bool accepted = false;
       double et = 0;
       for (int tries = 0; tries < 40; ++tries, step *= 0.5) {
@@ -602,6 +617,7 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
       refresh(x, rho);
       used += lbfgs(prm.max_iterations - used);
       ++stats.seam_rounds;
+      if (stats.stalled) break;
       seam_values(x, cv);
       const double worst = worst_relative(cv);
       if (worst <= kSeamTolerance) break;
@@ -609,6 +625,13 @@ bool Phase2Solver::run(const PieceTopology& t, const RestState& rest, const Solv
       if (worst > 0.25 * previous && rho < kSeamPenaltyMax * rho0) rho *= 10;
       previous = worst;
     }
+  }
+  if (stats.stalled) {  // uv unchanged: the caller starts again cold
+    stats.iterations = used;
+    stats.phase2_ms = ms_since(t0);
+    return true;
+  }
+  if (kc) {
     // Projection onto the constraints (a Newton step on c in the metric of
     // H0), guarded like the line search; repeated while it gains.
     seam_values(x, cv);

@@ -12,6 +12,10 @@ namespace atelier {
 
 namespace {
 
+/// The reference of warm starts is flattened with this many times the
+/// iteration cap (MadeToMeasurePatterns::prepare).
+constexpr int kReferenceIterations = 3;
+
 void cell(std::string& out, double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.4f", v);
@@ -181,7 +185,13 @@ Status MadeToMeasurePatterns::prepare(const Model& reference, const MadeToMeasur
   impl->opened = std::move(*opened);
   impl->files = opened_options(opt, impl->opened);
   Model& m = impl->opened.model;
-  if (Status st = impl->reference.build(m, impl->files.flatten); !st) return st;
+  // With warm starts the reference's pattern is every body's start: it is
+  // flattened with kReferenceIterations times the iteration cap (once per
+  // batch), so the bodies start from a converged pattern, not from one a
+  // Tutte start left at the cap (docs/performance.md, flat11).
+  FlattenOptions reference_options = impl->files.flatten;
+  if (opt.warm_start) reference_options.max_iterations *= kReferenceIterations;
+  if (Status st = impl->reference.build(m, reference_options); !st) return st;
   std::vector<Vec2d> uv(m.nodes.slots.capacity(), Vec2d::Zero());
   auto flat = impl->reference.flatten(m.nodes.position, uv, false, ctx);
   if (!flat) return flat.status();

@@ -72,13 +72,15 @@ struct MadeToMeasureOptions {
   std::vector<NamedLine> lines = {{"hem", 0.02}, {"low", 0.25}, {"middle", 0.5}, {"high", 0.75}, {"top", 0.98}};
   bool csv = true;
   /// MadeToMeasurePatterns only: flatten each body warm from the reference
-  /// body (its pattern, seam multipliers and factor) instead of cold. Off:
-  /// measured on the project templates, warm starts from another body saved
-  /// no phase 2 iterations on the trouser legs and the top, left a leg's
-  /// seams 28 mm apart and flipped triangles on some bodies (a pattern of
-  /// another body is a poor start where the pieces are far from
-  /// developable).
-  bool warm_start = false;
+  /// body (its pattern fitted by one affine map to the body's 3D lengths,
+  /// its seam multipliers and factor) instead of cold. A piece whose warm
+  /// start has its first steps all cut by the flip guard is flattened cold
+  /// instead (PieceFlattening::warm_abandoned_iterations): on the project
+  /// templates the trouser legs. On: the top's body pieces, which start
+  /// from Tutte cold and run to the 2000-iteration cap, take 360-1000
+  /// iterations warm at a lower E (docs/performance.md, flat11). Off: the
+  /// same bits as write_made_to_measure_pattern.
+  bool warm_start = true;
 };
 
 struct PieceMeasurements {
@@ -110,13 +112,15 @@ struct MadeToMeasureReport {
 /// report. prepare() once with the garment on a reference body: the seams
 /// are opened (they depend on the topology only), every piece's flattening
 /// built (topology, springs, symbolic Cholesky analysis) and the reference
-/// garment flattened cold. write() per body then copies the opened model
+/// garment flattened cold (with MadeToMeasureOptions::warm_start, to 3
+/// times the iteration cap). write() per body then copies the opened model
 /// with the body's positions (no open_seams) and flattens it with a built
-/// workspace (no topology checks, springs or symbolic analysis): cold by
-/// default (the same bits as write_made_to_measure_pattern), or with
-/// MadeToMeasureOptions::warm_start from the reference: its pattern (no
-/// phase 1), its seam multipliers and its Cholesky factor (kept while no
-/// spring's stiffness moved by 25%). Every body starts from the reference,
+/// workspace (no topology checks, springs or symbolic analysis): with
+/// warm_start (the default) from the reference: its pattern fitted to the
+/// body (no phase 1; a piece whose warm start stalls is flattened cold),
+/// its seam multipliers and its Cholesky factor (kept while no spring's
+/// stiffness moved by 25%); without, cold (the same bits as
+/// write_made_to_measure_pattern). Every body starts from the reference,
 /// never from the body before: write()'s result depends on the reference
 /// and the body only (the same bits in any order, for 1 or 2 threads), and
 /// write() may run for several bodies at once (each takes a flattening
