@@ -794,6 +794,27 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   return true;
 }
 
+namespace {
+
+/// An edge through a triangle (key edge x face, either way round): the
+/// edge's ends p, q and the triangle's corners c; false for other keys.
+struct EdgeFace {
+  const Vec3d *p, *q;
+  std::array<const Vec3d*, 3> c;
+};
+bool edge_face_of(const TriMesh& a, const TriMesh& b, const PointKey& k, EdgeFace& out) noexcept {
+  const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
+  if (!edge_face && !(dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) return false;
+  const TriMesh& me = edge_face ? a : b;
+  const TriMesh& mf = edge_face ? b : a;
+  const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
+  const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
+  out = {&me.p[ev[0]], &me.p[ev[1]], {&mf.p[tv[0]], &mf.p[tv[1]], &mf.p[tv[2]]}};
+  return true;
+}
+
+}  // namespace
+
 PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexcept {
   // An edge through a triangle (the common point of a cut): x = p + t (q -
   // p) with t = o_p / (o_p - o_q), o the orientations of the edge's ends
@@ -830,14 +851,9 @@ PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexce
     out.ok = true;
     return out;
   }
-  const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
-  if (!edge_face && !(dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) return out;
-  const TriMesh& me = edge_face ? a : b;
-  const TriMesh& mf = edge_face ? b : a;
-  const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
-  const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
-  const Vec3d &p = me.p[ev[0]], &q = me.p[ev[1]];
-  const Vec3d &c0 = mf.p[tv[0]], &c1 = mf.p[tv[1]], &c2 = mf.p[tv[2]];
+  EdgeFace ef;
+  if (!edge_face_of(a, b, k, ef)) return out;
+  const Vec3d &p = *ef.p, &q = *ef.q, &c0 = *ef.c[0], &c1 = *ef.c[1], &c2 = *ef.c[2];
   std::array<I, 3> u, v, wp, wq;
   for (int j = 0; j < 3; ++j) {
     u[static_cast<std::size_t>(j)] = I(c1[j]) - I(c0[j]);
@@ -936,14 +952,10 @@ bool rounded_point(const TriMesh& a, const TriMesh& b, const PointKey& k, const 
     const Z s = dot(cross(diff(r, p), d2), n);
     for (std::size_t j = 0; j < 3; ++j) num[j] = Z(p[static_cast<int>(j)]) * den + s * d1[j];
   } else {
-    const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
-    if (!edge_face && !(dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) return false;
-    const TriMesh& me = edge_face ? a : b;
-    const TriMesh& mf = edge_face ? b : a;
-    const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
-    const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
-    const Vec3d &p = me.p[ev[0]], &q = me.p[ev[1]], &c0 = mf.p[tv[0]];
-    const auto n = cross(diff(mf.p[tv[1]], c0), diff(mf.p[tv[2]], c0));
+    EdgeFace ef;
+    if (!edge_face_of(a, b, k, ef)) return false;
+    const Vec3d &p = *ef.p, &q = *ef.q, &c0 = *ef.c[0];
+    const auto n = cross(diff(*ef.c[1], c0), diff(*ef.c[2], c0));
     const Z op = dot(n, diff(p, c0)), oq = dot(n, diff(q, c0));
     den = op - oq;
     for (std::size_t j = 0; j < 3; ++j) num[j] = op * Z(q[static_cast<int>(j)]) - oq * Z(p[static_cast<int>(j)]);
