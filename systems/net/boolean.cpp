@@ -295,10 +295,16 @@ double soup_area(const PolygonSoupView& s) {
   double a = 0;
   for (std::size_t f = 0; f < s.face_count(); ++f) {
     const std::uint32_t b = s.face_offsets[f], e = s.face_offsets[f + 1];
+    if (e - b == 3) {
+      // The fan below about the first corner: its two other terms are
+      // exact zeros, so this one term is the same sum, bit for bit.
+      const Vec3d& p = s.positions[s.face_nodes[b]];
+      a += 0.5 * (s.positions[s.face_nodes[b + 1]] - p).cross(s.positions[s.face_nodes[b + 2]] - p).norm();
+      continue;
+    }
     Vec3d c = Vec3d::Zero();
     for (std::uint32_t i = b; i < e; ++i) c += s.positions[s.face_nodes[i]];
     c /= static_cast<double>(e - b);
-    if (e - b == 3) c = s.positions[s.face_nodes[b]];
     for (std::uint32_t i = b; i < e; ++i) {
       const Vec3d& p = s.positions[s.face_nodes[i]];
       const Vec3d& q = s.positions[s.face_nodes[i + 1 < e ? i + 1 : b]];

@@ -16,6 +16,7 @@
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Mpzf.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/intersections.h>
 #include <atelier/engine/parallel.h>
@@ -793,6 +794,27 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   return true;
 }
 
+namespace {
+
+/// An edge through a triangle (key edge x face, either way round): the
+/// edge's ends p, q and the triangle's corners c; false for other keys.
+struct EdgeFace {
+  const Vec3d *p, *q;
+  std::array<const Vec3d*, 3> c;
+};
+bool edge_face_of(const TriMesh& a, const TriMesh& b, const PointKey& k, EdgeFace& out) noexcept {
+  const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
+  if (!edge_face && !(dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) return false;
+  const TriMesh& me = edge_face ? a : b;
+  const TriMesh& mf = edge_face ? b : a;
+  const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
+  const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
+  out = {&me.p[ev[0]], &me.p[ev[1]], {&mf.p[tv[0]], &mf.p[tv[1]], &mf.p[tv[2]]}};
+  return true;
+}
+
+}  // namespace
+
 PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexcept {
   // An edge through a triangle (the common point of a cut): x = p + t (q -
   // p) with t = o_p / (o_p - o_q), o the orientations of the edge's ends
@@ -829,14 +851,9 @@ PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexce
     out.ok = true;
     return out;
   }
-  const bool edge_face = dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimFace;
-  if (!edge_face && !(dim_of(k.a) == kDimFace && dim_of(k.b) == kDimEdge)) return out;
-  const TriMesh& me = edge_face ? a : b;
-  const TriMesh& mf = edge_face ? b : a;
-  const auto& ev = me.edge[idx_of(edge_face ? k.a : k.b)];
-  const auto& tv = mf.tri[idx_of(edge_face ? k.b : k.a)];
-  const Vec3d &p = me.p[ev[0]], &q = me.p[ev[1]];
-  const Vec3d &c0 = mf.p[tv[0]], &c1 = mf.p[tv[1]], &c2 = mf.p[tv[2]];
+  EdgeFace ef;
+  if (!edge_face_of(a, b, k, ef)) return out;
+  const Vec3d &p = *ef.p, &q = *ef.q, &c0 = *ef.c[0], &c1 = *ef.c[1], &c2 = *ef.c[2];
   std::array<I, 3> u, v, wp, wq;
   for (int j = 0; j < 3; ++j) {
     u[static_cast<std::size_t>(j)] = I(c1[j]) - I(c0[j]);
@@ -860,6 +877,99 @@ PointBox point_box(const TriMesh& a, const TriMesh& b, const PointKey& k) noexce
   return out;
 }
 
+namespace {
+
+/// x = num / den rounded to nearest (ties to even, as centre() rounds them),
+/// from a first guess: the guess moves by one ulp until num / den lies
+/// between the midpoints to its neighbours, every comparison exact (the
+/// midpoints are dyadic, so Mpzf holds them and den times them exactly).
+/// False when the guess is not finite or wanders (the caller goes exact).
+bool round_quotient(CGAL::Mpzf num, CGAL::Mpzf den, double guess, double& out) {
+  if (den.sign() == 0 || !std::isfinite(guess)) return false;
+  if (den.sign() < 0) {
+    num = -num;
+    den = -den;
+  }
+  const CGAL::Mpzf half(0.5);
+  double c = guess;
+  for (int step = 0; step < 16; ++step) {
+    const double lo = std::nextafter(c, -HUGE_VAL), hi = std::nextafter(c, HUGE_VAL);
+    if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
+    const int below = Mpzf_cmp(num, den * ((CGAL::Mpzf(lo) + CGAL::Mpzf(c)) * half));
+    if (below < 0) {
+      c = lo;
+      continue;
+    }
+    if (below == 0) {
+      out = centre(lo, c) + 0.0;
+      return true;
+    }
+    const int above = Mpzf_cmp(num, den * ((CGAL::Mpzf(c) + CGAL::Mpzf(hi)) * half));
+    if (above > 0) {
+      c = hi;
+      continue;
+    }
+    if (above == 0) {
+      out = centre(c, hi) + 0.0;
+      return true;
+    }
+    out = c + 0.0;  // an exact zero is +0, as the rational's interval gives it
+    return true;
+  }
+  return false;
+}
+
+/// The new point k rounded to nearest in each coordinate, the same doubles
+/// as the lazy kernel's exact value rounded (the intersection of a line and
+/// a plane or of two lines is one point, however it is written), from its
+/// closed form in Mpzf (exact sums and products of doubles, no gcd, no
+/// allocation for short numbers): an edge through a triangle is
+/// x = (o_p q - o_q p) / (o_p - o_q), o the orientations of the edge's ends
+/// against the triangle; two edges meeting are x = p + s d1 with
+/// s = ((r - p) x d2) . n / (n . n), n = d1 x d2. The guess is the
+/// quotient in doubles (the box's centre where that overflows). False when
+/// a guess is not finite or a rounding wanders (the caller goes exact).
+bool rounded_point(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box, Vec3d& out) {
+  using Z = CGAL::Mpzf;
+  auto diff = [](const Vec3d& x, const Vec3d& y) {
+    return std::array<Z, 3>{Z(x[0]) - Z(y[0]), Z(x[1]) - Z(y[1]), Z(x[2]) - Z(y[2])};
+  };
+  auto cross = [](const std::array<Z, 3>& x, const std::array<Z, 3>& y) {
+    return std::array<Z, 3>{x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]};
+  };
+  auto dot = [](const std::array<Z, 3>& x, const std::array<Z, 3>& y) {
+    return x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+  };
+  std::array<Z, 3> num;
+  Z den;
+  if (dim_of(k.a) == kDimEdge && dim_of(k.b) == kDimEdge) {
+    const auto& ea = a.edge[idx_of(k.a)];
+    const auto& eb = b.edge[idx_of(k.b)];
+    const Vec3d &p = a.p[ea[0]], &q = a.p[ea[1]], &r = b.p[eb[0]], &w = b.p[eb[1]];
+    const auto d1 = diff(q, p), d2 = diff(w, r);
+    const auto n = cross(d1, d2);
+    den = dot(n, n);
+    const Z s = dot(cross(diff(r, p), d2), n);
+    for (std::size_t j = 0; j < 3; ++j) num[j] = Z(p[static_cast<int>(j)]) * den + s * d1[j];
+  } else {
+    EdgeFace ef;
+    if (!edge_face_of(a, b, k, ef)) return false;
+    const Vec3d &p = *ef.p, &q = *ef.q, &c0 = *ef.c[0];
+    const auto n = cross(diff(*ef.c[1], c0), diff(*ef.c[2], c0));
+    const Z op = dot(n, diff(p, c0)), oq = dot(n, diff(q, c0));
+    den = op - oq;
+    for (std::size_t j = 0; j < 3; ++j) num[j] = op * Z(q[static_cast<int>(j)]) - oq * Z(p[static_cast<int>(j)]);
+  }
+  for (std::size_t j = 0; j < 3; ++j) {
+    double guess = num[j].to_double() / den.to_double();  // a few ulps off
+    if (!std::isfinite(guess) && box.ok) guess = centre(box.b[j], box.b[j + 3]);
+    if (!round_quotient(num[j], den, guess, out[static_cast<int>(j)])) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box,
                         const ExactPoints& exact, std::size_t index) {
   // An edge through a triangle with a pinned box takes the box's centre;
@@ -869,6 +979,7 @@ Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, c
   const bool edge_face = dim_of(k.a) == kDimFace || dim_of(k.b) == kDimFace;
   if (edge_face && box.ok && pinned(box.b[0], box.b[3]) && pinned(box.b[1], box.b[4]) && pinned(box.b[2], box.b[5]))
     return {centre(box.b[0], box.b[3]), centre(box.b[1], box.b[4]), centre(box.b[2], box.b[5])};
+  if (Vec3d x; rounded_point(a, b, k, box, x)) return x;
   const Ke::Point_3 pt = index < exact.p.size() && exact.ok[index] ? exact.p[index] : exact_point(a, b, k);
   auto coord = [&](const Ke::FT& x) {
     const auto& e = CGAL::exact(x);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <sstream>
@@ -35,6 +36,35 @@ void merge_box(std::array<double, 6>& into, const std::array<double, 6>& b) noex
     into[k] = std::min(into[k], b[k]);
     into[k + 3] = std::max(into[k + 3], b[k + 3]);
   }
+}
+
+/// Whether two of the listed positions are equal (==, so -0 equals +0):
+/// open addressing on their bits, linear in the count. Only a yes needs the
+/// lexicographic sort, which then names the same pair as before.
+bool has_equal_positions(std::span<const Vec3d> p, std::span<const std::uint32_t> list) {
+  std::size_t cap = 16;
+  while (cap < 2 * list.size()) cap *= 2;
+  std::vector<std::uint32_t> slot(cap, kNil);
+  auto bits = [](double x) {
+    x += 0.0;  // -0 -> +0: equal doubles hash alike
+    std::uint64_t u;
+    std::memcpy(&u, &x, sizeof u);
+    return u;
+  };
+  for (std::uint32_t v : list) {
+    const Vec3d& x = p[v];
+    std::uint64_t h = bits(x.x()) * 0x9e3779b97f4a7c15ull;
+    h = (h ^ (h >> 29) ^ bits(x.y())) * 0xbf58476d1ce4e5b9ull;
+    h = (h ^ (h >> 31) ^ bits(x.z())) * 0x94d049bb133111ebull;
+    for (std::size_t i = (h ^ (h >> 32)) & (cap - 1);; i = (i + 1) & (cap - 1)) {
+      if (slot[i] == kNil) {
+        slot[i] = v;
+        break;
+      }
+      if (p[slot[i]] == x) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace
@@ -128,6 +158,7 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
   order.reserve(out.p.size());
   for (std::uint32_t v = 0; v < out.p.size(); ++v)
     if (used[v]) order.push_back(v);
+  if (!has_equal_positions(out.p, order)) order.clear();  // nothing to name: skip the sort
   auto lex = [&](std::uint32_t x, std::uint32_t y) {
     const Vec3d &p = out.p[x], &q = out.p[y];
     if (p.x() != q.x()) return p.x() < q.x();

@@ -214,6 +214,21 @@ TEST(NetBoolean, RefusesBadNets) {
   dup.positions.push_back(dup.positions[0]);
   dup.face_nodes[0] = 8;
   EXPECT_NE(error(dup).find("duplicate"), std::string::npos);
+  // Duplicates equal as doubles but not as bits (-0 and +0): the hashed
+  // search compares with ==, and the message names both, smaller first.
+  PolygonSoup signed_zero = box({0, 0, 0}, {2, 2, 2});
+  std::uint32_t origin = 0;
+  while (signed_zero.positions[origin] != Vec3d(0, 0, 0)) ++origin;
+  signed_zero.positions.push_back(Vec3d(-0.0, 0.0, -0.0));
+  for (auto& v : signed_zero.face_nodes)
+    if (v == origin) {
+      v = 8;
+      break;
+    }
+  const std::string zero = error(signed_zero);
+  EXPECT_NE(zero.find("vertex " + std::to_string(origin) + " of face"), std::string::npos) << zero;
+  EXPECT_NE(zero.find("vertex 8 of face"), std::string::npos) << zero;
+  EXPECT_NE(zero.find("duplicate"), std::string::npos) << zero;
   // Inward.
   PolygonSoup inward = box({.5, .5, .5}, {2, 2, 2});
   for (std::size_t f = 0; f < inward.face_count(); ++f)
