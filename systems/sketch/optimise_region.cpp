@@ -14,7 +14,9 @@
 // 002) is the same optimisation keeping its places outside a body: split
 // points and relaxed nodes that would lie within the clearance are pushed
 // out (closest body point + c n), and a relaxed node whose projection
-// onto the region lands there keeps its tangential place, pushed out.
+// onto the region lands there keeps its tangential place, pushed out; and
+// the repair's last move for a slightly-out edge searches places around an
+// end in its tangent plane (search_move).
 #include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/sketch/optimise_region.h>
 #include <atelier/systems/spatial/body_bvh.h>
@@ -824,6 +826,41 @@ class Optimiser {
     return false;
   }
 
+  /// With a body (the settle rounds only): the place in v's tangent plane,
+  /// among 36 (12 directions, 0.1, 0.2, 0.3 L), with the least ring
+  /// violation, when it is lower than v's now. The edge from B's node on the
+  /// dress that no other move fixed: moving along the edge or by springs
+  /// stretched another ring edge past hi.
+  bool search_move(NodeIdx v) {
+    if (!body_ || !m_.alive(v) || fixed(v) || m_.is_isolated(v) || on_border(v)) return false;
+    const Vec3d p = m_.position(v);
+    Vec3d n = Vec3d::Zero();
+    m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
+      if (m_.face(h).valid()) n += tri_normal(p, m_.position(m_.head(h)), m_.position(m_.head(m_.next(h))));
+    });
+    if (!(n.norm() > 0)) return false;
+    n.normalize();
+    const Vec3d t0 = n.unitOrthogonal(), t1 = n.cross(t0);
+    const double before = violation(v, p);
+    double best = before - 1e-12 * o_.target;
+    Vec3d bq;
+    std::uint32_t bt = kNoTriangle;
+    bool found = false;
+    for (int s = 1; s <= 3; ++s)
+      for (int k = 0; k < 12; ++k) {
+        const double a = k * (M_PI / 6);
+        Vec3d q = p + 0.1 * s * o_.target * (std::cos(a) * t0 + std::sin(a) * t1);
+        std::uint32_t tri = kNoTriangle;
+        if (can_project_ && !project(v, q, tri)) continue;
+        if (!no_flip(v, q, 0.5)) continue;
+        if (const double w = violation(v, q); w < best) best = w, bq = q, bt = tri, found = true;
+      }
+    if (!found) return false;
+    place(v, bq, bt);
+    ++rep_.relaxed;
+    return true;
+  }
+
   /// Spring move of v, kept only when it lowers v's ring violation (so the
   /// repair cannot cycle through moves). True when v moved.
   bool spring_move(NodeIdx v) {
@@ -991,7 +1028,8 @@ class Optimiser {
       // Slightly out (splitting would leave halves below lo, a collapse
       // edges above hi): moves of the ends first.
       const bool gentle = l > hi_ ? l < 2 * lo_ : 2 * l > hi_;
-      if (gentle && o_.relax && (targeted_move(e) || spring_move(a) || spring_move(b))) {
+      if (gentle && o_.relax &&
+          (targeted_move(e) || spring_move(a) || spring_move(b) || search_move(a) || search_move(b))) {
         for (NodeIdx v : {a, b}) near(v);
         continue;
       }
