@@ -22,8 +22,14 @@
 //    optimisation keeps to runs outside the body. On by default with a body.
 //  - After the optimisation, the last push moves nodes again without
 //    remeshing. settle re-optimises only the faces around the edges that
-//    are then outside the bounds (optimise_region on that small region,
-//    B fixed, after refine_outside) and pushes again, a few times.
+//    are then outside the bounds (B fixed, after refine_outside) and pushes
+//    again, a few times. That optimisation keeps its places outside the
+//    body (optimise_outside, optimise_region.cpp): where a limb runs
+//    through the sleeve's first copies, triangles between pushed nodes
+//    cross the limb (nodes on its opposite sides), the plain optimisation
+//    relaxed nodes onto them and split their edges at midpoints inside
+//    the limb, and the push took those nodes out again by up to 2 L: the
+//    same 20-30 edges left the bounds after every round.
 #include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/mesh/fan_triangulation.h>
 #include <atelier/systems/sketch/extrude.h>
@@ -37,6 +43,13 @@
 namespace atelier::extrude_detail {
 
 namespace {
+
+/// The settle rounds' repair budget (operations per region edge; the
+/// optimisation's default is 8): where a limb runs across the region the
+/// repair's splits and collapses churn until the budget is spent (4000 on a
+/// 300-face region, 10 s, the count no better than with 2); the next round
+/// goes on from a region around the edges still out.
+constexpr int kSettleRepairBudget = 2;
 
 bool is_new(const std::vector<char>& old, NodeIdx v) {
   return !(v.value < old.size() && old[v.value]);
@@ -208,6 +221,8 @@ Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::
                              int rounds, double refine_shortest, int refine_rounds, std::vector<char>& pushed,
                              const ExecContext& ctx) {
   const double lo = oo.low * oo.target, hi = oo.high * oo.target;
+  RegionOptimiseOptions settle_oo = oo;
+  settle_oo.repair_budget = std::min(oo.repair_budget, kSettleRepairBudget);
   std::size_t ops = 0;
   for (int r = 0; r < rounds; ++r) {
     // The surface this round's optimisation keeps to, outside the body
@@ -241,7 +256,12 @@ Expected<std::size_t> settle(Model& m, const std::vector<char>& old, const std::
       if (std::any_of(fn.begin(), fn.end(), [&](NodeIdx v) { return mark[v.value] != 0; }))
         region.push_back(FaceIdx{f});
     }
-    auto oc = optimise_region(m, region, B, chain, oo, ctx);
+    // Every place this optimisation makes is kept outside the body
+    // (optimise_outside): it would otherwise relax nodes onto triangles
+    // that run across a limb between pushed nodes, the push would take them
+    // out again by up to 2 L, and the same edges would leave the bounds
+    // round after round.
+    auto oc = optimise_outside(m, region, B, chain, settle_oo, body, c, ctx);
     if (!oc) return oc.status();
     ops += oc->splits + oc->collapses + oc->swaps;
     push_out(m, old, body, c, push_rounds, pushed);

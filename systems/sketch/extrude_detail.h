@@ -84,6 +84,13 @@ void smooth_pushed(Model& m, const std::vector<char>& old, const std::vector<cha
                                            const RegionOptimiseOptions& oo, const CollisionBody& body, double c,
                                            int push_rounds, int rounds, double refine_shortest, int refine_rounds,
                                            std::vector<char>& pushed, const ExecContext& ctx);
+/// optimise_region keeping every place it makes c outside the body: split
+/// and collapse points pushed out (closest body point + c n), a relaxed
+/// node projected onto the region where the region runs outside the body,
+/// else its tangential place pushed out (optimise_region.cpp).
+[[nodiscard]] Expected<RegionOptimiseReport> optimise_outside(
+    Model& m, std::span<const FaceIdx> region, std::span<const NodeIdx> fixed, std::span<const HalfedgeIdx> fixed_chain,
+    const RegionOptimiseOptions& options, const CollisionBody& body, double c, const ExecContext& ctx);
 /// Lengths of the edges with a new node against [low, high] L.
 [[nodiscard]] EdgeLengthStats new_edge_stats(const Model& m, const std::vector<char>& old, double L, double low,
                                              double high);

@@ -9,9 +9,18 @@
 // triangle (a BVH query only at a fold) and visits only the nodes whose ring
 // changed after the first round, and the repair works on a FIFO queue of
 // edges, so the cost follows the region and the edits.
+//
+// extrude_detail::optimise_outside (extrude's settle rounds, beyond seed
+// 002) is the same optimisation keeping its places outside a body: split
+// points and relaxed nodes that would lie within the clearance are pushed
+// out (closest body point + c n), and a relaxed node whose projection
+// onto the region lands there keeps its tangential place, pushed out; and
+// the repair's last move for a slightly-out edge searches places around an
+// end in its tangent plane (search_move).
 #include <atelier/systems/mesh/edit.h>
 #include <atelier/systems/sketch/optimise_region.h>
 #include <atelier/systems/spatial/body_bvh.h>
+#include <atelier/systems/spatial/collision_body.h>
 #include <atelier/systems/spatial/triangle_query.h>
 
 #include <algorithm>
@@ -20,6 +29,8 @@
 #include <deque>
 #include <string>
 #include <vector>
+
+#include "extrude_detail.h"
 
 namespace atelier {
 
@@ -34,6 +45,10 @@ Vec3d tri_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
 }
 
 using RingPair = std::array<NodeIdx, 2>;  // see Optimiser::no_flip_ring
+
+/// With a body (optimise_outside): a split's pushed point at most this far
+/// from either end, in the edge's length (0.5 at the middle).
+constexpr double kPushedSplitReach = 0.6;
 
 class Optimiser {
  public:
@@ -185,6 +200,16 @@ class Optimiser {
   /// Projects q (a new place of v, |q - p| short) onto the region on
   /// entry, starting from v's hint; tri receives the closest triangle.
   bool project(NodeIdx v, Vec3d& q, std::uint32_t& tri) {
+    const Vec3d q0 = q;
+    if (!project_region(v, q, tri)) return false;
+    if (!body_ || !(body_->query(q).distance < clear_ * (1 - 1e-9))) return true;
+    // The region runs through the body there (a triangle across a limb
+    // between pushed nodes): the tangential place itself, pushed out.
+    q = q0;
+    return push(q);
+  }
+
+  bool project_region(NodeIdx v, Vec3d& q, std::uint32_t& tri) {
     tri = v.value < hint_.size() ? hint_[v.value] : kNoTriangle;
     if (tri == kNoTriangle || !walk_) {
       const ClosestHit hit = tree().closest_point(q, o_.target);
@@ -207,6 +232,21 @@ class Optimiser {
   }
 
   bool walks() const { return walk_; }
+
+  /// Keep every place c outside `body` (extrude's settle rounds; null: off).
+  void keep_outside(const CollisionBody* body, double c) { body_ = body, clear_ = c; }
+
+  /// q moved to the body's closest point + c n when it is closer than c
+  /// (the body push of extrude_body.cpp). False on a non-finite answer.
+  bool push(Vec3d& q) const {
+    if (!body_) return true;
+    const BodyDistance d = body_->query(q);
+    if (d.triangle == kNoTriangle || !(d.distance < clear_ * (1 - 1e-9))) return true;
+    const Vec3d r = d.closest + clear_ * d.normal;
+    if (!r.allFinite()) return false;
+    q = r;
+    return true;
+  }
 
   Vec3d ref_normal(std::uint32_t t) const {
     const Triangle& T = ref_tris_[t];
@@ -314,8 +354,19 @@ class Optimiser {
   // ---------------------------------------------------------- operators
   /// Splits e at its midpoint; returns the new node (invalid when refused).
   NodeIdx split(EdgeIdx e) {
-    const Vec3d mid = 0.5 * (m_.position(m_.tail(halfedge_of(e, 0))) + m_.position(m_.tail(halfedge_of(e, 1))));
     const NodeIdx a = m_.tail(halfedge_of(e, 0));
+    const Vec3d& pa = m_.position(a);
+    const Vec3d& pb = m_.position(m_.tail(halfedge_of(e, 1)));
+    Vec3d mid = 0.5 * (pa + pb);
+    if (body_) {
+      // A split at a midpoint inside the body (an edge across a limb between
+      // pushed nodes) pushed out: refused when the pushed point is no longer
+      // near the middle, since the halves would not be shorter (splits and
+      // collapses then churned there, 3000 of each on a 350-face region).
+      const double l = (pa - pb).norm();
+      if (!push(mid) || (mid - pa).norm() > kPushedSplitReach * l || (mid - pb).norm() > kPushedSplitReach * l)
+        return {};
+    }
     NodeIdx n;
     if (plain_ && !m_.edges.mesh_edge[e.value].valid()) {
       n = split_plain(e, mid);
@@ -775,6 +826,41 @@ class Optimiser {
     return false;
   }
 
+  /// With a body (the settle rounds only): the place in v's tangent plane,
+  /// among 36 (12 directions, 0.1, 0.2, 0.3 L), with the least ring
+  /// violation, when it is lower than v's now. The edge from B's node on the
+  /// dress that no other move fixed: moving along the edge or by springs
+  /// stretched another ring edge past hi.
+  bool search_move(NodeIdx v) {
+    if (!body_ || !m_.alive(v) || fixed(v) || m_.is_isolated(v) || on_border(v)) return false;
+    const Vec3d p = m_.position(v);
+    Vec3d n = Vec3d::Zero();
+    m_.for_each_outgoing(v, [&](HalfedgeIdx h) {
+      if (m_.face(h).valid()) n += tri_normal(p, m_.position(m_.head(h)), m_.position(m_.head(m_.next(h))));
+    });
+    if (!(n.norm() > 0)) return false;
+    n.normalize();
+    const Vec3d t0 = n.unitOrthogonal(), t1 = n.cross(t0);
+    const double before = violation(v, p);
+    double best = before - 1e-12 * o_.target;
+    Vec3d bq;
+    std::uint32_t bt = kNoTriangle;
+    bool found = false;
+    for (int s = 1; s <= 3; ++s)
+      for (int k = 0; k < 12; ++k) {
+        const double a = k * (M_PI / 6);
+        Vec3d q = p + 0.1 * s * o_.target * (std::cos(a) * t0 + std::sin(a) * t1);
+        std::uint32_t tri = kNoTriangle;
+        if (can_project_ && !project(v, q, tri)) continue;
+        if (!no_flip(v, q, 0.5)) continue;
+        if (const double w = violation(v, q); w < best) best = w, bq = q, bt = tri, found = true;
+      }
+    if (!found) return false;
+    place(v, bq, bt);
+    ++rep_.relaxed;
+    return true;
+  }
+
   /// Spring move of v, kept only when it lowers v's ring violation (so the
   /// repair cannot cycle through moves). True when v moved.
   bool spring_move(NodeIdx v) {
@@ -942,7 +1028,8 @@ class Optimiser {
       // Slightly out (splitting would leave halves below lo, a collapse
       // edges above hi): moves of the ends first.
       const bool gentle = l > hi_ ? l < 2 * lo_ : 2 * l > hi_;
-      if (gentle && o_.relax && (targeted_move(e) || spring_move(a) || spring_move(b))) {
+      if (gentle && o_.relax &&
+          (targeted_move(e) || spring_move(a) || spring_move(b) || search_move(a) || search_move(b))) {
         for (NodeIdx v : {a, b}) near(v);
         continue;
       }
@@ -1018,7 +1105,7 @@ class Optimiser {
         // of the distance to the region on entry.
         Vec3d c = m_.position(v);
         std::uint32_t tri;
-        if (!project(v, c, tri)) return INFINITY;
+        if (!project_region(v, c, tri)) return INFINITY;
         worst = std::max(worst, (c - m_.position(v)).norm());
       }
     return worst;
@@ -1062,12 +1149,14 @@ class Optimiser {
   std::vector<std::uint32_t> ref_ring_offset_, ref_ring_;  // triangles around each point
   std::vector<std::uint32_t> hint_;                        // per node: a triangle of ref_ at or near its closest point
   bool can_project_ = false, tree_built_ = false, walk_ = false;
+  const CollisionBody* body_ = nullptr;
+  double clear_ = 0;
   bool any_border_ = false;  // see on_border
 };
 
 Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, std::span<const NodeIdx> fixed,
                                    std::span<const HalfedgeIdx> chain, const RegionOptimiseOptions& o,
-                                   const ExecContext& ctx) {
+                                   const ExecContext& ctx, const CollisionBody* body = nullptr, double c = 0) {
   if (!(o.target > 0) || !std::isfinite(o.target))
     return region_error(ErrorCode::kInvalidArgument, "the target length must be positive and finite");
   if (!(o.low > 0 && o.low < 1 && o.high > 1) || !std::isfinite(o.high))
@@ -1075,6 +1164,7 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
   if (o.passes < 0 || o.repair_budget < 0)
     return region_error(ErrorCode::kInvalidArgument, "negative passes or budget");
   Optimiser opt(m, o);
+  opt.keep_outside(body, c);
   const bool edits = o.passes > 0 || o.repair_budget > 0;
   if (Status s = opt.init(region, fixed, edits); !s) return s;
   opt.rep_.before = opt.stats();
@@ -1127,11 +1217,9 @@ Expected<RegionOptimiseReport> run(Model& m, std::span<const FaceIdx> region, st
   return opt.rep_;
 }
 
-}  // namespace
-
-Expected<RegionOptimiseReport> optimise_region(Model& model, std::span<const FaceIdx> region,
-                                               std::span<const NodeIdx> fixed, std::span<const HalfedgeIdx> fixed_chain,
-                                               const RegionOptimiseOptions& options, const ExecContext& ctx) {
+Expected<RegionOptimiseReport> transact(Model& model, std::span<const FaceIdx> region, std::span<const NodeIdx> fixed,
+                                        std::span<const HalfedgeIdx> fixed_chain, const RegionOptimiseOptions& options,
+                                        const ExecContext& ctx, const CollisionBody* body, double c) {
   if (options.passes == 0 && options.repair_budget == 0)  // statistics only: nothing to undo
     return run(model, region, fixed, fixed_chain, options, ctx);
   // Transactional: the work is done on a copy, which takes the model's
@@ -1144,9 +1232,26 @@ Expected<RegionOptimiseReport> optimise_region(Model& model, std::span<const Fac
   work.reserve(model.nodes.slots.capacity() + 2 * grow, model.edges.slots.capacity() + 4 * grow,
                model.faces.slots.capacity() + 3 * grow);
   work = model;
-  auto r = run(work, region, fixed, fixed_chain, options, ctx);
+  auto r = run(work, region, fixed, fixed_chain, options, ctx, body, c);
   if (r) model = std::move(work);
   return r;
+}
+
+}  // namespace
+
+Expected<RegionOptimiseReport> optimise_region(Model& model, std::span<const FaceIdx> region,
+                                               std::span<const NodeIdx> fixed, std::span<const HalfedgeIdx> fixed_chain,
+                                               const RegionOptimiseOptions& options, const ExecContext& ctx) {
+  return transact(model, region, fixed, fixed_chain, options, ctx, nullptr, 0);
+}
+
+Expected<RegionOptimiseReport> extrude_detail::optimise_outside(Model& model, std::span<const FaceIdx> region,
+                                                                std::span<const NodeIdx> fixed,
+                                                                std::span<const HalfedgeIdx> fixed_chain,
+                                                                const RegionOptimiseOptions& options,
+                                                                const CollisionBody& body, double c,
+                                                                const ExecContext& ctx) {
+  return transact(model, region, fixed, fixed_chain, options, ctx, &body, c);
 }
 
 }  // namespace atelier
