@@ -78,8 +78,12 @@ struct MadeToMeasureOptions {
   /// instead (PieceFlattening::warm_abandoned_iterations): on the project
   /// templates the trouser legs. On: the top's body pieces, which start
   /// from Tutte cold and run to the 2000-iteration cap, take 360-1000
-  /// iterations warm at a lower E (docs/performance.md, flat11). Off: the
-  /// same bits as write_made_to_measure_pattern.
+  /// iterations warm at a lower E (docs/performance.md, flat11). Off: cold,
+  /// as write_made_to_measure_pattern (the same bits on the skirt,
+  /// MadeToMeasure.PreparedPatternsGiveTheSameBitsInAnyOrderAndThreadCount;
+  /// NOT yet on every piece: a trouser leg that falls back to Tutte on
+  /// sampled body 1 of seed 2026 took 1,169 phase 2 iterations prepared
+  /// against 2,000 one-shot, both flip-free and sewable; unexplained).
   bool warm_start = true;
 };
 
@@ -119,8 +123,9 @@ struct MadeToMeasureReport {
 /// warm_start (the default) from the reference: its pattern fitted to the
 /// body (no phase 1; a piece whose warm start stalls is flattened cold),
 /// its seam multipliers and its Cholesky factor (kept while no spring's
-/// stiffness moved by 25%); without, cold (the same bits as
-/// write_made_to_measure_pattern). Every body starts from the reference,
+/// stiffness moved by 25%); without, cold (as
+/// write_made_to_measure_pattern; see MadeToMeasureOptions::warm_start for
+/// the one case seen where the bits differ). Every body starts from the reference,
 /// never from the body before: write()'s result depends on the reference
 /// and the body only (the same bits in any order, for 1 or 2 threads), and
 /// write() may run for several bodies at once (each takes a flattening
