@@ -206,9 +206,11 @@ double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<c
   };
   if (par::run_sequential(ctx, nt)) {
     // E in par::transform_reduce's blocks; the gradient scattered in
-    // triangle order, which is each vertex's order in vt_tri.
+    // triangle order, which is each vertex's order in vt_tri, over the
+    // triangles below r0 listed (with their r) by the energy's pass.
+    thread_local std::vector<std::pair<std::uint32_t, double>> active;
+    active.clear();
     double e = 0;
-    std::size_t active = 0;
     for (std::size_t b0 = 0; b0 < nt; b0 += kReduceBlock) {
       double acc = 0;
       const std::size_t b1 = std::min(nt, b0 + kReduceBlock);
@@ -216,17 +218,14 @@ double barrier_energy(const PieceTopology& t, const RestState& rest, std::span<c
         const double r = ratio(f);
         if (r >= kBarrierRatio) continue;
         acc += term(f, r);
-        ++active;
+        active.emplace_back(static_cast<std::uint32_t>(f), r);
       }
       e += acc;
     }
-    if (want && active && std::isfinite(e)) {
+    if (want && !active.empty() && std::isfinite(e)) {
       scratch.assign(t.vertex_count(), Vec2d::Zero());
-      for (std::size_t f = 0; f < nt; ++f) {
-        const double r = ratio(f);
-        if (r >= kBarrierRatio) continue;
+      for (const auto& [f, r] : active)
         for (int k = 0; k < 3; ++k) scratch[t.tri[f][k]] += corner_gradient(f, r, k);
-      }
       for (std::size_t v = 0; v < t.vertex_count(); ++v) gradient[v] += scratch[v];
     }
     return e;

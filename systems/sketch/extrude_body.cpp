@@ -106,8 +106,8 @@ void push_out(Model& m, const std::vector<char>& old, const CollisionBody& body,
     for (NodeIdx v : nodes) {
       const Vec3d p = m.position(v);
       const BodyDistance d = body.query(p);
-      if (d.triangle == kNoTriangle || !(d.distance < c * (1 - 1e-9))) continue;
-      Vec3d q = d.closest + c * d.normal;
+      if (!within_clearance(d, c)) continue;
+      Vec3d q = pushed_place(d, c);
       if (axes && d.distance < 0 && v.value < axes->normal.size() && axes->normal[v.value] != Vec3d::Zero()) {
         const Vec3d n = axes->normal[v.value];
         Vec3d radial = p - axes->centre[v.value];
@@ -202,7 +202,7 @@ Expected<std::size_t> refine_outside(Model& m, const std::vector<char>& old, con
     }
     if (dipping.empty()) break;
     for (const auto& [e, d] : dipping) {
-      const Vec3d q = d.closest + c * d.normal;
+      const Vec3d q = pushed_place(d, c);
       if (d.triangle == kNoTriangle || !q.allFinite()) continue;
       auto sp = edge_split(m, m.handle(e), q, eo);
       if (!sp) return sp.status();

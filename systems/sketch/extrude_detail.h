@@ -60,6 +60,16 @@ struct BaseSide {
 struct CopyAxes {
   std::vector<Vec3d> centre, normal;
 };
+/// The body push of one point, shared by every push of the extrusion: a
+/// point whose body distance d is below the clearance c (by a hair, so that
+/// a point already pushed is not pushed again by rounding) moves to the
+/// closest body point + c n.
+[[nodiscard]] inline bool within_clearance(const BodyDistance& d, double c) noexcept {
+  return d.triangle != kNoTriangle && d.distance < c * (1 - 1e-9);
+}
+[[nodiscard]] inline Vec3d pushed_place(const BodyDistance& d, double c) noexcept {
+  return d.closest + c * d.normal;
+}
 /// The push of the collision pass on the new nodes (closest body point +
 /// c n). With axes, a node inside the body whose closest point lies towards
 /// its copy's axis goes out away from the axis instead (extrude.cpp).

@@ -202,7 +202,7 @@ class Optimiser {
   bool project(NodeIdx v, Vec3d& q, std::uint32_t& tri) {
     const Vec3d q0 = q;
     if (!project_region(v, q, tri)) return false;
-    if (!body_ || !(body_->query(q).distance < clear_ * (1 - 1e-9))) return true;
+    if (!body_ || !extrude_detail::within_clearance(body_->query(q), clear_)) return true;
     // The region runs through the body there (a triangle across a limb
     // between pushed nodes): the tangential place itself, pushed out.
     q = q0;
@@ -241,8 +241,8 @@ class Optimiser {
   bool push(Vec3d& q) const {
     if (!body_) return true;
     const BodyDistance d = body_->query(q);
-    if (d.triangle == kNoTriangle || !(d.distance < clear_ * (1 - 1e-9))) return true;
-    const Vec3d r = d.closest + clear_ * d.normal;
+    if (!extrude_detail::within_clearance(d, clear_)) return true;
+    const Vec3d r = extrude_detail::pushed_place(d, clear_);
     if (!r.allFinite()) return false;
     q = r;
     return true;
