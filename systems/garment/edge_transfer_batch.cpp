@@ -1,0 +1,176 @@
+// apply_edge_transfer_bodies: the edge transfer on several bodies at once,
+// one body per SIMD lane (issue 26, branch lanes13).
+//
+// One body's length iterations are a chain of dependent loads over arrays
+// larger than L2 (a Gauss-Seidel sweep in vertex order, a sparse triangular
+// solve): colour orders and gathers cost more than they saved (performance.md,
+// speed5 and speed7). Bodies of one family share the garment's edges,
+// incidences, weights and factor, so the same walk serves kLanes bodies:
+// each index is loaded once for all lanes and the lanes' chains run side by
+// side. The kernel (edge_transfer_lanes.inc) is compiled three times: 8
+// lanes for AVX-512, 4 for AVX2 and 4 on the baseline instruction set (the
+// fallback, as fast as the compiler makes 4-wide vectors of SSE2), picked
+// at run time by cpu_features() as detail_decode_batch.cpp does. This file
+// and edge_transfer.cpp are compiled with -ffp-contract=off
+// (CMakeLists.txt): a product added to a sum stays two roundings in every
+// kernel, as in the one-body path, so each lane is that body's bits.
+#include <atelier/engine/cpu_features.h>
+#include <atelier/systems/garment/edge_transfer.h>
+#include <immintrin.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <new>
+#include <string>
+
+#include "edge_transfer_detail.h"
+
+// The kernels pass vectors by value only between functions of one
+// instruction set (inlined); GCC's note on the ABI of such calls and its
+// false alarm on _mm512_sqrt_pd's undefined source are not ours.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+namespace atelier {
+namespace {
+
+// Cache-line aligned storage for the lanes' arrays (the kernels' loads and
+// stores of whole lines assume it; std::allocator does not promise it for
+// over-aligned vector types across instruction-set regions).
+template <class T>
+struct LineAllocator {
+  using value_type = T;
+  LineAllocator() = default;
+  template <class U>
+  LineAllocator(const LineAllocator<U>&) noexcept {}
+  [[nodiscard]] T* allocate(std::size_t n) {
+    return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(64)));
+  }
+  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, std::align_val_t(64)); }
+  template <class U>
+  bool operator==(const LineAllocator<U>&) const noexcept {
+    return true;
+  }
+};
+
+namespace lanes_avx512 {
+#pragma GCC push_options
+#pragma GCC target("avx512f")
+constexpr int kLanes = 8;
+typedef double V __attribute__((vector_size(64)));
+typedef long long M __attribute__((vector_size(64)));
+inline V vsqrt(V a) noexcept {
+  return (V)_mm512_sqrt_pd((__m512d)a);
+}
+#include "edge_transfer_lanes.inc"
+#pragma GCC pop_options
+}  // namespace lanes_avx512
+
+namespace lanes_avx2 {
+#pragma GCC push_options
+#pragma GCC target("avx2")
+constexpr int kLanes = 4;
+typedef double V __attribute__((vector_size(32)));
+typedef long long M __attribute__((vector_size(32)));
+inline V vsqrt(V a) noexcept {
+  return (V)_mm256_sqrt_pd((__m256d)a);
+}
+#include "edge_transfer_lanes.inc"
+#pragma GCC pop_options
+}  // namespace lanes_avx2
+
+namespace lanes_generic {
+constexpr int kLanes = 4;
+typedef double V __attribute__((vector_size(32)));
+typedef long long M __attribute__((vector_size(32)));
+inline V vsqrt(V a) noexcept {
+  V r;
+  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(a[l]);
+  return r;
+}
+#include "edge_transfer_lanes.inc"
+}  // namespace lanes_generic
+
+EdgeTransferKernel pick(EdgeTransferKernel k) noexcept {
+  const CpuFeatures& cpu = cpu_features();
+  if (k == EdgeTransferKernel::kAuto)
+    return cpu.avx512f ? EdgeTransferKernel::kAvx512
+           : cpu.avx2  ? EdgeTransferKernel::kAvx2
+                       : EdgeTransferKernel::kGeneric;
+  if (k == EdgeTransferKernel::kAvx512 && !cpu.avx512f) return EdgeTransferKernel::kGeneric;
+  if (k == EdgeTransferKernel::kAvx2 && !cpu.avx2) return EdgeTransferKernel::kGeneric;
+  return k;
+}
+
+// Runs one kernel over groups of its lanes; `ok` lists the bodies whose
+// set-up passed.
+template <class Tile, auto Run>
+void run_groups(std::size_t lanes, const EdgeTransfer& t, std::span<const std::size_t> ok,
+                std::span<const std::vector<Vec3d>> target, std::span<const std::vector<Vec3d>> rhs,
+                std::span<const std::span<Vec3d>> garments) {
+  Tile w;
+  std::vector<const std::vector<Vec3d>*> tg(lanes), rh(lanes);
+  std::vector<Vec3d*> gp(lanes);
+  for (std::size_t g0 = 0; g0 < ok.size(); g0 += lanes) {
+    const std::size_t count = std::min(lanes, ok.size() - g0);
+    for (std::size_t l = 0; l < count; ++l) {
+      const std::size_t b = ok[g0 + l];
+      tg[l] = &target[b];
+      rh[l] = &rhs[b];
+      gp[l] = garments[b].data();
+    }
+    Run(t, count, std::span<const std::vector<Vec3d>* const>(tg.data(), count),
+        std::span<const std::vector<Vec3d>* const>(rh.data(), count), std::span<Vec3d* const>(gp.data(), count), w);
+  }
+}
+
+}  // namespace
+
+std::size_t edge_transfer_lanes(EdgeTransferKernel kernel) noexcept {
+  return pick(kernel) == EdgeTransferKernel::kAvx512 ? 8 : 4;
+}
+
+Status apply_edge_transfer_bodies(const EdgeTransfer& t, std::span<const std::span<const Vec3d>> bodies,
+                                  std::span<const Triangle> body_triangles, std::span<const std::span<Vec3d>> garments,
+                                  std::span<Status> status, EdgeTransferKernel kernel) {
+  if (!t.solver) return Status(ErrorCode::kInvalidArgument, "edge transfer: not encoded");
+  if (garments.size() != bodies.size() || status.size() != bodies.size())
+    return Status(ErrorCode::kMismatch, "edge transfer: " + std::to_string(bodies.size()) + " bodies, " +
+                                            std::to_string(garments.size()) + " garments and " +
+                                            std::to_string(status.size()) + " statuses");
+  // The lane kernels run the accelerated iterations with at most 8 columns
+  // (the default window is 3); other settings take the one-body path.
+  const bool lanes_fit =
+      (t.anderson_window > 0 || t.length_tolerance > 0) && t.length_sweeps == 1 && t.anderson_window <= 8;
+  if (!lanes_fit || bodies.size() == 1) {
+    const ExecContext seq = ExecContext::sequential();
+    for (std::size_t b = 0; b < bodies.size(); ++b)
+      status[b] = apply_edge_transfer(t, bodies[b], body_triangles, garments[b], seq);
+    return {};
+  }
+  const ExecContext seq = ExecContext::sequential();
+  std::vector<std::vector<Vec3d>> target(bodies.size()), rhs(bodies.size());
+  std::vector<std::size_t> ok;
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    status[b] =
+        edge_transfer_detail::targets_and_rhs(t, bodies[b], body_triangles, garments[b], target[b], rhs[b], seq);
+    if (status[b]) ok.push_back(b);
+  }
+  switch (pick(kernel)) {
+    case EdgeTransferKernel::kAvx512:
+      run_groups<lanes_avx512::Tile, lanes_avx512::run_tile>(8, t, ok, target, rhs, garments);
+      break;
+    case EdgeTransferKernel::kAvx2:
+      run_groups<lanes_avx2::Tile, lanes_avx2::run_tile>(4, t, ok, target, rhs, garments);
+      break;
+    default:
+      run_groups<lanes_generic::Tile, lanes_generic::run_tile>(4, t, ok, target, rhs, garments);
+  }
+  return {};
+}
+
+}  // namespace atelier
+
+#pragma GCC diagnostic pop
