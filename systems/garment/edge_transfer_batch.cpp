@@ -8,9 +8,9 @@
 // incidences, weights and factor, so the same walk serves kLanes bodies:
 // each index is loaded once for all lanes and the lanes' chains run side by
 // side. The kernel (edge_transfer_lanes.inc) is compiled three times: 8
-// lanes for AVX-512, 4 for AVX2 and 4 on the baseline instruction set (the
-// fallback, as fast as the compiler makes 4-wide vectors of SSE2), picked
-// at run time by cpu_features() as detail_decode_batch.cpp does. This file
+// lanes for AVX-512, 4 for AVX2 and 2 for SSE2 (the baseline instruction
+// set, the fallback), picked at run time by cpu_features() as
+// detail_decode_batch.cpp does (see pick() for why 4, not 8, by default). This file
 // and edge_transfer.cpp are compiled with -ffp-contract=off
 // (CMakeLists.txt): a product added to a sum stays two roundings in every
 // kernel, as in the one-body path, so each lane is that body's bits.
@@ -82,54 +82,49 @@ inline V vsqrt(V a) noexcept {
 }  // namespace lanes_avx2
 
 namespace lanes_generic {
-constexpr int kLanes = 4;
-typedef double V __attribute__((vector_size(32)));
-typedef long long M __attribute__((vector_size(32)));
+constexpr int kLanes = 2;
+typedef double V __attribute__((vector_size(16)));
+typedef long long M __attribute__((vector_size(16)));
 inline V vsqrt(V a) noexcept {
-  V r;
-  for (int l = 0; l < kLanes; ++l) r[l] = std::sqrt(a[l]);
-  return r;
+  return (V)_mm_sqrt_pd((__m128d)a);
 }
 #include "edge_transfer_lanes.inc"
 }  // namespace lanes_generic
 
 EdgeTransferKernel pick(EdgeTransferKernel k) noexcept {
   const CpuFeatures& cpu = cpu_features();
-  if (k == EdgeTransferKernel::kAuto)
-    return cpu.avx512f ? EdgeTransferKernel::kAvx512
-           : cpu.avx2  ? EdgeTransferKernel::kAvx2
-                       : EdgeTransferKernel::kGeneric;
+  // Auto is 4 lanes where AVX2 runs, also on AVX-512 machines: the lanes'
+  // arrays grow with the lanes (about 3.5 MB per lane for an 8,426-vertex
+  // suit) and the sweeps are bound by the caches, so 8 lanes ran slower
+  // than 4 (performance.md, lanes13: 9.7 against 6.3 ms per body; 2 lanes
+  // 8.1, one body at a time 9.5).
+  if (k == EdgeTransferKernel::kAuto) return cpu.avx2 ? EdgeTransferKernel::kAvx2 : EdgeTransferKernel::kGeneric;
   if (k == EdgeTransferKernel::kAvx512 && !cpu.avx512f) return EdgeTransferKernel::kGeneric;
   if (k == EdgeTransferKernel::kAvx2 && !cpu.avx2) return EdgeTransferKernel::kGeneric;
   return k;
 }
 
-// Runs one kernel over groups of its lanes; `ok` lists the bodies whose
-// set-up passed.
-template <class Tile, auto Run>
-void run_groups(std::size_t lanes, const EdgeTransfer& t, std::span<const std::size_t> ok,
-                std::span<const std::vector<Vec3d>> target, std::span<const std::vector<Vec3d>> rhs,
-                std::span<const std::span<Vec3d>> garments) {
+// Runs one kernel on the bodies listed in `ok` (those whose set-up passed).
+template <class Tile, class Bodies, auto Run>
+void run_kernel(const EdgeTransfer& t, std::span<const std::size_t> ok, std::span<const std::vector<Vec3d>> target,
+                std::span<std::vector<Vec3d>> rhs, std::span<const std::span<Vec3d>> garments) {
   Tile w;
-  std::vector<const std::vector<Vec3d>*> tg(lanes), rh(lanes);
-  std::vector<Vec3d*> gp(lanes);
-  for (std::size_t g0 = 0; g0 < ok.size(); g0 += lanes) {
-    const std::size_t count = std::min(lanes, ok.size() - g0);
-    for (std::size_t l = 0; l < count; ++l) {
-      const std::size_t b = ok[g0 + l];
-      tg[l] = &target[b];
-      rh[l] = &rhs[b];
-      gp[l] = garments[b].data();
-    }
-    Run(t, count, std::span<const std::vector<Vec3d>* const>(tg.data(), count),
-        std::span<const std::vector<Vec3d>* const>(rh.data(), count), std::span<Vec3d* const>(gp.data(), count), w);
+  std::vector<const std::vector<Vec3d>*> tg;
+  std::vector<std::vector<Vec3d>*> solved;
+  std::vector<Vec3d*> out;
+  for (const std::size_t b : ok) {
+    tg.push_back(&target[b]);
+    solved.push_back(&rhs[b]);
+    out.push_back(garments[b].data());
   }
+  Run(t, Bodies{tg, solved, out}, w);
 }
 
 }  // namespace
 
 std::size_t edge_transfer_lanes(EdgeTransferKernel kernel) noexcept {
-  return pick(kernel) == EdgeTransferKernel::kAvx512 ? 8 : 4;
+  const EdgeTransferKernel k = pick(kernel);
+  return k == EdgeTransferKernel::kAvx512 ? 8 : k == EdgeTransferKernel::kAvx2 ? 4 : 2;
 }
 
 Status apply_edge_transfer_bodies(const EdgeTransfer& t, std::span<const std::span<const Vec3d>> bodies,
@@ -160,13 +155,13 @@ Status apply_edge_transfer_bodies(const EdgeTransfer& t, std::span<const std::sp
   }
   switch (pick(kernel)) {
     case EdgeTransferKernel::kAvx512:
-      run_groups<lanes_avx512::Tile, lanes_avx512::run_tile>(8, t, ok, target, rhs, garments);
+      run_kernel<lanes_avx512::Tile, lanes_avx512::Bodies, lanes_avx512::run_bodies>(t, ok, target, rhs, garments);
       break;
     case EdgeTransferKernel::kAvx2:
-      run_groups<lanes_avx2::Tile, lanes_avx2::run_tile>(4, t, ok, target, rhs, garments);
+      run_kernel<lanes_avx2::Tile, lanes_avx2::Bodies, lanes_avx2::run_bodies>(t, ok, target, rhs, garments);
       break;
     default:
-      run_groups<lanes_generic::Tile, lanes_generic::run_tile>(4, t, ok, target, rhs, garments);
+      run_kernel<lanes_generic::Tile, lanes_generic::Bodies, lanes_generic::run_bodies>(t, ok, target, rhs, garments);
   }
   return {};
 }
