@@ -105,9 +105,13 @@ EdgeTransferKernel pick(EdgeTransferKernel k) noexcept {
 }
 
 // Runs one kernel on the bodies listed in `ok` (those whose set-up passed).
+// A body with an edge of zero length on the way (where the one-body path
+// keeps an edge's previous target) is left to apply_edge_transfer.
 template <class Tile, class Bodies, auto Run>
 void run_kernel(const EdgeTransfer& t, std::span<const std::size_t> ok, std::span<const std::vector<Vec3d>> target,
-                std::span<std::vector<Vec3d>> rhs, std::span<const std::span<Vec3d>> garments) {
+                std::span<std::vector<Vec3d>> rhs, std::span<const std::span<const Vec3d>> bodies,
+                std::span<const Triangle> body_triangles, std::span<const std::span<Vec3d>> garments,
+                std::span<Status> status) {
   Tile w;
   std::vector<const std::vector<Vec3d>*> tg;
   std::vector<std::vector<Vec3d>*> solved;
@@ -117,7 +121,11 @@ void run_kernel(const EdgeTransfer& t, std::span<const std::size_t> ok, std::spa
     solved.push_back(&rhs[b]);
     out.push_back(garments[b].data());
   }
-  Run(t, Bodies{tg, solved, out}, w);
+  std::vector<std::uint8_t> alone(ok.size(), 0);
+  Run(t, Bodies{tg, solved, out, alone}, w);
+  const ExecContext seq = ExecContext::sequential();
+  for (std::size_t k = 0; k < ok.size(); ++k)
+    if (alone[k]) status[ok[k]] = apply_edge_transfer(t, bodies[ok[k]], body_triangles, garments[ok[k]], seq);
 }
 
 }  // namespace
@@ -155,13 +163,16 @@ Status apply_edge_transfer_bodies(const EdgeTransfer& t, std::span<const std::sp
   }
   switch (pick(kernel)) {
     case EdgeTransferKernel::kAvx512:
-      run_kernel<lanes_avx512::Tile, lanes_avx512::Bodies, lanes_avx512::run_bodies>(t, ok, target, rhs, garments);
+      run_kernel<lanes_avx512::Tile, lanes_avx512::Bodies, lanes_avx512::run_bodies>(t, ok, target, rhs, bodies,
+                                                                                     body_triangles, garments, status);
       break;
     case EdgeTransferKernel::kAvx2:
-      run_kernel<lanes_avx2::Tile, lanes_avx2::Bodies, lanes_avx2::run_bodies>(t, ok, target, rhs, garments);
+      run_kernel<lanes_avx2::Tile, lanes_avx2::Bodies, lanes_avx2::run_bodies>(t, ok, target, rhs, bodies,
+                                                                               body_triangles, garments, status);
       break;
     default:
-      run_kernel<lanes_generic::Tile, lanes_generic::Bodies, lanes_generic::run_bodies>(t, ok, target, rhs, garments);
+      run_kernel<lanes_generic::Tile, lanes_generic::Bodies, lanes_generic::run_bodies>(
+          t, ok, target, rhs, bodies, body_triangles, garments, status);
   }
   return {};
 }
