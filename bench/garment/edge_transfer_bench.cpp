@@ -2,8 +2,8 @@
 // (8,426 vertices) decoded on 64 random MakeHuman adults, transferred one
 // body at a time (apply_edge_transfer, today's job path) against bodies as
 // SIMD lanes (apply_edge_transfer_bodies on the 64 at once: 8 lanes with
-// AVX-512, 4 with AVX2 or the baseline kernel, each lane taking the next
-// body when its body stops). One thread;
+// AVX-512, 4 with AVX2, 2 with SSE2, each lane taking the next body when
+// its body stops). One thread;
 // the counter ms_per_body is CPU time per body (the machine is shared:
 // compare rows of one run). Each iteration restores the decoded garments
 // (a copy, in every row). Skipped without the shared MakeHuman data.
@@ -11,7 +11,8 @@
 //   BM_EdgeTransferMakeHuman/0/s: one body at a time
 //   BM_EdgeTransferMakeHuman/1/s: lanes, the kernel cpu_features() picks
 //   BM_EdgeTransferMakeHuman/2/s: lanes, AVX2 (4)
-//   BM_EdgeTransferMakeHuman/3/s: lanes, baseline instruction set (4)
+//   BM_EdgeTransferMakeHuman/3/s: lanes, baseline instruction set (SSE2, 2)
+//   BM_EdgeTransferMakeHuman/4/s: lanes, AVX-512 (8)
 // s = 0: the garment's own stop (each body its own number of sweeps, a
 // group of lanes as many as its slowest); s > 0: exactly s accelerated
 // sweeps for every body (the cost of a sweep, without that wait).
@@ -89,7 +90,8 @@ void BM_EdgeTransferMakeHuman(benchmark::State& st) {
   std::vector<Status> status(nb);
   const EdgeTransferKernel kernel = mode == 1   ? EdgeTransferKernel::kAuto
                                     : mode == 2 ? EdgeTransferKernel::kAvx2
-                                                : EdgeTransferKernel::kGeneric;
+                                    : mode == 3 ? EdgeTransferKernel::kGeneric
+                                                : EdgeTransferKernel::kAvx512;
   const ExecContext seq = ExecContext::sequential();
   for (auto _ : st) {
     for (std::size_t b = 0; b < nb; ++b) std::copy(s.decoded[b].begin(), s.decoded[b].end(), g[b].begin());
@@ -107,7 +109,7 @@ void BM_EdgeTransferMakeHuman(benchmark::State& st) {
       1e-3 * static_cast<double>(nb), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_EdgeTransferMakeHuman)
-    ->ArgsProduct({{0, 1, 2, 3}, {0, 16}})
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0, 16}})
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime();
 
