@@ -59,12 +59,9 @@ namespace lanes_avx512 {
 #pragma GCC push_options
 #pragma GCC target("avx512f")
 constexpr int kLanes = 8;
-typedef double V __attribute__((vector_size(64)));
-typedef long long M __attribute__((vector_size(64)));
-inline V vsqrt(V a) noexcept {
-  return (V)_mm512_sqrt_pd((__m512d)a);
-}
+#define ATELIER_LANE_SQRT(a) (V) _mm512_sqrt_pd((__m512d)(a))
 #include "edge_transfer_lanes.inc"
+#undef ATELIER_LANE_SQRT
 #pragma GCC pop_options
 }  // namespace lanes_avx512
 
@@ -72,23 +69,17 @@ namespace lanes_avx2 {
 #pragma GCC push_options
 #pragma GCC target("avx2")
 constexpr int kLanes = 4;
-typedef double V __attribute__((vector_size(32)));
-typedef long long M __attribute__((vector_size(32)));
-inline V vsqrt(V a) noexcept {
-  return (V)_mm256_sqrt_pd((__m256d)a);
-}
+#define ATELIER_LANE_SQRT(a) (V) _mm256_sqrt_pd((__m256d)(a))
 #include "edge_transfer_lanes.inc"
+#undef ATELIER_LANE_SQRT
 #pragma GCC pop_options
 }  // namespace lanes_avx2
 
 namespace lanes_generic {
 constexpr int kLanes = 2;
-typedef double V __attribute__((vector_size(16)));
-typedef long long M __attribute__((vector_size(16)));
-inline V vsqrt(V a) noexcept {
-  return (V)_mm_sqrt_pd((__m128d)a);
-}
+#define ATELIER_LANE_SQRT(a) (V) _mm_sqrt_pd((__m128d)(a))
 #include "edge_transfer_lanes.inc"
+#undef ATELIER_LANE_SQRT
 }  // namespace lanes_generic
 
 EdgeTransferKernel pick(EdgeTransferKernel k) noexcept {
