@@ -31,7 +31,21 @@
 // false alarm on _mm512_sqrt_pd's undefined source are not ours.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"
+#ifndef __clang__
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+// Every function of a kernel's region compiled for its instruction set:
+// GCC's target pragma, clang's attribute pragma (the clang ASan build).
+#define ATELIER_PRAGMA(x) _Pragma(#x)
+#if defined(__clang__)
+#define ATELIER_LANES_TARGET_PUSH(isa) \
+  ATELIER_PRAGMA(clang attribute push(__attribute__((target(isa))), apply_to = function))
+#define ATELIER_LANES_TARGET_POP ATELIER_PRAGMA(clang attribute pop)
+#else
+#define ATELIER_LANES_TARGET_PUSH(isa) ATELIER_PRAGMA(GCC push_options) ATELIER_PRAGMA(GCC target(isa))
+#define ATELIER_LANES_TARGET_POP ATELIER_PRAGMA(GCC pop_options)
+#endif
 
 namespace atelier {
 namespace {
@@ -56,23 +70,21 @@ struct LineAllocator {
 };
 
 namespace lanes_avx512 {
-#pragma GCC push_options
-#pragma GCC target("avx512f")
+ATELIER_LANES_TARGET_PUSH("avx512f")
 constexpr int kLanes = 8;
 #define ATELIER_LANE_SQRT(a) (V) _mm512_sqrt_pd((__m512d)(a))
 #include "edge_transfer_lanes.inc"
 #undef ATELIER_LANE_SQRT
-#pragma GCC pop_options
+ATELIER_LANES_TARGET_POP
 }  // namespace lanes_avx512
 
 namespace lanes_avx2 {
-#pragma GCC push_options
-#pragma GCC target("avx2")
+ATELIER_LANES_TARGET_PUSH("avx2")
 constexpr int kLanes = 4;
 #define ATELIER_LANE_SQRT(a) (V) _mm256_sqrt_pd((__m256d)(a))
 #include "edge_transfer_lanes.inc"
 #undef ATELIER_LANE_SQRT
-#pragma GCC pop_options
+ATELIER_LANES_TARGET_POP
 }  // namespace lanes_avx2
 
 namespace lanes_generic {
