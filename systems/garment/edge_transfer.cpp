@@ -8,36 +8,26 @@
 #include <cmath>
 #include <string>
 
+#include "edge_transfer_detail.h"
+
 namespace atelier {
 
-// P A P^T = L D L^T (sparse LDL^T with a fill-reducing ordering, Eigen's
-// SimplicialLDLT), kept as plain arrays so that a solve runs the three
-// coordinates together: one pass over L per direction instead of one per
-// coordinate (Eigen's solve with a three-column right-hand side makes six).
-class EdgeTransferSolver {
- public:
-  std::vector<int> col_start, row;  // strictly lower L, compressed columns
-  std::vector<double> value;
-  std::vector<double> inv_d;
-  std::vector<int> perm;  // y = P b: y[perm[i]] = b[i]
-
-  void solve(std::span<const Vec3d> b, std::span<Vec3d> x, std::vector<Vec3d>& y) const {
-    const std::size_t n = inv_d.size();
-    y.resize(n);
-    for (std::size_t i = 0; i < n; ++i) y[perm[i]] = b[i];
-    for (std::size_t j = 0; j < n; ++j) {  // L y' = y, by columns
-      const Vec3d yj = y[j];
-      for (int k = col_start[j]; k < col_start[j + 1]; ++k) y[row[k]] -= value[k] * yj;
-    }
-    for (std::size_t j = 0; j < n; ++j) y[j] *= inv_d[j];
-    for (std::size_t j = n; j-- > 0;) {  // L^T x' = y', column j of L is row j of L^T
-      Vec3d s = y[j];
-      for (int k = col_start[j]; k < col_start[j + 1]; ++k) s -= value[k] * y[row[k]];
-      y[j] = s;
-    }
-    for (std::size_t i = 0; i < n; ++i) x[i] = y[perm[i]];
+void EdgeTransferSolver::solve(std::span<const Vec3d> b, std::span<Vec3d> x, std::vector<Vec3d>& y) const {
+  const std::size_t n = inv_d.size();
+  y.resize(n);
+  for (std::size_t i = 0; i < n; ++i) y[perm[i]] = b[i];
+  for (std::size_t j = 0; j < n; ++j) {  // L y' = y, by columns
+    const Vec3d yj = y[j];
+    for (int k = col_start[j]; k < col_start[j + 1]; ++k) y[row[k]] -= value[k] * yj;
   }
-};
+  for (std::size_t j = 0; j < n; ++j) y[j] *= inv_d[j];
+  for (std::size_t j = n; j-- > 0;) {  // L^T x' = y', column j of L is row j of L^T
+    Vec3d s = y[j];
+    for (int k = col_start[j]; k < col_start[j + 1]; ++k) s -= value[k] * y[row[k]];
+    y[j] = s;
+  }
+  for (std::size_t i = 0; i < n; ++i) x[i] = y[perm[i]];
+}
 
 Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
                                             std::span<const std::array<std::uint32_t, 2>> edges,
@@ -148,6 +138,19 @@ Expected<EdgeTransfer> encode_edge_transfer(std::span<const Vec3d> source,
 }
 
 namespace {
+
+// The right-hand side D^T W T + A d, gathered per vertex in a fixed order.
+void rhs_of(const EdgeTransfer& t, std::span<const Vec3d> decoded, std::span<const Vec3d> target,
+            std::vector<Vec3d>& rhs) {
+  rhs.resize(t.vertices);
+  for (std::size_t v = 0; v < t.vertices; ++v) rhs[v] = t.anchor[v] * decoded[v];
+  for (std::size_t e = 0; e < t.edges.size(); ++e) {
+    if (t.weight[e] == 0) continue;
+    const Vec3d f = t.weight[e] * target[e];
+    rhs[t.edges[e][1]] += f;
+    rhs[t.edges[e][0]] -= f;
+  }
+}
 
 // The local step: every target turned to its edge's current direction,
 // keeping its length. Returns the edge part of the energy at x,
@@ -261,12 +264,8 @@ void accelerated_length_iterations(const EdgeTransfer& t, std::span<const Vec3d>
         for (std::size_t v = 0; v < n; ++v) s += o[v].dot(f_prev[v]);
         rhs[static_cast<Eigen::Index>(c)] = s;
       }
-      // Normal equations of the small least-squares problem, with a
-      // Tikhonov term relative to the diagonal (nearly parallel columns).
-      Eigen::MatrixXd a = gram.topLeftCorner(k, k);
-      a.diagonal() *= 1.0 + 1e-10;
-      const Eigen::VectorXd gamma = a.ldlt().solve(rhs);
-      if (gamma.allFinite()) {
+      Eigen::VectorXd gamma;
+      if (edge_transfer_detail::anderson_gamma(gram, rhs, gamma)) {
         for (std::size_t v = 0; v < n; ++v) {
           Vec3d s = g_prev[v];
           for (std::size_t c = 0; c < cols; ++c) s -= gamma[static_cast<Eigen::Index>(c)] * dg[c * n + v];
@@ -291,8 +290,21 @@ void accelerated_length_iterations(const EdgeTransfer& t, std::span<const Vec3d>
 
 }  // namespace
 
-Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_points,
-                           std::span<const Triangle> body_triangles, std::span<Vec3d> garment, const ExecContext& ctx) {
+namespace edge_transfer_detail {
+
+bool anderson_gamma(const Eigen::MatrixXd& gram, const Eigen::VectorXd& rhs, Eigen::VectorXd& gamma) {
+  // Normal equations of the small least-squares problem, with a Tikhonov
+  // term relative to the diagonal (nearly parallel columns).
+  const Eigen::Index k = rhs.size();
+  Eigen::MatrixXd a = gram.topLeftCorner(k, k);
+  a.diagonal() *= 1.0 + 1e-10;
+  gamma = a.ldlt().solve(rhs);
+  return gamma.allFinite();
+}
+
+Status targets_and_rhs(const EdgeTransfer& t, std::span<const Vec3d> body_points,
+                       std::span<const Triangle> body_triangles, std::span<const Vec3d> garment,
+                       std::vector<Vec3d>& target, std::vector<Vec3d>& rhs, const ExecContext& ctx) {
   const std::size_t n = t.vertices;
   if (!t.solver) return Status(ErrorCode::kInvalidArgument, "edge transfer: not encoded");
   if (garment.size() != n)
@@ -315,7 +327,7 @@ Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_po
       return Status(ErrorCode::kDegenerate, "edge transfer: garment vertex " + std::to_string(v) + " is not finite");
   // Edge targets T_e = B_new c_e, then the right-hand side D^T W T + A d,
   // gathered per vertex in a fixed order (deterministic).
-  std::vector<Vec3d> target(t.edges.size(), Vec3d::Zero());
+  target.assign(t.edges.size(), Vec3d::Zero());
   par::for_each_n(ctx, t.edges.size(), [&](std::size_t e) {
     if (t.weight[e] == 0) return;
     const Mat3d m = triangle_basis(body_points, body_triangles[t.triangle[e]]);
@@ -324,18 +336,23 @@ Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_po
     target[e] = m.col(2).squaredNorm() > 0 ? Vec3d(m * t.coefficient[e])
                                            : Vec3d(garment[t.edges[e][1]] - garment[t.edges[e][0]]);
   });
-  std::vector<Vec3d> rhs(n), x(n), scratch;
+  rhs_of(t, garment, target, rhs);
+  return Status::ok();
+}
+
+}  // namespace edge_transfer_detail
+
+Status apply_edge_transfer(const EdgeTransfer& t, std::span<const Vec3d> body_points,
+                           std::span<const Triangle> body_triangles, std::span<Vec3d> garment, const ExecContext& ctx) {
+  const std::size_t n = t.vertices;
+  std::vector<Vec3d> target, rhs, x(n), scratch;
+  if (Status s = edge_transfer_detail::targets_and_rhs(t, body_points, body_triangles, garment, target, rhs, ctx); !s)
+    return s;
   auto solve = [&] {
-    for (std::size_t v = 0; v < n; ++v) rhs[v] = t.anchor[v] * garment[v];
-    for (std::size_t e = 0; e < t.edges.size(); ++e) {
-      if (t.weight[e] == 0) continue;
-      const Vec3d f = t.weight[e] * target[e];
-      rhs[t.edges[e][1]] += f;
-      rhs[t.edges[e][0]] -= f;
-    }
+    rhs_of(t, garment, target, rhs);
     t.solver->solve(rhs, x, scratch);
   };
-  solve();
+  t.solver->solve(rhs, x, scratch);
   // Length iterations (local-global, as in as-rigid-as-possible solvers):
   // only an edge's length is prescribed, its direction is free, so each
   // target is turned to the edge's current direction and the same energy is

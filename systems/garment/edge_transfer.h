@@ -123,4 +123,32 @@ struct EdgeTransfer {
                                          std::span<const Triangle> body_triangles, std::span<Vec3d> garment,
                                          const ExecContext& ctx = {});
 
+/// The lane kernel of apply_edge_transfer_bodies: kAuto picks AVX2 (4 lanes)
+/// where the CPU runs it (cpu_features()), else kGeneric (SSE2, 2 lanes);
+/// kAvx512 (8 lanes) is for tests and benchmarks (slower: see
+/// edge_transfer_batch.cpp). A kernel the CPU lacks falls back to kGeneric.
+enum class EdgeTransferKernel : std::uint8_t { kAuto, kAvx512, kAvx2, kGeneric };
+
+/// Lanes of a kernel (AVX-512 8, AVX2 4, generic 2); kAuto: the one it picks.
+[[nodiscard]] std::size_t edge_transfer_lanes(EdgeTransferKernel kernel = EdgeTransferKernel::kAuto) noexcept;
+
+/// apply_edge_transfer on several bodies of one family at once, one body per
+/// SIMD lane (edge_transfer_batch.cpp): the bodies share the garment's edges,
+/// weights and factor, so a Gauss-Seidel sweep or a triangular solve loads
+/// each index once for all lanes and runs the lanes' dependency chains side
+/// by side; a lane whose body stops takes the next one, so lanes do not wait
+/// for the slowest body. Every lane does the one-body path's operations in its order
+/// (no contraction into FMA; sqrt and division are correctly rounded), with
+/// its own Anderson history and stop: each garment is the same bits as
+/// apply_edge_transfer gives it alone. `bodies[b]` and `garments[b]` are
+/// body b's points and garment (decoded on entry, the result on exit);
+/// `status[b]` gets its own errors (those of apply_edge_transfer) and a body
+/// that fails keeps its garment. Errors of the call: sizes that differ, a
+/// transfer not encoded.
+[[nodiscard]] Status apply_edge_transfer_bodies(const EdgeTransfer& transfer,
+                                                std::span<const std::span<const Vec3d>> bodies,
+                                                std::span<const Triangle> body_triangles,
+                                                std::span<const std::span<Vec3d>> garments, std::span<Status> status,
+                                                EdgeTransferKernel kernel = EdgeTransferKernel::kAuto);
+
 }  // namespace atelier

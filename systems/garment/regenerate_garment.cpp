@@ -449,28 +449,60 @@ Status GarmentRegenerator::run(const BodySet& bodies, std::size_t first, std::si
   }
   decode_ms_per_body_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() /
                         static_cast<double>(count);
-  // 2-4. Each body on its own thread: the transfer, the pass and the figures
-  // are sequential per body (bodies are plenty, and a body's result must not
-  // depend on the thread count).
-  ExecContext per_body = ctx;
-  per_body.sequential_threshold = 2;
-  per_body.grain = 1;
-  par::for_each_n(per_body, count, [&](std::size_t b) {
+  // 2-4. Tiles of kTransferTile bodies in parallel: the tile's edge
+  // transfer with bodies as SIMD lanes (each body the bits it has alone),
+  // then per body the collision pass and the figures. Sequential within a
+  // tile, and tiles do not depend on the thread count: the same bits for
+  // any thread count.
+  constexpr std::size_t kTransferTile = 16;
+  const std::size_t ng = garments_.size();
+  const std::vector<const GarmentTemplate*> raw = raw_garments();
+  GarmentRegenOptions after = options_;
+  const bool lanes = options_.edge_transfer;
+  if (lanes) after.edge_transfer = false;  // done for the tile
+  ExecContext per_tile = ctx;
+  per_tile.sequential_threshold = 2;
+  per_tile.grain = 1;
+  par::for_each_n(per_tile, (count + kTransferTile - 1) / kTransferTile, [&](std::size_t tile) {
     ExecContext inner = ExecContext::sequential();
     inner.cancel = ctx.cancel;
+    const std::size_t b0 = tile * kTransferTile, nb = std::min(kTransferTile, count - b0);
     if (ctx.cancelled()) {
-      out[b].status = Status(ErrorCode::kCancelled, "garment regeneration cancelled");
+      for (std::size_t b = b0; b < b0 + nb; ++b)
+        out[b].status = Status(ErrorCode::kCancelled, "garment regeneration cancelled");
       return;
     }
-    const std::vector<Vec3d> body = bodies.positions(first + b);
-    std::vector<std::vector<Vec3d>> g(garments_.size());
-    for (std::size_t i = 0; i < garments_.size(); ++i) {
-      const std::size_t nv = garments_[i]->mesh.positions.size();
-      g[i].resize(nv);
-      const Vec3f* src = decoded_.data() + offset[i] + b * nv;
-      for (std::size_t v = 0; v < nv; ++v) g[i][v] = src[v].cast<double>();
+    std::vector<std::vector<Vec3d>> body(nb);
+    std::vector<std::vector<std::vector<Vec3d>>> g(nb, std::vector<std::vector<Vec3d>>(ng));
+    for (std::size_t k = 0; k < nb; ++k) {
+      body[k] = bodies.positions(first + b0 + k);
+      for (std::size_t i = 0; i < ng; ++i) {
+        const std::size_t nv = garments_[i]->mesh.positions.size();
+        g[k][i].resize(nv);
+        const Vec3f* src = decoded_.data() + offset[i] + (b0 + k) * nv;
+        for (std::size_t v = 0; v < nv; ++v) g[k][i][v] = src[v].cast<double>();
+      }
     }
-    out[b] = finish_body(*family_, raw_garments(), options_, body, std::move(g), inner);
+    std::vector<Status> failed(nb);
+    if (lanes) {
+      std::vector<std::span<const Vec3d>> bs(body.begin(), body.end());
+      std::vector<std::span<Vec3d>> gs(nb);
+      std::vector<Status> st(nb);
+      for (std::size_t i = 0; i < ng; ++i) {
+        for (std::size_t k = 0; k < nb; ++k) gs[k] = g[k][i];
+        const Status call = apply_edge_transfer_bodies(garments_[i]->transfer, bs, family_->collision->triangles(), gs,
+                                                       st, EdgeTransferKernel::kAuto);
+        for (std::size_t k = 0; k < nb; ++k)
+          if (failed[k] && !(call && st[k])) failed[k] = named(garments_[i]->name, call ? st[k] : call);
+      }
+    }
+    for (std::size_t k = 0; k < nb; ++k) {
+      if (!failed[k]) {
+        out[b0 + k].status = failed[k];
+        continue;
+      }
+      out[b0 + k] = finish_body(*family_, raw, after, body[k], std::move(g[k]), inner);
+    }
   });
   if (ctx.cancelled()) return Status(ErrorCode::kCancelled, "garment regeneration cancelled");
   return {};

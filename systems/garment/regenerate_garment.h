@@ -196,7 +196,10 @@ class GarmentRegenerator {
                                                           const ExecContext& ctx = {});
 
   /// Bodies [first, first + count) of `bodies` (the family's topology):
-  /// decoded 16 bodies per pass, then each body in parallel. `out` gets one
+  /// decoded 16 bodies per pass, then tiles of 16 bodies in parallel: the
+  /// tile's edge transfer with bodies as SIMD lanes
+  /// (apply_edge_transfer_bodies), then each body's collision pass and
+  /// figures (tiles do not depend on the thread count). `out` gets one
   /// entry per body; a body that fails has its status set and the others
   /// complete. Errors (of the whole call): a range outside the set, a body
   /// set of another topology, cancellation.

@@ -7,6 +7,7 @@
 #include <atelier/systems/garment/edge_transfer.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -236,4 +237,65 @@ TEST(EdgeTransfer, BadInputsGiveClearErrors) {
   EXPECT_NE(msg(apply_edge_transfer(s->transfer, s->body.p, std::span(s->body.t).first(10), nan)).find("triangles"),
             std::string::npos);
   EXPECT_NE(msg(apply_edge_transfer(s->transfer, s->body.p, s->body.t, nan)).find("vertex 17"), std::string::npos);
+}
+
+// Bodies as SIMD lanes (apply_edge_transfer_bodies): each garment is the
+// same bits as apply_edge_transfer gives it alone, on every kernel this
+// machine runs, for 11 bodies (a last group that does not fill the lanes)
+// whose stops come after different numbers of sweeps (5 to 30 here, some
+// with the safeguard's restarts), with a body that
+// fails in the middle (its own error, the others unaffected).
+TEST(EdgeTransfer, BodiesAsLanesGiveEachBodysOwnBits) {
+  const auto s = make_setup();
+  constexpr std::size_t kBodies = 11, kBad = 6;
+  SplitMix64 rng(11);
+  std::vector<std::vector<Vec3d>> bodies(kBodies, s->body.p), decoded(kBodies, s->tube.p);
+  for (std::size_t b = 0; b < kBodies; ++b) {
+    const double amp = 0.001 * static_cast<double>(b + 1), k = 0.5 * static_cast<double>(b % 4);
+    for (auto& p : bodies[b]) p = Vec3d(p.x() * (1 + k * p.z()), p.y(), p.z() + amp * std::sin(2 * M_PI * p.z() / 0.1));
+    for (auto& q : decoded[b]) q += 0.004 * Vec3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+  }
+  decoded[kBad][5].x() = std::nan("");
+  // Each body alone, and its number of sweeps: the fewest iterations that
+  // give the same bits as the default cap.
+  std::vector<std::vector<Vec3d>> alone = decoded;
+  std::vector<int> sweeps(kBodies, 0);
+  for (std::size_t b = 0; b < kBodies; ++b) {
+    if (b == kBad) continue;
+    ASSERT_TRUE(apply_edge_transfer(s->transfer, bodies[b], s->body.t, alone[b]));
+    for (int it = 1; it <= s->transfer.length_iterations && sweeps[b] == 0; ++it) {
+      EdgeTransfer capped = s->transfer;
+      capped.length_iterations = it;
+      std::vector<Vec3d> g = decoded[b];
+      ASSERT_TRUE(apply_edge_transfer(capped, bodies[b], s->body.t, g));
+      if (std::memcmp(g.data(), alone[b].data(), g.size() * sizeof(Vec3d)) == 0) sweeps[b] = it;
+    }
+  }
+  std::vector<int> distinct = sweeps;
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  EXPECT_GE(distinct.size(), 4u) << "the bodies should stop after different numbers of sweeps";
+  std::vector<Vec3d> bad_copy = decoded[kBad];
+  const Status bad = apply_edge_transfer(s->transfer, bodies[kBad], s->body.t, bad_copy);
+  ASSERT_FALSE(bad);
+  for (const EdgeTransferKernel kernel : {EdgeTransferKernel::kAuto, EdgeTransferKernel::kAvx512,
+                                          EdgeTransferKernel::kAvx2, EdgeTransferKernel::kGeneric}) {
+    std::vector<std::vector<Vec3d>> g = decoded;
+    std::vector<std::span<const Vec3d>> bs(bodies.begin(), bodies.end());
+    std::vector<std::span<Vec3d>> gs(g.begin(), g.end());
+    std::vector<Status> st(kBodies);
+    ASSERT_TRUE(apply_edge_transfer_bodies(s->transfer, bs, s->body.t, gs, st, kernel));
+    SCOPED_TRACE(testing::Message() << "kernel " << static_cast<int>(kernel) << ", " << edge_transfer_lanes(kernel)
+                                    << " lanes");
+    for (std::size_t b = 0; b < kBodies; ++b) {
+      if (b == kBad) {
+        EXPECT_EQ(st[b].to_string(), bad.to_string());
+        EXPECT_EQ(std::memcmp(g[b].data(), decoded[b].data(), 5 * sizeof(Vec3d)), 0) << "kept";
+        continue;
+      }
+      ASSERT_TRUE(st[b]) << b;
+      EXPECT_EQ(std::memcmp(g[b].data(), alone[b].data(), g[b].size() * sizeof(Vec3d)), 0)
+          << "body " << b << " (" << sweeps[b] << " sweeps)";
+    }
+  }
 }

@@ -93,9 +93,10 @@ TEST(GarmentPipeline, BatchedRunMatchesSingleBodyCallsAndIsOutsideTheBody) {
   }
 }
 
+// 35 bodies: three tiles of run()'s edge transfer, shared by the threads.
 TEST(GarmentPipeline, SameBitsForOneAndTwoThreads) {
   const Scene& s = scene();
-  const BodySet set = bodies(6, 5);
+  const BodySet set = bodies(35, 5);
   std::vector<std::vector<BodyGarments>> runs;
   for (int threads : {1, 2}) {
     ExecContext ctx;
@@ -111,7 +112,56 @@ TEST(GarmentPipeline, SameBitsForOneAndTwoThreads) {
       const auto& c = runs[1][b].garments[g].positions;
       ASSERT_EQ(a.size(), c.size());
       EXPECT_EQ(0, std::memcmp(a.data(), c.data(), a.size() * sizeof(Vec3d))) << "body " << b << " garment " << g;
+      // The body's record: every figure the same bits.
+      const GarmentQuality& qa = runs[0][b].garments[g].quality;
+      const GarmentQuality& qc = runs[1][b].garments[g].quality;
+      for (const auto& [x, y] : {std::pair{qa.min_clearance, qc.min_clearance}, {qa.mean_clearance, qc.mean_clearance},
+                                 {qa.clearance_error, qc.clearance_error}, {qa.strain_max, qc.strain_max},
+                                 {qa.strain_p95, qc.strain_p95}, {qa.max_depth, qc.max_depth}})
+        EXPECT_EQ(0, std::memcmp(&x, &y, sizeof(double))) << "body " << b << " garment " << g;
+      EXPECT_EQ(qa.inside, qc.inside);
+      EXPECT_EQ(qa.pushed, qc.pushed);
+      EXPECT_EQ(qa.layer_inside, qc.layer_inside);
     }
+}
+
+// run() transfers a tile of bodies as SIMD lanes: each garment is the bits
+// the one-body apply_edge_transfer gives it from the same decode (run()
+// without the transfer), for 19 bodies (a tile of 16 and one not full),
+// two garments, on 1 and 2 threads.
+TEST(GarmentPipeline, TiledTransferGivesTheOneBodyTransfersBits) {
+  const Scene& s = scene();
+  const BodySet set = bodies(19, 8);
+  GarmentRegenOptions decode_only;
+  decode_only.edge_transfer = false;
+  decode_only.collision_pass = false;
+  auto plain = GarmentRegenerator::create(s.family, {s.shorts, s.shell}, decode_only);
+  ASSERT_TRUE(plain);
+  std::vector<BodyGarments> decoded;
+  ASSERT_TRUE(plain->run(set, 0, set.size(), decoded));
+  GarmentRegenOptions transfer_only = decode_only;
+  transfer_only.edge_transfer = true;
+  for (int threads : {1, 2}) {
+    ExecContext ctx;
+    ctx.threads = threads;
+    auto regen = GarmentRegenerator::create(s.family, {s.shorts, s.shell}, transfer_only, ctx);
+    ASSERT_TRUE(regen);
+    std::vector<BodyGarments> out;
+    ASSERT_TRUE(regen->run(set, 0, set.size(), out, ctx));
+    for (std::size_t b = 0; b < set.size(); ++b) {
+      ASSERT_TRUE(out[b].status) << out[b].status.to_string();
+      const std::vector<Vec3d> body = set.positions(b);
+      for (std::size_t g = 0; g < 2; ++g) {
+        std::vector<Vec3d> want = decoded[b].garments[g].positions;
+        ASSERT_TRUE(apply_edge_transfer(regen->garment(g).transfer, body, s.family->collision->triangles(), want));
+        const auto& got = out[b].garments[g].positions;
+        ASSERT_EQ(got.size(), want.size());
+        EXPECT_EQ(0, std::memcmp(got.data(), want.data(), got.size() * sizeof(Vec3d)))
+            << threads << " threads, body " << b << " garment " << g;
+        EXPECT_NE(0, std::memcmp(got.data(), decoded[b].garments[g].positions.data(), got.size() * sizeof(Vec3d)));
+      }
+    }
+  }
 }
 
 TEST(GarmentPipeline, LayersKeepTheOuterGarmentOutsideTheInnerOne) {
