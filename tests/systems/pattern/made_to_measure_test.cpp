@@ -63,6 +63,14 @@ std::vector<Model> sampled_garments(const std::string& name, std::size_t n) {
   return out;
 }
 
+/// The options of a pattern set without files (no SVG, DXF or CSV).
+MadeToMeasureOptions pattern_set_only(bool warm_start) {
+  MadeToMeasureOptions o;
+  o.files.svg = o.files.dxf = o.csv = false;
+  o.warm_start = warm_start;
+  return o;
+}
+
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("atelier_mtm_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
@@ -211,9 +219,7 @@ TEST(MadeToMeasure, PreparedPatternsGiveTheSameBitsInAnyOrderAndThreadCount) {
   const auto& f = testing::template_fixture();
   const std::size_t skirt = template_index("skirt");
   const std::vector<Model> garments = sampled_garments("skirt", 3);
-  MadeToMeasureOptions o;
-  o.files.svg = o.files.dxf = o.csv = false;
-  o.warm_start = false;
+  MadeToMeasureOptions o = pattern_set_only(false);
   MadeToMeasurePatterns mtm;
   ASSERT_TRUE(mtm.prepare(garments[0], o));
   const fs::path dir = fresh_dir("prepared");
@@ -317,9 +323,7 @@ TEST(MadeToMeasure, PreparedColdGivesTheOneShotBitsOnEveryPieceHoweverItsPolygon
   EXPECT_NE(fans0.at("left_leg"), fans1.at("left_leg"));  // the case this test is about
   EXPECT_NE(fans0.at("right_leg"), fans1.at("right_leg"));
   EXPECT_EQ(fans0.at("waistband"), fans1.at("waistband"));
-  MadeToMeasureOptions o;
-  o.files.svg = o.files.dxf = o.csv = false;
-  o.warm_start = false;
+  const MadeToMeasureOptions o = pattern_set_only(false);
   MadeToMeasurePatterns mtm;
   ASSERT_TRUE(mtm.prepare(g[0], o));
   const fs::path dir = fresh_dir("fans");
