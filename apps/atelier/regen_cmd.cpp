@@ -410,8 +410,9 @@ constexpr std::size_t kBatchPatternBodies = 8;
 /// --patterns: per template, the batch form of the made-to-measure patterns
 /// (systems/pattern/made_to_measure.h, MadeToMeasurePatterns) prepared on
 /// the template regenerated on the reference body, so every body's pattern
-/// set is flattened warm from the reference's pattern (1.5x less CPU per
-/// body than the one-shot form, docs/performance.md, flat11 and mtm13).
+/// set is flattened warm from the reference's pattern (per body, the top
+/// 1.6-2.2x less CPU than one-shot, the skirt 1.2x, the trousers about the
+/// same: their legs start again cold; docs/performance.md, flat11, mtm13).
 /// The reference is regenerated like any body (same parameters, same roi),
 /// so its garment has the bodies' topology; a body's pattern set depends on
 /// the reference and that body only: the same bits for any thread count,
