@@ -57,6 +57,8 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
       // tests/systems/pattern/made_to_measure_test.cpp).
       EXPECT_GE(p["max_seam_difference_mm"].get<double>(), 0.0);
       EXPECT_LE(p["failed_seams"].get<std::size_t>(), p["seams_opened"].get<std::size_t>() + 8);
+      // One body: one-shot (the batch form pays off from 8 bodies), no piece warm.
+      EXPECT_EQ(p["warm_started_pieces"].get<std::size_t>(), 0u);
       std::size_t svg = 0;
       for (const auto& e : fs::directory_iterator(sets / name)) {
         svg += e.path().extension() == ".svg";
