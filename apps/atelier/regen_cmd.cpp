@@ -387,20 +387,87 @@ RegenJob prepare_regen(const Common& common, const RegenOptions& opt) {
   return job;
 }
 
-/// A body's record marks it complete; with --patterns, only a record that
-/// lists its pattern sets (or a failure) does.
-/// The made-to-measure pattern set of one regenerated template (one library
-/// call), and its figures for the body's record.
-nlohmann::json write_patterns(const Model& garment, const fs::path& dir, bool marked_seams, const ExecContext& ctx) {
+/// --patterns: the options of every pattern set (the defaults; the top cut
+/// along its template's marked seams unless --no-marked-seams).
+MadeToMeasureOptions pattern_options(bool marked_seams) {
   MadeToMeasureOptions o;
   o.seams.marked = marked_seams;
-  auto rep = write_made_to_measure_pattern(garment, o, dir, ctx);
+  return o;
+}
+
+/// --patterns: the fewest bodies in a job (all ranks, done or not: the
+/// choice is the job's, the same on a rerun) for which the pattern sets are
+/// made by the batch form. Its prepare() (the templates regenerated and
+/// flattened on the reference body, the reference with 3 times the
+/// iteration cap) costs about 2 bodies' worth of CPU on the project
+/// templates, more than it saves below ~6 bodies (docs/performance.md,
+/// mtm13: 4 bodies 7.1 s against 6.0 s one-shot, 16 bodies 20.0 s against
+/// 24.4 s). A body's pattern set is the same bits for any thread count,
+/// rank count, chunk size or resume; which of the two forms made it depends
+/// on the job's body count only.
+constexpr std::size_t kBatchPatternBodies = 8;
+
+/// --patterns: per template, the batch form of the made-to-measure patterns
+/// (systems/pattern/made_to_measure.h, MadeToMeasurePatterns) prepared on
+/// the template regenerated on the reference body, so every body's pattern
+/// set is flattened warm from the reference's pattern (per body, the top
+/// 1.6-2.2x less CPU than one-shot, the skirt 1.2x, the trousers about the
+/// same: their legs start again cold; docs/performance.md, flat11, mtm13).
+/// The reference is regenerated like any body (same parameters, same roi),
+/// so its garment has the bodies' topology; a body's pattern set depends on
+/// the reference and that body only: the same bits for any thread count,
+/// chunk size, rank or resume. A template whose reference garment cannot
+/// be prepared is left unprepared and its bodies take the one-shot form
+/// (write_made_to_measure_pattern), with a warning.
+std::vector<MadeToMeasurePatterns> prepare_patterns(std::span<const ProfileTemplate> templates,
+                                                    const ReferenceBody& ref, const Box3d& roi, const RegenParams& rp,
+                                                    bool marked_seams, const ExecContext& ctx, Log& log) {
+  std::vector<MadeToMeasurePatterns> out(templates.size());
+  auto garments = regenerate_on_body(templates, ref, ref.model.nodes.position, roi, rp, {.use_grid = false}, ctx);
+  if (!garments) {
+    log.warn("patterns: the templates could not be regenerated on the reference body (" +
+             garments.status().to_string() + "); every body's patterns are made alone");
+    return out;
+  }
+  std::vector<Status> status(templates.size());
+  ExecContext per_template = ctx;
+  per_template.sequential_threshold = 2;
+  per_template.grain = 1;
+  par::for_each_n(per_template, templates.size(), [&](std::size_t k) {
+    ExecContext inner = ExecContext::sequential();
+    inner.cancel = ctx.cancel;
+    status[k] = out[k].prepare((*garments)[k].model, pattern_options(marked_seams), inner);
+  });
+  for (std::size_t k = 0; k < templates.size(); ++k)
+    if (!status[k])
+      log.warn("patterns of " + templates[k].name + ": the reference garment could not be flattened (" +
+               status[k].to_string() + "); its bodies' patterns are made alone");
+  return out;
+}
+
+/// A body's record marks it complete; with --patterns, only a record that
+/// lists its pattern sets (or a failure) does.
+/// The made-to-measure pattern set of one regenerated template (the batch
+/// form when prepared, else one library call), and its figures for the
+/// body's record.
+nlohmann::json write_patterns(const MadeToMeasurePatterns& batch, const Model& garment, const fs::path& dir,
+                              bool marked_seams, const ExecContext& ctx) {
+  auto rep = batch.prepared() ? batch.write(garment, dir, ctx)
+                              : write_made_to_measure_pattern(garment, pattern_options(marked_seams), dir, ctx);
   if (!rep) throw Error(Status(rep.status().code(), "patterns: " + rep.status().message()));
   double e_l = 0;
-  for (const auto& p : rep->files.flattening.pieces) e_l = std::max(e_l, p.distortion.length_error);
-  return {{"pieces", rep->files.pattern.pieces.size()},   {"seams_opened", rep->seams_opened},
-          {"flipped", rep->flipped},                     {"failed_seams", rep->failed_seams},
-          {"max_seam_difference_mm", rep->max_seam_difference_mm}, {"max_length_error", e_l}};
+  std::size_t warm = 0;  // pieces flattened warm from the reference (batch form)
+  for (const auto& p : rep->files.flattening.pieces) {
+    e_l = std::max(e_l, p.distortion.length_error);
+    warm += p.warm_started;
+  }
+  return {{"pieces", rep->files.pattern.pieces.size()},
+          {"seams_opened", rep->seams_opened},
+          {"flipped", rep->flipped},
+          {"failed_seams", rep->failed_seams},
+          {"max_seam_difference_mm", rep->max_seam_difference_mm},
+          {"max_length_error", e_l},
+          {"warm_started_pieces", warm}};
 }
 
 nlohmann::json garment_quality_json(const GarmentQuality& q) {
@@ -443,6 +510,10 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
   }
   std::vector<BodyGarments> garments;
   const std::size_t n = src.size();
+  // --patterns: the batch form for a job of kBatchPatternBodies or more
+  // bodies (prepared at the first chunk with a body to do), else one-shot.
+  std::vector<MadeToMeasurePatterns> patterns(templates.size());
+  bool prepare = opt.patterns && n >= kBatchPatternBodies && !templates.empty();
   // Progress counts this rank's share; only rank 0 draws it (one bar).
   const bool show = group.rank() == 0;
   std::size_t share = 0, share_seen = 0;
@@ -479,6 +550,10 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
       nlohmann::json rec = {{"body", failures[f].name}, {"ok", false}, {"reason", failures[f].status.to_string()}};
       log.warn(failures[f].name + ": " + failures[f].status.message());  // e.g. a member of another topology
       write_atomically(bodies_dir / (failures[f].name + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
+    }
+    if (prepare) {
+      patterns = prepare_patterns(templates, *ref, roi, rp, !opt.no_marked_seams, ctx, log);
+      prepare = false;
     }
     double garment_ms_per_body = 0;
     if (regenerator) {
@@ -573,7 +648,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
           nlohmann::json pats = nlohmann::json::object();
           for (std::size_t k = 0; k < templates.size(); ++k)
             pats[templates[k].name] =
-                write_patterns(regen[k].model, bodies_dir / chunk.name(b) / "patterns" / templates[k].name,
+                write_patterns(patterns[k], regen[k].model, bodies_dir / chunk.name(b) / "patterns" / templates[k].name,
                                !opt.no_marked_seams, inner);
           rec["patterns"] = pats;
         }

@@ -13,10 +13,11 @@
 //  * BM_MadeToMeasure_RegenAndPatterns: both, as `regen --patterns` does.
 //  * ..._Prepared: the same with MadeToMeasurePatterns (made_to_measure.h),
 //    prepared once per template on the first sampled body's garment (not
-//    timed): seams opened once, flattening built once per piece topology,
-//    every body warm-started from that reference (its pattern fitted to the
-//    body, seam multipliers, Cholesky factor; MadeToMeasureOptions::
-//    warm_start, the default).
+//    timed): flattening built once per piece topology (again for a body
+//    whose seams open with other fans: its own open_seams per body), every
+//    body warm-started from that reference (its pattern fitted to the body,
+//    seam multipliers, Cholesky factor; MadeToMeasureOptions::warm_start,
+//    the default).
 // Counters bodies_per_s (items_per_second); iterations_per_body (phase 2
 // L-BFGS iterations of all pieces per body) and warm_pieces_per_body.
 #include <atelier/engine/parallel.h>

@@ -430,10 +430,30 @@ def made_to_measure_pattern(
     svg: bool = True,
     dxf: bool = True,
     csv: bool = True,
+    marked_seams: bool = True,
     threads: int = 0,
     progress: Progress = None,
 ) -> dict[str, Any]:
     """The made-to-measure pattern set of one garment (SVG, DXF, measurements CSV in out): its report."""
+
+class MadeToMeasurePatterns:
+    """Made-to-measure patterns of one garment topology for many bodies (prepared on a reference)."""
+
+    def __init__(
+        self,
+        reference: MeshLike,
+        *,
+        lines: Optional[Sequence[tuple[str, float]]] = None,
+        svg: bool = True,
+        dxf: bool = True,
+        csv: bool = True,
+        marked_seams: bool = True,
+        warm_start: bool = True,
+        threads: int = 0,
+        progress: Progress = None,
+    ) -> None: ...
+    def write(self, garment: MeshLike, out: str, *, threads: int = 0, progress: Progress = None) -> dict[str, Any]:
+        """The pattern set of one garment of the reference's topology in out: its report."""
 
 def sketch(
     mesh: MeshLike,

@@ -29,6 +29,57 @@ SurfaceIdx surface_named(const Model& m, const std::string& name) {
   value_error("surfaces: no surface named '" + name + "' (surfaces: " + names + ")");
 }
 
+/// The made-to-measure options the Python calls take (the rest default).
+MadeToMeasureOptions mtm_options(const std::optional<std::vector<std::pair<std::string, double>>>& lines, bool svg,
+                                 bool dxf, bool csv, bool marked_seams) {
+  MadeToMeasureOptions o;
+  o.files.svg = svg;
+  o.files.dxf = dxf;
+  o.csv = csv;
+  o.seams.marked = marked_seams;
+  if (lines) {
+    o.lines.clear();
+    for (const auto& [name, f] : *lines) o.lines.push_back({name, f});
+  }
+  return o;
+}
+
+/// A made-to-measure report as the dict made_to_measure_pattern returns.
+py::dict mtm_report(const MadeToMeasureReport& rep, const MadeToMeasureOptions& o) {
+  py::list pieces;
+  for (std::size_t i = 0; i < rep.files.pattern.pieces.size(); ++i) {
+    const PatternPiece& p = rep.files.pattern.pieces[i];
+    const PieceMeasurements& pm = rep.measurements[i];
+    py::dict widths;
+    for (std::size_t k = 0; k < o.lines.size(); ++k) widths[py::str(o.lines[k].name)] = pm.widths_mm[k];
+    pieces.append(py::dict(py::arg("name") = p.name, py::arg("mirrored") = p.mirrored, py::arg("area_mm2") = p.area_mm2,
+                           py::arg("height_mm") = pm.height_mm, py::arg("widths_mm") = widths));
+  }
+  py::list seams;
+  for (const SeamCheck& c : rep.files.pattern.seams) {
+    py::list lengths;
+    for (const SeamMemberLength& ml : c.members) lengths.append(py::make_tuple(ml.length_2d_mm, ml.length_3d_mm));
+    seams.append(py::dict(py::arg("joint") = c.joint.value, py::arg("lengths_mm") = lengths,
+                          py::arg("max_difference_mm") = c.max_difference_mm, py::arg("ok") = c.ok));
+  }
+  py::list files;
+  for (const auto& f : rep.files.files) files.append(f.string());
+  std::size_t warm = 0;
+  for (const PieceFlattening& p : rep.files.flattening.pieces) warm += p.warm_started;
+  return py::dict(py::arg("seams_opened") = rep.seams_opened, py::arg("flipped") = rep.flipped,
+                  py::arg("failed_seams") = rep.failed_seams,
+                  py::arg("max_seam_difference_mm") = rep.max_seam_difference_mm,
+                  py::arg("max_length_error") = rep.max_length_error, py::arg("warm_started_pieces") = warm,
+                  py::arg("pieces") = pieces, py::arg("seams") = seams, py::arg("files") = files);
+}
+
+/// atelier.MadeToMeasurePatterns: the batch form prepared on a reference
+/// garment, and the options its reports are read with.
+struct PreparedPatterns {
+  MadeToMeasurePatterns batch;
+  MadeToMeasureOptions options;
+};
+
 }  // namespace
 
 void bind_pattern(py::module_& m) {
@@ -116,46 +167,15 @@ with the engine's message (a piece with holes, an unknown surface, ...).
 
   m.def(
       "made_to_measure_pattern",
-      [](const MeshLike& mesh, const std::string& out, const std::optional<std::vector<std::pair<std::string, double>>>& lines,
-         bool svg, bool dxf, bool csv, bool marked_seams, int threads, const Progress& progress) {
+      [](const MeshLike& mesh, const std::string& out,
+         const std::optional<std::vector<std::pair<std::string, double>>>& lines, bool svg, bool dxf, bool csv,
+         bool marked_seams, int threads, const Progress& progress) {
         Model model = model_from(mesh, "mesh");
-        MadeToMeasureOptions o;
-        o.files.svg = svg;
-        o.files.dxf = dxf;
-        o.csv = csv;
-        o.seams.marked = marked_seams;
-        if (lines) {
-          o.lines.clear();
-          for (const auto& [name, f] : *lines) o.lines.push_back({name, f});
-        }
+        const MadeToMeasureOptions o = mtm_options(lines, svg, dxf, csv, marked_seams);
         MadeToMeasureReport rep = unwrap(run_long(progress, threads, [&](const ExecContext& ctx) {
           return write_made_to_measure_pattern(model, o, std::filesystem::path(out), ctx);
         }));
-        py::list pieces;
-        for (std::size_t i = 0; i < rep.files.pattern.pieces.size(); ++i) {
-          const PatternPiece& p = rep.files.pattern.pieces[i];
-          const PieceMeasurements& pm = rep.measurements[i];
-          py::dict widths;
-          for (std::size_t k = 0; k < o.lines.size(); ++k) widths[py::str(o.lines[k].name)] = pm.widths_mm[k];
-          pieces.append(py::dict(py::arg("name") = p.name, py::arg("mirrored") = p.mirrored,
-                                 py::arg("area_mm2") = p.area_mm2, py::arg("height_mm") = pm.height_mm,
-                                 py::arg("widths_mm") = widths));
-        }
-        py::list seams;
-        for (const SeamCheck& c : rep.files.pattern.seams) {
-          py::list lengths;
-          for (const SeamMemberLength& ml : c.members)
-            lengths.append(py::make_tuple(ml.length_2d_mm, ml.length_3d_mm));
-          seams.append(py::dict(py::arg("joint") = c.joint.value, py::arg("lengths_mm") = lengths,
-                                py::arg("max_difference_mm") = c.max_difference_mm, py::arg("ok") = c.ok));
-        }
-        py::list files;
-        for (const auto& f : rep.files.files) files.append(f.string());
-        return py::dict(py::arg("seams_opened") = rep.seams_opened, py::arg("flipped") = rep.flipped,
-                        py::arg("failed_seams") = rep.failed_seams,
-                        py::arg("max_seam_difference_mm") = rep.max_seam_difference_mm,
-                        py::arg("max_length_error") = rep.max_length_error, py::arg("pieces") = pieces,
-                        py::arg("seams") = seams, py::arg("files") = files);
+        return mtm_report(rep, o);
       },
       py::arg("mesh"), py::arg("out"), py::kw_only(), py::arg("lines") = py::none(), py::arg("svg") = true,
       py::arg("dxf") = true, py::arg("csv") = true, py::arg("marked_seams") = true, py::arg("threads") = 0,
@@ -176,11 +196,67 @@ lines: named lines as (name, fraction of the piece's height along the
 marked_seams: cut along the marked seams (default); False ignores the marks.
 
 Returns a dict: ``seams_opened``, ``flipped``, ``failed_seams``,
-``max_seam_difference_mm``, ``max_length_error``, ``pieces`` (``name``,
+``max_seam_difference_mm``, ``max_length_error``, ``warm_started_pieces``
+(0 here; see MadeToMeasurePatterns), ``pieces`` (``name``,
 ``mirrored``, ``area_mm2``, ``height_mm``, ``widths_mm`` per named line),
 ``seams`` (``joint``, ``lengths_mm`` (pattern, body) per member,
 ``max_difference_mm``, ``ok``) and ``files``. Long call (GIL released).
 Raises ValueError with the engine's message.
+)doc");
+
+  py::class_<PreparedPatterns, std::shared_ptr<PreparedPatterns>>(m, "MadeToMeasurePatterns", R"doc(
+Made-to-measure patterns of one garment topology for many bodies: the batch
+form of ``made_to_measure_pattern`` (systems/pattern/made_to_measure.h,
+MadeToMeasurePatterns), prepared once on the garment on a reference body,
+then ``write()`` per body. Each body is flattened warm from the reference's
+pattern (its seams already opened, its flattening built): on the project
+templates about 1.5x less CPU per body than ``made_to_measure_pattern``
+(the top's body pieces 2x; the trouser legs fall back to a cold start).
+The preparation costs about two bodies' worth: worth it from a few bodies.
+A body's result depends on the reference and the body only (the same bits
+for any thread count or order); ``write()`` may run from several Python
+threads at once.
+)doc")
+      .def(py::init([](const MeshLike& reference,
+                       const std::optional<std::vector<std::pair<std::string, double>>>& lines, bool svg, bool dxf,
+                       bool csv, bool marked_seams, bool warm_start, int threads, const Progress& progress) {
+             Model model = model_from(reference, "mesh");  // pieces named as made_to_measure_pattern names them
+             auto p = std::make_shared<PreparedPatterns>();
+             p->options = mtm_options(lines, svg, dxf, csv, marked_seams);
+             p->options.warm_start = warm_start;
+             check(run_long(progress, threads,
+                            [&](const ExecContext& ctx) { return p->batch.prepare(model, p->options, ctx); }));
+             return p;
+           }),
+           py::arg("reference"), py::kw_only(), py::arg("lines") = py::none(), py::arg("svg") = true,
+           py::arg("dxf") = true, py::arg("csv") = true, py::arg("marked_seams") = true, py::arg("warm_start") = true,
+           py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+reference: the garment on the reference body, as ``made_to_measure_pattern``'s
+    mesh (a Mesh or a (vertices, faces) pair); every garment given to
+    write() must have its topology (the same template regenerated).
+lines, svg, dxf, csv, marked_seams: as made_to_measure_pattern's.
+warm_start: flatten each body warm from the reference (default); False
+    flattens cold, as made_to_measure_pattern does.
+Long call (GIL released): the seams opened and the reference flattened.
+Raises ValueError with the engine's message.
+)doc")
+      .def(
+          "write",
+          [](const PreparedPatterns& p, const MeshLike& garment, const std::string& out, int threads,
+             const Progress& progress) {
+            Model model = model_from(garment, "mesh");
+            MadeToMeasureReport rep = unwrap(run_long(progress, threads, [&](const ExecContext& ctx) {
+              return p.batch.write(model, std::filesystem::path(out), ctx);
+            }));
+            return mtm_report(rep, p.options);
+          },
+          py::arg("garment"), py::arg("out"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
+          R"doc(
+The pattern set of one garment (the reference's topology, this body's
+positions) in the folder ``out``: the files and the dict of
+``made_to_measure_pattern``; ``warm_started_pieces`` counts the pieces
+flattened warm. Long call (GIL released). Raises ValueError for a garment of
+another topology and with the engine's message.
 )doc");
 }
 

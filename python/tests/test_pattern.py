@@ -119,3 +119,77 @@ def test_made_to_measure_pattern_of_a_tube(tmp_path):
     assert any(row.startswith("mesh,width,elbow,") for row in rows)
     with pytest.raises(ValueError, match="fraction"):
         atelier.made_to_measure_pattern(tube(), str(tmp_path / "bad"), lines=[("waist", 2.0)])
+
+
+def flared(r0=0.1, flare=0.3, h=0.4, squash=0.8, nu=24, nv=4):
+    """tube()'s topology on another body: an elliptic cone, wider at y = 0."""
+    v, f = tube(r0, h, nu, nv)
+    grow = 1 + flare * (1 - v[:, 1] / h)
+    return v * np.stack([grow, np.ones(len(v)), squash * grow], axis=1), f
+
+
+def figures(rep):
+    return ([(p["name"], p["mirrored"], p["height_mm"], p["widths_mm"]) for p in rep["pieces"]],
+            [(s["joint"], s["lengths_mm"]) for s in rep["seams"]])
+
+
+def test_made_to_measure_patterns_batch_form(tmp_path):
+    # Prepared once on the reference garment, then written per body: on the
+    # reference itself the same pieces and seams as the one-shot call (the
+    # same figures to 1e-3 mm; cold, warm_start=False, the same numbers);
+    # on other bodies of the same topology, the other body's measures: a
+    # wider, taller tube opens into its own girth x height rectangle, and
+    # an elliptic cone flattens without flips, its seam sides within the
+    # tests' 2 mm.
+    ref = tube()
+    lines = [("elbow", 0.5), ("cuff", 0.1)]
+    one = atelier.made_to_measure_pattern(ref, str(tmp_path / "one"), lines=lines)
+    batch = atelier.MadeToMeasurePatterns(ref, lines=lines)
+    warm = batch.write(ref, str(tmp_path / "warm"))
+    assert warm["warm_started_pieces"] == 1 and one["warm_started_pieces"] == 0
+    (mine, seams), (theirs, seams_one) = figures(warm), figures(one)
+    assert [p[:2] for p in mine] == [p[:2] for p in theirs]
+    assert [s[0] for s in seams] == [s[0] for s in seams_one]
+    for p, q in zip(mine, theirs):
+        assert p[2] == pytest.approx(q[2], abs=1e-3)
+        assert p[3] == pytest.approx(q[3], abs=1e-3)
+    for s, t in zip(seams, seams_one):
+        assert np.allclose(s[1], t[1], atol=1e-3)
+    cold = atelier.MadeToMeasurePatterns(ref, lines=lines, warm_start=False).write(ref, str(tmp_path / "cold"))
+    assert cold["warm_started_pieces"] == 0 and figures(cold) == figures(one)
+    assert sorted(p.rsplit("/", 1)[-1] for p in warm["files"]) == ["measurements.csv", "mesh.svg", "pattern.dxf"]
+
+    r, h, nu = 0.13, 0.47, 24
+    big = batch.write(tube(r, h), str(tmp_path / "big"))
+    assert big["flipped"] == 0 and big["failed_seams"] == 0 and big["warm_started_pieces"] == 1
+    (piece,) = big["pieces"]
+    girth = 1000 * nu * 2 * r * np.sin(np.pi / nu)
+    assert piece["height_mm"] == pytest.approx(1000 * h, abs=1e-6)
+    assert piece["widths_mm"]["elbow"] == pytest.approx(girth, abs=1e-6)
+    (seam,) = big["seams"]
+    assert [a for a, _ in seam["lengths_mm"]] == pytest.approx([1000 * h, 1000 * h], abs=1e-6)
+
+    cone = batch.write(flared(), str(tmp_path / "cone"))
+    assert cone["flipped"] == 0 and cone["failed_seams"] == 0
+    assert cone["max_seam_difference_mm"] < 2.0
+    alone = atelier.made_to_measure_pattern(flared(), str(tmp_path / "cone_one"), lines=lines)
+    assert cone["max_seam_difference_mm"] <= alone["max_seam_difference_mm"] + 0.1
+    for a, b in zip(cone["pieces"], alone["pieces"]):  # the same body measured: heights within 1 mm
+        assert a["height_mm"] == pytest.approx(b["height_mm"], abs=1.0)
+
+    with pytest.raises(ValueError, match="topology"):
+        batch.write(tube(nu=20), str(tmp_path / "other"))
+
+
+def test_made_to_measure_patterns_from_several_threads(tmp_path):
+    # write() releases the GIL and may run for several bodies at once: the
+    # same figures as one body at a time, in any order.
+    from concurrent.futures import ThreadPoolExecutor
+
+    batch = atelier.MadeToMeasurePatterns(tube(), svg=False, dxf=False)
+    bodies = [flared(flare=0.1 * k, squash=1 - 0.05 * k) for k in range(4)]
+    alone = [figures(batch.write(b, str(tmp_path / f"a{k}"), threads=1)) for k, b in enumerate(bodies)]
+    with ThreadPoolExecutor(2) as pool:
+        together = list(pool.map(lambda k: figures(batch.write(bodies[k], str(tmp_path / f"t{k}"), threads=2)),
+                                 reversed(range(4))))
+    assert together[::-1] == alone

@@ -435,11 +435,14 @@ Status Flattener::warm_from(const Flattener& other) {
   if (!impl_ || !other.impl_) return {ErrorCode::kInvalidArgument, "Flattener::warm_from: not built"};
   Impl& I = *impl_;
   const Impl& O = *other.impl_;
-  if (I.topo.node != O.topo.node || I.topo.tri != O.topo.tri || I.seams.lengths.sides != O.seams.lengths.sides)
+  if (I.topo.node != O.topo.node || I.seams.lengths.sides != O.seams.lengths.sides)
     return {ErrorCode::kInvalidArgument,
             "Flattener::warm_from: " + I.label + " and " + O.label + " are not the same piece topology"};
   I.seams.lengths.lambda = O.seams.lengths.lambda;
-  I.solver.set_factor(O.solver.factor());
+  // Fanned otherwise (a polygon's fan starts at another corner: open_seams
+  // picks it from the geometry), the springs differ: no factor to share,
+  // phase 2 factors its own.
+  I.solver.set_factor(I.topo.tri == O.topo.tri ? O.solver.factor() : nullptr);
   return {};
 }
 

@@ -209,8 +209,11 @@ class Flattener {
   /// and its Cholesky factor (shared, immutable) are copied. With the same
   /// pattern in `uv`, flatten() then gives the bits `other` would give,
   /// whatever this Flattener flattened before: many bodies can start from
-  /// one reference body in any order, on any thread. Errors:
-  /// kInvalidArgument (either not built, or built on another topology).
+  /// one reference body in any order, on any thread. A piece of the same
+  /// nodes and seams fanned otherwise (a polygon's fan from another corner)
+  /// takes the multipliers only; its next flatten() factors its own
+  /// springs. Errors: kInvalidArgument (either not built, or built on
+  /// other nodes or seams).
   [[nodiscard]] Status warm_from(const Flattener& other);
 
   [[nodiscard]] bool built() const noexcept;

@@ -128,6 +128,17 @@ void finish(MadeToMeasureReport& rep, const MadeToMeasureOptions& opt, const std
   }
 }
 
+/// The corners of every live face of an opened model, in its order: where
+/// its fan starts (open_seams picks the corner from the geometry: a polygon
+/// whose fan from its first corner has a nearly degenerate triangle starts
+/// at another, seams.cpp fan_start).
+std::vector<std::uint32_t> fans(const Model& m) {
+  std::vector<std::uint32_t> c;
+  for (std::uint32_t f = 0; f < m.faces.slots.capacity(); ++f)
+    if (m.alive(FaceIdx{f})) m.for_each_face_halfedge(FaceIdx{f}, [&](HalfedgeIdx h) { c.push_back(m.tail(h).value); });
+  return c;
+}
+
 /// The topology write() compares with prepare()'s: node slots, and per live
 /// face its surface and nodes.
 std::vector<std::uint32_t> fingerprint(const Model& m) {
@@ -166,6 +177,7 @@ struct MadeToMeasurePatterns::Impl {
   OpenedSeams opened;  // the reference's, its pattern in model.nodes.uv
   ModelFlattener reference;
   std::vector<std::uint32_t> topology;
+  std::vector<std::uint32_t> fans;  // the opened reference's (fans())
   mutable std::mutex pool_mutex;
   mutable std::vector<std::unique_ptr<ModelFlattener>> pool;  // idle workspaces
 };
@@ -197,6 +209,7 @@ Status MadeToMeasurePatterns::prepare(const Model& reference, const MadeToMeasur
   if (!flat) return flat.status();
   m.nodes.uv = std::move(uv);
   impl->topology = fingerprint(reference);
+  impl->fans = fans(m);
   impl_ = std::move(impl);
   return {};
 }
@@ -209,12 +222,25 @@ Expected<MadeToMeasureReport> MadeToMeasurePatterns::write(const Model& garment,
     return Status(ErrorCode::kInvalidArgument,
                   "made-to-measure patterns: the garment does not have the topology of the reference they were "
                   "prepared for");
-  // The opened model with this body's positions.
-  Model m = I.opened.model;
-  for (std::uint32_t v = 0; v < m.nodes.slots.capacity(); ++v)
-    if (m.alive(NodeIdx{v})) m.nodes.position[v] = garment.nodes.position[I.opened.source_node[v].value];
+  // The body's own opened model: its seams are the reference's (open_seams
+  // chooses them from the topology), but a polygon's fan may start at
+  // another corner (fan_start looks at the geometry): the one-shot form's
+  // triangles, so that cold the bits are the one-shot's on every piece.
+  auto opened = open_seams(garment, I.opt.seams, ctx);
+  if (!opened) return opened.status();
+  Model& m = opened->model;
+  if (m.nodes.slots.capacity() != I.opened.model.nodes.slots.capacity() ||
+      m.faces.slots.capacity() != I.opened.model.faces.slots.capacity() || opened->part_of != I.opened.part_of)
+    return Status(ErrorCode::kInternal,
+                  "made-to-measure patterns: the garment's seams open otherwise than the "
+                  "reference's");
+  m.nodes.uv = I.opened.model.nodes.uv;  // the warm start's pattern
+  // A workspace from the pool when every polygon is fanned as on the
+  // reference; else one built for this body (its pieces fanned otherwise
+  // start warm with the reference's multipliers, not its factor).
+  const bool reference_fans = fans(m) == I.fans;
   std::unique_ptr<ModelFlattener> ws;
-  {
+  if (reference_fans) {
     const std::lock_guard<std::mutex> lock(I.pool_mutex);
     if (!I.pool.empty()) {
       ws = std::move(I.pool.back());
@@ -223,7 +249,7 @@ Expected<MadeToMeasureReport> MadeToMeasurePatterns::write(const Model& garment,
   }
   if (!ws) {
     ws = std::make_unique<ModelFlattener>();
-    if (Status st = ws->build(I.opened.model, I.files.flatten); !st) return st;
+    if (Status st = ws->build(reference_fans ? I.opened.model : m, I.files.flatten); !st) return st;
   }
   Expected<FlattenReport> flat = Status(ErrorCode::kInternal, "made-to-measure patterns: not flattened");
   if (!I.opt.warm_start)
@@ -232,7 +258,7 @@ Expected<MadeToMeasureReport> MadeToMeasurePatterns::write(const Model& garment,
     flat = st;
   else
     flat = ws->flatten(m.nodes.position, m.nodes.uv, true, ctx);
-  {
+  if (reference_fans) {
     const std::lock_guard<std::mutex> lock(I.pool_mutex);
     I.pool.push_back(std::move(ws));
   }

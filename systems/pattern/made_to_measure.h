@@ -79,11 +79,9 @@ struct MadeToMeasureOptions {
   /// templates the trouser legs. On: the top's body pieces, which start
   /// from Tutte cold and run to the 2000-iteration cap, take 360-1000
   /// iterations warm at a lower E (docs/performance.md, flat11). Off: cold,
-  /// as write_made_to_measure_pattern (the same bits on the skirt,
-  /// MadeToMeasure.PreparedPatternsGiveTheSameBitsInAnyOrderAndThreadCount;
-  /// NOT yet on every piece: a trouser leg that falls back to Tutte on
-  /// sampled body 1 of seed 2026 took 1,169 phase 2 iterations prepared
-  /// against 2,000 one-shot, both flip-free and sewable; unexplained).
+  /// as write_made_to_measure_pattern, the same bits on every piece
+  /// (MadeToMeasure.PreparedPatternsGiveTheSameBitsInAnyOrderAndThreadCount,
+  /// MadeToMeasure.PreparedColdGivesTheOneShotBitsOnEveryPieceHowever...).
   bool warm_start = true;
 };
 
@@ -117,15 +115,19 @@ struct MadeToMeasureReport {
 /// are opened (they depend on the topology only), every piece's flattening
 /// built (topology, springs, symbolic Cholesky analysis) and the reference
 /// garment flattened cold (with MadeToMeasureOptions::warm_start, to 3
-/// times the iteration cap). write() per body then copies the opened model
-/// with the body's positions (no open_seams) and flattens it with a built
-/// workspace (no topology checks, springs or symbolic analysis): with
+/// times the iteration cap). write() per body then opens the body's seams
+/// (the reference's seams, chosen from the topology; but open_seams fans a
+/// polygon from a corner it picks from the geometry, seams.cpp fan_start,
+/// and on sampled bodies a quad of each trouser leg is fanned from another
+/// corner than on the reference: the body's fans are the one-shot's
+/// triangles) and flattens it with a built workspace (no topology checks,
+/// springs or symbolic analysis; built for the body when its fans are not
+/// the reference's, the factor then not shared): with
 /// warm_start (the default) from the reference: its pattern fitted to the
 /// body (no phase 1; a piece whose warm start stalls is flattened cold),
 /// its seam multipliers and its Cholesky factor (kept while no spring's
 /// stiffness moved by 25%); without, cold (as
-/// write_made_to_measure_pattern; see MadeToMeasureOptions::warm_start for
-/// the one case seen where the bits differ). Every body starts from the reference,
+/// write_made_to_measure_pattern, the same bits). Every body starts from the reference,
 /// never from the body before: write()'s result depends on the reference
 /// and the body only (the same bits in any order, for 1 or 2 threads), and
 /// write() may run for several bodies at once (each takes a flattening

@@ -57,6 +57,8 @@ TEST(RegenPatternsCli, EveryBodyGetsAPatternSetPerTemplateAndARerunSkipsThem) {
       // tests/systems/pattern/made_to_measure_test.cpp).
       EXPECT_GE(p["max_seam_difference_mm"].get<double>(), 0.0);
       EXPECT_LE(p["failed_seams"].get<std::size_t>(), p["seams_opened"].get<std::size_t>() + 8);
+      // One body: one-shot (the batch form pays off from 8 bodies), no piece warm.
+      EXPECT_EQ(p["warm_started_pieces"].get<std::size_t>(), 0u);
       std::size_t svg = 0;
       for (const auto& e : fs::directory_iterator(sets / name)) {
         svg += e.path().extension() == ".svg";
@@ -118,4 +120,36 @@ TEST(RegenPatternsCli, PatternsAfterARunWithoutThemRedoTheBodies) {
     EXPECT_TRUE(nlohmann::json::parse(read_bytes(rec)).contains("patterns")) << rec;
     EXPECT_TRUE(fs::exists(out / "bodies" / rec.stem() / "patterns" / "skirt" / "measurements.csv"));
   }
+}
+
+TEST(RegenPatternsCli, BatchPatternSetsAreTheSameBitsForAnyThreadCountAndChunk) {
+  // A job of 8 bodies makes its pattern sets with the batch form (prepared
+  // on the templates regenerated on the reference body, each body warm
+  // from it): every file is the same bytes on 1 thread in one chunk and on
+  // 2 threads in chunks of 3 (bodies in another order on the workers).
+  const std::string args = template_args({"skirt", "top"}) + " --count 8 --patterns";
+  const fs::path a = atelier::testing::scratch_dir("regen_patterns_t1");
+  const fs::path b = atelier::testing::scratch_dir("regen_patterns_t2");
+  const CliRun ra = run_cli("--threads 1 regen" + args + " --out " + a.string());
+  ASSERT_EQ(ra.code, 0) << ra.out;
+  const CliRun rb = run_cli("--threads 2 regen" + args + " --chunk 3 --out " + b.string());
+  ASSERT_EQ(rb.code, 0) << rb.out;
+  const auto recs = records(a);
+  ASSERT_EQ(recs.size(), 8u);
+  std::size_t files = 0;
+  for (const fs::path& rec : recs) {
+    const auto j = nlohmann::json::parse(read_bytes(rec));
+    ASSERT_TRUE(j.value("ok", false)) << j.dump();
+    // The batch form: pieces started warm from the reference's pattern.
+    EXPECT_GE(j["patterns"]["top"]["warm_started_pieces"].get<std::size_t>(), 1u) << rec;
+    EXPECT_EQ(j["patterns"], nlohmann::json::parse(read_bytes(b / "bodies" / rec.filename()))["patterns"]) << rec;
+    for (const auto& e : fs::recursive_directory_iterator(a / "bodies" / rec.stem() / "patterns")) {
+      if (!e.is_regular_file()) continue;
+      const fs::path other = b / fs::relative(e.path(), a);
+      ASSERT_TRUE(fs::exists(other)) << other;
+      EXPECT_EQ(read_bytes(e.path()), read_bytes(other)) << e.path();
+      ++files;
+    }
+  }
+  EXPECT_EQ(files, 8u * (1 + 5 + 2 + 2));  // SVG per piece (skirt 1, top 5), DXF and CSV per set
 }

@@ -63,6 +63,14 @@ std::vector<Model> sampled_garments(const std::string& name, std::size_t n) {
   return out;
 }
 
+/// The options of a pattern set without files (no SVG, DXF or CSV).
+MadeToMeasureOptions pattern_set_only(bool warm_start) {
+  MadeToMeasureOptions o;
+  o.files.svg = o.files.dxf = o.csv = false;
+  o.warm_start = warm_start;
+  return o;
+}
+
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("atelier_mtm_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
@@ -211,9 +219,7 @@ TEST(MadeToMeasure, PreparedPatternsGiveTheSameBitsInAnyOrderAndThreadCount) {
   const auto& f = testing::template_fixture();
   const std::size_t skirt = template_index("skirt");
   const std::vector<Model> garments = sampled_garments("skirt", 3);
-  MadeToMeasureOptions o;
-  o.files.svg = o.files.dxf = o.csv = false;
-  o.warm_start = false;
+  MadeToMeasureOptions o = pattern_set_only(false);
   MadeToMeasurePatterns mtm;
   ASSERT_TRUE(mtm.prepare(garments[0], o));
   const fs::path dir = fresh_dir("prepared");
@@ -292,6 +298,51 @@ std::vector<Vec2d> sew_lines_of(const MadeToMeasureReport& r, const std::string&
     if (p.name == name)
       for (const auto& loop : p.sew_line) out.insert(out.end(), loop.begin(), loop.end());
   return out;
+}
+
+TEST(MadeToMeasure, PreparedColdGivesTheOneShotBitsOnEveryPieceHoweverItsPolygonsAreFanned) {
+  // open_seams fans a polygon from a corner it picks from the geometry
+  // (seams.cpp fan_start): on sampled body 1 a quad of each trouser leg
+  // starts at another corner than on body 0. The batch form prepared on
+  // body 0 flattens body 1 with body 1's fans, so cold it gives the
+  // one-shot's bits on every piece (it took body 0's fans before: a leg
+  // then ran 1,169 phase 2 iterations against the one-shot's 2,000).
+  const std::vector<Model> g = sampled_garments("trousers", 2);
+  auto corners = [](const Model& garment) {
+    const auto o = open_seams(garment).value();
+    std::map<std::string, std::vector<std::uint32_t>> c;  // per piece, its faces' corners in order
+    for (std::uint32_t f = 0; f < o.model.faces.slots.capacity(); ++f)
+      if (o.model.alive(FaceIdx{f}))
+        o.model.for_each_face_halfedge(FaceIdx{f}, [&](HalfedgeIdx h) {
+          c[o.model.surfaces.name[o.model.faces.surface[f].value]].push_back(o.model.tail(h).value);
+        });
+    return c;
+  };
+  const auto fans0 = corners(g[0]), fans1 = corners(g[1]);
+  ASSERT_EQ(fans0.size(), 3u);
+  EXPECT_NE(fans0.at("left_leg"), fans1.at("left_leg"));  // the case this test is about
+  EXPECT_NE(fans0.at("right_leg"), fans1.at("right_leg"));
+  EXPECT_EQ(fans0.at("waistband"), fans1.at("waistband"));
+  const MadeToMeasureOptions o = pattern_set_only(false);
+  MadeToMeasurePatterns mtm;
+  ASSERT_TRUE(mtm.prepare(g[0], o));
+  const fs::path dir = fresh_dir("fans");
+  auto prepared = mtm.write(g[1], dir, ExecContext::sequential());
+  ASSERT_TRUE(prepared) << prepared.status().to_string();
+  auto one = write_made_to_measure_pattern(g[1], o, dir);
+  ASSERT_TRUE(one) << one.status().to_string();
+  EXPECT_EQ(prepared->flipped, 0u);
+  ASSERT_EQ(prepared->files.flattening.pieces.size(), 3u);
+  for (const std::string piece : {"left_leg", "right_leg", "waistband"}) {
+    SCOPED_TRACE(piece);
+    const auto a = sew_lines_of(*prepared, piece), b = sew_lines_of(*one, piece);
+    ASSERT_FALSE(a.empty());
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec2d)));
+  }
+  for (std::size_t i = 0; i < 3; ++i)
+    EXPECT_EQ(prepared->files.flattening.pieces[i].iterations, one->files.flattening.pieces[i].iterations);
+  fs::remove_all(dir);
 }
 
 TEST(MadeToMeasure, WarmStartsFromTheReferenceCutTheSlowPiecesIterations) {
