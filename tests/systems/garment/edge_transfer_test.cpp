@@ -285,8 +285,8 @@ TEST(EdgeTransfer, BodiesAsLanesGiveEachBodysOwnBits) {
     std::vector<std::span<Vec3d>> gs(g.begin(), g.end());
     std::vector<Status> st(kBodies);
     ASSERT_TRUE(apply_edge_transfer_bodies(s->transfer, bs, s->body.t, gs, st, kernel));
-    SCOPED_TRACE(testing::Message() << "kernel " << static_cast<int>(kernel) << ", " << edge_transfer_lanes(kernel)
-                                    << " lanes");
+    SCOPED_TRACE(::testing::Message() << "kernel " << static_cast<int>(kernel) << ", " << edge_transfer_lanes(kernel)
+                                      << " lanes");
     for (std::size_t b = 0; b < kBodies; ++b) {
       if (b == kBad) {
         EXPECT_EQ(st[b].to_string(), bad.to_string());
