@@ -328,7 +328,7 @@ void write_garment_mesh(const PolygonSoup& g, std::span<const Vec3d> positions, 
     }
     std::string face;
     for (std::size_t k = 0; k < g.face_count(); ++k) {
-      face.assign(1, 'f');  // not = "f": GCC 12 sees a bogus memcpy bound there when inlined (-Wstringop-overflow)
+      face = "f";
       for (std::uint32_t c = g.face_offsets[k]; c < g.face_offsets[k + 1]; ++c) {
         face += " " + std::to_string(g.face_nodes[c] + 1);
         if (has_uv) face += "/" + std::to_string(vt_of[c] + 1);
