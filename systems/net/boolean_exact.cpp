@@ -610,7 +610,7 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
 bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
                           std::span<const PointKey> points, std::span<const std::array<PointKey, 2>> constraints,
                           const PointIds& ids, std::span<const PointBox> boxes, std::uint32_t first_new,
-                          std::vector<std::array<std::uint32_t, 3>>& out) {
+                          std::vector<std::array<std::uint32_t, 3>>& out, bool projected) {
   using Ct = Cdt<Ki>;
   using I = CGAL::Interval_nt<true>;
   const CutTriangle ctri(a, b, side, t);
@@ -673,7 +673,7 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   const double p0u = c[0][u], p0v = c[0][v];
   const double e1u = c[1][u] - p0u, e1v = c[1][v] - p0v, e2u = c[2][u] - p0u, e2v = c[2][v] - p0v;
   const double det = e1u * e2v - e1v * e2u;
-  if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
+  if (!projected && (!(std::abs(det) > 0) || !std::isfinite(det))) return false;
   auto mid2 = [&](std::uint32_t i) {
     const auto& x = vert[i].box;
     return std::array<double, 2>{centre(x[0], x[2]) - p0u, centre(x[1], x[3]) - p0v};
@@ -682,7 +682,17 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   frame[0] = {0.0, 0.0};
   frame[1] = {1.0, 0.0};
   frame[2] = {0.0, 1.0};
-  for (std::uint32_t q = 0; q < 3; ++q)
+  // Projected: the boxes' centres as they are (the triangle's corners
+  // exact), for a triangle whose frame would merge its points (a corner at
+  // 3.4e38 and cut points of size 1e4: Cray). An edge point then lies on
+  // its edge in doubles only where the projected edge is axis-parallel or
+  // the centre happens to be exactly on it; elsewhere the boundary
+  // certificate below fails and the exact path decides.
+  for (std::uint32_t i = 0; projected && i < vert.size(); ++i) {
+    const auto& x = vert[i].box;
+    frame[i] = {centre(x[0], x[2]), centre(x[1], x[3])};
+  }
+  for (std::uint32_t q = 0; q < 3 && !projected; ++q)
     for (std::uint32_t i : on_edge[q]) {
       // The parameter along the edge from its first corner.
       const auto m2 = mid2(i);
@@ -699,16 +709,27 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
       }
     }
   for (std::uint32_t i : inside) {
+    if (projected) break;
     const auto m2 = mid2(i);
     frame[i] = {(m2[0] * e2v - m2[1] * e2u) / det, (e1u * m2[1] - e1v * m2[0]) / det};
   }
   // Certified sign of the orientation of three vertices, for any points in
   // their boxes: +1, -1, or 0 when the intervals cannot tell.
-  auto orient_box = [&](std::uint32_t i, std::uint32_t j, std::uint32_t k) {
+  auto orient_from = [&](std::uint32_t i, std::uint32_t j, std::uint32_t k) {
     const auto &p = vert[i].box, &q = vert[j].box, &r = vert[k].box;
     const I px(p[0], p[2]), py(p[1], p[3]), qx(q[0], q[2]), qy(q[1], q[3]), rx(r[0], r[2]), ry(r[1], r[3]);
     const I d = (qx - px) * (ry - py) - (qy - py) * (rx - px);
     return d.inf() > 0 ? 1 : (d.sup() < 0 ? -1 : 0);
+  };
+  // Projected, a corner far from the cut (3.4e38 against points of size
+  // 1e4) swamps the differences taken from it: the determinant is also
+  // taken from the other two vertices (a cyclic turn keeps the sign), whose
+  // differences to each other are small and exact-ish.
+  auto orient_box = [&](std::uint32_t i, std::uint32_t j, std::uint32_t k) {
+    int o = orient_from(i, j, k);
+    if (o == 0 && projected) o = orient_from(j, k, i);
+    if (o == 0 && projected) o = orient_from(k, i, j);
+    return o;
   };
   // Points on an edge in their certified order along it (a coordinate in
   // which the edge is monotone; disjoint intervals).
@@ -781,12 +802,16 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
     for (auto f = ct.finite_faces_begin(); f != ct.finite_faces_end(); ++f) {
       const std::uint32_t i0 = f->vertex(0)->info(), i1 = f->vertex(1)->info(), i2 = f->vertex(2)->info();
       // Counter-clockwise in the frame is the triangle's own orientation,
-      // which the projection shows with the sign pr.sign.
-      if (orient_box(i0, i1, i2) != pr.sign) {
+      // which the projection shows with the sign pr.sign; counter-clockwise
+      // in the projection is that orientation when pr.sign > 0.
+      if (orient_box(i0, i1, i2) != (projected ? 1 : pr.sign)) {
         out.resize(before);
         return false;
       }
-      out.push_back({vert[i0].id, vert[i1].id, vert[i2].id});
+      if (projected && pr.sign < 0)
+        out.push_back({vert[i0].id, vert[i2].id, vert[i1].id});
+      else
+        out.push_back({vert[i0].id, vert[i1].id, vert[i2].id});
     }
   } catch (const std::exception&) {
     return false;  // constraints cross in doubles: the exact path decides
@@ -969,6 +994,28 @@ bool rounded_point(const TriMesh& a, const TriMesh& b, const PointKey& k, const 
 }
 
 }  // namespace
+
+bool rounded_box(const TriMesh& a, const TriMesh& b, const PointKey& k, PointBox& box, Vec3d& x) {
+  // point_coordinates' choice: a pinned edge-face point keeps its box.
+  const bool edge_face = dim_of(k.a) == kDimFace || dim_of(k.b) == kDimFace;
+  if (edge_face && box.ok && pinned(box.b[0], box.b[3]) && pinned(box.b[1], box.b[4]) && pinned(box.b[2], box.b[5]))
+    return false;
+  if (!rounded_point(a, b, k, box, x)) return false;
+  // x is the exact value rounded to nearest: the exact value lies within
+  // its neighbours.
+  for (int j = 0; j < 3; ++j) {
+    const auto lo = static_cast<std::size_t>(j), hi = static_cast<std::size_t>(j + 3);
+    double l = std::nextafter(x[j], -HUGE_VAL), h = std::nextafter(x[j], HUGE_VAL);
+    if (box.ok) {
+      l = std::max(l, box.b[lo]);
+      h = std::min(h, box.b[hi]);
+    }
+    box.b[lo] = l;
+    box.b[hi] = h;
+  }
+  box.ok = true;
+  return true;
+}
 
 Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box,
                         const ExactPoints& exact, std::size_t index) {
