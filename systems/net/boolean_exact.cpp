@@ -345,6 +345,170 @@ int winding_any(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, 
   throw Error(Status(ErrorCode::kInternal, "net boolean: no generic ray direction found for a winding number"));
 }
 
+// Shewchuk's exact arithmetic (Adaptive Precision Floating-Point
+// Arithmetic, 1997): Two-Sum (Theorem 7), Two-Product by a fused
+// multiply-add, Grow-Expansion with zero elimination (Theorem 10).
+void two_sum(double a, double b, double& s, double& e) noexcept {
+  s = a + b;
+  const double bv = s - a, av = s - bv;
+  e = (a - av) + (b - bv);
+}
+
+/// An exact sum of doubles, as a nonoverlapping expansion in increasing
+/// magnitude; its sign is that of its largest component.
+struct Expansion {
+  std::array<double, 64> e{};
+  std::size_t n = 0;
+  bool full = false;  // more components than room: the caller goes to CGAL
+  void add(double b) noexcept {
+    if (b == 0.0) return;
+    double q = b;
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      double h;
+      two_sum(q, e[i], q, h);
+      if (h != 0.0) e[k++] = h;
+    }
+    if (q != 0.0) {
+      if (k == e.size()) {
+        full = true;
+        return;
+      }
+      e[k++] = q;
+    }
+    n = k;
+  }
+  /// x y z exactly: four terms (Two-Product twice).
+  void add_product(double x, double y, double z) noexcept {
+    const double p = x * y, pe = std::fma(x, y, -p);
+    const double q = p * z, qe = std::fma(p, z, -q);
+    const double r = pe * z, re = std::fma(pe, z, -r);
+    add(re);
+    add(r);
+    add(qe);
+    add(q);
+  }
+  [[nodiscard]] int sign() const noexcept { return n == 0 ? 0 : (e[n - 1] > 0 ? 1 : -1); }
+};
+
+/// det[r1, c - a, r3] exactly, when r1 = b - a and r3 = d - c are exact in
+/// doubles: by linearity in the middle row it is det[r1, c, r3] - det[r1,
+/// a, r3], six triple products each of doubles, summed as an expansion. 2
+/// when it cannot tell (a difference rounds, a value outside [2^-250,
+/// 2^250] where a product's tail could underflow or overflow, or too many
+/// components).
+int orient3d_expansion(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
+  std::array<double, 3> r1, r3;
+  for (int k = 0; k < 3; ++k) {
+    double t1, t3;
+    two_sum(b[k], -a[k], r1[static_cast<std::size_t>(k)], t1);
+    two_sum(d[k], -c[k], r3[static_cast<std::size_t>(k)], t3);
+    if (t1 != 0.0 || t3 != 0.0) return 2;
+  }
+  auto in_range = [](double x) { return x == 0.0 || (std::abs(x) > 0x1p-250 && std::abs(x) < 0x1p250); };
+  for (std::size_t k = 0; k < 3; ++k)
+    if (!in_range(r1[k]) || !in_range(r3[k]) || !in_range(a[static_cast<int>(k)]) || !in_range(c[static_cast<int>(k)]))
+      return 2;
+  Expansion sum;
+  for (int m = 0; m < 2; ++m) {
+    const Vec3d& v = m == 0 ? c : a;
+    const double s = m == 0 ? 1.0 : -1.0;  // exact negation
+    // det[r1, v, r3] = r1x (vy r3z - vz r3y) - r1y (vx r3z - vz r3x) + r1z (vx r3y - vy r3x)
+    sum.add_product(s * r1[0], v.y(), r3[2]);
+    sum.add_product(-s * r1[0], v.z(), r3[1]);
+    sum.add_product(-s * r1[1], v.x(), r3[2]);
+    sum.add_product(s * r1[1], v.z(), r3[0]);
+    sum.add_product(s * r1[2], v.x(), r3[1]);
+    sum.add_product(-s * r1[2], v.y(), r3[0]);
+  }
+  return sum.full ? 2 : sum.sign();
+}
+
+/// The sign of det[b - a, c - a, d - c] (= orient3d) when d - c is exact
+/// in doubles: the cofactor row n = (c - a) x (d - c) = c x r3 - a x r3 is
+/// summed exactly (an expansion of eight products per coordinate) and
+/// rounded, so no cancellation between 3.4e38-sized products is lost; the
+/// dot product with b - a (rounded, its tail known exactly) then has a
+/// rigorous error bound. Cray's diagonal (c, d at 3.4e38) against an edge
+/// (a, b) of A 1e4 from it: det about 1e47, the bound about 1e33. 2 when
+/// it cannot tell or d - c rounds.
+int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
+  std::array<double, 3> r1, t1, r3;
+  auto in_range = [](double x) { return x == 0.0 || (std::abs(x) > 0x1p-250 && std::abs(x) < 0x1p250); };
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    double t3;
+    two_sum(d[k], -c[k], r3[i], t3);
+    if (t3 != 0.0) return 2;
+    two_sum(b[k], -a[k], r1[i], t1[i]);
+    if (!in_range(r3[i]) || !in_range(a[k]) || !in_range(c[k]) || !in_range(r1[i])) return 2;
+  }
+  double p = 0.0, t = 0.0, det = 0.0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::size_t i = (k + 1) % 3, j = (k + 2) % 3;
+    // n_k = c_i r3_j - c_j r3_i - a_i r3_j + a_j r3_i, each product as
+    // head + tail (Two-Product).
+    Expansion e;
+    auto product = [&](double x, double y) {
+      const double h = x * y;
+      e.add(std::fma(x, y, -h));
+      e.add(h);
+    };
+    product(c[static_cast<int>(i)], r3[j]);
+    product(-c[static_cast<int>(j)], r3[i]);
+    product(-a[static_cast<int>(i)], r3[j]);
+    product(a[static_cast<int>(j)], r3[i]);
+    if (e.full) return 2;
+    double n = 0.0;  // the components summed upwards: within 8 eps |n_k|
+    for (std::size_t q = 0; q < e.n; ++q) n += e.e[q];
+    det += r1[k] * n;
+    p += std::abs(r1[k] * n);
+    t += std::abs(t1[k] * n);
+  }
+  // |exact - det| <= (sum |t1| |n|) + (sum |r1| |n|)(8 eps for n + 3 eps
+  // for the dot product), with room for the rounding of p and t.
+  const double bound = 1.125 * (t + p * 0x1p-48);
+  if (!std::isfinite(bound) || !std::isfinite(det)) return 2;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return 2;
+}
+
+/// orient3d after its first filter fails (kept out of line so the filter
+/// inlines into its callers): exact rules that need no CGAL, then CGAL's
+/// filtered predicate.
+[[gnu::noinline]] int orient3d_slow(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
+  // A plane of constant coordinate k (Cray's slab, CAD boxes): the normal is
+  // (0, 0, orient2d) along k, so the sign is that of d_k - a_k (an exact
+  // comparison) times the exact orientation of the corners across k. The
+  // filter above fails there whenever the corners are far (3.4e38) or d lies
+  // on the plane; the exact fallback would take Mpzf products of 3.4e38^3.
+  for (int k = 0; k < 3; ++k)
+    if (a[k] == b[k] && a[k] == c[k]) return (d[k] > a[k] ? 1 : (d[k] < a[k] ? -1 : 0)) * orient2(a, b, c, k);
+  // The same determinant with rows b - a, c - a, d - c (d - a minus c - a)
+  // in interval arithmetic: when a, b are close and c, d are close but the
+  // pairs far apart (an edge of A against an edge of Cray's 3.4e38 slab,
+  // locate_line), b - a and d - c are nearly exact and only c - a is
+  // rounded, by a relative 2^-53 that the intervals carry; Shewchuk's
+  // differences from d round three rows of size 3.4e38 instead.
+  {
+    using I = CGAL::Interval_nt<true>;
+    const I r1x = I(b.x()) - I(a.x()), r1y = I(b.y()) - I(a.y()), r1z = I(b.z()) - I(a.z());
+    const I r2x = I(c.x()) - I(a.x()), r2y = I(c.y()) - I(a.y()), r2z = I(c.z()) - I(a.z());
+    const I r3x = I(d.x()) - I(c.x()), r3y = I(d.y()) - I(c.y()), r3z = I(d.z()) - I(c.z());
+    const I det3 = r1x * (r2y * r3z - r2z * r3y) + r1y * (r2z * r3x - r2x * r3z) + r1z * (r2x * r3y - r2y * r3x);
+    if (det3.inf() > 0) return 1;
+    if (det3.sup() < 0) return -1;
+  }
+  // Exact without CGAL when b - a and d - c are exact (coplanar CAD faces
+  // with short coordinates; Cray's diagonal against A's edges, where a is
+  // 1e-34 of 3.4e38 off the plane: no double filter can tell).
+  if (const int o = orient3d_cofactor(a, b, c, d); o != 2) return o;
+  if (const int o = orient3d_cofactor(c, d, a, b); o != 2) return o;  // an even permutation
+  if (const int o = orient3d_expansion(a, b, c, d); o != 2) return o;
+  return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+}
+
 }  // namespace
 
 int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
@@ -367,7 +531,7 @@ int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noe
     if (det > bound) return -1;
     if (-det > bound) return 1;
   }
-  return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  return orient3d_slow(a, b, c, d);
 }
 
 bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) noexcept {
