@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 #include "boolean_detail.h"
@@ -919,8 +920,41 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   try {
     Ct ct;
     std::vector<Ct::Vertex_handle> handle(vert.size());
-    for (std::uint32_t i = 0; i < vert.size(); ++i) {
+    // Projected, the points go in as the exact path puts them in (corners,
+    // each edge's points along it, then the inner points), so that with the
+    // same predicate outcomes its triangles come out in the same order.
+    std::vector<std::uint32_t> insertion(vert.size());
+    std::iota(insertion.begin(), insertion.end(), 0u);
+    if (projected) {
+      insertion.assign({0u, 1u, 2u});
+      for (const auto& list : on_edge) insertion.insert(insertion.end(), list.begin(), list.end());
+      insertion.insert(insertion.end(), inside.begin(), inside.end());
+    }
+    std::vector<std::uint8_t> on_an_edge(vert.size(), 0);
+    for (std::size_t q = 0; q < 3 && projected; ++q)
+      for (const std::uint32_t i : on_edge[q]) on_an_edge[i] = static_cast<std::uint8_t>(q + 1);
+    for (const std::uint32_t i : insertion) {
       const std::size_t before = ct.number_of_vertices();
+      if (on_an_edge[i]) {
+        // Into the rest of its edge, as the exact path does (the same
+        // triangulation operations, so the same order of triangles).
+        const std::size_t q = on_an_edge[i] - 1u;
+        const auto& list = on_edge[q];
+        const auto at = std::find(list.begin(), list.end(), i);
+        const std::uint32_t prev = at == list.begin() ? static_cast<std::uint32_t>(q) : *(at - 1);
+        Ct::Face_handle f;
+        int j = 0;
+        // Only a point on the edge in doubles (else the boundary
+        // certificate could not hold: the exact path decides).
+        const Ki::Point_2 &p0 = frame[prev], &p1 = frame[(q + 1) % 3];
+        if (CGAL::orientation(p0, frame[i], p1) != CGAL::COLLINEAR ||
+            !CGAL::collinear_are_strictly_ordered_along_line(p0, frame[i], p1) ||
+            !ct.is_edge(handle[prev], handle[(q + 1) % 3], f, j))
+          return false;
+        handle[i] = ct.insert(frame[i], Ct::EDGE, f, j);
+        handle[i]->info() = i;
+        continue;
+      }
       handle[i] = ct.insert(frame[i]);
       if (ct.number_of_vertices() == before) return false;  // two points coincide in doubles
       handle[i]->info() = i;
