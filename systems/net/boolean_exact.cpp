@@ -486,24 +486,10 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
   // on the plane; the exact fallback would take Mpzf products of 3.4e38^3.
   for (int k = 0; k < 3; ++k)
     if (a[k] == b[k] && a[k] == c[k]) return (d[k] > a[k] ? 1 : (d[k] < a[k] ? -1 : 0)) * orient2(a, b, c, k);
-  // The same determinant with rows b - a, c - a, d - c (d - a minus c - a)
-  // in interval arithmetic: when a, b are close and c, d are close but the
-  // pairs far apart (an edge of A against an edge of Cray's 3.4e38 slab,
-  // locate_line), b - a and d - c are nearly exact and only c - a is
-  // rounded, by a relative 2^-53 that the intervals carry; Shewchuk's
-  // differences from d round three rows of size 3.4e38 instead.
-  {
-    using I = CGAL::Interval_nt<true>;
-    const I r1x = I(b.x()) - I(a.x()), r1y = I(b.y()) - I(a.y()), r1z = I(b.z()) - I(a.z());
-    const I r2x = I(c.x()) - I(a.x()), r2y = I(c.y()) - I(a.y()), r2z = I(c.z()) - I(a.z());
-    const I r3x = I(d.x()) - I(c.x()), r3y = I(d.y()) - I(c.y()), r3z = I(d.z()) - I(c.z());
-    const I det3 = r1x * (r2y * r3z - r2z * r3y) + r1y * (r2z * r3x - r2x * r3z) + r1z * (r2x * r3y - r2y * r3x);
-    if (det3.inf() > 0) return 1;
-    if (det3.sup() < 0) return -1;
-  }
-  // Exact without CGAL when b - a and d - c are exact (coplanar CAD faces
-  // with short coordinates; Cray's diagonal against A's edges, where a is
-  // 1e-34 of 3.4e38 off the plane: no double filter can tell).
+  // Without CGAL when d - c is exact: an edge (a, b) of A against an edge
+  // (c, d) of Cray's slab, whose differences to a 3.4e38 corner no double
+  // filter can use (the cofactor); exactly when b - a is exact too
+  // (coplanar CAD faces with short coordinates: an exact zero).
   if (const int o = orient3d_cofactor(a, b, c, d); o != 2) return o;
   if (const int o = orient3d_cofactor(c, d, a, b); o != 2) return o;  // an even permutation
   if (const int o = orient3d_expansion(a, b, c, d); o != 2) return o;
@@ -923,19 +909,21 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
     // Projected, the points go in as the exact path puts them in (corners,
     // each edge's points along it, then the inner points), so that with the
     // same predicate outcomes its triangles come out in the same order.
-    std::vector<std::uint32_t> insertion(vert.size());
-    std::iota(insertion.begin(), insertion.end(), 0u);
+    // (Nothing is allocated for the frame's first try, the common case.)
+    std::vector<std::uint32_t> insertion;
+    std::vector<std::uint8_t> on_an_edge;
     if (projected) {
       insertion.assign({0u, 1u, 2u});
       for (const auto& list : on_edge) insertion.insert(insertion.end(), list.begin(), list.end());
       insertion.insert(insertion.end(), inside.begin(), inside.end());
+      on_an_edge.assign(vert.size(), 0);
+      for (std::size_t q = 0; q < 3; ++q)
+        for (const std::uint32_t i : on_edge[q]) on_an_edge[i] = static_cast<std::uint8_t>(q + 1);
     }
-    std::vector<std::uint8_t> on_an_edge(vert.size(), 0);
-    for (std::size_t q = 0; q < 3 && projected; ++q)
-      for (const std::uint32_t i : on_edge[q]) on_an_edge[i] = static_cast<std::uint8_t>(q + 1);
-    for (const std::uint32_t i : insertion) {
+    for (std::uint32_t n = 0; n < vert.size(); ++n) {
+      const std::uint32_t i = projected ? insertion[n] : n;
       const std::size_t before = ct.number_of_vertices();
-      if (on_an_edge[i]) {
+      if (projected && on_an_edge[i]) {
         // Into the rest of its edge, as the exact path does (the same
         // triangulation operations, so the same order of triangles).
         const std::size_t q = on_an_edge[i] - 1u;
