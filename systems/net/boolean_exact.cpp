@@ -356,7 +356,7 @@ void two_sum(double a, double b, double& s, double& e) noexcept {
 }
 
 /// An exact sum of doubles, as a nonoverlapping expansion in increasing
-/// magnitude; its sign is that of its largest component.
+/// magnitude.
 struct Expansion {
   std::array<double, 64> e{};
   std::size_t n = 0;
@@ -379,51 +379,7 @@ struct Expansion {
     }
     n = k;
   }
-  /// x y z exactly: four terms (Two-Product twice).
-  void add_product(double x, double y, double z) noexcept {
-    const double p = x * y, pe = std::fma(x, y, -p);
-    const double q = p * z, qe = std::fma(p, z, -q);
-    const double r = pe * z, re = std::fma(pe, z, -r);
-    add(re);
-    add(r);
-    add(qe);
-    add(q);
-  }
-  [[nodiscard]] int sign() const noexcept { return n == 0 ? 0 : (e[n - 1] > 0 ? 1 : -1); }
 };
-
-/// det[r1, c - a, r3] exactly, when r1 = b - a and r3 = d - c are exact in
-/// doubles: by linearity in the middle row it is det[r1, c, r3] - det[r1,
-/// a, r3], six triple products each of doubles, summed as an expansion. 2
-/// when it cannot tell (a difference rounds, a value outside [2^-250,
-/// 2^250] where a product's tail could underflow or overflow, or too many
-/// components).
-int orient3d_expansion(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
-  std::array<double, 3> r1, r3;
-  for (int k = 0; k < 3; ++k) {
-    double t1, t3;
-    two_sum(b[k], -a[k], r1[static_cast<std::size_t>(k)], t1);
-    two_sum(d[k], -c[k], r3[static_cast<std::size_t>(k)], t3);
-    if (t1 != 0.0 || t3 != 0.0) return 2;
-  }
-  auto in_range = [](double x) { return x == 0.0 || (std::abs(x) > 0x1p-250 && std::abs(x) < 0x1p250); };
-  for (std::size_t k = 0; k < 3; ++k)
-    if (!in_range(r1[k]) || !in_range(r3[k]) || !in_range(a[static_cast<int>(k)]) || !in_range(c[static_cast<int>(k)]))
-      return 2;
-  Expansion sum;
-  for (int m = 0; m < 2; ++m) {
-    const Vec3d& v = m == 0 ? c : a;
-    const double s = m == 0 ? 1.0 : -1.0;  // exact negation
-    // det[r1, v, r3] = r1x (vy r3z - vz r3y) - r1y (vx r3z - vz r3x) + r1z (vx r3y - vy r3x)
-    sum.add_product(s * r1[0], v.y(), r3[2]);
-    sum.add_product(-s * r1[0], v.z(), r3[1]);
-    sum.add_product(-s * r1[1], v.x(), r3[2]);
-    sum.add_product(s * r1[1], v.z(), r3[0]);
-    sum.add_product(s * r1[2], v.x(), r3[1]);
-    sum.add_product(-s * r1[2], v.y(), r3[0]);
-  }
-  return sum.full ? 2 : sum.sign();
-}
 
 /// The sign of det[b - a, c - a, d - c] (= orient3d) when d - c is exact
 /// in doubles: the cofactor row n = (c - a) x (d - c) = c x r3 - a x r3 is
@@ -488,11 +444,17 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
     if (a[k] == b[k] && a[k] == c[k]) return (d[k] > a[k] ? 1 : (d[k] < a[k] ? -1 : 0)) * orient2(a, b, c, k);
   // Without CGAL when d - c is exact: an edge (a, b) of A against an edge
   // (c, d) of Cray's slab, whose differences to a 3.4e38 corner no double
-  // filter can use (the cofactor); exactly when b - a is exact too
-  // (coplanar CAD faces with short coordinates: an exact zero).
-  if (const int o = orient3d_cofactor(a, b, c, d); o != 2) return o;
-  if (const int o = orient3d_cofactor(c, d, a, b); o != 2) return o;  // an even permutation
-  if (const int o = orient3d_expansion(a, b, c, d); o != 2) return o;
+  // filter can use (the cofactor).
+  // Only for pairs far apart against the short edge (callgrind: on
+  // Offset3 x Offset4's coplanar zeros these stages cost more than CGAL's
+  // Mpzf on short numbers).
+  auto far = [](const Vec3d& p, const Vec3d& q, const Vec3d& r) {
+    return (r - p).cwiseAbs().maxCoeff() > 0x1p20 * (q - p).cwiseAbs().maxCoeff();
+  };
+  if (far(a, b, c))
+    if (const int o = orient3d_cofactor(a, b, c, d); o != 2) return o;
+  if (far(c, d, a))
+    if (const int o = orient3d_cofactor(c, d, a, b); o != 2) return o;  // an even permutation
   return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
 }
 

@@ -73,7 +73,7 @@ TEST(NetPredicates, Orient3dAndCollinearAgreeWithCgal) {
 }
 
 // The stages after the first filter (an axis plane's comparison, the
-// exactly summed cofactor, the exact expansion) against CGAL on what reaches them: points of a Cray-like slab
+// exactly summed cofactor) against CGAL on what reaches them: points of a Cray-like slab
 // (coordinates at FLT_MAX = 3.4e38) with small points of full mantissas
 // (1e4) on, near and off its planes and diagonals, in every order of the
 // four arguments; and near-degenerate small ones one ulp off a plane.
