@@ -206,12 +206,22 @@ struct PointBox {
 /// every cut segment an edge, the boundary the triangle's edges with their
 /// points in certified order). False (and `out` as it was) when any check
 /// cannot be certified: the caller then runs the exact refine_triangle.
-/// `boxes` are the new points' (id first_new + i).
+/// `boxes` are the new points' (id first_new + i). projected: the
+/// triangulation runs on the boxes' centres in the triangle's projection
+/// instead of its affine frame (for a triangle much larger than its cut:
+/// the frame would merge the points), with the same certificates.
 [[nodiscard]] bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
                                         std::span<const PointKey> points,
                                         std::span<const std::array<PointKey, 2>> constraints, const PointIds& ids,
                                         std::span<const PointBox> boxes, std::uint32_t first_new,
-                                        std::vector<std::array<std::uint32_t, 3>>& out);
+                                        std::vector<std::array<std::uint32_t, 3>>& out, bool projected = false);
+
+/// For a new point whose coordinates point_coordinates takes from its exact
+/// value (not a pinned edge-face box): x = that value rounded to nearest
+/// (the same doubles), and `box` narrowed to x's neighbours, which hold
+/// the exact value. False (box and x as they were) for a pinned point or
+/// when the rounding cannot be done without the lazy kernel.
+[[nodiscard]] bool rounded_box(const TriMesh& a, const TriMesh& b, const PointKey& k, PointBox& box, Vec3d& x);
 
 /// Refines triangle t of one side (0: A, 1: B) by the given intersection
 /// points (keys whose simplex on this side lies in the triangle's closure)

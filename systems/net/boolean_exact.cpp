@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 #include "boolean_detail.h"
@@ -345,6 +346,118 @@ int winding_any(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, 
   throw Error(Status(ErrorCode::kInternal, "net boolean: no generic ray direction found for a winding number"));
 }
 
+// Shewchuk's exact arithmetic (Adaptive Precision Floating-Point
+// Arithmetic, 1997): Two-Sum (Theorem 7), Two-Product by a fused
+// multiply-add, Grow-Expansion with zero elimination (Theorem 10).
+void two_sum(double a, double b, double& s, double& e) noexcept {
+  s = a + b;
+  const double bv = s - a, av = s - bv;
+  e = (a - av) + (b - bv);
+}
+
+/// An exact sum of doubles, as a nonoverlapping expansion in increasing
+/// magnitude.
+struct Expansion {
+  std::array<double, 64> e{};
+  std::size_t n = 0;
+  bool full = false;  // more components than room: the caller goes to CGAL
+  void add(double b) noexcept {
+    if (b == 0.0) return;
+    double q = b;
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      double h;
+      two_sum(q, e[i], q, h);
+      if (h != 0.0) e[k++] = h;
+    }
+    if (q != 0.0) {
+      if (k == e.size()) {
+        full = true;
+        return;
+      }
+      e[k++] = q;
+    }
+    n = k;
+  }
+};
+
+/// The sign of det[b - a, c - a, d - c] (= orient3d) when d - c is exact
+/// in doubles: the cofactor row n = (c - a) x (d - c) = c x r3 - a x r3 is
+/// summed exactly (an expansion of eight products per coordinate) and
+/// rounded, so no cancellation between 3.4e38-sized products is lost; the
+/// dot product with b - a (rounded, its tail known exactly) then has a
+/// rigorous error bound. Cray's diagonal (c, d at 3.4e38) against an edge
+/// (a, b) of A 1e4 from it: det about 1e47, the bound about 1e33. 2 when
+/// it cannot tell or d - c rounds.
+int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
+  std::array<double, 3> r1, t1, r3;
+  auto in_range = [](double x) { return x == 0.0 || (std::abs(x) > 0x1p-250 && std::abs(x) < 0x1p250); };
+  for (int k = 0; k < 3; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    double t3;
+    two_sum(d[k], -c[k], r3[i], t3);
+    if (t3 != 0.0) return 2;
+    two_sum(b[k], -a[k], r1[i], t1[i]);
+    if (!in_range(r3[i]) || !in_range(a[k]) || !in_range(c[k]) || !in_range(r1[i])) return 2;
+  }
+  double p = 0.0, t = 0.0, det = 0.0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::size_t i = (k + 1) % 3, j = (k + 2) % 3;
+    // n_k = c_i r3_j - c_j r3_i - a_i r3_j + a_j r3_i, each product as
+    // head + tail (Two-Product).
+    Expansion e;
+    auto product = [&](double x, double y) {
+      const double h = x * y;
+      e.add(std::fma(x, y, -h));
+      e.add(h);
+    };
+    product(c[static_cast<int>(i)], r3[j]);
+    product(-c[static_cast<int>(j)], r3[i]);
+    product(-a[static_cast<int>(i)], r3[j]);
+    product(a[static_cast<int>(j)], r3[i]);
+    if (e.full) return 2;
+    double n = 0.0;  // the components summed upwards: within 8 eps |n_k|
+    for (std::size_t q = 0; q < e.n; ++q) n += e.e[q];
+    det += r1[k] * n;
+    p += std::abs(r1[k] * n);
+    t += std::abs(t1[k] * n);
+  }
+  // |exact - det| <= (sum |t1| |n|) + (sum |r1| |n|)(8 eps for n + 3 eps
+  // for the dot product), with room for the rounding of p and t.
+  const double bound = 1.125 * (t + p * 0x1p-48);
+  if (!std::isfinite(bound) || !std::isfinite(det)) return 2;
+  if (det > bound) return 1;
+  if (-det > bound) return -1;
+  return 2;
+}
+
+/// orient3d after its first filter fails (kept out of line so the filter
+/// inlines into its callers): exact rules that need no CGAL, then CGAL's
+/// filtered predicate.
+[[gnu::noinline]] int orient3d_slow(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
+  // A plane of constant coordinate k (Cray's slab, CAD boxes): the normal is
+  // (0, 0, orient2d) along k, so the sign is that of d_k - a_k (an exact
+  // comparison) times the exact orientation of the corners across k. The
+  // filter above fails there whenever the corners are far (3.4e38) or d lies
+  // on the plane; the exact fallback would take Mpzf products of 3.4e38^3.
+  for (int k = 0; k < 3; ++k)
+    if (a[k] == b[k] && a[k] == c[k]) return (d[k] > a[k] ? 1 : (d[k] < a[k] ? -1 : 0)) * orient2(a, b, c, k);
+  // Without CGAL when d - c is exact: an edge (a, b) of A against an edge
+  // (c, d) of Cray's slab, whose differences to a 3.4e38 corner no double
+  // filter can use (the cofactor).
+  // Only for pairs far apart against the short edge (callgrind: on
+  // Offset3 x Offset4's coplanar zeros these stages cost more than CGAL's
+  // Mpzf on short numbers).
+  auto far = [](const Vec3d& p, const Vec3d& q, const Vec3d& r) {
+    return (r - p).cwiseAbs().maxCoeff() > 0x1p20 * (q - p).cwiseAbs().maxCoeff();
+  };
+  if (far(a, b, c))
+    if (const int o = orient3d_cofactor(a, b, c, d); o != 2) return o;
+  if (far(c, d, a))
+    if (const int o = orient3d_cofactor(c, d, a, b); o != 2) return o;  // an even permutation
+  return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+}
+
 }  // namespace
 
 int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
@@ -367,7 +480,7 @@ int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noe
     if (det > bound) return -1;
     if (-det > bound) return 1;
   }
-  return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  return orient3d_slow(a, b, c, d);
 }
 
 bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) noexcept {
@@ -610,7 +723,7 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
 bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
                           std::span<const PointKey> points, std::span<const std::array<PointKey, 2>> constraints,
                           const PointIds& ids, std::span<const PointBox> boxes, std::uint32_t first_new,
-                          std::vector<std::array<std::uint32_t, 3>>& out) {
+                          std::vector<std::array<std::uint32_t, 3>>& out, bool projected) {
   using Ct = Cdt<Ki>;
   using I = CGAL::Interval_nt<true>;
   const CutTriangle ctri(a, b, side, t);
@@ -673,7 +786,7 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   const double p0u = c[0][u], p0v = c[0][v];
   const double e1u = c[1][u] - p0u, e1v = c[1][v] - p0v, e2u = c[2][u] - p0u, e2v = c[2][v] - p0v;
   const double det = e1u * e2v - e1v * e2u;
-  if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
+  if (!projected && (!(std::abs(det) > 0) || !std::isfinite(det))) return false;
   auto mid2 = [&](std::uint32_t i) {
     const auto& x = vert[i].box;
     return std::array<double, 2>{centre(x[0], x[2]) - p0u, centre(x[1], x[3]) - p0v};
@@ -682,7 +795,17 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   frame[0] = {0.0, 0.0};
   frame[1] = {1.0, 0.0};
   frame[2] = {0.0, 1.0};
-  for (std::uint32_t q = 0; q < 3; ++q)
+  // Projected: the boxes' centres as they are (the triangle's corners
+  // exact), for a triangle whose frame would merge its points (a corner at
+  // 3.4e38 and cut points of size 1e4: Cray). An edge point then lies on
+  // its edge in doubles only where the projected edge is axis-parallel or
+  // the centre happens to be exactly on it; elsewhere the boundary
+  // certificate below fails and the exact path decides.
+  for (std::uint32_t i = 0; projected && i < vert.size(); ++i) {
+    const auto& x = vert[i].box;
+    frame[i] = {centre(x[0], x[2]), centre(x[1], x[3])};
+  }
+  for (std::uint32_t q = 0; q < 3 && !projected; ++q)
     for (std::uint32_t i : on_edge[q]) {
       // The parameter along the edge from its first corner.
       const auto m2 = mid2(i);
@@ -699,16 +822,27 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
       }
     }
   for (std::uint32_t i : inside) {
+    if (projected) break;
     const auto m2 = mid2(i);
     frame[i] = {(m2[0] * e2v - m2[1] * e2u) / det, (e1u * m2[1] - e1v * m2[0]) / det};
   }
   // Certified sign of the orientation of three vertices, for any points in
   // their boxes: +1, -1, or 0 when the intervals cannot tell.
-  auto orient_box = [&](std::uint32_t i, std::uint32_t j, std::uint32_t k) {
+  auto orient_from = [&](std::uint32_t i, std::uint32_t j, std::uint32_t k) {
     const auto &p = vert[i].box, &q = vert[j].box, &r = vert[k].box;
     const I px(p[0], p[2]), py(p[1], p[3]), qx(q[0], q[2]), qy(q[1], q[3]), rx(r[0], r[2]), ry(r[1], r[3]);
     const I d = (qx - px) * (ry - py) - (qy - py) * (rx - px);
     return d.inf() > 0 ? 1 : (d.sup() < 0 ? -1 : 0);
+  };
+  // Projected, a corner far from the cut (3.4e38 against points of size
+  // 1e4) swamps the differences taken from it: the determinant is also
+  // taken from the other two vertices (a cyclic turn keeps the sign), whose
+  // differences to each other are small and exact-ish.
+  auto orient_box = [&](std::uint32_t i, std::uint32_t j, std::uint32_t k) {
+    int o = orient_from(i, j, k);
+    if (o == 0 && projected) o = orient_from(j, k, i);
+    if (o == 0 && projected) o = orient_from(k, i, j);
+    return o;
   };
   // Points on an edge in their certified order along it (a coordinate in
   // which the edge is monotone; disjoint intervals).
@@ -734,8 +868,43 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   try {
     Ct ct;
     std::vector<Ct::Vertex_handle> handle(vert.size());
-    for (std::uint32_t i = 0; i < vert.size(); ++i) {
+    // Projected, the points go in as the exact path puts them in (corners,
+    // each edge's points along it, then the inner points), so that with the
+    // same predicate outcomes its triangles come out in the same order.
+    // (Nothing is allocated for the frame's first try, the common case.)
+    std::vector<std::uint32_t> insertion;
+    std::vector<std::uint8_t> on_an_edge;
+    if (projected) {
+      insertion.assign({0u, 1u, 2u});
+      for (const auto& list : on_edge) insertion.insert(insertion.end(), list.begin(), list.end());
+      insertion.insert(insertion.end(), inside.begin(), inside.end());
+      on_an_edge.assign(vert.size(), 0);
+      for (std::size_t q = 0; q < 3; ++q)
+        for (const std::uint32_t i : on_edge[q]) on_an_edge[i] = static_cast<std::uint8_t>(q + 1);
+    }
+    for (std::uint32_t n = 0; n < vert.size(); ++n) {
+      const std::uint32_t i = projected ? insertion[n] : n;
       const std::size_t before = ct.number_of_vertices();
+      if (projected && on_an_edge[i]) {
+        // Into the rest of its edge, as the exact path does (the same
+        // triangulation operations, so the same order of triangles).
+        const std::size_t q = on_an_edge[i] - 1u;
+        const auto& list = on_edge[q];
+        const auto at = std::find(list.begin(), list.end(), i);
+        const std::uint32_t prev = at == list.begin() ? static_cast<std::uint32_t>(q) : *(at - 1);
+        Ct::Face_handle f;
+        int j = 0;
+        // Only a point on the edge in doubles (else the boundary
+        // certificate could not hold: the exact path decides).
+        const Ki::Point_2 &p0 = frame[prev], &p1 = frame[(q + 1) % 3];
+        if (CGAL::orientation(p0, frame[i], p1) != CGAL::COLLINEAR ||
+            !CGAL::collinear_are_strictly_ordered_along_line(p0, frame[i], p1) ||
+            !ct.is_edge(handle[prev], handle[(q + 1) % 3], f, j))
+          return false;
+        handle[i] = ct.insert(frame[i], Ct::EDGE, f, j);
+        handle[i]->info() = i;
+        continue;
+      }
       handle[i] = ct.insert(frame[i]);
       if (ct.number_of_vertices() == before) return false;  // two points coincide in doubles
       handle[i]->info() = i;
@@ -781,12 +950,16 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
     for (auto f = ct.finite_faces_begin(); f != ct.finite_faces_end(); ++f) {
       const std::uint32_t i0 = f->vertex(0)->info(), i1 = f->vertex(1)->info(), i2 = f->vertex(2)->info();
       // Counter-clockwise in the frame is the triangle's own orientation,
-      // which the projection shows with the sign pr.sign.
-      if (orient_box(i0, i1, i2) != pr.sign) {
+      // which the projection shows with the sign pr.sign; counter-clockwise
+      // in the projection is that orientation when pr.sign > 0.
+      if (orient_box(i0, i1, i2) != (projected ? 1 : pr.sign)) {
         out.resize(before);
         return false;
       }
-      out.push_back({vert[i0].id, vert[i1].id, vert[i2].id});
+      if (projected && pr.sign < 0)
+        out.push_back({vert[i0].id, vert[i2].id, vert[i1].id});
+      else
+        out.push_back({vert[i0].id, vert[i1].id, vert[i2].id});
     }
   } catch (const std::exception&) {
     return false;  // constraints cross in doubles: the exact path decides
@@ -969,6 +1142,28 @@ bool rounded_point(const TriMesh& a, const TriMesh& b, const PointKey& k, const 
 }
 
 }  // namespace
+
+bool rounded_box(const TriMesh& a, const TriMesh& b, const PointKey& k, PointBox& box, Vec3d& x) {
+  // point_coordinates' choice: a pinned edge-face point keeps its box.
+  const bool edge_face = dim_of(k.a) == kDimFace || dim_of(k.b) == kDimFace;
+  if (edge_face && box.ok && pinned(box.b[0], box.b[3]) && pinned(box.b[1], box.b[4]) && pinned(box.b[2], box.b[5]))
+    return false;
+  if (!rounded_point(a, b, k, box, x)) return false;
+  // x is the exact value rounded to nearest: the exact value lies within
+  // its neighbours.
+  for (int j = 0; j < 3; ++j) {
+    const auto lo = static_cast<std::size_t>(j), hi = static_cast<std::size_t>(j + 3);
+    double l = std::nextafter(x[j], -HUGE_VAL), h = std::nextafter(x[j], HUGE_VAL);
+    if (box.ok) {
+      l = std::max(l, box.b[lo]);
+      h = std::min(h, box.b[hi]);
+    }
+    box.b[lo] = l;
+    box.b[hi] = h;
+  }
+  box.ok = true;
+  return true;
+}
 
 Vec3d point_coordinates(const TriMesh& a, const TriMesh& b, const PointKey& k, const PointBox& box,
                         const ExactPoints& exact, std::size_t index) {

@@ -180,6 +180,41 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
       }
     });
   }
+  // Second try for the triangles left: their points' boxes narrowed to the
+  // neighbours of the exactly rounded coordinates (rounded_box: Mpzf, no
+  // lazy kernel; the same doubles point_coordinates gives, kept for it),
+  // the triangulation on the projected centres first (a triangle much
+  // larger than its cut, Cray's 3.4e38 slab against cut points of size 1e4,
+  // whose interval boxes are ~1e23 wide and whose frame would merge them),
+  // then in the frame. The certificates are the same.
+  std::vector<std::uint8_t> rounded(new_keys.size(), 0);  // 1: rounded_box done, 2: also narrowed
+  std::vector<Vec3d> rounded_at(new_keys.size());
+  std::vector<PointBox> narrow;
+  for (CutSide& s : sides)
+    for (std::size_t c = 0; c < s.cut.size(); ++c) {
+      if (!slow[static_cast<std::size_t>(s.side)][c]) continue;
+      for (const PointKey& k : s.points[c]) {
+        const std::uint32_t id = ids.find(k);
+        if (id != kNil && id >= first_new) rounded[id - first_new] = 1;
+      }
+    }
+  if (!exact_only && std::find(rounded.begin(), rounded.end(), std::uint8_t{1}) != rounded.end()) {
+    narrow = boxes;
+    par::for_each_n(ctx, new_keys.size(), [&](std::size_t i) {
+      if (rounded[i]) rounded[i] = rounded_box(A, B, new_keys[i], narrow[i], rounded_at[i]) ? 2 : 0;
+    });
+    for (CutSide& s : sides) {
+      auto& to_exact = slow[static_cast<std::size_t>(s.side)];
+      par::for_each_n(ctx, s.cut.size(), [&](std::size_t c) {
+        if (!to_exact[c]) return;
+        const std::uint32_t t = s.cut[c];
+        auto& out = s.refined[c];
+        if (refine_triangle_fast(A, B, s.side, t, s.points[c], s.segments[c], ids, narrow, first_new, out, true) ||
+            refine_triangle_fast(A, B, s.side, t, s.points[c], s.segments[c], ids, narrow, first_new, out))
+          to_exact[c] = 0;
+      });
+    }
+  }
   // The lazy exact points of the new points the exact path will use
   // (point_coordinates makes its own for a point its box does not pin).
   std::vector<std::uint8_t> need(new_keys.size(), 0);
@@ -208,8 +243,9 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
       if (!st) return st;
   }
   std::vector<Vec3d> new_points(new_keys.size());
-  par::for_each_n(ctx, new_keys.size(),
-                  [&](std::size_t i) { new_points[i] = point_coordinates(A, B, new_keys[i], boxes[i], *exact, i); });
+  par::for_each_n(ctx, new_keys.size(), [&](std::size_t i) {
+    new_points[i] = rounded[i] == 2 ? rounded_at[i] : point_coordinates(A, B, new_keys[i], boxes[i], *exact, i);
+  });
 
   // ---- pieces, coplanar overlaps, components
   for (CutSide& s : sides) {

@@ -10,6 +10,9 @@
 #include <CGAL/intersections.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstring>
 #include <random>
 
@@ -67,6 +70,67 @@ TEST(NetPredicates, Orient3dAndCollinearAgreeWithCgal) {
   EXPECT_GT(zeros, 3000);
   EXPECT_GT(nonzero, 3000);
   EXPECT_GT(collinear_seen, 3000);
+}
+
+// The stages after the first filter (an axis plane's comparison, the
+// exactly summed cofactor) against CGAL on what reaches them: points of a Cray-like slab
+// (coordinates at FLT_MAX = 3.4e38) with small points of full mantissas
+// (1e4) on, near and off its planes and diagonals, in every order of the
+// four arguments; and near-degenerate small ones one ulp off a plane.
+TEST(NetPredicates, Orient3dAgreesWithCgalOnFltMaxSlabsAndNearDegenerateInputs) {
+  const double F = 340282346999999984391321947108527833088.0;
+  std::mt19937_64 rng(38);
+  std::uniform_real_distribution<double> real(-2.5e4, 2.5e4);
+  std::uniform_int_distribution<int> pick(0, 7), ulps(-3, 3);
+  const std::array<Vec3d, 8> corner = {Vec3d(-F, F, -F),     Vec3d(F, F, -F),     Vec3d(-F, -F, -F),
+                                       Vec3d(F, -F, -F),     Vec3d(F, F, -100.0), Vec3d(-F, -F, -100.0),
+                                       Vec3d(-F, F, -100.0), Vec3d(F, -F, -100.0)};
+  auto nudge = [&](double x) {
+    for (int k = ulps(rng); k != 0; k += k > 0 ? -1 : 1) x = std::nextafter(x, k > 0 ? HUGE_VAL : -HUGE_VAL);
+    return x;
+  };
+  int zeros = 0, pos = 0, neg = 0;
+  for (int trial = 0; trial < 40000; ++trial) {
+    // A small point: generic, on the top plane z = -100, on its diagonal
+    // y = -x (exactly, or a few ulps off), or on the plane x = F.
+    auto small = [&] {
+      const double x = real(rng), y = real(rng), z = real(rng);
+      switch (pick(rng) % 5) {
+        case 0:
+          return Vec3d(x, y, z);
+        case 1:
+          return Vec3d(x, y, -100.0);
+        case 2:
+          return Vec3d(x, -x, -100.0);
+        case 3:
+          return Vec3d(x, nudge(-x), nudge(-100.0));
+        default:
+          return Vec3d(F, y, z);
+      }
+    };
+    std::array<Vec3d, 4> p;
+    const int kind = trial % 4;
+    if (kind == 0) {  // three corners of one slab face (a triangle of it), one small point
+      p = {corner[4], corner[5], corner[6], small()};
+    } else if (kind == 1) {  // a small edge against a slab edge (locate_line)
+      p = {small(), small(), corner[static_cast<std::size_t>(pick(rng))], corner[static_cast<std::size_t>(pick(rng))]};
+    } else if (kind == 2) {  // a small triangle against a corner
+      p = {small(), small(), small(), corner[static_cast<std::size_t>(pick(rng))]};
+    } else {  // small points a few ulps off a common plane
+      const Vec3d a = small(), b = small(), c = small();
+      const double s = real(rng) / 2.5e4, t = real(rng) / 2.5e4;
+      const Vec3d d = a + s * (b - a) + t * (c - a);
+      p = {a, b, c, Vec3d(nudge(d.x()), nudge(d.y()), nudge(d.z()))};
+    }
+    std::shuffle(p.begin(), p.end(), rng);
+    const int ours = net_detail::orient3d(p[0], p[1], p[2], p[3]), theirs = cgal_orient3d(p[0], p[1], p[2], p[3]);
+    ASSERT_EQ(ours, theirs) << "trial " << trial << ": " << p[0].transpose() << " | " << p[1].transpose() << " | "
+                            << p[2].transpose() << " | " << p[3].transpose();
+    (theirs == 0 ? zeros : (theirs > 0 ? pos : neg)) += 1;
+  }
+  EXPECT_GT(zeros, 1000);
+  EXPECT_GT(pos, 5000);
+  EXPECT_GT(neg, 5000);
 }
 
 /// The point of key k from CGAL's exact construction, each coordinate
