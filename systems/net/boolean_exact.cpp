@@ -286,14 +286,20 @@ Vec3d ray_direction(int k) {
 
 /// Winding number by the parity of crossings of a segment from q to a point
 /// outside the net's box, with exact predicates of kernel K; 0 ok, or a
-/// degenerate direction (returns false).
+/// degenerate direction (returns false). The hierarchy is culled by the
+/// segment from qd, q's double stand-in: `spread` bounds |q - qd| per
+/// coordinate (q an interval point: its box's half-width), so a node the
+/// segment from q itself may cross is never skipped. Without it a wide box
+/// (a point on Cray's 3.4e38 slab diagonal: 1e23 wide) gave a certain,
+/// wrong parity: the uncertain predicates that would send the question to
+/// the exact kernel were culled away (issue 24, round 13).
 template <class K>
 bool ray_winding(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, const Vec3d& qd, const Vec3d& r,
-                 int& w) {
+                 double spread, int& w) {
   using P = typename K::Point_3;
   const double scale = std::max({m.bounds.lo.cwiseAbs().maxCoeff(), m.bounds.hi.cwiseAbs().maxCoeff(),
                                  qd.cwiseAbs().maxCoeff(), r.cwiseAbs().maxCoeff()});
-  const double eps = 1e-9 * scale + 1e-300;
+  const double eps = 1e-9 * scale + 1e-300 + spread;
   const Vec3d d = r - qd;
   const P pr(r.x(), r.y(), r.z());
   w = 0;
@@ -334,14 +340,14 @@ bool ray_winding(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q,
 }
 
 template <class K>
-int winding_any(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, const Vec3d& qd) {
+int winding_any(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, const Vec3d& qd, double spread = 0.0) {
   if (bvh.nodes.empty()) return 0;
   const Vec3d centre = 0.5 * (m.bounds.lo + m.bounds.hi);
   const double reach = 2.0 * ((m.bounds.hi - m.bounds.lo).norm() + (qd - centre).norm()) + 1.0;
   for (int k = 0; k < 64; ++k) {
     const Vec3d r = qd + reach * ray_direction(k);
     int w = 0;
-    if (ray_winding<K>(m, bvh, q, qd, r, w)) return w;
+    if (ray_winding<K>(m, bvh, q, qd, r, spread, w)) return w;
   }
   throw Error(Status(ErrorCode::kInternal, "net boolean: no generic ray direction found for a winding number"));
 }
@@ -1219,9 +1225,13 @@ int winding_number_centroid(const TriMesh& m, const Bvh& bvh, const TriMesh& a, 
       const Kv::Point_3 c(sum[0] / 3, sum[1] / 3, sum[2] / 3);
       const Vec3d cd(centre(c.x().inf(), c.x().sup()), centre(c.y().inf(), c.y().sup()),
                      centre(c.z().inf(), c.z().sup()));
-      if (cd.allFinite()) {
+      // Rounded upwards: |q - cd| <= spread for every q in the box.
+      const double spread = std::max({c.x().sup() - cd.x(), cd.x() - c.x().inf(), c.y().sup() - cd.y(),
+                                      cd.y() - c.y().inf(), c.z().sup() - cd.z(), cd.z() - c.z().inf()}) *
+                            (1.0 + 0x1p-50);
+      if (cd.allFinite() && std::isfinite(spread)) {
         try {
-          return winding_any<Kv>(m, bvh, c, cd);
+          return winding_any<Kv>(m, bvh, c, cd, spread);
         } catch (const CGAL::Uncertain_conversion_exception&) {
           // An orientation the intervals cannot decide: exact below.
         }

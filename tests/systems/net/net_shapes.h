@@ -8,11 +8,14 @@
 #include <atelier/storage/validate.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "support/shapes.h"
 
@@ -99,6 +102,30 @@ inline void grid_box_pair(std::uint64_t& seed, Vec3d (&lo)[2], Vec3d (&hi)[2]) {
       lo[s][k] = 0.5 * std::min(x, y);
       hi[s][k] = 0.5 * std::max(x, y);
     }
+}
+
+/// A slab much larger than its cut, as Cray_right (corners at FLT_MAX as its
+/// OBJ writes them, top at z = -100, square faces split along a diagonal).
+inline PolygonSoup flt_max_slab() {
+  const double big = 340282346999999984391321947108527833088.0;
+  return box_triangles({-big, -big, -big}, {big, big, -100.0});
+}
+
+/// n icospheres (level 2, radius 2.5e4: Cray_left's size) at random
+/// rotations and centres about the slab's top (seed 38: the placements of
+/// NetRefineFast.ASlabMuchLargerThanItsCutTakesTheProjectedPath).
+inline std::vector<PolygonSoup> spheres_across_the_slab(int n) {
+  std::mt19937 rng(38);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::vector<PolygonSoup> out;
+  for (int trial = 0; trial < n; ++trial) {
+    const Eigen::Quaterniond q(Eigen::Vector4d(unit(rng), unit(rng), unit(rng), unit(rng)).normalized());
+    const Vec3d centre(1000.0 * unit(rng), 1000.0 * unit(rng), -100.0 + 5000.0 * unit(rng));
+    PolygonSoup s = icosphere(2, 2.5e4, {0, 0, 0});
+    for (Vec3d& p : s.positions) p = q.toRotationMatrix() * p + centre;
+    out.push_back(std::move(s));
+  }
+  return out;
 }
 
 /// Builds the result into a Model: closed (no boundary), consistently

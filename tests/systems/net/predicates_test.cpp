@@ -215,5 +215,54 @@ TEST(NetPredicates, NewPointsAreTheExactPointsRoundedToNearest) {
   EXPECT_GT(edge_face, 50);
 }
 
+// The root cause of issue 24's refused slab placements (round 13): the
+// certified winding number of a centroid whose interval box is wide (a
+// corner on Cray's slab diagonal, corners at FLT_MAX: a box ~1e23 wide)
+// culled the other net's hierarchy by the segment from the box's centre
+// (~1e22 away from a sphere of radius 2.5e4), so no predicate was
+// uncertain and it returned 0 for a centroid inside: the pieces of the
+// disc the sphere cuts from the slab were all dropped (an intersection)
+// and the result had unmatched edges. Expectation by convexity: a point
+// on the sphere (the diagonal's crossing) and two of its vertices off
+// that point's face have their centroid strictly inside.
+TEST(NetPredicates, CentroidWindingWithAWideBoxIsTheExactOne) {
+  using namespace net_detail;
+  using namespace net_test;
+  const double big = 340282346999999984391321947108527833088.0;  // FLT_MAX, as Cray_right's OBJ writes it
+  TriMesh a, b;
+  ASSERT_TRUE(build_tri_mesh(icosphere(1, 2.5e4, {3.0, -7.0, -100.0}), "A", a, {}));
+  ASSERT_TRUE(build_tri_mesh(box_triangles({-big, -big, -big}, {big, big, -100.0}), "B", b, {}));
+  Bvh bvh;
+  build_bvh(a, bvh, {});
+  const ExactPointsPtr none = make_exact_points(a, b, {}, {}, {});
+  PairHit hit;
+  int wide = 0;
+  for (std::uint32_t ta = 0; ta < a.tri.size(); ++ta)
+    for (std::uint32_t tb = 0; tb < b.tri.size(); ++tb) {
+      intersect_pair(a, ta, b, tb, hit);
+      for (const PointKey& k : hit.points) {
+        if (dim_of(k.a) != kDimFace || dim_of(k.b) != kDimEdge) continue;  // A's face by the slab's diagonal
+        const PointBox box = point_box(a, b, k);
+        ASSERT_TRUE(box.ok);
+        if (!(box.b[3] - box.b[0] > 1e20)) continue;
+        ++wide;
+        const Vec3d x = point_coordinates(a, b, k, box, *none, 0);
+        const auto& t = a.tri[idx_of(k.a)];
+        // The two vertices farthest from x, neither a corner of its face.
+        std::vector<std::pair<double, std::uint32_t>> far;
+        for (std::uint32_t v = 0; v < a.net_vertices; ++v)
+          if (v != t[0] && v != t[1] && v != t[2]) far.emplace_back(-(a.p[v] - x).squaredNorm(), v);
+        std::sort(far.begin(), far.end());
+        const std::array<PointKey, 3> corners{k, PointKey{simplex(kDimVertex, far[0].second), kNoSimplex},
+                                              PointKey{simplex(kDimVertex, far[1].second), kNoSimplex}};
+        EXPECT_EQ(winding_number(a, bvh, (x + a.p[far[0].second] + a.p[far[1].second]) / 3.0), 1);
+        EXPECT_EQ(winding_number_centroid(a, bvh, a, b, corners, {nullptr, nullptr, nullptr}), 1);
+        EXPECT_EQ(winding_number_centroid(a, bvh, a, b, corners, {&box, nullptr, nullptr}), 1)
+            << "box x [" << box.b[0] << ", " << box.b[3] << "]";
+      }
+    }
+  EXPECT_GE(wide, 2);  // the diagonal enters and leaves the sphere
+}
+
 }  // namespace
 }  // namespace atelier
