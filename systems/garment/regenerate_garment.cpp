@@ -483,7 +483,7 @@ Status GarmentRegenerator::run(const BodySet& bodies, std::size_t first, std::si
         for (std::size_t v = 0; v < nv; ++v) g[k][i][v] = src[v].cast<double>();
       }
     }
-    std::vector<Status> failed(nb);
+    std::vector<Status> transferred(nb);  // per body: the first error of its garments' transfers, else ok
     if (lanes) {
       std::vector<std::span<const Vec3d>> bs(body.begin(), body.end());
       std::vector<std::span<Vec3d>> gs(nb);
@@ -493,12 +493,12 @@ Status GarmentRegenerator::run(const BodySet& bodies, std::size_t first, std::si
         const Status call = apply_edge_transfer_bodies(garments_[i]->transfer, bs, family_->collision->triangles(), gs,
                                                        st, EdgeTransferKernel::kAuto);
         for (std::size_t k = 0; k < nb; ++k)
-          if (failed[k] && !(call && st[k])) failed[k] = named(garments_[i]->name, call ? st[k] : call);
+          if (transferred[k] && !(call && st[k])) transferred[k] = named(garments_[i]->name, call ? st[k] : call);
       }
     }
     for (std::size_t k = 0; k < nb; ++k) {
-      if (!failed[k]) {
-        out[b0 + k].status = failed[k];
+      if (!transferred[k]) {
+        out[b0 + k].status = transferred[k];
         continue;
       }
       out[b0 + k] = finish_body(*family_, raw, after, body[k], std::move(g[k]), inner);
