@@ -8,6 +8,8 @@
 #include <limits>
 #include <mutex>
 
+#include "made_to_measure_detail.h"
+
 namespace atelier {
 
 namespace {
@@ -47,15 +49,15 @@ double sew_line_width(const PatternPiece& piece, double v) noexcept {
   return w;
 }
 
-namespace {
-
-Status check_lines(const MadeToMeasureOptions& opt) {
+Status pattern_detail::check_named_lines(const MadeToMeasureOptions& opt) {
   for (const NamedLine& l : opt.lines)
     if (!std::isfinite(l.fraction) || l.fraction < 0 || l.fraction > 1)
       return status_of(ErrorCode::kInvalidArgument, "named line '", l.name, "': fraction ", l.fraction,
                        " is not in [0, 1]");
   return {};
 }
+
+namespace {
 
 /// The file options for the opened model: surfaces named by the caller are
 /// the garment's, mapped to the opened model's.
@@ -157,7 +159,7 @@ std::vector<std::uint32_t> fingerprint(const Model& m) {
 
 Expected<MadeToMeasureReport> write_made_to_measure_pattern(const Model& garment, const MadeToMeasureOptions& opt,
                                                             const std::filesystem::path& dir, const ExecContext& ctx) {
-  if (Status st = check_lines(opt); !st) return st;
+  if (Status st = pattern_detail::check_named_lines(opt); !st) return st;
   auto opened = open_seams(garment, opt.seams, ctx);
   if (!opened) return opened.status();
   MadeToMeasureReport rep;
@@ -189,7 +191,7 @@ MadeToMeasurePatterns& MadeToMeasurePatterns::operator=(MadeToMeasurePatterns&&)
 
 Status MadeToMeasurePatterns::prepare(const Model& reference, const MadeToMeasureOptions& opt, const ExecContext& ctx) {
   impl_.reset();
-  if (Status st = check_lines(opt); !st) return st;
+  if (Status st = pattern_detail::check_named_lines(opt); !st) return st;
   auto impl = std::make_unique<Impl>();
   impl->opt = opt;
   auto opened = open_seams(reference, opt.seams, ctx);
