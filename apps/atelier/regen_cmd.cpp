@@ -6,6 +6,22 @@
 // merge of the records and the MPI verdict, each short.
 #include "regen_cmd.h"
 
+#include <atelier/engine/parallel.h>
+#include <atelier/io/atomic_file.h>
+#include <atelier/io/makehuman/makehuman.h>
+#include <atelier/io/obj.h>
+#include <atelier/systems/body/body_file.h>
+#include <atelier/systems/body/makehuman_body.h>
+#include <atelier/systems/body/mannequin.h>
+#include <atelier/systems/garment/detail_template.h>
+#include <atelier/systems/garment/makehuman_binding.h>
+#include <atelier/systems/garment/regenerate_garment.h>
+#include <atelier/systems/mesh/fan_triangulation.h>
+#include <atelier/systems/pattern/made_to_measure_templates.h>
+#include <atelier/systems/profile/project_templates.h>
+#include <atelier/systems/profile/regenerate.h>
+#include <atelier/systems/profile/template_json.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -21,21 +37,6 @@
 #include "mpi_split.h"
 #include "regen_job.h"
 #include "regen_report.h"
-#include <atelier/engine/parallel.h>
-#include <atelier/io/atomic_file.h>
-#include <atelier/io/makehuman/makehuman.h>
-#include <atelier/systems/garment/makehuman_binding.h>
-#include <atelier/io/obj.h>
-#include <atelier/systems/garment/detail_template.h>
-#include <atelier/systems/garment/regenerate_garment.h>
-#include <atelier/systems/body/body_file.h>
-#include <atelier/systems/body/makehuman_body.h>
-#include <atelier/systems/body/mannequin.h>
-#include <atelier/systems/profile/project_templates.h>
-#include <atelier/systems/profile/regenerate.h>
-#include <atelier/systems/profile/template_json.h>
-#include <atelier/systems/mesh/fan_triangulation.h>
-#include <atelier/systems/pattern/made_to_measure.h>
 
 namespace atelier::cli {
 
@@ -407,53 +408,42 @@ MadeToMeasureOptions pattern_options(bool marked_seams) {
 /// on the job's body count only.
 constexpr std::size_t kBatchPatternBodies = 8;
 
-/// --patterns: per template, the batch form of the made-to-measure patterns
-/// (systems/pattern/made_to_measure.h, MadeToMeasurePatterns) prepared on
-/// the template regenerated on the reference body, so every body's pattern
-/// set is flattened warm from the reference's pattern (per body, the top
-/// 1.6-2.2x less CPU than one-shot, the skirt 1.2x, the trousers about the
-/// same: their legs start again cold; docs/performance.md, flat11, mtm13).
-/// The reference is regenerated like any body (same parameters, same roi),
-/// so its garment has the bodies' topology; a body's pattern set depends on
-/// the reference and that body only: the same bits for any thread count,
-/// chunk size, rank or resume. A template whose reference garment cannot
-/// be prepared is left unprepared and its bodies take the one-shot form
-/// (write_made_to_measure_pattern), with a warning.
-std::vector<MadeToMeasurePatterns> prepare_patterns(std::span<const ProfileTemplate> templates,
-                                                    const ReferenceBody& ref, const Box3d& roi, const RegenParams& rp,
-                                                    bool marked_seams, const ExecContext& ctx, Log& log) {
-  std::vector<MadeToMeasurePatterns> out(templates.size());
-  auto garments = regenerate_on_body(templates, ref, ref.model.nodes.position, roi, rp, {.use_grid = false}, ctx);
-  if (!garments) {
+/// --patterns: per template, the made-to-measure patterns of the job's
+/// bodies (systems/pattern/made_to_measure_templates.h): in a job of
+/// kBatchPatternBodies or more, the batch form prepared on the template
+/// regenerated on the reference body (same parameters, same roi as the
+/// bodies), so every body's pattern set is flattened warm from the
+/// reference's (per body, the top 1.6-2.2x less CPU than one-shot, the skirt
+/// 1.2x, the trousers about the same: their legs start again cold;
+/// docs/performance.md, flat11, mtm13); else, and for a template whose
+/// reference garment cannot be prepared (with a warning), the one-shot form.
+std::vector<TemplatePatterns> template_patterns(std::span<const ProfileTemplate> templates, const ReferenceBody& ref,
+                                                const Box3d& roi, const RegenParams& rp, bool batch, bool marked_seams,
+                                                const ExecContext& ctx, Log& log) {
+  if (batch) {
+    auto prepared = prepare_made_to_measure_patterns(templates, ref, roi, rp, pattern_options(marked_seams), ctx);
+    if (prepared) {
+      for (std::size_t k = 0; k < templates.size(); ++k)
+        if (!(*prepared)[k].reason)
+          log.warn("patterns of " + templates[k].name + ": the reference garment could not be flattened (" +
+                   (*prepared)[k].reason.to_string() + "); its bodies' patterns are made alone");
+      return std::move(*prepared);
+    }
     log.warn("patterns: the templates could not be regenerated on the reference body (" +
-             garments.status().to_string() + "); every body's patterns are made alone");
-    return out;
+             prepared.status().to_string() + "); every body's patterns are made alone");
   }
-  std::vector<Status> status(templates.size());
-  ExecContext per_template = ctx;
-  per_template.sequential_threshold = 2;
-  per_template.grain = 1;
-  par::for_each_n(per_template, templates.size(), [&](std::size_t k) {
-    ExecContext inner = ExecContext::sequential();
-    inner.cancel = ctx.cancel;
-    status[k] = out[k].prepare((*garments)[k].model, pattern_options(marked_seams), inner);
-  });
-  for (std::size_t k = 0; k < templates.size(); ++k)
-    if (!status[k])
-      log.warn("patterns of " + templates[k].name + ": the reference garment could not be flattened (" +
-               status[k].to_string() + "); its bodies' patterns are made alone");
-  return out;
+  std::vector<TemplatePatterns> one_shot(templates.size());
+  for (TemplatePatterns& t : one_shot) t.options = pattern_options(marked_seams);
+  return one_shot;
 }
 
 /// A body's record marks it complete; with --patterns, only a record that
 /// lists its pattern sets (or a failure) does.
-/// The made-to-measure pattern set of one regenerated template (the batch
-/// form when prepared, else one library call), and its figures for the
-/// body's record.
-nlohmann::json write_patterns(const MadeToMeasurePatterns& batch, const Model& garment, const fs::path& dir,
-                              bool marked_seams, const ExecContext& ctx) {
-  auto rep = batch.prepared() ? batch.write(garment, dir, ctx)
-                              : write_made_to_measure_pattern(garment, pattern_options(marked_seams), dir, ctx);
+/// The made-to-measure pattern set of one regenerated template, and its
+/// figures for the body's record.
+nlohmann::json write_patterns(const TemplatePatterns& patterns, const Model& garment, const fs::path& dir,
+                              const ExecContext& ctx) {
+  auto rep = write_template_patterns(patterns, garment, dir, ctx);
   if (!rep) throw Error(Status(rep.status().code(), "patterns: " + rep.status().message()));
   double e_l = 0;
   std::size_t warm = 0;  // pieces flattened warm from the reference (batch form)
@@ -512,8 +502,8 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
   const std::size_t n = src.size();
   // --patterns: the batch form for a job of kBatchPatternBodies or more
   // bodies (prepared at the first chunk with a body to do), else one-shot.
-  std::vector<MadeToMeasurePatterns> patterns(templates.size());
-  bool prepare = opt.patterns && n >= kBatchPatternBodies && !templates.empty();
+  std::vector<TemplatePatterns> patterns;
+  bool prepare = opt.patterns && !templates.empty();
   // Progress counts this rank's share; only rank 0 draws it (one bar).
   const bool show = group.rank() == 0;
   std::size_t share = 0, share_seen = 0;
@@ -552,7 +542,7 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
       write_atomically(bodies_dir / (failures[f].name + ".json"), [&](AtomicFile& file) { file.write(rec.dump(1)); });
     }
     if (prepare) {
-      patterns = prepare_patterns(templates, *ref, roi, rp, !opt.no_marked_seams, ctx, log);
+      patterns = template_patterns(templates, *ref, roi, rp, n >= kBatchPatternBodies, !opt.no_marked_seams, ctx, log);
       prepare = false;
     }
     double garment_ms_per_body = 0;
@@ -647,9 +637,8 @@ void regen_share(const Common& common, const RegenOptions& opt, const mpi::Proce
         if (opt.patterns) {
           nlohmann::json pats = nlohmann::json::object();
           for (std::size_t k = 0; k < templates.size(); ++k)
-            pats[templates[k].name] =
-                write_patterns(patterns[k], regen[k].model, bodies_dir / chunk.name(b) / "patterns" / templates[k].name,
-                               !opt.no_marked_seams, inner);
+            pats[templates[k].name] = write_patterns(
+                patterns[k], regen[k].model, bodies_dir / chunk.name(b) / "patterns" / templates[k].name, inner);
           rec["patterns"] = pats;
         }
       } catch (const Error& e) {
