@@ -454,6 +454,29 @@ class MadeToMeasurePatterns:
     ) -> None: ...
     def write(self, garment: MeshLike, out: str, *, threads: int = 0, progress: Progress = None) -> dict[str, Any]:
         """The pattern set of one garment of the reference's topology in out: its report."""
+    @property
+    def prepared(self) -> bool:
+        """True when write() takes the batch form (else the one-shot form)."""
+    @property
+    def reason(self) -> Optional[str]:
+        """Why it is not prepared, or None."""
+
+def prepare_made_to_measure_patterns(
+    templates: Union[ProfileTemplate, Sequence[ProfileTemplate]],
+    reference: Body,
+    *,
+    levels: int = -1,
+    clearance: float = -1.0,
+    lines: Optional[Sequence[tuple[str, float]]] = None,
+    svg: bool = True,
+    dxf: bool = True,
+    csv: bool = True,
+    marked_seams: bool = True,
+    warm_start: bool = True,
+    threads: int = 0,
+    progress: Progress = None,
+) -> list[MadeToMeasurePatterns]:
+    """Per template, the batch form prepared on it regenerated on the reference, or unprepared with its reason."""
 
 def sketch(
     mesh: MeshLike,

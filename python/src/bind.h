@@ -37,6 +37,7 @@
 namespace atelier {
 struct GarmentFamily;
 struct GarmentTemplate;
+struct ProfileTemplate;
 }  // namespace atelier
 
 namespace atelier::python {
@@ -133,6 +134,18 @@ struct Garment {
   double reference_mean_clearance = 0;  // mean encoded clearance (what clearance_change is relative to)
 };
 [[nodiscard]] std::shared_ptr<Garment> garment_of(GarmentTemplate garment, std::shared_ptr<Family> family);
+
+/// A profile template (immutable; bind_profile.cpp).
+struct Template {
+  std::shared_ptr<const ProfileTemplate> t;
+};
+/// The profile templates of a `templates` argument (a ProfileTemplate or a
+/// list), copied, each checked to be encoded on `reference` (ValueError
+/// naming the template otherwise).
+[[nodiscard]] std::vector<ProfileTemplate> profile_templates_arg(py::handle templates, const Body& reference);
+/// The region a job's bodies are regenerated in, as `atelier regen` takes
+/// it: every node slot of its templates.
+[[nodiscard]] Box3d templates_roi(std::span<const ProfileTemplate> templates);
 
 // ------------------------------------------------------------ arrays in
 

@@ -5,7 +5,7 @@
 // and, per piece, its triangles and distortion figures.
 #include <atelier/storage/builder.h>
 #include <atelier/systems/pattern/flatten.h>
-#include <atelier/systems/pattern/made_to_measure.h>
+#include <atelier/systems/pattern/made_to_measure_templates.h>
 #include <pybind11/stl.h>
 
 #include <algorithm>
@@ -73,12 +73,14 @@ py::dict mtm_report(const MadeToMeasureReport& rep, const MadeToMeasureOptions& 
                   py::arg("pieces") = pieces, py::arg("seams") = seams, py::arg("files") = files);
 }
 
-/// atelier.MadeToMeasurePatterns: the batch form prepared on a reference
-/// garment, and the options its reports are read with.
+/// atelier.MadeToMeasurePatterns: one template's patterns for many bodies
+/// (the batch form when prepared, else the one-shot form), and the options
+/// its reports are read with.
 struct PreparedPatterns {
-  MadeToMeasurePatterns batch;
-  MadeToMeasureOptions options;
+  TemplatePatterns patterns;
 };
+
+using Lines = std::optional<std::vector<std::pair<std::string, double>>>;
 
 }  // namespace
 
@@ -222,10 +224,11 @@ threads at once.
                        bool csv, bool marked_seams, bool warm_start, int threads, const Progress& progress) {
              Model model = model_from(reference, "mesh");  // pieces named as made_to_measure_pattern names them
              auto p = std::make_shared<PreparedPatterns>();
-             p->options = mtm_options(lines, svg, dxf, csv, marked_seams);
-             p->options.warm_start = warm_start;
+             TemplatePatterns& t = p->patterns;
+             t.options = mtm_options(lines, svg, dxf, csv, marked_seams);
+             t.options.warm_start = warm_start;
              check(run_long(progress, threads,
-                            [&](const ExecContext& ctx) { return p->batch.prepare(model, p->options, ctx); }));
+                            [&](const ExecContext& ctx) { return t.batch.prepare(model, t.options, ctx); }));
              return p;
            }),
            py::arg("reference"), py::kw_only(), py::arg("lines") = py::none(), py::arg("svg") = true,
@@ -246,17 +249,69 @@ Raises ValueError with the engine's message.
              const Progress& progress) {
             Model model = model_from(garment, "mesh");
             MadeToMeasureReport rep = unwrap(run_long(progress, threads, [&](const ExecContext& ctx) {
-              return p.batch.write(model, std::filesystem::path(out), ctx);
+              return write_template_patterns(p.patterns, model, std::filesystem::path(out), ctx);
             }));
-            return mtm_report(rep, p.options);
+            return mtm_report(rep, p.patterns.options);
           },
           py::arg("garment"), py::arg("out"), py::kw_only(), py::arg("threads") = 0, py::arg("progress") = py::none(),
           R"doc(
 The pattern set of one garment (the reference's topology, this body's
 positions) in the folder ``out``: the files and the dict of
 ``made_to_measure_pattern``; ``warm_started_pieces`` counts the pieces
-flattened warm. Long call (GIL released). Raises ValueError for a garment of
-another topology and with the engine's message.
+flattened warm. Unprepared (``prepare_made_to_measure_patterns`` could not
+prepare it), the one-shot ``made_to_measure_pattern`` with its options.
+Long call (GIL released). Raises ValueError for a garment of another
+topology and with the engine's message.
+)doc")
+      .def_property_readonly(
+          "prepared", [](const PreparedPatterns& p) { return p.patterns.batch.prepared(); },
+          "True when write() takes the batch form (always for an object made by the constructor).")
+      .def_property_readonly(
+          "reason",
+          [](const PreparedPatterns& p) {
+            return p.patterns.reason ? py::object(py::none()) : py::object(py::str(p.patterns.reason.to_string()));
+          },
+          "Why it is not prepared (the engine's message), or None.");
+
+  m.def(
+      "prepare_made_to_measure_patterns",
+      [](const Templates& templates, const Body& reference, int levels, double clearance, const Lines& lines, bool svg,
+         bool dxf, bool csv, bool marked_seams, bool warm_start, int threads, const Progress& progress) {
+        const std::vector<ProfileTemplate> ts = profile_templates_arg(templates, reference);
+        MadeToMeasureOptions o = mtm_options(lines, svg, dxf, csv, marked_seams);
+        o.warm_start = warm_start;
+        RegenParams rp;
+        rp.levels = levels;
+        rp.clearance = clearance;
+        std::vector<TemplatePatterns> prepared = unwrap(run_long(progress, threads, [&](const ExecContext& ctx) {
+          return prepare_made_to_measure_patterns(ts, *reference.reference, templates_roi(ts), rp, o, ctx);
+        }));
+        py::list out;
+        for (TemplatePatterns& t : prepared) {
+          auto p = std::make_shared<PreparedPatterns>();
+          p->patterns = std::move(t);
+          out.append(py::cast(p));
+        }
+        return out;
+      },
+      py::arg("templates"), py::arg("reference"), py::kw_only(), py::arg("levels") = -1, py::arg("clearance") = -1.0,
+      py::arg("lines") = py::none(), py::arg("svg") = true, py::arg("dxf") = true, py::arg("csv") = true,
+      py::arg("marked_seams") = true, py::arg("warm_start") = true, py::arg("threads") = 0,
+      py::arg("progress") = py::none(), R"doc(
+The made-to-measure patterns of profile templates for many bodies, as
+``atelier regen --patterns`` prepares them in a job of 8 bodies or more
+(systems/pattern/made_to_measure_templates.h): the templates regenerated
+on ``reference`` (a Body) with ``levels`` and ``clearance`` (give the same
+as to ``regenerate_profiles`` for the bodies, so the garments have one
+topology), and per template the batch form prepared on its garment.
+
+Returns one MadeToMeasurePatterns per template, in order: ``prepared``, or
+not, with ``reason`` (the reference garment could not be flattened, e.g. a
+closed surface); write() of an unprepared one makes the one-shot pattern
+set. lines, svg, dxf, csv, marked_seams, warm_start: as
+MadeToMeasurePatterns'. Long call (GIL released). Raises ValueError for a
+bad named line, a template encoded on another body, or templates that
+cannot be regenerated on the reference (naming the template).
 )doc");
 }
 

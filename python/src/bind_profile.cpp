@@ -29,10 +29,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Template {
-  std::shared_ptr<const ProfileTemplate> t;
-};
-
 struct ProfileRegeneration {
   std::vector<std::string> names;
   py::list meshes;  // per body: a list of Mesh (None where the body failed)
@@ -91,12 +87,12 @@ ProfileQualityRow row_of(const RegenQuality& q) {
           q.crack};
 }
 
-ProfileRegeneration regenerate_profiles(const Templates& templates, const Body& reference, const Array& bodies,
-                                        int levels, double clearance, int threads, const Progress& progress) {
-  const auto list = templates_arg(templates);
+}  // namespace
+
+std::vector<ProfileTemplate> profile_templates_arg(py::handle templates, const Body& reference) {
   std::vector<ProfileTemplate> ts;
   const std::string tag = reference_tag(*reference.reference);
-  for (const auto& t : list) {
+  for (const auto& t : templates_arg(templates)) {
     if (t->t->model.nodes.slots.capacity() != t->t->encodings.nodes.size())
       value_error(t->t->name + ": encodings do not match the template's nodes");
     if (t->t->reference.find(tag) == std::string::npos)
@@ -104,6 +100,21 @@ ProfileRegeneration regenerate_profiles(const Templates& templates, const Body& 
                   "; this body has " + tag + " (encode it on this body: project_templates(body))");
     ts.push_back(*t->t);
   }
+  return ts;
+}
+
+Box3d templates_roi(std::span<const ProfileTemplate> templates) {
+  Box3d roi;
+  for (const auto& t : templates)
+    for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) roi.extend(t.model.nodes.position[v]);
+  return roi;
+}
+
+namespace {
+
+ProfileRegeneration regenerate_profiles(const Templates& templates, const Body& reference, const Array& bodies,
+                                        int levels, double clearance, int threads, const Progress& progress) {
+  const std::vector<ProfileTemplate> ts = profile_templates_arg(templates, reference);
   // One body (n, 3) or a batch (B, n, 3).
   const py::array a = py::module_::import("numpy").attr("asarray")(bodies);
   const bool single = a.ndim() == 2;
@@ -113,9 +124,7 @@ ProfileRegeneration regenerate_profiles(const Templates& templates, const Body& 
   RegenParams rp;
   rp.levels = levels;
   rp.clearance = clearance;
-  Box3d roi;
-  for (const auto& t : ts)
-    for (std::uint32_t v = 0; v < t.model.nodes.slots.capacity(); ++v) roi.extend(t.model.nodes.position[v]);
+  const Box3d roi = templates_roi(ts);
   std::vector<std::vector<std::optional<Model>>> models(nb, std::vector<std::optional<Model>>(nt));
   std::vector<std::vector<ProfileQualityRow>> rows(nt, std::vector<ProfileQualityRow>(nb));
   std::vector<std::string> errors(nb);

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/made_to_measure_options.h"
 #include "tests/support/project_templates.h"
 
 namespace atelier {
@@ -41,14 +42,6 @@ std::vector<ProfileTemplate> mtt_templates(std::initializer_list<std::string> na
     for (const ProfileTemplate& t : testing::template_fixture().templates)
       if (t.name == n) out.push_back(t);
   return out;
-}
-
-/// Pattern sets without files (no SVG, DXF or CSV).
-MadeToMeasureOptions mtt_no_files(bool warm_start) {
-  MadeToMeasureOptions o;
-  o.files.svg = o.files.dxf = o.csv = false;
-  o.warm_start = warm_start;
-  return o;
 }
 
 /// Every piece's sew line, in piece order, as one list.
@@ -113,7 +106,7 @@ TEST(MadeToMeasureTemplates, PreparedGivesTheOneShotBitsColdAndTheHandAssembledB
   const std::vector<RegenResult> body = mtt_regen(ts, 1);
   const fs::path dir = mtt_dir("bits");
   // Cold: per template, the one-shot call's bits on every piece.
-  const MadeToMeasureOptions cold_options = mtt_no_files(false);
+  const MadeToMeasureOptions cold_options = testing::pattern_set_only(false);
   auto cold = prepare_made_to_measure_patterns(ts, f.body, roi, {}, cold_options, ExecContext::sequential());
   ASSERT_TRUE(cold) << cold.status().to_string();
   ASSERT_EQ(cold->size(), 2u);
@@ -135,7 +128,7 @@ TEST(MadeToMeasureTemplates, PreparedGivesTheOneShotBitsColdAndTheHandAssembledB
   }
   // Warm (the default): prepared with 1 and with 2 threads, and the
   // pipeline assembled by hand: the same bits for the body.
-  const MadeToMeasureOptions warm_options = mtt_no_files(true);
+  const MadeToMeasureOptions warm_options = testing::pattern_set_only(true);
   ExecContext two;
   two.threads = 2;
   two.sequential_threshold = 1;
@@ -168,7 +161,7 @@ TEST(MadeToMeasureTemplates, ATemplateThatCannotBeFlattenedComesBackUnpreparedWi
   std::vector<ProfileTemplate> ts = mtt_templates({"skirt"});
   ts.push_back(mtt_pouch());
   const Box3d roi = mtt_roi(ts);
-  const MadeToMeasureOptions o = mtt_no_files(false);
+  const MadeToMeasureOptions o = testing::pattern_set_only(false);
   auto r = prepare_made_to_measure_patterns(ts, f.body, roi, {}, o, ExecContext::sequential());
   ASSERT_TRUE(r) << r.status().to_string();
   ASSERT_EQ(r->size(), 2u);
@@ -200,7 +193,7 @@ TEST(MadeToMeasureTemplates, ATemplateThatCannotBeFlattenedComesBackUnpreparedWi
 TEST(MadeToMeasureTemplates, BadOptionsAndACancelledJobAreRefused) {
   const auto& f = testing::template_fixture();
   const std::vector<ProfileTemplate> ts = mtt_templates({"skirt"});
-  MadeToMeasureOptions o = mtt_no_files(true);
+  MadeToMeasureOptions o = testing::pattern_set_only(true);
   o.lines.push_back({"knee", 1.5});
   auto bad = prepare_made_to_measure_patterns(ts, f.body, mtt_roi(ts), {}, o, ExecContext::sequential());
   ASSERT_FALSE(bad);
@@ -208,7 +201,7 @@ TEST(MadeToMeasureTemplates, BadOptionsAndACancelledJobAreRefused) {
   EXPECT_NE(bad.status().message().find("'knee'"), std::string::npos) << bad.status().message();
   ExecContext cancelled = ExecContext::sequential();
   cancelled.cancel.cancel();
-  auto none = prepare_made_to_measure_patterns(ts, f.body, mtt_roi(ts), {}, mtt_no_files(true), cancelled);
+  auto none = prepare_made_to_measure_patterns(ts, f.body, mtt_roi(ts), {}, testing::pattern_set_only(true), cancelled);
   ASSERT_FALSE(none);
   EXPECT_EQ(none.status().code(), ErrorCode::kCancelled);
 }

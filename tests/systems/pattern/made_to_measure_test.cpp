@@ -21,6 +21,7 @@
 #include <map>
 #include <sstream>
 
+#include "tests/support/made_to_measure_options.h"
 #include "tests/support/project_templates.h"
 
 namespace atelier {
@@ -63,13 +64,7 @@ std::vector<Model> sampled_garments(const std::string& name, std::size_t n) {
   return out;
 }
 
-/// The options of a pattern set without files (no SVG, DXF or CSV).
-MadeToMeasureOptions pattern_set_only(bool warm_start) {
-  MadeToMeasureOptions o;
-  o.files.svg = o.files.dxf = o.csv = false;
-  o.warm_start = warm_start;
-  return o;
-}
+using testing::pattern_set_only;
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("atelier_mtm_" + name + "_" + std::to_string(::getpid()));
