@@ -118,6 +118,14 @@ int locate_coplanar(const Vec3d& p, const std::array<Vec3d, 3>& c, const Project
 /// Where the line through p, q (crossing the triangle's plane) meets the
 /// triangle: as locate_coplanar.
 int locate_line(const Vec3d& p, const Vec3d& q, const std::array<Vec3d, 3>& c) {
+  // The crossing lies on the segment pq (its ends are on either side of the
+  // plane) and, if it is in the triangle, in the triangle's box: segment
+  // and box apart in one coordinate (exact comparisons) mean a miss. Cray's
+  // slab edges at FLT_MAX against A's small triangles.
+  for (int k = 0; k < 3; ++k) {
+    const double lo = std::min({c[0][k], c[1][k], c[2][k]}), hi = std::max({c[0][k], c[1][k], c[2][k]});
+    if (std::max(p[k], q[k]) < lo || std::min(p[k], q[k]) > hi) return -1;
+  }
   int o[3];
   int pos = 0, neg = 0, zeros = 0;
   for (int k = 0; k < 3; ++k) {
@@ -362,9 +370,12 @@ void two_sum(double a, double b, double& s, double& e) noexcept {
 }
 
 /// An exact sum of doubles, as a nonoverlapping expansion in increasing
-/// magnitude.
+/// magnitude. Grow-Expansion of an m-component expansion and one double has
+/// at most m + 1 components, so eight doubles never need more than eight:
+/// the room is left uninitialised (zeroing a 64-slot array, three per
+/// call, was a sixth of the cofactor's time on Cray).
 struct Expansion {
-  std::array<double, 64> e{};
+  std::array<double, 8> e;  // components [0, n) are set before they are read
   std::size_t n = 0;
   bool full = false;  // more components than room: the caller goes to CGAL
   void add(double b) noexcept {
@@ -412,7 +423,10 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
     // n_k = c_i r3_j - c_j r3_i - a_i r3_j + a_j r3_i, each product as
     // head + tail (Two-Product).
     Expansion e;
+    // Two-Product by a fused multiply-add; a zero factor (the slab's edges
+    // along an axis) adds nothing.
     auto product = [&](double x, double y) {
+      if (x == 0.0 || y == 0.0) return;
       const double h = x * y;
       e.add(std::fma(x, y, -h));
       e.add(h);
@@ -437,6 +451,31 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
   return 2;
 }
 
+/// Shewchuk's orient2d with its first-stage bound (ccwerrboundA =
+/// (3 + 16 eps) eps times the permanent) in the projection dropping `axis`
+/// (the cyclic pair, as orient2): +1, -1, or 2 when the bound cannot tell.
+int orient2_filtered(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) noexcept {
+  const int u = u_of(axis), v = v_of(axis);
+  const double left = (a[u] - c[u]) * (b[v] - c[v]), right = (a[v] - c[v]) * (b[u] - c[u]);
+  const double det = left - right, sum = std::abs(left) + std::abs(right);
+  constexpr double kBound = 3.3306690738754716e-16;  // (3 + 16 eps) eps, eps = 2^-53
+  if (!std::isfinite(sum) || !(sum > 1e-250)) return 2;
+  if (det > kBound * sum) return 1;
+  if (-det > kBound * sum) return -1;
+  return 2;
+}
+
+/// The sign of orient3d(a, b, c, d) when c and d share coordinate k and a,
+/// b lie on either side of that level (or one on it), both ends certainly
+/// on one side of cd in the projection dropping k; 2 otherwise.
+int level_edge_rule(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d, int k) noexcept {
+  if (c[k] != d[k] || a[k] == b[k]) return 2;
+  if (!((a[k] <= c[k] && c[k] <= b[k]) || (b[k] <= c[k] && c[k] <= a[k]))) return 2;
+  const int oa = orient2_filtered(a, c, d, k);
+  if (oa == 2 || orient2_filtered(b, c, d, k) != oa) return 2;
+  return (b[k] > a[k] ? 1 : -1) * oa;  // orient3d has the sign of det[b - a, c - a, d - a]
+}
+
 /// orient3d after its first filter fails (kept out of line so the filter
 /// inlines into its callers): exact rules that need no CGAL, then CGAL's
 /// filtered predicate.
@@ -448,6 +487,17 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
   // on the plane; the exact fallback would take Mpzf products of 3.4e38^3.
   for (int k = 0; k < 3; ++k)
     if (a[k] == b[k] && a[k] == c[k]) return (d[k] > a[k] ? 1 : (d[k] < a[k] ? -1 : 0)) * orient2(a, b, c, k);
+  // An edge (c, d) level in coordinate k against a segment (a, b) across
+  // that level: with x the point of line ab at level c_k,
+  // det[b - a, c - a, d - a] = det[b - a, c - x, d - x]
+  // = (b_k - a_k) orient2d_k(x, c, d), and x lies on the segment, along
+  // which orient2d_k is affine: when both ends are certainly on one side
+  // of cd in the projection, so is x. Cray's slab perimeter (at FLT_MAX)
+  // against A's edges through the top, which went to the cofactor.
+  for (int k = 0; k < 3; ++k)
+    if (const int o = level_edge_rule(a, b, c, d, k); o != 2) return o;
+  for (int k = 0; k < 3; ++k)
+    if (const int o = level_edge_rule(c, d, a, b, k); o != 2) return o;  // an even permutation
   // Without CGAL when d - c is exact: an edge (a, b) of A against an edge
   // (c, d) of Cray's slab, whose differences to a 3.4e38 corner no double
   // filter can use (the cofactor).
@@ -1069,12 +1119,14 @@ bool round_quotient(CGAL::Mpzf num, CGAL::Mpzf den, double guess, double& out) {
     num = -num;
     den = -den;
   }
-  const CGAL::Mpzf half(0.5);
+  // num / den against the midpoint (lo + c) / 2 is 2 num against
+  // den (lo + c): one exact product per comparison instead of two.
+  const CGAL::Mpzf num2 = num + num;
   double c = guess;
   for (int step = 0; step < 16; ++step) {
     const double lo = std::nextafter(c, -HUGE_VAL), hi = std::nextafter(c, HUGE_VAL);
     if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
-    const int below = Mpzf_cmp(num, den * ((CGAL::Mpzf(lo) + CGAL::Mpzf(c)) * half));
+    const int below = Mpzf_cmp(num2, den * (CGAL::Mpzf(lo) + CGAL::Mpzf(c)));
     if (below < 0) {
       c = lo;
       continue;
@@ -1083,7 +1135,7 @@ bool round_quotient(CGAL::Mpzf num, CGAL::Mpzf den, double guess, double& out) {
       out = centre(lo, c) + 0.0;
       return true;
     }
-    const int above = Mpzf_cmp(num, den * ((CGAL::Mpzf(c) + CGAL::Mpzf(hi)) * half));
+    const int above = Mpzf_cmp(num2, den * (CGAL::Mpzf(c) + CGAL::Mpzf(hi)));
     if (above > 0) {
       c = hi;
       continue;
