@@ -22,6 +22,8 @@
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -118,14 +120,6 @@ int locate_coplanar(const Vec3d& p, const std::array<Vec3d, 3>& c, const Project
 /// Where the line through p, q (crossing the triangle's plane) meets the
 /// triangle: as locate_coplanar.
 int locate_line(const Vec3d& p, const Vec3d& q, const std::array<Vec3d, 3>& c) {
-  // The crossing lies on the segment pq (its ends are on either side of the
-  // plane) and, if it is in the triangle, in the triangle's box: segment
-  // and box apart in one coordinate (exact comparisons) mean a miss. Cray's
-  // slab edges at FLT_MAX against A's small triangles.
-  for (int k = 0; k < 3; ++k) {
-    const double lo = std::min({c[0][k], c[1][k], c[2][k]}), hi = std::max({c[0][k], c[1][k], c[2][k]});
-    if (std::max(p[k], q[k]) < lo || std::min(p[k], q[k]) > hi) return -1;
-  }
   int o[3];
   int pos = 0, neg = 0, zeros = 0;
   for (int k = 0; k < 3; ++k) {
@@ -451,29 +445,55 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
   return 2;
 }
 
-/// Shewchuk's orient2d with its first-stage bound (ccwerrboundA =
-/// (3 + 16 eps) eps times the permanent) in the projection dropping `axis`
-/// (the cyclic pair, as orient2): +1, -1, or 2 when the bound cannot tell.
-int orient2_filtered(const Vec3d& a, const Vec3d& b, const Vec3d& c, int axis) noexcept {
-  const int u = u_of(axis), v = v_of(axis);
-  const double left = (a[u] - c[u]) * (b[v] - c[v]), right = (a[v] - c[v]) * (b[u] - c[u]);
-  const double det = left - right, sum = std::abs(left) + std::abs(right);
-  constexpr double kBound = 3.3306690738754716e-16;  // (3 + 16 eps) eps, eps = 2^-53
-  if (!std::isfinite(sum) || !(sum > 1e-250)) return 2;
-  if (det > kBound * sum) return 1;
-  if (-det > kBound * sum) return -1;
-  return 2;
-}
-
-/// The sign of orient3d(a, b, c, d) when c and d share coordinate k and a,
-/// b lie on either side of that level (or one on it), both ends certainly
-/// on one side of cd in the projection dropping k; 2 otherwise.
-int level_edge_rule(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d, int k) noexcept {
-  if (c[k] != d[k] || a[k] == b[k]) return 2;
-  if (!((a[k] <= c[k] && c[k] <= b[k]) || (b[k] <= c[k] && c[k] <= a[k]))) return 2;
-  const int oa = orient2_filtered(a, c, d, k);
-  if (oa == 2 || orient2_filtered(b, c, d, k) != oa) return 2;
-  return (b[k] > a[k] ? 1 : -1) * oa;  // orient3d has the sign of det[b - a, c - a, d - a]
+/// A question orient3d(a, b, c, d) up to the orders that keep or flip its
+/// sign: each pair (a, b), (c, d) in lexicographic order (a swap flips
+/// the sign) and the pairs in order (orient3d(c, d, a, b) is an even
+/// permutation).
+struct OrientMemoKey {
+  std::array<const Vec3d*, 4> p;
+  static bool less(const Vec3d& x, const Vec3d& y) noexcept {
+    return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
+  }
+  /// Reorders p; returns +1 or -1, the sign relating the two questions.
+  int canonical() noexcept {
+    int flip = 1;
+    if (less(*p[1], *p[0])) std::swap(p[0], p[1]), flip = -flip;
+    if (less(*p[3], *p[2])) std::swap(p[2], p[3]), flip = -flip;
+    if (less(*p[2], *p[0]) || (*p[2] == *p[0] && less(*p[3], *p[1]))) std::swap(p[0], p[2]), std::swap(p[1], p[3]);
+    return flip;
+  }
+};
+std::atomic<std::uint64_t> orient_memo_generation{1};
+struct OrientMemoEntry {
+  std::array<double, 12> x{};
+  int sign = 0;
+  std::uint64_t generation = 0;  // filled in this generation
+  [[nodiscard]] bool same(const OrientMemoKey& k) const noexcept {
+    for (std::size_t i = 0; i < 4; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (std::bit_cast<std::uint64_t>(x[3 * i + static_cast<std::size_t>(j)]) !=
+            std::bit_cast<std::uint64_t>((*k.p[i])[j]))
+          return false;
+    return true;
+  }
+  void store(const OrientMemoKey& k, int s) noexcept {
+    for (std::size_t i = 0; i < 4; ++i)
+      for (int j = 0; j < 3; ++j) x[3 * i + static_cast<std::size_t>(j)] = (*k.p[i])[j];
+    sign = s;
+    generation = orient_memo_generation.load(std::memory_order_relaxed);
+  }
+};
+/// The slot of a canonical question in this thread's direct-mapped memo.
+OrientMemoEntry& orient_memo_slot(const OrientMemoKey& k) noexcept {
+  thread_local std::array<OrientMemoEntry, 256> memo;
+  std::uint64_t h = 0x9e3779b97f4a7c15ULL;
+  for (const Vec3d* q : k.p)
+    for (int j = 0; j < 3; ++j) {
+      h ^= std::bit_cast<std::uint64_t>((*q)[j]);
+      h *= 0xff51afd7ed558ccdULL;
+      h ^= h >> 29;
+    }
+  return memo[static_cast<std::size_t>(h >> 56)];
 }
 
 /// orient3d after its first filter fails (kept out of line so the filter
@@ -487,17 +507,6 @@ int level_edge_rule(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d&
   // on the plane; the exact fallback would take Mpzf products of 3.4e38^3.
   for (int k = 0; k < 3; ++k)
     if (a[k] == b[k] && a[k] == c[k]) return (d[k] > a[k] ? 1 : (d[k] < a[k] ? -1 : 0)) * orient2(a, b, c, k);
-  // An edge (c, d) level in coordinate k against a segment (a, b) across
-  // that level: with x the point of line ab at level c_k,
-  // det[b - a, c - a, d - a] = det[b - a, c - x, d - x]
-  // = (b_k - a_k) orient2d_k(x, c, d), and x lies on the segment, along
-  // which orient2d_k is affine: when both ends are certainly on one side
-  // of cd in the projection, so is x. Cray's slab perimeter (at FLT_MAX)
-  // against A's edges through the top, which went to the cofactor.
-  for (int k = 0; k < 3; ++k)
-    if (const int o = level_edge_rule(a, b, c, d, k); o != 2) return o;
-  for (int k = 0; k < 3; ++k)
-    if (const int o = level_edge_rule(c, d, a, b, k); o != 2) return o;  // an even permutation
   // Without CGAL when d - c is exact: an edge (a, b) of A against an edge
   // (c, d) of Cray's slab, whose differences to a 3.4e38 corner no double
   // filter can use (the cofactor).
@@ -507,14 +516,30 @@ int level_edge_rule(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d&
   auto far = [](const Vec3d& p, const Vec3d& q, const Vec3d& r) {
     return (r - p).cwiseAbs().maxCoeff() > 0x1p20 * (q - p).cwiseAbs().maxCoeff();
   };
-  if (far(a, b, c))
-    if (const int o = orient3d_cofactor(a, b, c, d); o != 2) return o;
-  if (far(c, d, a))
-    if (const int o = orient3d_cofactor(c, d, a, b); o != 2) return o;  // an even permutation
-  return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  const bool far_ab = far(a, b, c), far_cd = far(c, d, a);
+  if (!far_ab && !far_cd) return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  // The same far question comes back from neighbouring pairs (an edge of A
+  // and the slab's diagonal: from both triangles of the edge, against both
+  // triangles of the diagonal): a per-thread memo of the answers. The
+  // answer is a function of the question, so the memo changes no bit.
+  OrientMemoKey key{{&a, &b, &c, &d}};
+  const int flip = key.canonical();
+  OrientMemoEntry& slot = orient_memo_slot(key);
+  if (slot.generation == orient_memo_generation.load(std::memory_order_relaxed) && slot.same(key))
+    return flip * slot.sign;
+  int o = 2;
+  if (far_ab) o = orient3d_cofactor(a, b, c, d);
+  if (o == 2 && far_cd) o = orient3d_cofactor(c, d, a, b);  // an even permutation
+  if (o == 2) o = sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  slot.store(key, flip * o);
+  return o;
 }
 
 }  // namespace
+
+void new_orient3d_memo_generation() noexcept {
+  orient_memo_generation.fetch_add(1, std::memory_order_relaxed);
+}
 
 int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
   // Shewchuk's first-stage filter (orient3d, error bound A = (7 + 56 eps) eps

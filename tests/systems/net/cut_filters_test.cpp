@@ -1,15 +1,17 @@
-// The cut's cheap exact rules (issue 24, round 15) against CGAL's exact
-// predicates: orient3d's level-edge rule (an edge level in one coordinate
-// against a segment across that level, decided by two filtered orient2d of
-// the segment's ends) and locate_line's box rejection (a segment through a
-// triangle's plane apart from the triangle's box misses it), on Cray's
-// FLT_MAX slab, small full-mantissa points, points a few ulps off the edge
-// in the projection, ends on the level, shared and touching corners.
+// The cut's far orient3d questions (issue 24, round 15) against CGAL's
+// exact predicates: orient3d keeps a per-thread memo of the questions that
+// reach its cofactor stage (an edge against a 3.4e38 edge of Cray's slab),
+// keyed up to the argument orders that keep or flip the sign, so every
+// order of every question, asked again and again, must still get CGAL's
+// exact sign; and intersect_pair names exactly the edges that cross the
+// other triangle (CGAL's exact do_intersect), on the slab, boxes with
+// shared, touching and coplanar faces, and spheres.
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/intersections.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
@@ -32,78 +34,68 @@ int cut_filters_cgal_orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, co
   return o == CGAL::POSITIVE ? 1 : (o == CGAL::NEGATIVE ? -1 : 0);
 }
 
-// Every argument order of orient3d (even orders give the sign, odd ones
-// its opposite) against CGAL's exact orientation.
-void expect_orient3d_exact(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d, int& nonzero) {
-  const std::array<const Vec3d*, 4> v{&a, &b, &c, &d};
-  static constexpr std::array<std::array<int, 4>, 6> kOrders{
-      {{0, 1, 2, 3}, {2, 3, 0, 1}, {1, 0, 3, 2}, {3, 2, 1, 0}, {0, 1, 3, 2}, {2, 3, 1, 0}}};
-  for (const auto& o : kOrders) {
-    const Vec3d &p = *v[static_cast<std::size_t>(o[0])], &q = *v[static_cast<std::size_t>(o[1])],
-                &r = *v[static_cast<std::size_t>(o[2])], &s = *v[static_cast<std::size_t>(o[3])];
-    const int want = cut_filters_cgal_orient3d(p, q, r, s);
-    ASSERT_EQ(net_detail::orient3d(p, q, r, s), want)
+// All 24 argument orders of orient3d (the sign of the permutation times
+// the sign) against CGAL's exact orientation of the first order.
+void expect_orient3d_exact(const std::array<Vec3d, 4>& v, int& nonzero) {
+  const int want = cut_filters_cgal_orient3d(v[0], v[1], v[2], v[3]);
+  std::array<int, 4> o{0, 1, 2, 3};
+  do {
+    int parity = 1;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j)
+        if (o[static_cast<std::size_t>(i)] > o[static_cast<std::size_t>(j)]) parity = -parity;
+    const Vec3d &p = v[static_cast<std::size_t>(o[0])], &q = v[static_cast<std::size_t>(o[1])],
+                &r = v[static_cast<std::size_t>(o[2])], &s = v[static_cast<std::size_t>(o[3])];
+    ASSERT_EQ(net_detail::orient3d(p, q, r, s), parity * want)
         << p.transpose() << " | " << q.transpose() << " | " << r.transpose() << " | " << s.transpose();
-    nonzero += want != 0;
-  }
+  } while (std::next_permutation(o.begin(), o.end()));
+  nonzero += want != 0;
 }
 
-TEST(NetCutFilters, LevelEdgeRuleAgreesWithCgal) {
+TEST(NetCutFilters, FarOrientationsAgreeWithCgalInEveryOrderAndRepeated) {
   const double F = 340282346999999984391321947108527833088.0;
   std::mt19937_64 rng(1515);
   std::uniform_real_distribution<double> real(-2.5e4, 2.5e4), unit(-1.0, 1.0);
-  std::uniform_int_distribution<int> pick(0, 5), axis(0, 2), ulps(-3, 3);
+  std::uniform_int_distribution<int> pick(0, 5), ulps(-3, 3);
   auto nudge = [&](double x) {
     for (int k = ulps(rng); k != 0; k += k > 0 ? -1 : 1) x = std::nextafter(x, k > 0 ? HUGE_VAL : -HUGE_VAL);
     return x;
   };
-  int nonzero = 0;
-  for (int trial = 0; trial < 30000; ++trial) {
-    const int k = axis(rng), u = (k + 1) % 3, w = (k + 2) % 3;
-    // The level edge cd: Cray's slab (FLT_MAX corners, its diagonal and its
-    // perimeter), or a small full-mantissa one.
-    Vec3d c, d;
-    const double level = pick(rng) < 2 ? -100.0 : real(rng);
-    c[k] = d[k] = level;
-    switch (pick(rng)) {
-      case 0:  // the slab's perimeter
-        c[u] = F, c[w] = -F, d[u] = F, d[w] = F;
-        break;
-      case 1:  // its diagonal
-        c[u] = -F, c[w] = -F, d[u] = F, d[w] = F;
-        break;
-      case 2:  // a corner at FLT_MAX, one small
-        c[u] = F, c[w] = real(rng), d[u] = real(rng), d[w] = real(rng);
-        break;
-      default:
-        c[u] = real(rng), c[w] = real(rng), d[u] = real(rng), d[w] = real(rng);
-    }
-    // The segment ab across the level (or with an end on it); its ends in
-    // the projection generic, on the line cd (a few ulps off), or equal to c.
-    auto end = [&](bool above) {
-      Vec3d p;
-      const double t = unit(rng);
+  // The slab's edges (its top's diagonal and perimeter, its sides) and
+  // short edges near them: generic, ends on the top, a few ulps off the
+  // diagonal in the projection, sharing a corner.
+  const std::array<std::array<Vec3d, 2>, 4> slab_edges{{{Vec3d(-F, -F, -100.0), Vec3d(F, F, -100.0)},
+                                                        {Vec3d(F, -F, -100.0), Vec3d(F, F, -100.0)},
+                                                        {Vec3d(-F, F, -100.0), Vec3d(-F, -F, -F)},
+                                                        {Vec3d(F, F, -F), Vec3d(-F, F, -100.0)}}};
+  std::vector<std::array<Vec3d, 4>> questions;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const auto& e = slab_edges[static_cast<std::size_t>(trial) % slab_edges.size()];
+    auto end = [&] {
+      const double t = unit(rng), z = pick(rng) == 0 ? -100.0 : real(rng);
       switch (pick(rng)) {
         case 0:
-        case 1:  // near the line cd in the projection (the filter's hard case)
-          p[u] = nudge(c[u] + t * (d[u] - c[u]));
-          p[w] = nudge(c[w] + t * (d[w] - c[w]));
-          break;
-        case 2:  // exactly c's projection
-          p[u] = c[u], p[w] = c[w];
-          break;
+        case 1:  // a few ulps off the diagonal's projection
+          return Vec3d(nudge(1e4 * t), nudge(1e4 * t), z);
+        case 2:  // a corner of the slab edge
+          return e[0];
         default:
-          p[u] = real(rng), p[w] = real(rng);
+          return Vec3d(real(rng), real(rng), z);
       }
-      const double off = std::abs(real(rng));
-      p[k] = pick(rng) == 0 ? level : (above ? nudge(level + off) : nudge(level - off));
-      return p;
     };
-    const Vec3d a = end(true), b = end(false);
-    expect_orient3d_exact(a, b, c, d, nonzero);
-    if (::testing::Test::HasFatalFailure()) return;
+    Vec3d a = end(), b = end();
+    if (a == b) b.z() += 1.0;
+    questions.push_back({a, b, e[0], e[1]});
   }
-  EXPECT_GT(nonzero, 100000);  // of 180,000: most are not degenerate
+  int nonzero = 0;
+  // Twice over, the second time in reverse: each question meets the memo
+  // filled by itself in every order and by its neighbours.
+  for (int round = 0; round < 2; ++round)
+    for (std::size_t i = 0; i < questions.size(); ++i) {
+      expect_orient3d_exact(questions[round == 0 ? i : questions.size() - 1 - i], nonzero);
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+  EXPECT_GT(nonzero, 4000);  // of 6,000: most are not degenerate
 }
 
 // The keys of one pair that name edge e of `self`'s triangle (side 0: A's
@@ -116,7 +108,7 @@ bool names_edge(const net_detail::PairHit& hit, int side, std::uint32_t e) {
 
 // An edge whose ends lie strictly on either side of the other triangle's
 // plane meets it (CGAL's exact do_intersect) exactly when intersect_pair
-// names it: the rejection by boxes must never drop a crossing.
+// names it.
 void expect_edges_named(const net_detail::TriMesh& self, std::uint32_t ts, const net_detail::TriMesh& other,
                         std::uint32_t to, int side, const net_detail::PairHit& hit, int& crossings, int& misses) {
   using EK = CGAL::Exact_predicates_exact_constructions_kernel;
@@ -136,7 +128,7 @@ void expect_edges_named(const net_detail::TriMesh& self, std::uint32_t ts, const
   }
 }
 
-TEST(NetCutFilters, BoxRejectionNeverDropsACrossing) {
+TEST(NetCutFilters, IntersectPairNamesExactlyTheCrossingEdges) {
   using namespace net_detail;
   using namespace net_test;
   // The slab against spheres across its top (Cray's case: slab edges at
@@ -166,8 +158,7 @@ TEST(NetCutFilters, BoxRejectionNeverDropsACrossing) {
         if (::testing::Test::HasFatalFailure()) return;
       }
   }
-  // Both outcomes occur often (the slab's far edges are the misses the
-  // boxes reject).
+  // Both outcomes occur often (the slab's far edges mostly miss).
   EXPECT_GT(crossings, 500) << misses;
   EXPECT_GT(misses, 1000) << crossings;
 }
