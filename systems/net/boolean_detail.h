@@ -150,6 +150,10 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
 /// Sign of the orientation of d against the plane of (a, b, c): +1 on the
 /// side the normal (b - a) x (c - a) points to.
 [[nodiscard]] int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept;
+/// Starts a new generation of orient3d's per-thread memo of far questions
+/// (called by cut_nets): answers are never stale, but a benchmark repeating
+/// one Boolean must not find the previous run's.
+void new_orient3d_memo_generation() noexcept;
 /// Exactly collinear (or coincident) points: a degenerate triangle.
 [[nodiscard]] bool collinear(const Vec3d& a, const Vec3d& b, const Vec3d& c) noexcept;
 

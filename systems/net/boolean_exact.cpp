@@ -22,6 +22,8 @@
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -362,9 +364,12 @@ void two_sum(double a, double b, double& s, double& e) noexcept {
 }
 
 /// An exact sum of doubles, as a nonoverlapping expansion in increasing
-/// magnitude.
+/// magnitude. Grow-Expansion of an m-component expansion and one double has
+/// at most m + 1 components, so eight doubles never need more than eight:
+/// the room is left uninitialised (zeroing a 64-slot array, three per
+/// call, was a sixth of the cofactor's time on Cray).
 struct Expansion {
-  std::array<double, 64> e{};
+  std::array<double, 8> e;  // components [0, n) are set before they are read
   std::size_t n = 0;
   bool full = false;  // more components than room: the caller goes to CGAL
   void add(double b) noexcept {
@@ -412,7 +417,10 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
     // n_k = c_i r3_j - c_j r3_i - a_i r3_j + a_j r3_i, each product as
     // head + tail (Two-Product).
     Expansion e;
+    // Two-Product by a fused multiply-add; a zero factor (the slab's edges
+    // along an axis) adds nothing.
     auto product = [&](double x, double y) {
+      if (x == 0.0 || y == 0.0) return;
       const double h = x * y;
       e.add(std::fma(x, y, -h));
       e.add(h);
@@ -437,6 +445,57 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
   return 2;
 }
 
+/// A question orient3d(a, b, c, d) up to the orders that keep or flip its
+/// sign: each pair (a, b), (c, d) in lexicographic order (a swap flips
+/// the sign) and the pairs in order (orient3d(c, d, a, b) is an even
+/// permutation).
+struct OrientMemoKey {
+  std::array<const Vec3d*, 4> p;
+  static bool less(const Vec3d& x, const Vec3d& y) noexcept {
+    return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
+  }
+  /// Reorders p; returns +1 or -1, the sign relating the two questions.
+  int canonical() noexcept {
+    int flip = 1;
+    if (less(*p[1], *p[0])) std::swap(p[0], p[1]), flip = -flip;
+    if (less(*p[3], *p[2])) std::swap(p[2], p[3]), flip = -flip;
+    if (less(*p[2], *p[0]) || (*p[2] == *p[0] && less(*p[3], *p[1]))) std::swap(p[0], p[2]), std::swap(p[1], p[3]);
+    return flip;
+  }
+};
+std::atomic<std::uint64_t> orient_memo_generation{1};
+struct OrientMemoEntry {
+  std::array<double, 12> x{};
+  int sign = 0;
+  std::uint64_t generation = 0;  // filled in this generation
+  [[nodiscard]] bool same(const OrientMemoKey& k) const noexcept {
+    for (std::size_t i = 0; i < 4; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (std::bit_cast<std::uint64_t>(x[3 * i + static_cast<std::size_t>(j)]) !=
+            std::bit_cast<std::uint64_t>((*k.p[i])[j]))
+          return false;
+    return true;
+  }
+  void store(const OrientMemoKey& k, int s) noexcept {
+    for (std::size_t i = 0; i < 4; ++i)
+      for (int j = 0; j < 3; ++j) x[3 * i + static_cast<std::size_t>(j)] = (*k.p[i])[j];
+    sign = s;
+    generation = orient_memo_generation.load(std::memory_order_relaxed);
+  }
+};
+/// The slot of a canonical question in this thread's direct-mapped memo.
+OrientMemoEntry& orient_memo_slot(const OrientMemoKey& k) noexcept {
+  thread_local std::array<OrientMemoEntry, 256> memo;
+  std::uint64_t h = 0x9e3779b97f4a7c15ULL;
+  for (const Vec3d* q : k.p)
+    for (int j = 0; j < 3; ++j) {
+      h ^= std::bit_cast<std::uint64_t>((*q)[j]);
+      h *= 0xff51afd7ed558ccdULL;
+      h ^= h >> 29;
+    }
+  return memo[static_cast<std::size_t>(h >> 56)];
+}
+
 /// orient3d after its first filter fails (kept out of line so the filter
 /// inlines into its callers): exact rules that need no CGAL, then CGAL's
 /// filtered predicate.
@@ -457,14 +516,30 @@ int orient3d_cofactor(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3
   auto far = [](const Vec3d& p, const Vec3d& q, const Vec3d& r) {
     return (r - p).cwiseAbs().maxCoeff() > 0x1p20 * (q - p).cwiseAbs().maxCoeff();
   };
-  if (far(a, b, c))
-    if (const int o = orient3d_cofactor(a, b, c, d); o != 2) return o;
-  if (far(c, d, a))
-    if (const int o = orient3d_cofactor(c, d, a, b); o != 2) return o;  // an even permutation
-  return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  const bool far_ab = far(a, b, c), far_cd = far(c, d, a);
+  if (!far_ab && !far_cd) return sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  // The same far question comes back from neighbouring pairs (an edge of A
+  // and the slab's diagonal: from both triangles of the edge, against both
+  // triangles of the diagonal): a per-thread memo of the answers. The
+  // answer is a function of the question, so the memo changes no bit.
+  OrientMemoKey key{{&a, &b, &c, &d}};
+  const int flip = key.canonical();
+  OrientMemoEntry& slot = orient_memo_slot(key);
+  if (slot.generation == orient_memo_generation.load(std::memory_order_relaxed) && slot.same(key))
+    return flip * slot.sign;
+  int o = 2;
+  if (far_ab) o = orient3d_cofactor(a, b, c, d);
+  if (o == 2 && far_cd) o = orient3d_cofactor(c, d, a, b);  // an even permutation
+  if (o == 2) o = sgn(CGAL::orientation(pi(a), pi(b), pi(c), pi(d)));
+  slot.store(key, flip * o);
+  return o;
 }
 
 }  // namespace
+
+void new_orient3d_memo_generation() noexcept {
+  orient_memo_generation.fetch_add(1, std::memory_order_relaxed);
+}
 
 int orient3d(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& d) noexcept {
   // Shewchuk's first-stage filter (orient3d, error bound A = (7 + 56 eps) eps
@@ -1069,12 +1144,14 @@ bool round_quotient(CGAL::Mpzf num, CGAL::Mpzf den, double guess, double& out) {
     num = -num;
     den = -den;
   }
-  const CGAL::Mpzf half(0.5);
+  // num / den against the midpoint (lo + c) / 2 is 2 num against
+  // den (lo + c): one exact product per comparison instead of two.
+  const CGAL::Mpzf num2 = num + num;
   double c = guess;
   for (int step = 0; step < 16; ++step) {
     const double lo = std::nextafter(c, -HUGE_VAL), hi = std::nextafter(c, HUGE_VAL);
     if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
-    const int below = Mpzf_cmp(num, den * ((CGAL::Mpzf(lo) + CGAL::Mpzf(c)) * half));
+    const int below = Mpzf_cmp(num2, den * (CGAL::Mpzf(lo) + CGAL::Mpzf(c)));
     if (below < 0) {
       c = lo;
       continue;
@@ -1083,7 +1160,7 @@ bool round_quotient(CGAL::Mpzf num, CGAL::Mpzf den, double guess, double& out) {
       out = centre(lo, c) + 0.0;
       return true;
     }
-    const int above = Mpzf_cmp(num, den * ((CGAL::Mpzf(c) + CGAL::Mpzf(hi)) * half));
+    const int above = Mpzf_cmp(num2, den * (CGAL::Mpzf(c) + CGAL::Mpzf(hi)));
     if (above > 0) {
       c = hi;
       continue;

@@ -38,6 +38,7 @@ bool in_closure(const TriMesh& m, std::uint64_t s, std::uint32_t g) {
 Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh& bvh_b, const ExecContext& ctx,
                 Cut& out, bool exact_only) {
   using Tri3 = std::array<std::uint32_t, 3>;
+  new_orient3d_memo_generation();
   // ---- pairs and their intersection points
   const auto pairs = overlapping_pairs(A, bvh_a, B, bvh_b, ctx);
   out.candidate_pairs = pairs.size();
