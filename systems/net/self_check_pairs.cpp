@@ -1,0 +1,368 @@
+// The self-intersection check's pair traversal: first_self_crossing walks
+// the net's box hierarchy against itself (skipping the inside of the
+// patches embedded_nodes certifies, self_check.cpp) and decides each pair of
+// triangles whose boxes overlap by certified floating-point rules, leaving
+// only the pairs none of them can decide to the exact test
+// (triangles_cross). Every rule answers "certainly apart" or "not known",
+// so the verdict (the smallest crossing pair) is the exact one.
+#include <atelier/engine/parallel.h>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include "boolean_detail.h"
+
+namespace atelier::net_detail {
+
+namespace {
+
+/// One triangle as the pair decisions read it, in the hierarchy's leaf
+/// order (the boxes are the hierarchy's own, also in leaf order): its
+/// corners and its index in the net, then its plane for the certified side
+/// test: the rounded normal n = (b - a) x (c - a) and, per
+/// component, the sum of the absolute values of its two products (the part
+/// of Shewchuk's orient3d permanent that does not depend on the tested
+/// point).
+struct SelfTri {
+  std::uint32_t v[3];
+  std::uint32_t t;
+  double n[3];
+  double nabs[3];
+};
+
+SelfTri self_tri(const TriMesh& m, std::uint32_t t) noexcept {
+  SelfTri r{};
+  const auto& v = m.tri[t];
+  for (int k = 0; k < 3; ++k) r.v[k] = v[static_cast<std::size_t>(k)];
+  r.t = t;
+  const Vec3d& a = m.p[v[0]];
+  const double ux = m.p[v[1]].x() - a.x(), uy = m.p[v[1]].y() - a.y(), uz = m.p[v[1]].z() - a.z();
+  const double vx = m.p[v[2]].x() - a.x(), vy = m.p[v[2]].y() - a.y(), vz = m.p[v[2]].z() - a.z();
+  r.n[0] = uy * vz - uz * vy;
+  r.n[1] = uz * vx - ux * vz;
+  r.n[2] = ux * vy - uy * vx;
+  r.nabs[0] = std::abs(uy * vz) + std::abs(uz * vy);
+  r.nabs[1] = std::abs(uz * vx) + std::abs(ux * vz);
+  r.nabs[2] = std::abs(ux * vy) + std::abs(uy * vx);
+  return r;
+}
+
+// Without short-circuits: six independent comparisons whose outcome is
+// unpredictable cost less than six branches.
+bool self_nodes_meet(const std::array<double, 6>& x, const std::array<double, 6>& y) noexcept {
+  return (x[0] <= y[3]) & (y[0] <= x[3]) & (x[1] <= y[4]) & (y[1] <= x[4]) & (x[2] <= y[5]) & (y[2] <= x[5]);
+}
+
+/// The side of p against the plane of triangle x (first corner a): +1 or
+/// -1 when certified, 0 when the filter cannot tell. det = (p - a) . n is
+/// orient3d expanded along p - a: the same products as Shewchuk's
+/// expansion, so his first-stage bound (7 + 56 eps) eps times the
+/// permanent holds (every input a double, each difference rounded once).
+inline int self_side(const SelfTri& x, const Vec3d& a, const Vec3d& p) noexcept {
+  const double wx = p.x() - a.x(), wy = p.y() - a.y(), wz = p.z() - a.z();
+  const double det = wx * x.n[0] + wy * x.n[1] + wz * x.n[2];
+  const double perm = std::abs(wx) * x.nabs[0] + std::abs(wy) * x.nabs[1] + std::abs(wz) * x.nabs[2];
+  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
+  // Below 1e-250 underflow could exceed the bound; infinity voids it.
+  if (!(perm > 1e-250) || !(perm < std::numeric_limits<double>::infinity())) return 0;
+  const double bound = kBound * perm;
+  return det > bound ? 1 : (-det > bound ? -1 : 0);
+}
+
+/// The axis along which triangle x's rounded normal is longest: the
+/// projection that keeps it best.
+int self_axis(const SelfTri& x) noexcept {
+  const double a = std::abs(x.n[0]), b = std::abs(x.n[1]), c = std::abs(x.n[2]);
+  return a >= b ? (a >= c ? 0 : 2) : (b >= c ? 1 : 2);
+}
+
+/// True when the umbrella of vertex v (the triangles around it, walked
+/// from triangle t0 across the edges from v) certainly projects
+/// one-to-one near v: along one axis every umbrella triangle (v, a, b) has
+/// the same certain orientation s, and the direction from v to t0's a (d)
+/// lies certainly outside the closed angle a..b of every other triangle
+/// but the one ending at d. Each angle is then positive and below pi, the
+/// angles of a closed fan add up to 2 pi times its winding number about
+/// v, and a direction just after d lies in exactly one angle (t0's), so
+/// the winding number is 1: the angles tile the plane about v once, two
+/// of them meet only in v or, when the triangles share an edge, in its
+/// ray, and a projection that keeps a triangle is one-to-one on it, so
+/// two umbrella triangles meet only in v or their shared edge. A closed
+/// net's vertex has one fan (build_tri_mesh refuses pinched vertices), so
+/// the walk sees all its triangles; a walk that meets a boundary edge or
+/// runs longer than kSelfMaxFan is not certified.
+constexpr std::size_t kSelfMaxFan = 64;
+
+bool self_umbrella(const TriMesh& m, std::uint32_t v, std::uint32_t t0) noexcept {
+  std::array<std::array<std::uint32_t, 2>, kSelfMaxFan> fan;  // (a, b) of each triangle, t0's first
+  std::size_t k = 0;
+  for (std::uint32_t t = t0;;) {
+    const auto& c = m.tri[t];
+    const std::size_t kv = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+    if (k == kSelfMaxFan) return false;
+    fan[k++] = {c[(kv + 1) % 3], c[(kv + 2) % 3]};
+    const auto& et = m.edge_tri[m.tri_edge[t][(kv + 2) % 3]];  // edge b -> v: the next triangle about v
+    t = et[0] == t ? et[1] : et[0];
+    if (t == kNil) return false;
+    if (t == t0) break;
+  }
+  if (k < 3) return false;
+  const Vec3d& pv = m.p[v];
+  const Vec3d& d = m.p[fan[0][0]];
+  for (int axis = 0; axis < 3; ++axis) {
+    const int s = certified_orient2(pv, d, m.p[fan[0][1]], axis);
+    if (s == 0) continue;
+    bool ok = true;
+    for (std::size_t i = 1; i < k && ok; ++i) {
+      const Vec3d &a = m.p[fan[i][0]], &b = m.p[fan[i][1]];
+      ok = certified_orient2(pv, a, b, axis) == s;
+      if (ok && fan[i][1] != fan[0][0])
+        ok = certified_orient2(pv, a, d, axis) == -s || certified_orient2(pv, d, b, axis) == -s;
+    }
+    if (ok) return true;
+  }
+  return false;
+}
+
+/// Per vertex: 0 not yet asked, 1 umbrella certified, 2 not. Filled on
+/// demand by whichever task asks first. Whether a vertex is certified may
+/// depend on the triangle its walk starts from (and so on the thread
+/// count), but only the speed does: every verdict stays exact.
+class SelfUmbrellas {
+ public:
+  explicit SelfUmbrellas(std::size_t n) : state_(n) {}
+  bool ok(const TriMesh& m, std::uint32_t v, std::uint32_t t) noexcept {
+    std::uint8_t s = state_[v].load(std::memory_order_relaxed);
+    if (s == 0) {
+      s = self_umbrella(m, v, t) ? 1 : 2;
+      state_[v].store(s, std::memory_order_relaxed);
+    }
+    return s == 1;
+  }
+
+ private:
+  std::vector<std::atomic<std::uint8_t>> state_;
+};
+
+/// True when triangles x and y of one net certainly meet at most in the
+/// corners and edge they share; false means "not known" (triangles_cross
+/// decides exactly).
+/// - The other one's corners that are not shared strictly on one side of
+///   one triangle's plane (the exact test's first rejection).
+/// - An edge pair (a fold meets beyond the edge only when coplanar with the
+///   third corners on the same side of it): third corners certainly on
+///   opposite sides of the edge, seen along an axis where x is not flat,
+///   whether or not the four corners are coplanar (the two triangles of a
+///   planar quad are coplanar up to rounding, which no plane filter
+///   certifies).
+/// - A vertex pair (the umbrella of the shared vertex v): both triangles
+///   project along one axis with a certain orientation and a line through
+///   v's image holds one triangle's edge from v, with the other triangle's
+///   two far corners strictly on the far side of it. Then the projections
+///   meet only in v's image, and a projection that keeps a triangle is
+///   one-to-one on it, so the triangles meet only in v (coplanar pairs of
+///   a split planar polygon included).
+bool self_apart(const TriMesh& m, SelfUmbrellas& umbrellas, const SelfTri& x, const SelfTri& y) noexcept {
+  const std::vector<Vec3d>& p = m.p;
+  // Which corners are shared: bit k of in_y when x's corner k is one of y's.
+  unsigned in_y = 0, in_x = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (x.v[i] == y.v[j]) {
+        in_y |= 1u << i;
+        in_x |= 1u << j;
+      }
+  auto one_side = [&](const SelfTri& a, const SelfTri& b, unsigned shared_of_b) {
+    const Vec3d& a0 = p[a.v[0]];
+    int side = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (shared_of_b >> k & 1u) continue;
+      const int s = self_side(a, a0, p[b.v[k]]);
+      if (s == 0 || (side != 0 && s != side)) return false;
+      side = s;
+    }
+    return side != 0;  // the same triangle twice is no certificate
+  };
+  // A shared corner whose umbrella is certified decides the pair.
+  for (unsigned bits = in_y; bits != 0; bits &= bits - 1)
+    if (umbrellas.ok(m, x.v[std::countr_zero(bits)], x.t)) return true;
+  if (one_side(x, y, in_x) || one_side(y, x, in_y)) return true;
+  const int shared = std::popcount(in_y);
+  if (shared == 2) {
+    const int ox = std::countr_zero(~in_y & 7u), oy = std::countr_zero(~in_x & 7u);  // the third corners
+    const int axis = self_axis(x);
+    const Vec3d& u = p[x.v[(ox + 1) % 3]];
+    const Vec3d& w = p[x.v[(ox + 2) % 3]];
+    const int sx = certified_orient2(u, w, p[x.v[ox]], axis);
+    const int sy = certified_orient2(u, w, p[y.v[oy]], axis);
+    return sx != 0 && sy != 0 && sx != sy;
+  }
+  if (shared == 1) {
+    const int ix = std::countr_zero(in_y), iy = std::countr_zero(in_x);  // v in x and in y
+    const Vec3d& v = p[x.v[ix]];
+    const Vec3d &x1 = p[x.v[(ix + 1) % 3]], &x2 = p[x.v[(ix + 2) % 3]];
+    const Vec3d &y1 = p[y.v[(iy + 1) % 3]], &y2 = p[y.v[(iy + 2) % 3]];
+    const int axis = self_axis(x);
+    const int sx = certified_orient2(v, x1, x2, axis);
+    if (sx == 0 || certified_orient2(v, y1, y2, axis) == 0) return false;
+    // A line through v and e (an edge's far corner) with the own
+    // triangle's other far corner o on side s: apart when both of the other
+    // triangle's far corners lie on side -s.
+    auto separates = [&](const Vec3d& e, int s, const Vec3d& q1, const Vec3d& q2) {
+      const int s1 = certified_orient2(v, e, q1, axis);
+      return s1 == -s && certified_orient2(v, e, q2, axis) == -s;
+    };
+    const int sy = certified_orient2(v, y1, y2, axis);
+    return separates(x1, sx, y1, y2) || separates(x2, -sx, y1, y2) || separates(y1, sy, x1, x2) ||
+           separates(y2, -sy, x1, x2);
+  }
+  if (shared == 0) {
+    // Disjoint projections along x's axis (an edge line of one triangle
+    // with its third corner strictly on one side and the other triangle's
+    // corners strictly on the other): a common point would project into
+    // both. Decides coplanar pairs of a split planar polygon, which no
+    // plane filter can.
+    const int axis = self_axis(x);
+    auto separated_by_edges = [&](const SelfTri& a, const SelfTri& b) {
+      for (int k = 0; k < 3; ++k) {
+        const Vec3d &e0 = p[a.v[k]], &e1 = p[a.v[(k + 1) % 3]];
+        const int s = certified_orient2(e0, e1, p[a.v[(k + 2) % 3]], axis);
+        if (s != 0 && certified_orient2(e0, e1, p[b.v[0]], axis) == -s &&
+            certified_orient2(e0, e1, p[b.v[1]], axis) == -s && certified_orient2(e0, e1, p[b.v[2]], axis) == -s)
+          return true;
+      }
+      return false;
+    };
+    return separated_by_edges(x, y) || separated_by_edges(y, x);
+  }
+  return false;
+}
+
+// The frontier of independent node pairs stops growing at 256; one step
+// makes at most three of each, so tasks (the frontier plus task 0) stay
+// below this.
+constexpr std::size_t kSelfMaxTasks = 1024;
+
+}  // namespace
+
+std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
+  const std::size_t nt = m.tri.size();
+  if (bvh.nodes.empty() || nt == 0) return {kNil, kNil};
+  // Per triangle in leaf order: its box, corners and plane (self_tri).
+  std::vector<SelfTri> rec(nt);
+  par::for_each_n(ctx, nt, [&](std::size_t i) { rec[i] = self_tri(m, bvh.order[i]); });
+  // Patches certified embedded (self_check.cpp) are not walked inside:
+  // only their seams with each other are.
+  const std::vector<std::uint8_t> skip = embedded_nodes(m, bvh, ctx);
+  if (skip[0]) return {kNil, kNil};
+  std::vector<std::array<std::uint32_t, 2>> first(kSelfMaxTasks, {kNil, kNil});
+  SelfUmbrellas umbrellas(m.p.size());
+  // Most box-overlapping pairs of a fine net are neighbours (about 6 of 7
+  // per triangle share a corner): the certified rules reject almost all of
+  // them; only the pairs they cannot decide see the exact test.
+  auto visit = [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+    std::uint32_t ti = rec[i].t, tj = rec[j].t;
+    if (ti > tj) std::swap(ti, tj);
+    if (std::array<std::uint32_t, 2>{ti, tj} < first[task] && !self_apart(m, umbrellas, rec[i], rec[j]) &&
+        triangles_cross(m, ti, tj))
+      first[task] = {ti, tj};
+  };
+  using NodePair = std::array<std::uint32_t, 2>;
+  auto leaf = [&](std::uint32_t n) { return bvh.nodes[n].left == kNil; };
+  // Children to visit for a node pair (unordered pairs only).
+  auto expand = [&](const NodePair& np, auto&& push) {
+    const Bvh::Node& x = bvh.nodes[np[0]];
+    const Bvh::Node& y = bvh.nodes[np[1]];
+    if (np[0] == np[1]) {
+      if (!skip[x.left]) push({x.left, x.left});
+      push({x.left, x.left + 1});
+      if (!skip[x.left + 1]) push({x.left + 1, x.left + 1});
+      return;
+    }
+    // Split the node holding more triangles (a leaf never): halves the
+    // boxes on both sides alike, so fewer node pairs overlap.
+    const bool split_x = x.left != kNil && (y.left == kNil || x.count >= y.count);
+    if (split_x) {
+      push({x.left, np[1]});
+      push({x.left + 1, np[1]});
+    } else {
+      push({np[0], y.left});
+      push({np[0], y.left + 1});
+    }
+  };
+  auto leaf_pairs = [&](const NodePair& np, std::size_t task) {
+    const Bvh::Node& x = bvh.nodes[np[0]];
+    const Bvh::Node& y = bvh.nodes[np[1]];
+    const bool same = np[0] == np[1];
+    for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
+      // A triangle whose box misses the other leaf's box meets none of its
+      // triangles: one test instead of one per triangle there.
+      if (!same && !self_nodes_meet(bvh.box[i], y.box)) continue;
+      // The box tests first, into a mask (leaves hold at most 8 triangles;
+      // inner nodes come here only when both are leaves): their outcomes
+      // are unpredictable, so no branch per test.
+      const std::uint32_t j0 = same ? i + 1 : y.first, j1 = y.first + y.count;
+      std::uint32_t mask = 0;
+      const std::array<double, 6>& bi = bvh.box[i];
+      for (std::uint32_t j = j0; j < j1; ++j)
+        mask |= static_cast<std::uint32_t>(self_nodes_meet(bi, bvh.box[j])) << (j - j0);
+      for (; mask != 0; mask &= mask - 1) visit(task, i, j0 + static_cast<std::uint32_t>(std::countr_zero(mask)));
+    }
+  };
+  auto both_leaves = [&](const NodePair& np) { return leaf(np[0]) && leaf(np[1]); };
+  // One depth-first walk from the root pair with one stack.
+  auto walk = [&](const NodePair& root, std::size_t task, std::vector<NodePair>& stack) {
+    stack.assign(1, root);
+    while (!stack.empty()) {
+      const NodePair np = stack.back();
+      stack.pop_back();
+      if (both_leaves(np)) {
+        leaf_pairs(np, task);
+        continue;
+      }
+      expand(np, [&](const NodePair& ch) {
+        if (self_nodes_meet(bvh.nodes[ch[0]].box, bvh.nodes[ch[1]].box)) stack.push_back(ch);
+      });
+    }
+  };
+  if (par::run_sequential(ctx, nt)) {
+    // On one thread the frontier only costs (a small net's check is a
+    // fraction of a millisecond): the same pairs, one walk.
+    std::vector<NodePair> stack;
+    stack.reserve(64);
+    walk({0, 0}, 0, stack);
+    return first[0];
+  }
+  // Breadth-first frontier of independent node pairs, then one task each;
+  // the smallest crossing pair over all tasks is the same for any thread
+  // count.
+  std::vector<NodePair> frontier{{0, 0}};
+  std::vector<NodePair> direct;  // leaf pairs met while building the frontier: task 0
+  while (!frontier.empty() && frontier.size() < 256) {
+    std::vector<NodePair> next;
+    for (const NodePair& np : frontier) {
+      if (both_leaves(np)) {
+        direct.push_back(np);
+        continue;
+      }
+      expand(np, [&](const NodePair& c) {
+        if (self_nodes_meet(bvh.nodes[c[0]].box, bvh.nodes[c[1]].box)) next.push_back(c);
+      });
+    }
+    frontier = std::move(next);
+  }
+  for (const NodePair& np : direct) leaf_pairs(np, 0);
+  ExecContext c = ctx;
+  c.sequential_threshold = 2;
+  c.grain = 1;
+  par::for_each_n(c, frontier.size(), [&](std::size_t k) {
+    std::vector<NodePair> stack;
+    walk(frontier[k], k + 1, stack);
+  });
+  return *std::min_element(first.begin(), first.begin() + static_cast<std::ptrdiff_t>(frontier.size() + 1));
+}
+
+}  // namespace atelier::net_detail
