@@ -241,11 +241,6 @@ bool self_apart(const TriMesh& m, SelfUmbrellas& umbrellas, const SelfTri& x, co
   return false;
 }
 
-// The frontier of independent node pairs stops growing at 256; one step
-// makes at most three of each, so tasks (the frontier plus task 0) stay
-// below this.
-constexpr std::size_t kSelfMaxTasks = 1024;
-
 }  // namespace
 
 std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
@@ -258,17 +253,15 @@ std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bv
   // only their seams with each other are.
   const std::vector<std::uint8_t> skip = embedded_nodes(m, bvh, ctx);
   if (skip[0]) return {kNil, kNil};
-  std::vector<std::array<std::uint32_t, 2>> first(kSelfMaxTasks, {kNil, kNil});
   SelfUmbrellas umbrellas(m.p.size());
   // Most box-overlapping pairs of a fine net are neighbours (about 6 of 7
   // per triangle share a corner): the certified rules reject almost all of
   // them; only the pairs they cannot decide see the exact test.
-  auto visit = [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+  using Pair = std::array<std::uint32_t, 2>;
+  auto visit = [&](Pair& best, std::uint32_t i, std::uint32_t j) {
     std::uint32_t ti = rec[i].t, tj = rec[j].t;
     if (ti > tj) std::swap(ti, tj);
-    if (std::array<std::uint32_t, 2>{ti, tj} < first[task] && !self_apart(m, umbrellas, rec[i], rec[j]) &&
-        triangles_cross(m, ti, tj))
-      first[task] = {ti, tj};
+    if (Pair{ti, tj} < best && !self_apart(m, umbrellas, rec[i], rec[j]) && triangles_cross(m, ti, tj)) best = {ti, tj};
   };
   using NodePair = std::array<std::uint32_t, 2>;
   auto leaf = [&](std::uint32_t n) { return bvh.nodes[n].left == kNil; };
@@ -293,7 +286,7 @@ std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bv
       push({np[0], y.left + 1});
     }
   };
-  auto leaf_pairs = [&](const NodePair& np, std::size_t task) {
+  auto leaf_pairs = [&](const NodePair& np, Pair& best) {
     const Bvh::Node& x = bvh.nodes[np[0]];
     const Bvh::Node& y = bvh.nodes[np[1]];
     const bool same = np[0] == np[1];
@@ -309,18 +302,19 @@ std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bv
       const std::array<double, 6>& bi = bvh.box[i];
       for (std::uint32_t j = j0; j < j1; ++j)
         mask |= static_cast<std::uint32_t>(self_nodes_meet(bi, bvh.box[j])) << (j - j0);
-      for (; mask != 0; mask &= mask - 1) visit(task, i, j0 + static_cast<std::uint32_t>(std::countr_zero(mask)));
+      for (; mask != 0; mask &= mask - 1) visit(best, i, j0 + static_cast<std::uint32_t>(std::countr_zero(mask)));
     }
   };
   auto both_leaves = [&](const NodePair& np) { return leaf(np[0]) && leaf(np[1]); };
-  // One depth-first walk from the root pair with one stack.
-  auto walk = [&](const NodePair& root, std::size_t task, std::vector<NodePair>& stack) {
-    stack.assign(1, root);
+  // One depth-first walk of the node pairs whose boxes overlap, handing
+  // each pair of leaves to `at_leaves`.
+  auto walk = [&](auto&& at_leaves) {
+    std::vector<NodePair> stack{{0, 0}};
     while (!stack.empty()) {
       const NodePair np = stack.back();
       stack.pop_back();
       if (both_leaves(np)) {
-        leaf_pairs(np, task);
+        at_leaves(np);
         continue;
       }
       expand(np, [&](const NodePair& ch) {
@@ -328,41 +322,22 @@ std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bv
       });
     }
   };
+  Pair best{kNil, kNil};
   if (par::run_sequential(ctx, nt)) {
-    // On one thread the frontier only costs (a small net's check is a
-    // fraction of a millisecond): the same pairs, one walk.
-    std::vector<NodePair> stack;
-    stack.reserve(64);
-    walk({0, 0}, 0, stack);
-    return first[0];
+    // One thread: each pair of leaves as the walk meets it (a small net's
+    // check is a fraction of a millisecond; a task list would only cost).
+    walk([&](const NodePair& np) { leaf_pairs(np, best); });
+    return best;
   }
-  // Breadth-first frontier of independent node pairs, then one task each;
-  // the smallest crossing pair over all tasks is the same for any thread
-  // count.
-  std::vector<NodePair> frontier{{0, 0}};
-  std::vector<NodePair> direct;  // leaf pairs met while building the frontier: task 0
-  while (!frontier.empty() && frontier.size() < 256) {
-    std::vector<NodePair> next;
-    for (const NodePair& np : frontier) {
-      if (both_leaves(np)) {
-        direct.push_back(np);
-        continue;
-      }
-      expand(np, [&](const NodePair& c) {
-        if (self_nodes_meet(bvh.nodes[c[0]].box, bvh.nodes[c[1]].box)) next.push_back(c);
-      });
-    }
-    frontier = std::move(next);
-  }
-  for (const NodePair& np : direct) leaf_pairs(np, 0);
-  ExecContext c = ctx;
-  c.sequential_threshold = 2;
-  c.grain = 1;
-  par::for_each_n(c, frontier.size(), [&](std::size_t k) {
-    std::vector<NodePair> stack;
-    walk(frontier[k], k + 1, stack);
-  });
-  return *std::min_element(first.begin(), first.begin() + static_cast<std::ptrdiff_t>(frontier.size() + 1));
+  // Several threads: the pairs of leaves as a flat list, decided in
+  // parallel, each with its own smallest crossing pair; their minimum is the
+  // same for any thread count.
+  std::vector<NodePair> leaves;
+  walk([&](const NodePair& np) { leaves.push_back(np); });
+  std::vector<Pair> found(leaves.size(), Pair{kNil, kNil});
+  par::for_each_n(ctx, leaves.size(), [&](std::size_t k) { leaf_pairs(leaves[k], found[k]); });
+  for (const Pair& f : found) best = std::min(best, f);
+  return best;
 }
 
 }  // namespace atelier::net_detail
