@@ -277,14 +277,11 @@ std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bv
     }
     // Split the node holding more triangles (a leaf never): halves the
     // boxes on both sides alike, so fewer node pairs overlap.
+    // The order within a pair does not matter here (both are this net's).
     const bool split_x = x.left != kNil && (y.left == kNil || x.count >= y.count);
-    if (split_x) {
-      push({x.left, np[1]});
-      push({x.left + 1, np[1]});
-    } else {
-      push({np[0], y.left});
-      push({np[0], y.left + 1});
-    }
+    const std::uint32_t half = split_x ? x.left : y.left, other = split_x ? np[1] : np[0];
+    push({half, other});
+    push({half + 1, other});
   };
   auto leaf_pairs = [&](const NodePair& np, Pair& best) {
     const Bvh::Node& x = bvh.nodes[np[0]];
