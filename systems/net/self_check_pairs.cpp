@@ -8,7 +8,6 @@
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -19,25 +18,21 @@ namespace atelier::net_detail {
 
 namespace {
 
-/// One triangle as the pair decisions read it, in the hierarchy's leaf
-/// order (the boxes are the hierarchy's own, also in leaf order): its
-/// corners and its index in the net, then its plane for the certified side
-/// test: the rounded normal n = (b - a) x (c - a) and, per
+/// One triangle as the pair decisions read it (the box tests read the
+/// hierarchy's own boxes): its corners, then its plane for the certified
+/// side test: the rounded normal n = (b - a) x (c - a) and, per
 /// component, the sum of the absolute values of its two products (the part
 /// of Shewchuk's orient3d permanent that does not depend on the tested
 /// point).
 struct SelfTri {
   std::uint32_t v[3];
-  std::uint32_t t;
   double n[3];
   double nabs[3];
 };
 
-SelfTri self_tri(const TriMesh& m, std::uint32_t t) noexcept {
-  SelfTri r{};
+void self_tri(const TriMesh& m, std::uint32_t t, SelfTri& r) noexcept {
   const auto& v = m.tri[t];
   for (int k = 0; k < 3; ++k) r.v[k] = v[static_cast<std::size_t>(k)];
-  r.t = t;
   const Vec3d& a = m.p[v[0]];
   const double ux = m.p[v[1]].x() - a.x(), uy = m.p[v[1]].y() - a.y(), uz = m.p[v[1]].z() - a.z();
   const double vx = m.p[v[2]].x() - a.x(), vy = m.p[v[2]].y() - a.y(), vz = m.p[v[2]].z() - a.z();
@@ -47,7 +42,6 @@ SelfTri self_tri(const TriMesh& m, std::uint32_t t) noexcept {
   r.nabs[0] = std::abs(uy * vz) + std::abs(uz * vy);
   r.nabs[1] = std::abs(uz * vx) + std::abs(ux * vz);
   r.nabs[2] = std::abs(ux * vy) + std::abs(uy * vx);
-  return r;
 }
 
 // Without short-circuits: six independent comparisons whose outcome is
@@ -79,74 +73,6 @@ int self_axis(const SelfTri& x) noexcept {
   return a >= b ? (a >= c ? 0 : 2) : (b >= c ? 1 : 2);
 }
 
-/// True when the umbrella of vertex v (the triangles around it, walked
-/// from triangle t0 across the edges from v) certainly projects
-/// one-to-one near v: along one axis every umbrella triangle (v, a, b) has
-/// the same certain orientation s, and the direction from v to t0's a (d)
-/// lies certainly outside the closed angle a..b of every other triangle
-/// but the one ending at d. Each angle is then positive and below pi, the
-/// angles of a closed fan add up to 2 pi times its winding number about
-/// v, and a direction just after d lies in exactly one angle (t0's), so
-/// the winding number is 1: the angles tile the plane about v once, two
-/// of them meet only in v or, when the triangles share an edge, in its
-/// ray, and a projection that keeps a triangle is one-to-one on it, so
-/// two umbrella triangles meet only in v or their shared edge. A closed
-/// net's vertex has one fan (build_tri_mesh refuses pinched vertices), so
-/// the walk sees all its triangles; a walk that meets a boundary edge or
-/// runs longer than kSelfMaxFan is not certified.
-constexpr std::size_t kSelfMaxFan = 64;
-
-bool self_umbrella(const TriMesh& m, std::uint32_t v, std::uint32_t t0) noexcept {
-  std::array<std::array<std::uint32_t, 2>, kSelfMaxFan> fan;  // (a, b) of each triangle, t0's first
-  std::size_t k = 0;
-  for (std::uint32_t t = t0;;) {
-    const auto& c = m.tri[t];
-    const std::size_t kv = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
-    if (k == kSelfMaxFan) return false;
-    fan[k++] = {c[(kv + 1) % 3], c[(kv + 2) % 3]};
-    const auto& et = m.edge_tri[m.tri_edge[t][(kv + 2) % 3]];  // edge b -> v: the next triangle about v
-    t = et[0] == t ? et[1] : et[0];
-    if (t == kNil) return false;
-    if (t == t0) break;
-  }
-  if (k < 3) return false;
-  const Vec3d& pv = m.p[v];
-  const Vec3d& d = m.p[fan[0][0]];
-  for (int axis = 0; axis < 3; ++axis) {
-    const int s = certified_orient2(pv, d, m.p[fan[0][1]], axis);
-    if (s == 0) continue;
-    bool ok = true;
-    for (std::size_t i = 1; i < k && ok; ++i) {
-      const Vec3d &a = m.p[fan[i][0]], &b = m.p[fan[i][1]];
-      ok = certified_orient2(pv, a, b, axis) == s;
-      if (ok && fan[i][1] != fan[0][0])
-        ok = certified_orient2(pv, a, d, axis) == -s || certified_orient2(pv, d, b, axis) == -s;
-    }
-    if (ok) return true;
-  }
-  return false;
-}
-
-/// Per vertex: 0 not yet asked, 1 umbrella certified, 2 not. Filled on
-/// demand by whichever task asks first. Whether a vertex is certified may
-/// depend on the triangle its walk starts from (and so on the thread
-/// count), but only the speed does: every verdict stays exact.
-class SelfUmbrellas {
- public:
-  explicit SelfUmbrellas(std::size_t n) : state_(n) {}
-  bool ok(const TriMesh& m, std::uint32_t v, std::uint32_t t) noexcept {
-    std::uint8_t s = state_[v].load(std::memory_order_relaxed);
-    if (s == 0) {
-      s = self_umbrella(m, v, t) ? 1 : 2;
-      state_[v].store(s, std::memory_order_relaxed);
-    }
-    return s == 1;
-  }
-
- private:
-  std::vector<std::atomic<std::uint8_t>> state_;
-};
-
 /// True when triangles x and y of one net certainly meet at most in the
 /// corners and edge they share; false means "not known" (triangles_cross
 /// decides exactly).
@@ -158,15 +84,14 @@ class SelfUmbrellas {
 ///   whether or not the four corners are coplanar (the two triangles of a
 ///   planar quad are coplanar up to rounding, which no plane filter
 ///   certifies).
-/// - A vertex pair (the umbrella of the shared vertex v): both triangles
+/// - A vertex pair (sharing only the vertex v): both triangles
 ///   project along one axis with a certain orientation and a line through
 ///   v's image holds one triangle's edge from v, with the other triangle's
 ///   two far corners strictly on the far side of it. Then the projections
 ///   meet only in v's image, and a projection that keeps a triangle is
 ///   one-to-one on it, so the triangles meet only in v (coplanar pairs of
 ///   a split planar polygon included).
-bool self_apart(const TriMesh& m, SelfUmbrellas& umbrellas, const SelfTri& x, const SelfTri& y) noexcept {
-  const std::vector<Vec3d>& p = m.p;
+bool self_apart(const std::vector<Vec3d>& p, const SelfTri& x, const SelfTri& y) noexcept {
   // Which corners are shared: bit k of in_y when x's corner k is one of y's.
   unsigned in_y = 0, in_x = 0;
   for (int i = 0; i < 3; ++i)
@@ -186,9 +111,6 @@ bool self_apart(const TriMesh& m, SelfUmbrellas& umbrellas, const SelfTri& x, co
     }
     return side != 0;  // the same triangle twice is no certificate
   };
-  // A shared corner whose umbrella is certified decides the pair.
-  for (unsigned bits = in_y; bits != 0; bits &= bits - 1)
-    if (umbrellas.ok(m, x.v[std::countr_zero(bits)], x.t)) return true;
   if (one_side(x, y, in_x) || one_side(y, x, in_y)) return true;
   const int shared = std::popcount(in_y);
   if (shared == 2) {
@@ -246,22 +168,22 @@ bool self_apart(const TriMesh& m, SelfUmbrellas& umbrellas, const SelfTri& x, co
 std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh, const ExecContext& ctx) {
   const std::size_t nt = m.tri.size();
   if (bvh.nodes.empty() || nt == 0) return {kNil, kNil};
-  // Per triangle in leaf order: its box, corners and plane (self_tri).
+  // Per triangle, in the net's order (reading the corners in order; the
+  // hierarchy's order would scatter the reads of a large net).
   std::vector<SelfTri> rec(nt);
-  par::for_each_n(ctx, nt, [&](std::size_t i) { rec[i] = self_tri(m, bvh.order[i]); });
+  par::for_each_n(ctx, nt, [&](std::size_t t) { self_tri(m, static_cast<std::uint32_t>(t), rec[t]); });
   // Patches certified embedded (self_check.cpp) are not walked inside:
   // only their seams with each other are.
   const std::vector<std::uint8_t> skip = embedded_nodes(m, bvh, ctx);
   if (skip[0]) return {kNil, kNil};
-  SelfUmbrellas umbrellas(m.p.size());
   // Most box-overlapping pairs of a fine net are neighbours (about 6 of 7
   // per triangle share a corner): the certified rules reject almost all of
   // them; only the pairs they cannot decide see the exact test.
   using Pair = std::array<std::uint32_t, 2>;
   auto visit = [&](Pair& best, std::uint32_t i, std::uint32_t j) {
-    std::uint32_t ti = rec[i].t, tj = rec[j].t;
+    std::uint32_t ti = bvh.order[i], tj = bvh.order[j];
     if (ti > tj) std::swap(ti, tj);
-    if (Pair{ti, tj} < best && !self_apart(m, umbrellas, rec[i], rec[j]) && triangles_cross(m, ti, tj)) best = {ti, tj};
+    if (Pair{ti, tj} < best && !self_apart(m.p, rec[ti], rec[tj]) && triangles_cross(m, ti, tj)) best = {ti, tj};
   };
   using NodePair = std::array<std::uint32_t, 2>;
   auto leaf = [&](std::uint32_t n) { return bvh.nodes[n].left == kNil; };
