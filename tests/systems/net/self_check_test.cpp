@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "../../../systems/net/boolean_detail.h"
 #include "net_shapes.h"
-#include "systems/net/boolean_detail.h"
 
 namespace atelier {
 namespace {
@@ -30,7 +30,7 @@ using net_detail::kNil;
 
 /// The smallest pair i < j of triangles that cross, by the exact test on
 /// every pair.
-std::array<std::uint32_t, 2> brute_force_crossing(const net_detail::TriMesh& m) {
+std::array<std::uint32_t, 2> self_check_brute_force(const net_detail::TriMesh& m) {
   const auto n = static_cast<std::uint32_t>(m.tri.size());
   for (std::uint32_t i = 0; i < n; ++i)
     for (std::uint32_t j = i + 1; j < n; ++j)
@@ -41,7 +41,7 @@ std::array<std::uint32_t, 2> brute_force_crossing(const net_detail::TriMesh& m) 
 /// A closed slab [0, n] x [0, n] x [0, 1]: top and bottom grids of n x n
 /// cells (each cell two triangles, the diagonal chosen at random), walls of
 /// quads. Returns the index of top vertex (i, j) through `top`.
-PolygonSoup grid_slab(int n, std::mt19937& rng, std::vector<std::uint32_t>& top) {
+PolygonSoup self_check_slab(int n, std::mt19937& rng, std::vector<std::uint32_t>& top) {
   PolygonSoup s;
   auto id = [&](int layer, int i, int j) {
     return static_cast<std::uint32_t>(layer * (n + 1) * (n + 1) + i * (n + 1) + j);
@@ -83,19 +83,19 @@ PolygonSoup grid_slab(int n, std::mt19937& rng, std::vector<std::uint32_t>& top)
   return s;
 }
 
-struct Tally {
+struct SelfCheckTally {
   int refused = 0, accepted = 0;
 };
 
 /// Builds the net (skipping one the builder refuses: a move that put two
 /// vertices together or flattened a triangle) and compares the check with
 /// brute force on one and on two threads.
-void compare(const PolygonSoup& s, const std::string& what, Tally& tally) {
+void self_check_against_brute_force(const PolygonSoup& s, const std::string& what, SelfCheckTally& tally) {
   net_detail::TriMesh m;
   if (!net_detail::build_tri_mesh(s, "A", m, ExecContext::sequential())) return;
   net_detail::Bvh bvh;
   net_detail::build_bvh(m, bvh, ExecContext::sequential());
-  const auto want = brute_force_crossing(m);
+  const auto want = self_check_brute_force(m);
   const auto one = net_detail::first_self_crossing(m, bvh, ExecContext::sequential());
   EXPECT_EQ(one, want) << what << " (one thread): brute force names " << want[0] << ", " << want[1];
   ExecContext two;
@@ -111,7 +111,7 @@ TEST(NetSelfCheck, MatchesBruteForceOnMovedIcospheres) {
   std::mt19937 rng(11);
   const double factor[] = {-1.3, -0.5, 0.0, 0.3, 0.7, 1.2, 1.6};
   std::uniform_int_distribution<int> pick(0, 6);
-  Tally tally;
+  SelfCheckTally tally;
   for (int trial = 0; trial < 60; ++trial) {
     PolygonSoup a = net_test::icosphere(trial % 2 == 0 ? 1 : 2, 8.0, {0, 0, 0});  // 80 or 320 triangles
     std::uniform_int_distribution<std::size_t> which(0, a.positions.size() - 1);
@@ -124,7 +124,7 @@ TEST(NetSelfCheck, MatchesBruteForceOnMovedIcospheres) {
         p *= factor[pick(rng)];  // along the radius, through the centre or beyond
     }
     for (Vec3d& p : a.positions) p = p.array().round().matrix();  // exact coplanarities
-    compare(a, "icosphere trial " + std::to_string(trial), tally);
+    self_check_against_brute_force(a, "icosphere trial " + std::to_string(trial), tally);
   }
   EXPECT_GE(tally.refused, 10);
   EXPECT_GE(tally.accepted, 10);
@@ -132,7 +132,7 @@ TEST(NetSelfCheck, MatchesBruteForceOnMovedIcospheres) {
 
 TEST(NetSelfCheck, MatchesBruteForceOnFoldedSlabs) {
   std::mt19937 rng(5);
-  Tally tally;
+  SelfCheckTally tally;
   // In-plane moves (quarters: exact, often collinear with the grid lines)
   // make coplanar umbrellas that fold over a shared edge or overlap a
   // neighbour's triangle; vertical moves put a top vertex above, onto
@@ -143,7 +143,7 @@ TEST(NetSelfCheck, MatchesBruteForceOnFoldedSlabs) {
   for (int trial = 0; trial < 80; ++trial) {
     const int n = 3 + trial % 4;
     std::vector<std::uint32_t> top;
-    PolygonSoup s = grid_slab(n, rng, top);
+    PolygonSoup s = self_check_slab(n, rng, top);
     std::uniform_int_distribution<int> inner(1, n - 1);
     for (int k = 0; k < 1 + trial % 3; ++k) {
       Vec3d& p = s.positions[top[static_cast<std::size_t>(inner(rng) * (n + 1) + inner(rng))]];
@@ -154,7 +154,7 @@ TEST(NetSelfCheck, MatchesBruteForceOnFoldedSlabs) {
         p.z() = heights[height(rng)];
       }
     }
-    compare(s, "slab trial " + std::to_string(trial), tally);
+    self_check_against_brute_force(s, "slab trial " + std::to_string(trial), tally);
   }
   EXPECT_GE(tally.refused, 10);
   EXPECT_GE(tally.accepted, 10);
@@ -167,7 +167,7 @@ TEST(NetSelfCheck, MatchesBruteForceOnFoldedSlabs) {
 /// can tell from a simple one. Alternating heights make top triangles k
 /// and k + 3, over the same angles, cross along a line from v; rising
 /// heights make a spiral whose triangles meet only in v.
-PolygonSoup wound_cone(int n, double step_degrees, bool alternate) {
+PolygonSoup self_check_wound_cone(int n, double step_degrees, bool alternate) {
   PolygonSoup s;
   s.positions.emplace_back(0.0, 0.0, 0.0);    // v
   s.positions.emplace_back(0.0, 0.0, -20.0);  // apex
@@ -183,11 +183,11 @@ PolygonSoup wound_cone(int n, double step_degrees, bool alternate) {
 }
 
 TEST(NetSelfCheck, MatchesBruteForceOnWoundUmbrellas) {
-  Tally tally;
+  SelfCheckTally tally;
   for (const bool alternate : {true, false})
     for (const auto& [n, step] : {std::pair{6, 125.0}, std::pair{6, 118.0}, std::pair{8, 95.0}, std::pair{5, 72.0}})
-      compare(
-          wound_cone(n, step, alternate),
+      self_check_against_brute_force(
+          self_check_wound_cone(n, step, alternate),
           "wound cone " + std::to_string(n) + " x " + std::to_string(step) + (alternate ? " alternating" : " rising"),
           tally);
   EXPECT_GE(tally.refused, 2);
