@@ -1,6 +1,6 @@
 // The self-intersection check's embedded patches: nodes of a net's box
 // hierarchy whose triangles certainly do not cross one another, so the
-// pair traversal of first_self_crossing (net_mesh.cpp) skips the node's
+// pair traversal of first_self_crossing (self_check_pairs.cpp) skips the node's
 // pairs with itself and only walks the seams between such patches.
 //
 // The certificate (Volino and Magnenat-Thalmann's self-collision culling by
