@@ -366,34 +366,23 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx) {
 namespace {
 
 /// Pairs of overlapping triangle boxes by a simultaneous traversal of two
-/// hierarchies (or one against itself, i < j): node pairs are expanded
+/// hierarchies (one net against itself: self_check_pairs.cpp): node pairs are expanded
 /// breadth-first into a frontier of independent tasks, run in parallel, and
 /// the pairs are sorted, so the list is the same for any thread count.
 // The frontier stops growing at 256 node pairs; one step makes at most
 // three of each, so tasks (the frontier plus task 0) stay below this.
 constexpr std::size_t kMaxTasks = 1024;
 
-// `skip` (self only, may be empty): nodes whose pairs with themselves are
-// not visited (embedded_nodes: no two of their triangles cross).
 template <class Visit>
-void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx, std::size_t& tasks, Visit&& visit,
-                std::span<const std::uint8_t> skip = {}) {
+void dual_visit(const Bvh& ba, const Bvh& bb, const ExecContext& ctx, std::size_t& tasks, Visit&& visit) {
   tasks = 0;
   if (ba.nodes.empty() || bb.nodes.empty()) return;
-  auto skipped = [&](std::uint32_t n) { return !skip.empty() && skip[n] != 0; };
-  if (self && skipped(0)) return;
   using NodePair = std::array<std::uint32_t, 2>;
   auto leaf = [](const Bvh::Node& n) { return n.left == kNil; };
-  // Children to visit for a node pair (self: unordered pairs only).
+  // Children to visit for a node pair.
   auto expand = [&](const NodePair& np, auto&& push) {
     const Bvh::Node& x = ba.nodes[np[0]];
     const Bvh::Node& y = bb.nodes[np[1]];
-    if (self && np[0] == np[1]) {
-      if (!skipped(x.left)) push({x.left, x.left});
-      push({x.left, x.left + 1});
-      if (!skipped(x.left + 1)) push({x.left + 1, x.left + 1});
-      return;
-    }
     // Split the node holding more triangles (a leaf never): halves the
     // boxes on both sides alike, so fewer node pairs overlap.
     const bool split_x = !leaf(x) && (leaf(y) || x.count >= y.count);
@@ -408,19 +397,13 @@ void dual_visit(const Bvh& ba, const Bvh& bb, bool self, const ExecContext& ctx,
   auto leaf_pairs = [&](const NodePair& np, std::size_t task) {
     const Bvh::Node& x = ba.nodes[np[0]];
     const Bvh::Node& y = bb.nodes[np[1]];
-    const bool same = self && np[0] == np[1];
     for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
       const std::array<double, 6> bi = ba.box[i];
       // A triangle whose box misses the other leaf's box meets none of its
       // triangles: one test instead of one per triangle there.
-      if (!same && !overlap(bi, y.box)) continue;
-      const std::uint32_t j0 = same ? i + 1 : y.first;  // each unordered pair once in a leaf
-      for (std::uint32_t j = j0; j < y.first + y.count; ++j) {
-        if (!overlap(bi, bb.box[j])) continue;
-        std::uint32_t ti = ba.order[i], tj = bb.order[j];
-        if (self && ti > tj) std::swap(ti, tj);
-        visit(task, ti, tj);
-      }
+      if (!overlap(bi, y.box)) continue;
+      for (std::uint32_t j = y.first; j < y.first + y.count; ++j)
+        if (overlap(bi, bb.box[j])) visit(task, ba.order[i], bb.order[j]);
     }
   };
   auto both_leaves = [&](const NodePair& np) { return leaf(ba.nodes[np[0]]) && leaf(bb.nodes[np[1]]); };
@@ -471,7 +454,7 @@ std::vector<std::array<std::uint32_t, 2>> overlapping_pairs(const TriMesh& /*a*/
   // One list per task (each task writes only its own).
   std::vector<std::vector<std::array<std::uint32_t, 2>>> lists(kMaxTasks);
   std::size_t tasks = 0;
-  dual_visit(bvh_a, bvh_b, false, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
+  dual_visit(bvh_a, bvh_b, ctx, tasks, [&](std::size_t task, std::uint32_t i, std::uint32_t j) {
     lists[task].push_back({i, j});
   });
   std::vector<std::array<std::uint32_t, 2>> pairs;
