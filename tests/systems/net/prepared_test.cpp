@@ -154,14 +154,7 @@ TEST(NetPrepared, PrepareRefusesBadNetsWithTheOneCallsMessages) {
   open.face_offsets.pop_back();
   open.face_nodes.resize(open.face_offsets.back());
   bad.push_back(open);
-  PolygonSoup two = box({.5, .5, .5}, {2, 2, 2});  // two overlapping boxes in one net
-  const PolygonSoup other = box({1, 1, 1}, {3, 3, 3});
-  for (const auto& p : other.positions) two.positions.push_back(p);
-  for (std::size_t f = 0; f < other.face_count(); ++f) {
-    std::vector<std::uint32_t> c(other.face(f).begin(), other.face(f).end());
-    for (auto& x : c) x += 8;
-    two.add_face(c);
-  }
+  const PolygonSoup two = net_test::two_boxes_in_one_net();
   bad.push_back(two);
   PolygonSoup inward = box({.5, .5, .5}, {2, 2, 2});
   for (std::size_t f = 0; f < inward.face_count(); ++f)
