@@ -59,7 +59,7 @@ CLI::App* add_boolean_subcommand(CLI::App& app, NetBooleanOptions& opt) {
   auto* c = app.add_subcommand("boolean", "union, intersection or difference of two closed nets (seed 004)");
   c->add_option("--op", opt.op, "union, intersection, difference (A minus B) or b-a");
   c->add_option("a", opt.a, "net A (OBJ, PLY, OFF or .atm)")->required();
-  c->add_option("b", opt.b, "net B")->required();
+  c->add_option("b", opt.b, "net B; several: A op B op B2 ... (each result used as the next A)")->required();
   c->add_option("--out", opt.out, "result file (.obj, .ply, .off, .atm)")->required();
   c->add_option("--mode", opt.mode, "exact (watertight, default) or paper (merged midpoints, Fig. 2)");
   c->add_option("--correspondence", opt.correspondence, "paper mode: visual, topological, window2 or window4");
@@ -83,8 +83,38 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
   o.check_self_intersection = !opt.no_self_check;
   o.exact_refinement = opt.exact_refinement;
   check_mesh_output(opt.out);
-  const PolygonSoup a = read_net(opt.a), b = read_net(opt.b);
-  const BooleanReport r = named(net_boolean(a, b, o, common.context()), opt.a, opt.b);
+  PolygonSoup a = read_net(opt.a);
+  std::vector<PolygonSoup> bs;
+  for (const fs::path& p : opt.b) bs.push_back(read_net(p));
+  const ExecContext ctx = common.context();
+  BooleanReport r;
+  nlohmann::json steps = nlohmann::json::array();
+  if (bs.size() == 1) {
+    r = named(net_boolean(a, bs[0], o, ctx), opt.a, opt.b[0]);
+  } else {
+    // A chain: every net prepared (converted, checked, its hierarchy built)
+    // once, each result prepared without a re-check for the next step.
+    PrepareOptions pa, pb;
+    pa.check_self_intersection = pb.check_self_intersection = o.check_self_intersection;
+    pb.name = "B";
+    PreparedNet acc = named(PreparedNet::prepare(std::move(a), pa, ctx), opt.a, opt.b[0]);
+    for (std::size_t i = 0; i < bs.size(); ++i) {
+      const fs::path a_label = i == 0 ? opt.a : fs::path("the result of step " + std::to_string(i));
+      const PreparedNet b = named(PreparedNet::prepare(std::move(bs[i]), pb, ctx), a_label, opt.b[i]);
+      o.prepare_result = i + 1 < bs.size();
+      r = named(net_boolean(acc, b, o, ctx), a_label, opt.b[i]);
+      steps.push_back({{"b", opt.b[i].string()},
+                       {"volume", r.volume},
+                       {"area", r.area},
+                       {"intersection_polygons", r.intersection_polygons}});
+      if (!o.prepare_result) break;
+      if (!r.prepared_status)
+        throw Error(Status(r.prepared_status.code(),
+                           "the result of step " + std::to_string(i + 1) + " (with " + opt.b[i].string() +
+                               ") cannot be the next operand: " + r.prepared_status.message()));
+      acc = std::move(r.prepared);
+    }
+  }
   const Model m = to_model(r.result, "result");
   write_mesh_file(m, opt.out, log);
   if (!opt.seam_out.empty())
@@ -105,6 +135,7 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
     j["intersection_points"] = r.intersection_points;
     j["cut_triangles"] = r.cut_triangles;
     j["refined_exact"] = r.refined_exact;
+    if (!steps.empty()) j["steps"] = steps;  // a chain: volume, area above are the last step's
     j["faces"] = r.result.face_count();
     j["vertices"] = r.result.positions.size();
     if (o.mode == BooleanMode::kPaper) {

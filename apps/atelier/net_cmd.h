@@ -1,7 +1,8 @@
 // The net-modelling subcommands (seed 004; issue 24), each thin over one
 // library call of systems/net:
-//   atelier boolean --op union|intersection|difference|b-a A B --out OUT
+//   atelier boolean --op union|intersection|difference|b-a A B [B2 ...] --out OUT
 //                   [--mode exact|paper] [--correspondence visual|...] [--json FILE] [--seam-out FILE]
+//                   (several B: A op B op B2 ..., each net prepared once)
 //   atelier trim --mesh A --curve CURVE --out OUT [--height H] [--keep-enclosed] [--json FILE]
 //   atelier round --mesh A --seam SEAM --out OUT [--mu M] [--nu N] [--rings R] [--json FILE]
 // Nothing is written unless the operation succeeds (atomic files).
@@ -10,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 
@@ -17,7 +19,8 @@ namespace atelier::cli {
 
 struct NetBooleanOptions {
   std::string op = "union";
-  std::filesystem::path a, b, out, json, seam_out;
+  std::filesystem::path a, out, json, seam_out;
+  std::vector<std::filesystem::path> b;  // one B, or a chain: A op B1 op B2 ...
   std::string mode = "exact";
   std::string correspondence = "visual";
   std::string join = "cut";

@@ -12,6 +12,15 @@
 // check theirs); the default rows include it. CPU time is the main
 // thread's: with threads:2 it misses the second core's work.
 //
+// Like for like: manifold's `ms` is the Boolean of two ready Manifolds (its
+// constructor already sorted, checked and built its collider), `ms_build`
+// the same with both Manifolds made inside the timing. The one-call rows
+// (net_boolean on two polygon soups: conversion, checks and hierarchies
+// every call) report x_manifold against `ms` and x_manifold_build against
+// `ms_build`; the rows .../prepared/threads:N time net_boolean on two
+// PreparedNets made outside the timing (counter prepare_ms: making both,
+// once) and report x_manifold against `ms`.
+//
 // Pairs: triangulated UV spheres of about 10k, 100k and 1M triangles each
 // (B shifted and turned so the pair is generic), and the shared pairs
 // (../shared/data/meshes/boolean-pairs: Havocglass8, Offset3 x Offset4, Cray).
@@ -140,7 +149,7 @@ CgalMesh to_cgal(const PolygonSoup& s) {
 }
 
 struct PeerFigures {
-  double cgal_s = 0, manifold_s = 0;
+  double cgal_s = 0, manifold_s = 0, manifold_build_s = 0;
   double cgal_volume = NAN, manifold_volume = NAN;
 };
 std::map<std::string, PeerFigures>& peers() {
@@ -200,45 +209,95 @@ void BM_NetBooleanManifold(benchmark::State& state, std::string pair, BooleanOp 
     return state.SkipWithError(("manifold-3d: " + out.substr(0, 200)).c_str());
   }
   if (j.contains("error")) return state.SkipWithError(("manifold-3d: " + j["error"].get<std::string>()).c_str());
-  std::vector<double> ms = j["ms"].get<std::vector<double>>();
-  ms.erase(ms.begin());  // warm-up (JIT, first allocation)
-  std::sort(ms.begin(), ms.end());
-  const double median = ms[ms.size() / 2] * 1e-3;
+  auto median_s = [&](const char* key) {
+    std::vector<double> ms = j[key].get<std::vector<double>>();
+    ms.erase(ms.begin());  // warm-up (JIT, first allocation)
+    std::sort(ms.begin(), ms.end());
+    return ms[ms.size() / 2] * 1e-3;
+  };
+  const double median = median_s("ms");
   for (auto _ : state) state.SetIterationTime(median);
   auto& p = peers()[pair + op_name(op)];
   p.manifold_s = median;
+  p.manifold_build_s = median_s("ms_build");
+  state.counters["ms_build"] = p.manifold_build_s * 1e3;
   p.manifold_volume = j["volume"].get<double>();
   state.counters["volume"] = p.manifold_volume;
   state.SetLabel(j["status"].get<std::string>());
 }
 
-void BM_NetBoolean(benchmark::State& state, std::string pair, BooleanOp op, int threads, bool check) {
-  Case& c = get_case(pair);
-  if (!c.a.face_count()) return state.SkipWithError("shared data absent");
-  BooleanOptions o;
-  o.op = op == BooleanOp::kUnion ? BooleanOp::kUnion : BooleanOp::kAMinusB;
-  o.check_self_intersection = check;  // the peers do not check their inputs
-  ExecContext ctx;
-  ctx.threads = threads;
-  std::vector<double> times;
-  double volume = NAN;
-  for (auto _ : state) {
-    const auto t0 = std::chrono::steady_clock::now();
-    auto r = net_boolean(c.a, c.b, o, ctx);
-    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-    if (!r) return state.SkipWithError(r.status().to_string().c_str());
-    volume = r->volume;
-    benchmark::DoNotOptimize(r->result.face_nodes.data());
-  }
-  std::sort(times.begin(), times.end());
-  const double t = times[times.size() / 2];
-  const auto& p = peers()[pair + op_name(op)];
+/// The counters of an ours row: ratios to the peers' medians (>1: ours is
+/// faster) and relative volume differences.
+void report_against_peers(benchmark::State& state, const std::string& key, double t, double volume, bool prepared) {
+  const auto& p = peers()[key];
   if (p.cgal_s > 0) state.counters["x_cgal"] = p.cgal_s / t;
   if (p.manifold_s > 0) state.counters["x_manifold"] = p.manifold_s / t;
+  if (!prepared && p.manifold_build_s > 0) state.counters["x_manifold_build"] = p.manifold_build_s / t;
   if (!std::isnan(p.cgal_volume)) state.counters["vol_cgal"] = (volume - p.cgal_volume) / std::abs(p.cgal_volume);
   if (!std::isnan(p.manifold_volume))
     state.counters["vol_manifold"] = (volume - p.manifold_volume) / std::abs(p.manifold_volume);
   state.counters["volume"] = volume;
+}
+
+BooleanOptions bench_options(BooleanOp op, bool check) {
+  BooleanOptions o;
+  o.op = op == BooleanOp::kUnion ? BooleanOp::kUnion : BooleanOp::kAMinusB;
+  o.check_self_intersection = check;  // the peers do not check their inputs
+  return o;
+}
+
+/// The median of the timed calls of `call`, in seconds (steady clock).
+template <class Call>
+double median_seconds(benchmark::State& state, Call&& call, double& volume) {
+  std::vector<double> times;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto r = call();
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (!r) {
+      state.SkipWithError(r.status().to_string().c_str());
+      return 0;
+    }
+    volume = r->volume;
+    benchmark::DoNotOptimize(r->result.face_nodes.data());
+  }
+  std::sort(times.begin(), times.end());
+  return times[times.size() / 2];
+}
+
+void BM_NetBoolean(benchmark::State& state, std::string pair, BooleanOp op, int threads, bool check) {
+  Case& c = get_case(pair);
+  if (!c.a.face_count()) return state.SkipWithError("shared data absent");
+  const BooleanOptions o = bench_options(op, check);
+  ExecContext ctx;
+  ctx.threads = threads;
+  double volume = NAN;
+  const double t = median_seconds(
+      state, [&] { return net_boolean(c.a, c.b, o, ctx); }, volume);
+  if (t > 0) report_against_peers(state, pair + op_name(op), t, volume, false);
+}
+
+/// Both operands prepared outside the timing (as manifold's `ms` takes two
+/// ready Manifolds).
+void BM_NetBooleanPrepared(benchmark::State& state, std::string pair, BooleanOp op, int threads) {
+  Case& c = get_case(pair);
+  if (!c.a.face_count()) return state.SkipWithError("shared data absent");
+  const BooleanOptions o = bench_options(op, true);
+  ExecContext ctx;
+  ctx.threads = threads;
+  PrepareOptions pa_opt, pb_opt;
+  pb_opt.name = "B";
+  const auto t0 = std::chrono::steady_clock::now();
+  auto pa = PreparedNet::prepare(c.a, pa_opt, ctx);
+  auto pb = PreparedNet::prepare(c.b, pb_opt, ctx);
+  const double prepare_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!pa || !pb) return state.SkipWithError((pa ? pb.status() : pa.status()).to_string().c_str());
+  double volume = NAN;
+  const double t = median_seconds(
+      state, [&] { return net_boolean(*pa, *pb, o, ctx); }, volume);
+  if (t <= 0) return;
+  report_against_peers(state, pair + op_name(op), t, volume, true);
+  state.counters["prepare_ms"] = prepare_s * 1e3;
 }
 
 const int kRegistered = [] {
@@ -262,6 +321,11 @@ const int kRegistered = [] {
               BM_NetBoolean, std::string(pair), op, threads, check)
               ->Unit(benchmark::kMillisecond)
               ->Iterations(std::max(iters, 3));
+      for (int threads : {2, 1})
+        benchmark::RegisterBenchmark(("BM_NetBoolean/" + tag + "/prepared/threads:" + std::to_string(threads)).c_str(),
+                                     BM_NetBooleanPrepared, std::string(pair), op, threads)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(std::max(iters, 3));
     }
   return 0;
 }();

@@ -358,8 +358,8 @@ def render(
 # ---------------------------------------------------------------- modelling families
 
 def boolean(
-    a: MeshLike,
-    b: MeshLike,
+    a: Union[MeshLike, PreparedNet],
+    b: Union[MeshLike, PreparedNet],
     *,
     op: str = "union",
     mode: str = "exact",
@@ -367,10 +367,25 @@ def boolean(
     join: str = "cut",
     rule: str = "a",
     self_check: bool = True,
+    exact_refinement: bool = False,
+    prepare_result: bool = False,
     threads: int = 0,
     progress: Progress = None,
 ) -> tuple[npt.NDArray[np.float64], Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]], dict[str, Any]]:
-    """Union, intersection or difference of two closed nets: (vertices, faces, report)."""
+    """Union, intersection or difference of two closed nets (meshes or PreparedNets): (vertices, faces, report)."""
+
+class PreparedNet:
+    """A closed net converted, checked and given its box hierarchy once, for many Booleans."""
+
+    def __init__(self, net: MeshLike, *, self_check: bool = True, threads: int = 0, progress: Progress = None) -> None: ...
+    @property
+    def volume(self) -> float: ...
+    @property
+    def area(self) -> float: ...
+    @property
+    def triangles(self) -> int: ...
+    @property
+    def self_checked(self) -> bool: ...
 
 def trim(
     net: MeshLike,

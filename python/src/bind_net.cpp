@@ -9,7 +9,9 @@
 #include <atelier/systems/net/trim.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,11 +50,40 @@ py::tuple soup_out(PolygonSoup&& soup) {
 }  // namespace
 
 void bind_net(py::module_& m) {
+  py::class_<PreparedNet>(m, "PreparedNet", R"doc(
+A closed net prepared once for Booleans (systems/net/boolean.h,
+PreparedNet): split into triangles, checked (closed, oriented outwards,
+manifold, no duplicate vertices, not self-intersecting unless
+``self_check=False``) and given its box hierarchy. ``boolean`` takes it in
+place of a mesh and does none of this again; several threads may use it
+at once. A chain A - B1 - B2 - ... prepares each tool once and takes each
+result as ``report["prepared"]`` (``prepare_result=True``), not re-checked.
+)doc")
+      .def(py::init([](const MeshLike& net, bool self_check, int threads, const Progress& progress) {
+             PrepareOptions o;
+             o.check_self_intersection = self_check;
+             const PolygonSoup s = net_arg(net, "net");
+             return named(
+                 run_long(progress, threads, [&](const ExecContext& ctx) { return PreparedNet::prepare(s, o, ctx); }),
+                 "net", nullptr);
+           }),
+           py::arg("net"), py::kw_only(), py::arg("self_check") = true, py::arg("threads") = 0,
+           py::arg("progress") = py::none(), R"doc(
+net: a Mesh or a (vertices, faces) pair, closed and consistently oriented.
+self_check: test it for self-intersections (a Boolean asking for the test
+    refuses a net prepared without it).
+Long call. Raises ValueError with the engine's message (naming the face).
+)doc")
+      .def_property_readonly("volume", &PreparedNet::volume)
+      .def_property_readonly("area", &PreparedNet::area)
+      .def_property_readonly("triangles", &PreparedNet::triangle_count)
+      .def_property_readonly("self_checked", &PreparedNet::self_checked);
+
   m.def(
       "boolean",
       [](const MeshLike& a, const MeshLike& b, const std::string& op, const std::string& mode,
          const std::string& correspondence, const std::string& join, const std::string& rule, bool self_check,
-         bool exact_refinement, int threads, const Progress& progress) {
+         bool exact_refinement, bool prepare_result, int threads, const Progress& progress) {
         BooleanOptions o;
         o.op = unwrap(parse_boolean_op(op));
         o.mode = unwrap(parse_boolean_mode(mode));
@@ -61,9 +92,43 @@ void bind_net(py::module_& m) {
         o.rule = unwrap(parse_connect_rule(rule));
         o.check_self_intersection = self_check;
         o.exact_refinement = exact_refinement;
-        const PolygonSoup sa = net_arg(a, "a"), sb = net_arg(b, "b");
-        BooleanReport r = named(
-            run_long(progress, threads, [&](const ExecContext& ctx) { return net_boolean(sa, sb, o, ctx); }), "a", "b");
+        o.prepare_result = prepare_result;
+        BooleanReport r;
+        if (py::isinstance<PreparedNet>(a) || py::isinstance<PreparedNet>(b) || prepare_result) {
+          // A mesh operand is prepared (named "A" or "B", as the one-call
+          // names the nets); a PreparedNet is used as it is.
+          std::array<std::optional<PreparedNet>, 2> given;
+          std::array<PolygonSoup, 2> soups;
+          for (int k = 0; k < 2; ++k) {
+            const MeshLike& x = k == 0 ? a : b;
+            if (py::isinstance<PreparedNet>(x))
+              given[k] = x.cast<PreparedNet>();
+            else
+              soups[k] = net_arg(x, k == 0 ? "a" : "b");
+          }
+          r = named(run_long(progress, threads,
+                             [&](const ExecContext& ctx) -> Expected<BooleanReport> {
+                               std::array<PreparedNet, 2> p;
+                               for (int k = 0; k < 2; ++k) {
+                                 if (given[k]) {
+                                   p[k] = *given[k];
+                                   continue;
+                                 }
+                                 PrepareOptions po;
+                                 po.name = k == 0 ? "A" : "B";
+                                 po.check_self_intersection = self_check;
+                                 auto made = PreparedNet::prepare(std::move(soups[k]), po, ctx);
+                                 if (!made) return made.status();
+                                 p[k] = std::move(*made);
+                               }
+                               return net_boolean(p[0], p[1], o, ctx);
+                             }),
+                    "a", "b");
+        } else {
+          const PolygonSoup sa = net_arg(a, "a"), sb = net_arg(b, "b");
+          r = named(run_long(progress, threads, [&](const ExecContext& ctx) { return net_boolean(sa, sb, o, ctx); }),
+                    "a", "b");
+        }
         py::dict rep;
         rep["volume"] = py::dict(py::arg("a") = r.volume_a, py::arg("b") = r.volume_b, py::arg("result") = r.volume);
         rep["area"] = py::dict(py::arg("a") = r.area_a, py::arg("b") = r.area_b, py::arg("result") = r.area);
@@ -85,17 +150,24 @@ void bind_net(py::module_& m) {
           rep["connecting"] = py::dict(py::arg("triangles") = r.connecting.triangles,
                                        py::arg("quads") = r.connecting.quads, py::arg("other") = r.connecting.other,
                                        py::arg("irregular_vertices") = r.connecting.irregular_vertices);
+        if (prepare_result) {
+          if (r.prepared_status)
+            rep["prepared"] = py::cast(std::move(r.prepared));
+          else
+            rep["prepared_error"] = r.prepared_status.message();
+        }
         py::tuple vf = soup_out(std::move(r.result));
         return py::make_tuple(vf[0], vf[1], rep);
       },
       py::arg("a"), py::arg("b"), py::kw_only(), py::arg("op") = "union", py::arg("mode") = "exact",
       py::arg("correspondence") = "visual", py::arg("join") = "cut", py::arg("rule") = "a",
-      py::arg("self_check") = true, py::arg("exact_refinement") = false, py::arg("threads") = 0,
-      py::arg("progress") = py::none(), R"doc(
+      py::arg("self_check") = true, py::arg("exact_refinement") = false, py::arg("prepare_result") = false,
+      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Union, intersection or difference of two closed nets (``atelier boolean``; seed 004).
 
-a, b: the nets, each a Mesh (``read_mesh``) or a (vertices, faces) pair;
-    closed and consistently oriented.
+a, b: the nets, each a Mesh (``read_mesh``), a (vertices, faces) pair
+    (closed and consistently oriented) or a PreparedNet (not prepared again:
+    the same bits as the meshes it was made from).
 op: "union", "intersection", "difference" (a minus b) or "b-a".
 mode: "exact" (watertight, default) or "paper" (merged midpoints, Fig. 2).
 correspondence: paper mode: "visual", "topological", "window2", "window4".
@@ -105,6 +177,10 @@ self_check: test the inputs for self-intersections first.
 exact_refinement: re-triangulate every cut triangle with the exact
     constrained triangulation instead of the certified double fast path
     (``--exact-refinement``; the results differ at most in the diagonals).
+prepare_result: also return the result as a PreparedNet in
+    ``report["prepared"]`` (exact mode: without the self-intersection test,
+    the result is not self-intersecting by construction), or the reason it
+    cannot be one in ``report["prepared_error"]`` (an empty result).
 
 Returns (vertices, faces, report): the result's (n, 3) float64 vertices and
 faces (views onto the result, zero copy; the same bits as the CLI for the

@@ -166,3 +166,36 @@ def test_bad_input_is_a_value_error_with_the_engines_message():
         atelier.boolean(A, B, op="xor")
     with pytest.raises(ValueError, match="seam"):
         atelier.round_off(A, [0, 99])
+
+
+def test_prepared_nets_give_the_bits_of_the_meshes_and_a_chain_of_one_call_steps():
+    """PreparedNet: the Boolean on prepared nets is the one on the meshes
+    (same bytes), a chain A - B - C on prepared results is the chain of
+    one-call steps, and a net prepared without the self-test is refused by a
+    Boolean that asks for it."""
+    pa, pb = atelier.PreparedNet(A), atelier.PreparedNet(B)
+    assert pa.volume == pytest.approx(1.0, abs=1e-12) and pa.self_checked and pa.triangles == 24
+    for op in ("union", "intersection", "difference", "b-a"):
+        v, f, rep = atelier.boolean(A, B, op=op)
+        pv, pf, prep = atelier.boolean(pa, pb, op=op)
+        assert pv.tobytes() == v.tobytes() and polygons(pf) == polygons(f)
+        assert prep["volume"] == rep["volume"] and prep["seam"].tolist() == rep["seam"].tolist()
+        mv, mf, _ = atelier.boolean(pa, B, op=op)  # one prepared, one mesh
+        assert mv.tobytes() == v.tobytes()
+    C = box((-0.5, -0.5, -0.5), (0.25, 0.25, 1.5))  # bites A apart from B
+    v1, f1, _ = atelier.boolean(A, B, op="difference")
+    v2, f2, one = atelier.boolean((v1, f1), C, op="difference")
+    _, _, r1 = atelier.boolean(pa, pb, op="difference", prepare_result=True)
+    assert isinstance(r1["prepared"], atelier.PreparedNet) and r1["prepared"].self_checked
+    assert r1["prepared"].volume == r1["volume"]["result"]
+    cv, cf, r2 = atelier.boolean(r1["prepared"], atelier.PreparedNet(C), op="difference")
+    assert cv.tobytes() == v2.tobytes() and polygons(cf) == polygons(f2)
+    assert r2["volume"]["result"] == pytest.approx(1 - OVERLAP - 0.0625, abs=1e-12)
+    # An empty result cannot be an operand: the reason, not an exception.
+    _, f0, r0 = atelier.boolean(A, box((3, 3, 3), (4, 4, 4)), op="intersection", prepare_result=True)
+    assert len(polygons(f0)) == 0 and "no faces" in r0["prepared_error"]
+    unchecked = atelier.PreparedNet(B, self_check=False)
+    assert not unchecked.self_checked
+    with pytest.raises(ValueError, match="prepared without the self-intersection test"):
+        atelier.boolean(pa, unchecked)
+    assert atelier.boolean(pa, unchecked, self_check=False)[0].tobytes() == atelier.boolean(A, B)[0].tobytes()

@@ -1,7 +1,8 @@
 // Net Booleans (seed 004 sections 2-3): the entry point, the cut of each
 // net along the intersection polygons and the choice of kept pieces. The
 // exact kernel is boolean_exact.cpp; the nets' checks, the box hierarchy and
-// the candidate pairs are net_mesh.cpp; paper mode is paper_mode.cpp.
+// the candidate pairs are net_mesh.cpp; paper mode is paper_mode.cpp; the
+// prepared operands (step 1 done once per net) are prepared_net.cpp.
 //
 // Why this file is long: the cut and the choice of pieces share the
 // per-net tables built here (pairs per triangle, refined triangles, piece
@@ -23,16 +24,6 @@ using namespace net_detail;
 namespace {
 
 using Tri3 = std::array<std::uint32_t, 3>;
-
-double tri_volume(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  return a.dot(b.cross(c)) / 6.0;
-}
-
-double mesh_volume(const TriMesh& m) {
-  double v = 0;
-  for (const auto& t : m.tri) v += tri_volume(m.p[t[0]], m.p[t[1]], m.p[t[2]]);
-  return v;
-}
 
 std::uint64_t edge_key(std::uint32_t u, std::uint32_t v) {
   return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
@@ -274,46 +265,6 @@ Expected<Correspondence> parse_correspondence(std::string_view s) {
                 "unknown correspondence '" + std::string(s) + "' (visual, topological, window2, window4)");
 }
 
-double soup_volume(const PolygonSoupView& s) {
-  double v = 0;
-  for (std::size_t f = 0; f < s.face_count(); ++f) {
-    const std::uint32_t b = s.face_offsets[f], e = s.face_offsets[f + 1];
-    if (e - b == 3) {
-      v += tri_volume(s.positions[s.face_nodes[b]], s.positions[s.face_nodes[b + 1]], s.positions[s.face_nodes[b + 2]]);
-      continue;
-    }
-    Vec3d c = Vec3d::Zero();
-    for (std::uint32_t i = b; i < e; ++i) c += s.positions[s.face_nodes[i]];
-    c /= static_cast<double>(e - b);
-    for (std::uint32_t i = b; i < e; ++i)
-      v += tri_volume(c, s.positions[s.face_nodes[i]], s.positions[s.face_nodes[i + 1 < e ? i + 1 : b]]);
-  }
-  return v;
-}
-
-double soup_area(const PolygonSoupView& s) {
-  double a = 0;
-  for (std::size_t f = 0; f < s.face_count(); ++f) {
-    const std::uint32_t b = s.face_offsets[f], e = s.face_offsets[f + 1];
-    if (e - b == 3) {
-      // The fan below about the first corner: its two other terms are
-      // exact zeros, so this one term is the same sum, bit for bit.
-      const Vec3d& p = s.positions[s.face_nodes[b]];
-      a += 0.5 * (s.positions[s.face_nodes[b + 1]] - p).cross(s.positions[s.face_nodes[b + 2]] - p).norm();
-      continue;
-    }
-    Vec3d c = Vec3d::Zero();
-    for (std::uint32_t i = b; i < e; ++i) c += s.positions[s.face_nodes[i]];
-    c /= static_cast<double>(e - b);
-    for (std::uint32_t i = b; i < e; ++i) {
-      const Vec3d& p = s.positions[s.face_nodes[i]];
-      const Vec3d& q = s.positions[s.face_nodes[i + 1 < e ? i + 1 : b]];
-      a += 0.5 * (p - c).cross(q - c).norm();
-    }
-  }
-  return a;
-}
-
 PolygonSoup net_polygons(const Model& m) {
   PolygonSoup s;
   const auto source = m.nodes.props.find<std::int32_t>("source_vertex");
@@ -350,61 +301,24 @@ PolygonSoup net_polygons(const Model& m) {
   return s;
 }
 
-Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoupView& sb, const BooleanOptions& opt,
-                                    const ExecContext& ctx_in) {
-  BooleanReport rep;
-  // Small pairs run on the calling thread: below ctx.sequential_threshold
-  // polygons (10^4 by default) the start-up of parallel tasks costs more
-  // than the work (a CAD pair of 200 triangles takes a few milliseconds).
-  ExecContext ctx = ctx_in;
-  if (sa.face_count() + sb.face_count() < ctx.sequential_threshold) ctx.threads = 1;
-  // The two nets are built, checked and given their hierarchies side by
-  // side (two tasks; each is parallel inside). A's error is reported first.
-  TriMesh A, B;
-  Bvh bvh_a, bvh_b;
-  std::array<Status, 2> built;
-  std::array<std::array<std::uint32_t, 2>, 2> crossing{{{kNil, kNil}, {kNil, kNil}}};
-  {
-    ExecContext two = ctx;
-    two.sequential_threshold = 2;
-    two.grain = 1;
-    par::for_each_n(two, 2, [&](std::size_t k) {
-      TriMesh& m = k == 0 ? A : B;
-      Bvh& bvh = k == 0 ? bvh_a : bvh_b;
-      built[k] = build_tri_mesh(k == 0 ? sa : sb, k == 0 ? "A" : "B", m, ctx);
-      if (!built[k]) return;
-      build_bvh(m, bvh, ctx);
-      if (opt.check_self_intersection && mesh_volume(m) > 0) crossing[k] = first_self_crossing(m, bvh, ctx);
-    });
-  }
-  for (const Status& s : built)
-    if (!s) return s;
-  // Five stages reported to ctx.progress, each ending in a cancellation check.
-  constexpr std::size_t kStages = 5;
-  if (Status s = stage_done(ctx, "boolean: input", 1, kStages); !s) return s;
-  rep.volume_a = soup_volume(sa);
-  rep.volume_b = soup_volume(sb);
-  rep.area_a = soup_area(sa);
-  rep.area_b = soup_area(sb);
-  for (const TriMesh* m : {&A, &B})
-    if (!(mesh_volume(*m) > 0))
-      return fail(ErrorCode::kTopology, "net ", m->name,
-                  " encloses no volume or is oriented inwards (signed volume <= 0): reverse its faces");
-  if (opt.check_self_intersection) {
-    for (int k = 0; k < 2; ++k) {
-      const TriMesh& m = k == 0 ? A : B;
-      const auto& bad = crossing[static_cast<std::size_t>(k)];
-      if (bad[0] != kNil)
-        return fail(ErrorCode::kTopology, "net ", m.name, " intersects itself: faces ", m.face_of[bad[0]], " and ",
-                    m.face_of[bad[1]], " cross");
-    }
-  }
+namespace {
 
-  if (Status s = stage_done(ctx, "boolean: self-intersection check", 2, kStages); !s) return s;
+/// Steps 2-5 of the Boolean on two prepared nets (checked), reported to
+/// ctx.progress as stages first_stage .. first_stage + 2 of `stages`.
+Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& pb, const BooleanOptions& opt,
+                                   const ExecContext& ctx, std::size_t first_stage, std::size_t stages) {
+  BooleanReport rep;
+  const TriMesh &A = pa.mesh, &B = pb.mesh;
+  const Bvh &bvh_a = pa.bvh, &bvh_b = pb.bvh;
+  const PolygonSoupView &sa = pa.soup, &sb = pb.soup;
+  rep.volume_a = pa.volume;
+  rep.volume_b = pb.volume;
+  rep.area_a = pa.area;
+  rep.area_b = pb.area;
 
   Cut cut;
   if (Status st = cut_nets(A, bvh_a, B, bvh_b, ctx, cut, opt.exact_refinement); !st) return st;
-  if (Status s = stage_done(ctx, "boolean: cut", 3, kStages); !s) return s;
+  if (Status s = stage_done(ctx, "boolean: cut", first_stage, stages); !s) return s;
   rep.candidate_pairs = cut.candidate_pairs;
   rep.intersecting_pairs = cut.intersecting_pairs;
   rep.intersection_points = cut.new_keys.size();
@@ -502,7 +416,7 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     }
   }
 
-  if (Status s = stage_done(ctx, "boolean: classify", 4, kStages); !s) return s;
+  if (Status s = stage_done(ctx, "boolean: classify", first_stage + 1, stages); !s) return s;
 
   // ---- intersection polygons: components of the edges both nets share
   std::vector<std::uint64_t> common;
@@ -582,8 +496,65 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
     rep.volume = soup_volume(out);
     rep.area = soup_area(out);
   }
-  if (Status s = stage_done(ctx, "boolean: result", 5, kStages); !s) return s;
+  if (opt.prepare_result) {
+    const bool by_construction = opt.mode == BooleanMode::kExact && opt.join == BooleanJoin::kCut;
+    rep.prepared = prepare_result(rep.result, A.name, by_construction, ctx, rep.prepared_status);
+  }
+  if (Status s = stage_done(ctx, "boolean: result", first_stage + 2, stages); !s) return s;
   return rep;
+}
+
+}  // namespace
+
+Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoupView& sb, const BooleanOptions& opt,
+                                    const ExecContext& ctx_in) {
+  // Small pairs run on the calling thread: below ctx.sequential_threshold
+  // polygons (10^4 by default) the start-up of parallel tasks costs more
+  // than the work (a CAD pair of 200 triangles takes a few milliseconds).
+  ExecContext ctx = ctx_in;
+  if (sa.face_count() + sb.face_count() < ctx.sequential_threshold) ctx.threads = 1;
+  // prepare + prepare + the prepared Boolean, without copying the soups:
+  // the two nets are built, checked and given their hierarchies side by
+  // side (two tasks; each is parallel inside). A's error is reported first.
+  PreparedData pa, pb;
+  pa.soup = sa;
+  pb.soup = sb;
+  std::array<PrepareSteps, 2> steps;
+  {
+    ExecContext two = ctx;
+    two.sequential_threshold = 2;
+    two.grain = 1;
+    par::for_each_n(two, 2, [&](std::size_t k) {
+      prepare_data(k == 0 ? pa : pb, k == 0 ? "A" : "B", opt.check_self_intersection, ctx, steps[k]);
+    });
+  }
+  // Five stages reported to ctx.progress, each ending in a cancellation check.
+  constexpr std::size_t kStages = 5;
+  for (const PrepareSteps& st : steps)
+    if (!st.built) return st.built;
+  if (Status s = stage_done(ctx, "boolean: input", 1, kStages); !s) return s;
+  for (const PrepareSteps& st : steps)
+    if (!st.volume) return st.volume;
+  for (const PrepareSteps& st : steps)
+    if (!st.crossing) return st.crossing;
+  if (Status s = stage_done(ctx, "boolean: self-intersection check", 2, kStages); !s) return s;
+  return boolean_of(pa, pb, opt, ctx, 3, kStages);
+}
+
+Expected<BooleanReport> net_boolean(const PreparedNet& a, const PreparedNet& b, const BooleanOptions& opt,
+                                    const ExecContext& ctx_in) {
+  const PreparedData *pa = PreparedAccess::get(a), *pb = PreparedAccess::get(b);
+  if (pa == nullptr || pb == nullptr)
+    return Status(ErrorCode::kInvalidArgument, "net boolean: an operand is an empty PreparedNet (not prepared)");
+  if (opt.check_self_intersection)
+    for (const PreparedData* d : {pa, pb})
+      if (!d->self_checked)
+        return fail(ErrorCode::kInvalidArgument, "net ", d->mesh.name,
+                    " was prepared without the self-intersection test: prepare it with the test, or set "
+                    "check_self_intersection = false");
+  ExecContext ctx = ctx_in;
+  if (pa->soup.face_count() + pb->soup.face_count() < ctx.sequential_threshold) ctx.threads = 1;
+  return boolean_of(*pa, *pb, opt, ctx, 1, 3);
 }
 
 }  // namespace atelier

@@ -28,6 +28,15 @@
 //     once (A's triangles) by the orientation rule.
 // Untouched polygons (n-gons included) are copied whole.
 //
+// Prepared operands (geometry-central's one-call function beside a reusable
+// solver; OpenVDB's and Embree's explicit commit of derived data): step 1
+// and the box hierarchy depend on one net only, so PreparedNet::prepare does
+// them once and net_boolean(PreparedNet, PreparedNet) reuses them; the
+// one-call net_boolean(soup, soup) is prepare + prepare + that Boolean (the
+// same bits and errors). With BooleanOptions::prepare_result the result
+// comes prepared too, without the self-intersection test (the cut makes it
+// by construction), so a chain A - B1 - B2 - ... checks each net once.
+//
 // Reads: the two polygon soups. Writes: nothing (the result is returned).
 // Errors (nothing returned): kInvalidArgument, kDegenerate, kTopology,
 // kNonManifold naming the net ("A"/"B") and the face (0-based, in the soup's
@@ -44,10 +53,17 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <string_view>
 #include <vector>
 
 namespace atelier {
+
+namespace net_detail {
+struct PreparedData;
+struct PreparedAccess;
+}  // namespace net_detail
 
 enum class BooleanOp : std::uint8_t { kUnion, kIntersection, kAMinusB, kBMinusA };
 enum class BooleanMode : std::uint8_t { kExact, kPaper };
@@ -83,6 +99,12 @@ struct BooleanOptions {
   /// certified fast path on doubles (the reference the fast path is tested
   /// against; the results differ at most in the diagonals chosen).
   bool exact_refinement = false;
+  /// Also return the result as a PreparedNet (BooleanReport::prepared),
+  /// named like a. In exact mode joined by the cut its self-intersection
+  /// test is skipped (the result is not self-intersecting by construction);
+  /// paper mode and connecting meshes move or add faces, so their result is
+  /// prepared with the full checks.
+  bool prepare_result = false;
 };
 
 /// Valences (edge counts) of the vertices of the merged intersection
@@ -93,6 +115,46 @@ struct ValenceStats {
   std::size_t irregular = 0;
   std::size_t min = 0, max = 0;
   double mean = 0.0;
+};
+
+struct PrepareOptions {
+  /// The net's name in messages: "net A: face 3 ..." ("A" and "B" in the
+  /// one-call net_boolean).
+  std::string name = "A";
+  /// Refuse a self-intersecting net (exact test over box-overlapping pairs,
+  /// about a third of a Boolean's time). A net prepared without it can only
+  /// be used with BooleanOptions::check_self_intersection = false.
+  bool check_self_intersection = true;
+};
+
+/// A closed net made ready for Booleans: its polygons (a copy), their split
+/// into triangles, the checks (closed, consistently oriented outwards,
+/// 2-manifold, no duplicate vertices or degenerate triangles, optionally
+/// not self-intersecting; the errors of net_boolean, naming the face), the
+/// box hierarchy, its volume and area. Immutable once made: a handle to
+/// shared read-only data, cheap to copy, usable by several threads at once.
+class PreparedNet {
+ public:
+  PreparedNet() = default;  // empty: not an operand
+  [[nodiscard]] static Expected<PreparedNet> prepare(const PolygonSoupView& soup, const PrepareOptions& opt = {},
+                                                     const ExecContext& ctx = {});
+  /// The same, keeping the soup without a copy.
+  [[nodiscard]] static Expected<PreparedNet> prepare(PolygonSoup&& soup, const PrepareOptions& opt = {},
+                                                     const ExecContext& ctx = {});
+
+  [[nodiscard]] bool empty() const noexcept { return !data_; }
+  [[nodiscard]] const PolygonSoup& soup() const noexcept;
+  [[nodiscard]] const std::string& name() const noexcept;
+  [[nodiscard]] double volume() const noexcept;  // soup_volume
+  [[nodiscard]] double area() const noexcept;    // soup_area
+  [[nodiscard]] std::size_t triangle_count() const noexcept;
+  /// Tested for self-intersection, or a Boolean's result made without.
+  [[nodiscard]] bool self_checked() const noexcept;
+
+ private:
+  friend struct net_detail::PreparedAccess;
+  explicit PreparedNet(std::shared_ptr<const net_detail::PreparedData> d) noexcept : data_(std::move(d)) {}
+  std::shared_ptr<const net_detail::PreparedData> data_;
 };
 
 struct BooleanReport {
@@ -110,10 +172,24 @@ struct BooleanReport {
   ValenceStats valence;                   // paper mode
   ConnectReport connecting;               // join by meshes: the connecting meshes (faces empty)
   std::size_t gaps = 0;                   // join by meshes: gaps closed
+  /// With BooleanOptions::prepare_result: the result as an operand, or
+  /// empty with the reason in prepared_status (an empty result, or a result
+  /// that prepare() would refuse: coincident copies of a pinched vertex,
+  /// paper mode's merged points crossing).
+  PreparedNet prepared;
+  Status prepared_status;
 };
 
 /// The Boolean `opt.op` of the closed nets a and b (see above).
 [[nodiscard]] Expected<BooleanReport> net_boolean(const PolygonSoupView& a, const PolygonSoupView& b,
+                                                  const BooleanOptions& opt = {}, const ExecContext& ctx = {});
+
+/// The same Boolean of two prepared nets, without preparing them again
+/// (nothing is re-checked: their checks are those of their prepare). Reads
+/// a and b only: several threads may use the same prepared nets at once.
+/// kInvalidArgument for an empty operand, or one prepared without the
+/// self-intersection test when opt.check_self_intersection is set.
+[[nodiscard]] Expected<BooleanReport> net_boolean(const PreparedNet& a, const PreparedNet& b,
                                                   const BooleanOptions& opt = {}, const ExecContext& ctx = {});
 
 /// The live faces of a model as one polygon soup (nodes that came from the

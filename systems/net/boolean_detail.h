@@ -22,6 +22,12 @@
 #include <string_view>
 #include <vector>
 
+namespace atelier {
+class PreparedNet;
+struct BooleanOptions;
+struct BooleanReport;
+}  // namespace atelier
+
 namespace atelier::net_detail {
 
 inline constexpr std::uint32_t kNil = 0xffffffffu;
@@ -307,6 +313,43 @@ struct Cut {
 /// records the side of each face.
 void emit_side(const Cut& cut, const TriMesh& a, const TriMesh& b, int side, const PolygonSoupView& soup, bool reverse,
                PolygonSoup& out, std::vector<std::uint32_t>& out_index, std::vector<std::uint8_t>& face_side);
+
+/// The tables of a prepared net (PreparedNet, prepared_net.cpp): what the
+/// Booleans compute per operand, once.
+struct PreparedData {
+  TriMesh mesh;
+  Bvh bvh;
+  PolygonSoup owned;            // the polygons, when the prepared net owns them
+  PolygonSoupView soup;         // their arrays: owned's, or the caller's (the one-call net_boolean)
+  double volume = 0, area = 0;  // soup_volume, soup_area
+  bool self_checked = false;    // tested for self-intersection, or a Boolean's result by construction
+};
+
+/// The outcome of each step of prepare_data, kept apart so that the
+/// one-call Boolean reports two nets' errors in its order: both builds,
+/// then both volumes, then both self-intersection tests.
+struct PrepareSteps {
+  Status built, volume, crossing;
+};
+
+/// Builds d.mesh and d.bvh from d.soup (set by the caller) and checks them:
+/// build_tri_mesh, a positive volume, and first_self_crossing when asked
+/// (and the volume is positive); d.volume and d.area when built.
+void prepare_data(PreparedData& d, std::string name, bool check_self_intersection, const ExecContext& ctx,
+                  PrepareSteps& steps);
+
+/// The result of a Boolean as a prepared net named `name`, checked as
+/// prepare() checks it except for self-intersection when `by_construction`
+/// (then marked self_checked); empty with the reason in `why` otherwise.
+[[nodiscard]] PreparedNet prepare_result(const PolygonSoup& result, std::string name, bool by_construction,
+                                         const ExecContext& ctx, Status& why);
+
+/// The tables behind a PreparedNet (nullptr when empty), and a PreparedNet
+/// over given tables.
+struct PreparedAccess {
+  [[nodiscard]] static const PreparedData* get(const PreparedNet& p) noexcept;
+  [[nodiscard]] static PreparedNet make(std::shared_ptr<const PreparedData> d) noexcept;
+};
 
 /// Paper mode (seed 004 section 3, Fig. 2): on an exact result, the points
 /// of A's and of B's intersection polygons (`from_a`, `from_b` per vertex;

@@ -58,6 +58,47 @@ TEST(NetCli, BooleanVolumesAndReport) {
   EXPECT_LE(j["energy"]["after"].get<double>(), j["energy"]["before"].get<double>());
 }
 
+// Several B: A minus B1 minus B2 in one command, each net prepared once and
+// the first result prepared without a re-check; the volume against the
+// analytic one and against two one-call commands, the steps in the report.
+TEST(NetCli, BooleanChainOfSeveralOperands) {
+  const fs::path d = scratch_dir("net_cli_chain");
+  const double a0[3] = {0, 0, 0}, a1[3] = {1, 1, 1}, b0[3] = {.5, .25, -.5}, b1[3] = {1.5, 1.25, .5},
+               c0[3] = {-.5, -.5, -.5}, c1[3] = {.3, .2, 1.5};
+  write_box(d / "a.obj", a0, a1);
+  write_box(d / "b1.obj", b0, b1);
+  write_box(d / "b2.obj", c0, c1);
+  const std::string a = (d / "a.obj").string(), b1s = (d / "b1.obj").string(), b2s = (d / "b2.obj").string();
+  auto r = run_cli("boolean --op difference " + a + " " + b1s + " " + b2s + " --out " + (d / "chain.obj").string() +
+                   " --json " + (d / "chain.json").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = read_json(d / "chain.json");
+  // 1 - 0.1875 (B1) - 0.06 (B2: [0, .3] x [0, .2] x [0, 1] of A, apart from B1)
+  EXPECT_NEAR(j["volume"]["result"].get<double>(), 0.7525, 1e-12);
+  ASSERT_EQ(j["steps"].size(), 2u);
+  EXPECT_NEAR(j["steps"][0]["volume"].get<double>(), 0.8125, 1e-12);
+  EXPECT_EQ(j["steps"][1]["b"].get<std::string>(), b2s);
+  EXPECT_EQ(run_cli("validate " + (d / "chain.obj").string()).code, 0);
+  // The same two steps as one-call commands.
+  ASSERT_EQ(run_cli("boolean --op difference " + a + " " + b1s + " --out " + (d / "s1.obj").string()).code, 0);
+  ASSERT_EQ(run_cli("boolean --op difference " + (d / "s1.obj").string() + " " + b2s + " --out " +
+                    (d / "s2.obj").string() + " --json " + (d / "s2.json").string())
+                .code,
+            0);
+  EXPECT_NEAR(read_json(d / "s2.json")["volume"]["result"].get<double>(), j["volume"]["result"].get<double>(), 1e-14);
+  // A bad operand later in the chain is named, and nothing is written.
+  {
+    std::ofstream f(d / "open.obj");
+    for (int i = 0; i < 8; ++i) f << "v " << (i & 1) << ' ' << (i >> 1 & 1) << ' ' << (i >> 2 & 1) << '\n';
+    f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\n";
+  }
+  r = run_cli("boolean --op difference " + a + " " + b1s + " " + (d / "open.obj").string() + " --out " +
+              (d / "bad.obj").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("open.obj"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(d / "bad.obj"));
+}
+
 TEST(NetCli, BadInputIsRefusedAndNothingIsWritten) {
   const fs::path d = scratch_dir("net_cli_bad");
   const double a0[3] = {0, 0, 0}, a1[3] = {1, 1, 1};

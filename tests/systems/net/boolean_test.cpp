@@ -195,14 +195,7 @@ TEST(NetBoolean, RefusesBadNets) {
   open.face_nodes.resize(open.face_offsets.back());
   EXPECT_NE(error(open).find("open"), std::string::npos);
   // Self-intersecting: two overlapping boxes in one net.
-  PolygonSoup two = box({.5, .5, .5}, {2, 2, 2});
-  const PolygonSoup other = box({1, 1, 1}, {3, 3, 3});
-  for (const auto& p : other.positions) two.positions.push_back(p);
-  for (std::size_t f = 0; f < other.face_count(); ++f) {
-    std::vector<std::uint32_t> c(other.face(f).begin(), other.face(f).end());
-    for (auto& x : c) x += 8;
-    two.add_face(c);
-  }
+  const PolygonSoup two = net_test::two_boxes_in_one_net();
   const std::string self = error(two);
   EXPECT_NE(self.find("intersects itself: faces"), std::string::npos) << self;
   // Non-manifold: a face used twice.

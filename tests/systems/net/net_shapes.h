@@ -128,6 +128,20 @@ inline std::vector<PolygonSoup> spheres_across_the_slab(int n) {
   return out;
 }
 
+/// Two overlapping boxes in one net ([.5, 2]^3 and [1, 3]^3): closed,
+/// oriented and manifold, but intersecting itself.
+inline PolygonSoup two_boxes_in_one_net() {
+  PolygonSoup two = box({.5, .5, .5}, {2, 2, 2});
+  const PolygonSoup other = box({1, 1, 1}, {3, 3, 3});
+  for (const auto& p : other.positions) two.positions.push_back(p);
+  for (std::size_t f = 0; f < other.face_count(); ++f) {
+    std::vector<std::uint32_t> c(other.face(f).begin(), other.face(f).end());
+    for (auto& x : c) x += 8;
+    two.add_face(c);
+  }
+  return two;
+}
+
 /// Builds the result into a Model: closed (no boundary), consistently
 /// oriented, 2-manifold (the builder refuses the rest), validate() clean.
 inline ::testing::AssertionResult closed_model(const PolygonSoup& s) {
