@@ -325,10 +325,19 @@ bool ray_winding(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q,
       const int orr = sgn(CGAL::orientation(c0, c1, c2, pr));
       if (orr == 0) return false;  // the far end lies on a plane: try another direction
       if (oq == orr) continue;
-      if (oq == 0) return false;  // q on the net (callers never ask; be safe)
       const int e0 = sgn(CGAL::orientation(q, pr, c0, c1));
       const int e1 = sgn(CGAL::orientation(q, pr, c1, c2));
       const int e2 = sgn(CGAL::orientation(q, pr, c2, c0));
+      if (oq == 0) {
+        // q in the triangle's plane: the segment meets the plane at q only
+        // (its far end is off it), so it crosses the triangle iff q is in
+        // it, i.e. q on the net (callers never ask; try another direction).
+        // q outside it, in the plane of a coplanar neighbour or of an
+        // uncut coplanar face of the other net (a sphere and its copy
+        // shifted along a face), is no crossing (issue 24, round 16).
+        if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return false;
+        continue;
+      }
       if (e0 == 0 || e1 == 0 || e2 == 0) {
         if ((e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0)) return false;  // edge or vertex
         continue;

@@ -154,6 +154,67 @@ TEST(NetBooleanPairs, SpheresAcrossAFltMaxSlabAgreeWithCgal) {
     }
 }
 
+/// Issue 24 (found by round 16): an icosphere and its copy shifted along x
+/// have pairs of coplanar faces (normals perpendicular to x) that overlap
+/// in part, and pieces in the plane of a face of the other net but outside
+/// it. The winding number's ray treated a point in a triangle's plane as on
+/// the net and gave up after 64 directions ("no generic ray direction").
+/// Every operation at each shift: closed, manifold, oriented, not
+/// self-intersecting, CGAL's corefinement volume, and the union and
+/// intersection adding up to the two volumes.
+TEST(NetBooleanPairs, ShiftedCopiesWithCoplanarFacesAgreeWithCgal) {
+  const PolygonSoup a = net_test::icosphere(2, 1.0, {0, 0, 0});
+  for (const Vec3d shift :
+       {Vec3d(0.25, 0, 0), Vec3d(0.3, 0, 0), Vec3d(0.5, 0, 0), Vec3d(0, 0.5, 0), Vec3d(0, 0, 0.4)}) {
+    const PolygonSoup b = net_test::icosphere(2, 1.0, shift);
+    double v[4] = {};
+    for (BooleanOp op : {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB, BooleanOp::kBMinusA}) {
+      const std::string what = "shift " + std::to_string(shift.norm()) + " op " + std::to_string(static_cast<int>(op));
+      BooleanOptions o;
+      o.op = op;
+      const auto r = net_boolean(a, b, o);
+      ASSERT_TRUE(r.has_value()) << what << ": " << r.status().to_string();
+      EXPECT_TRUE(net_test::closed_model(r->result)) << what;
+      EXPECT_FALSE(PMP::does_self_intersect(to_cgal<Ki>(r->result))) << what;
+      const double want = cgal_volume(a, b, op);
+      EXPECT_NEAR(r->volume, want, 1e-12 * std::abs(want)) << what;
+      v[static_cast<int>(op)] = r->volume;
+    }
+    EXPECT_NEAR(v[0] + v[1], soup_volume(a) + soup_volume(b), 1e-12 * v[0]);
+  }
+}
+
+/// The same rule on boxes (found by round 16's chains): (A - B1) - B2 where
+/// B2's face y = 1/4 lies in the plane of the pocket wall B1 leaves, apart
+/// from it, and (A - B1) against A itself (every face in a plane of A).
+/// Volumes by hand: A = [0,1]^3, B1 = [.5,1.5] x [.25,1.25] x [-.5,.5],
+/// B2 = [-.5,.25]^2 x [-.5,1.5].
+TEST(NetBooleanPairs, APocketAgainstCoplanarBoxesHasTheVolumesByHand) {
+  const PolygonSoup a = net_test::box({0, 0, 0}, {1, 1, 1});
+  const PolygonSoup b1 = net_test::box({.5, .25, -.5}, {1.5, 1.25, .5});
+  const PolygonSoup b2 = net_test::box({-.5, -.5, -.5}, {.25, .25, 1.5});
+  BooleanOptions o;
+  o.op = BooleanOp::kAMinusB;
+  const auto pocket = net_boolean(a, b1, o);
+  ASSERT_TRUE(pocket.has_value()) << pocket.status().to_string();
+  const struct {
+    const PolygonSoup* b;
+    BooleanOp op;
+    double volume;
+  } cases[] = {{&b2, BooleanOp::kUnion, 1.875},  {&b2, BooleanOp::kIntersection, 0.0625},
+               {&b2, BooleanOp::kAMinusB, 0.75}, {&b2, BooleanOp::kBMinusA, 1.0625},
+               {&a, BooleanOp::kUnion, 1.0},     {&a, BooleanOp::kIntersection, 0.8125},
+               {&a, BooleanOp::kBMinusA, 0.1875}};
+  for (const auto& c : cases) {
+    const std::string what = std::string(c.b == &a ? "A" : "B2") + " op " + std::to_string(static_cast<int>(c.op));
+    o.op = c.op;
+    const auto r = net_boolean(pocket->result, *c.b, o);
+    ASSERT_TRUE(r.has_value()) << what << ": " << r.status().to_string();
+    EXPECT_TRUE(net_test::closed_model(r->result)) << what;
+    EXPECT_NEAR(r->volume, c.volume, 1e-12) << what;
+  }
+}
+
 TEST(NetBooleanPairs, SelfIntersectingInputsNameFaces) {
   if (!std::filesystem::exists(kPairs)) GTEST_SKIP() << "shared data absent: " << kPairs;
   const PolygonSoup a = load("Generic_Twin_7863.1.t0_left.obj"), b = load("Generic_Twin_7863.1.t0_right.obj");
