@@ -6,6 +6,7 @@
 #include <atelier/storage/builder.h>
 #include <atelier/storage/polygon_soup.h>
 #include <atelier/storage/validate.h>
+#include <atelier/systems/net/boolean.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -22,6 +23,10 @@
 namespace atelier::net_test {
 
 /// Axis-aligned box [lo, hi] as 6 outward quads.
+/// The four Boolean operations, for tests that run them all.
+inline constexpr BooleanOp kAllOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB,
+                                        BooleanOp::kBMinusA};
+
 inline PolygonSoup box(const Vec3d& lo, const Vec3d& hi) {
   PolygonSoup s;
   for (int i = 0; i < 8; ++i)

@@ -113,13 +113,11 @@ std::vector<std::pair<PolygonSoup, PolygonSoup>> unit_pairs() {
   return p;
 }
 
-constexpr BooleanOp kOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB, BooleanOp::kBMinusA};
-
 void expect_prepared_is_one_call(const PolygonSoup& a, const PolygonSoup& b, const std::string& what) {
   const PreparedNet pa = prepared(a, "A"), pb = prepared(b, "B");
   EXPECT_TRUE(same_double(pa.volume(), soup_volume(a)));
   EXPECT_TRUE(same_double(pb.area(), soup_area(b)));
-  for (BooleanOp op : kOps) {
+  for (BooleanOp op : net_test::kAllOps) {
     BooleanOptions o;
     o.op = op;
     auto one = net_boolean(a, b, o);

@@ -69,8 +69,6 @@ PolygonSoup rotated(PolygonSoup s, const Eigen::Matrix3d& r, const Vec3d& t) {
   return s;
 }
 
-const BooleanOp kOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB, BooleanOp::kBMinusA};
-
 TEST(NetRefineFast, AgreesWithExactOnRandomPairs) {
   std::mt19937 rng(2024);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -82,7 +80,7 @@ TEST(NetRefineFast, AgreesWithExactOnRandomPairs) {
     const Vec3d t(0.9 * unit(rng), 0.9 * unit(rng), 0.9 * unit(rng));
     const PolygonSoup b =
         rotated(net_test::icosphere(2, 0.6 + 0.3 * (unit(rng) + 1.0), {0, 0, 0}), q.toRotationMatrix(), t);
-    compare(a, b, kOps[trial % 4], "random " + std::to_string(trial), n);
+    compare(a, b, net_test::kAllOps[trial % 4], "random " + std::to_string(trial), n);
   }
   // Generic pairs: the doubles certify (almost) every cut triangle.
   EXPECT_GT(n.fast, 50 * n.exact + 100);
@@ -98,7 +96,7 @@ TEST(NetRefineFast, AgreesWithExactOnDegeneratePairs) {
     net_test::grid_box_pair(seed, lo, hi);
     const PolygonSoup a = trial % 2 ? net_test::box(lo[0], hi[0]) : net_test::box_triangles(lo[0], hi[0]);
     const PolygonSoup b = trial % 3 ? net_test::box_triangles(lo[1], hi[1]) : net_test::box(lo[1], hi[1]);
-    compare(a, b, kOps[trial % 4], "grid boxes " + std::to_string(trial), n);
+    compare(a, b, net_test::kAllOps[trial % 4], "grid boxes " + std::to_string(trial), n);
   }
   // A box turned about z by 45 degrees through a box of split quads: its
   // faces cut the quads' fans along lines through their centres.
@@ -106,7 +104,7 @@ TEST(NetRefineFast, AgreesWithExactOnDegeneratePairs) {
     const Eigen::Matrix3d r = Eigen::AngleAxisd(M_PI / 4, Vec3d::UnitZ()).toRotationMatrix();
     const PolygonSoup a = net_test::box({0, 0, 0}, {1, 1, 1});
     const PolygonSoup b = rotated(net_test::box({-0.5, -0.5, 0.25}, {0.5, 0.5, 1.5}), r, {0.5, 0.5, 0});
-    for (BooleanOp op : kOps) compare(a, b, op, "turned box", n);
+    for (BooleanOp op : net_test::kAllOps) compare(a, b, op, "turned box", n);
   }
   // Icospheres snapped to an integer grid, B moved by integer offsets:
   // exactly coplanar and collinear coincidences between the two nets.
@@ -116,7 +114,7 @@ TEST(NetRefineFast, AgreesWithExactOnDegeneratePairs) {
     PolygonSoup b = a;
     const Vec3d shift(3 + trial % 3, trial % 4, trial / 4);
     for (Vec3d& p : b.positions) p += shift;
-    compare(a, b, kOps[trial % 4], "snapped icospheres " + std::to_string(trial), n);
+    compare(a, b, net_test::kAllOps[trial % 4], "snapped icospheres " + std::to_string(trial), n);
   }
   // Coincident vertices: B is A moved by a vertex-to-vertex offset.
   {
@@ -124,7 +122,7 @@ TEST(NetRefineFast, AgreesWithExactOnDegeneratePairs) {
     PolygonSoup b = a;
     const Vec3d shift = a.positions[5] - a.positions[0];
     for (auto& p : b.positions) p += shift;
-    for (BooleanOp op : kOps) compare(a, b, op, "shared vertices", n);
+    for (BooleanOp op : net_test::kAllOps) compare(a, b, op, "shared vertices", n);
   }
   // Both paths are exercised: the doubles certify some triangles, the
   // degenerate ones go to the exact triangulation.
@@ -146,7 +144,7 @@ TEST(NetRefineFast, ASlabMuchLargerThanItsCutTakesTheProjectedPath) {
   Counts n;
   std::size_t exact_in_fast_runs = 0, cut = 0;
   for (int trial = 0; trial < 8; ++trial) {
-    const BooleanOp op = kOps[trial % 4];
+    const BooleanOp op = net_test::kAllOps[trial % 4];
     compare(spheres[static_cast<std::size_t>(trial)], slab, op, "slab " + std::to_string(trial), n);
     BooleanOptions o;
     o.op = op;
