@@ -92,6 +92,28 @@ inline PolygonSoup icosphere(int level, double r, const Vec3d& centre) {
   return s;
 }
 
+/// Right prism over a regular n-gon of circumradius r about the z axis
+/// through `centre`, from z0 to z1: n quads and two n-gon caps (split
+/// around their centroid by the Booleans).
+inline PolygonSoup prism(int n, double r, const Vec3d& centre, double z0, double z1) {
+  PolygonSoup s;
+  for (int k = 0; k < 2; ++k)
+    for (int i = 0; i < n; ++i) {
+      const double t = 2.0 * M_PI * i / n;
+      s.positions.emplace_back(centre.x() + r * std::cos(t), centre.y() + r * std::sin(t), k ? z1 : z0);
+    }
+  const auto u = static_cast<std::uint32_t>(n);
+  std::vector<std::uint32_t> bottom, top;
+  for (std::uint32_t i = 0; i < u; ++i) {
+    bottom.push_back(u - 1 - i);
+    top.push_back(u + i);
+    s.add_face(std::array<std::uint32_t, 4>{i, (i + 1) % u, u + (i + 1) % u, u + i});
+  }
+  s.add_face(bottom);
+  s.add_face(top);
+  return s;
+}
+
 /// Two random boxes on a coarse grid (steps of 0.5 in [0, 2.5]): faces
 /// coplanar, edges collinear, vertices on faces all the time. `seed` is a
 /// linear congruential state, advanced.

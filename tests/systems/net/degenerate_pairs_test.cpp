@@ -1,0 +1,480 @@
+// Net Booleans on degenerate but valid pairs, as CAD users make them
+// (issue 24, round 17): a shape and its copy shifted by axis steps of
+// 1/2^k, turned by quarter turns or by the shape's own symmetry, scaled by
+// 2^k, snapped to a grid, touching at a face, an edge or a vertex, inside
+// it sharing a face; and chains (A op B) op C on the results, by soups and
+// by prepared results. Oracle: CGAL's exact corefinement volume (where
+// CGAL declines, V(A u B) + V(A n B) = V(A) + V(B) and the differences
+// V(A) - V(A n B) still hold); every result closed, manifold and oriented
+// (closed_model) and, by CGAL's exact test, not self-intersecting (results
+// with coincident copies of a pinched vertex excepted: CGAL counts those as
+// crossings). Exact mode must answer every valid pair; paper mode may
+// refuse, but never with an internal error.
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/measure.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+#include <atelier/systems/net/boolean.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "net_shapes.h"
+
+namespace atelier::degenerate_pairs {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using Kex = CGAL::Exact_predicates_exact_constructions_kernel;
+using Kin = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+template <class K>
+CGAL::Surface_mesh<typename K::Point_3> mesh_of(const PolygonSoup& s) {
+  std::vector<typename K::Point_3> pts;
+  for (const Vec3d& p : s.positions) pts.emplace_back(p.x(), p.y(), p.z());
+  // n-gons split around their centroid as the Booleans split them (CGAL's
+  // own triangulation would pick diagonals of slightly warped quads).
+  std::vector<std::vector<std::size_t>> polys;
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const auto c = s.face(f);
+    if (c.size() == 3) {
+      polys.emplace_back(c.begin(), c.end());
+      continue;
+    }
+    Vec3d m = Vec3d::Zero();
+    for (std::uint32_t v : c) m += s.positions[v];
+    m /= static_cast<double>(c.size());
+    pts.emplace_back(m.x(), m.y(), m.z());
+    for (std::size_t i = 0; i < c.size(); ++i) polys.push_back({pts.size() - 1, c[i], c[(i + 1) % c.size()]});
+  }
+  CGAL::Surface_mesh<typename K::Point_3> m;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
+  return m;
+}
+
+/// CGAL's exact corefinement volume of a op b, or nothing where CGAL
+/// declines (a non-manifold output, for one).
+std::optional<double> corefined_volume(const PolygonSoup& a, const PolygonSoup& b, BooleanOp op) {
+  auto ma = mesh_of<Kex>(a), mb = mesh_of<Kex>(b);
+  CGAL::Surface_mesh<Kex::Point_3> out;
+  bool ok = false;
+  try {
+    switch (op) {
+      case BooleanOp::kUnion:
+        ok = PMP::corefine_and_compute_union(ma, mb, out);
+        break;
+      case BooleanOp::kIntersection:
+        ok = PMP::corefine_and_compute_intersection(ma, mb, out);
+        break;
+      case BooleanOp::kAMinusB:
+        ok = PMP::corefine_and_compute_difference(ma, mb, out);
+        break;
+      case BooleanOp::kBMinusA:
+        ok = PMP::corefine_and_compute_difference(mb, ma, out);
+        break;
+    }
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!ok) return std::nullopt;
+  return CGAL::to_double(PMP::volume(out));
+}
+
+bool has_coincident_vertices(const PolygonSoup& s) {
+  std::set<std::array<double, 3>> seen;
+  for (const Vec3d& p : s.positions)
+    if (!seen.insert({p.x(), p.y(), p.z()}).second) return true;
+  return false;
+}
+
+constexpr BooleanOp kOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB, BooleanOp::kBMinusA};
+
+struct Tally {
+  std::map<std::string, int> cases;  // per family
+  int booleans = 0, cgal_declined = 0, pinched = 0, invalid_inputs = 0, chains = 0, paper_ok = 0, paper_refused = 0;
+  std::vector<std::string> failures;
+  void fail(const std::string& s) {
+    if (failures.size() < 200) failures.push_back(s);
+  }
+};
+
+PolygonSoup mapped(PolygonSoup s, const auto& f) {
+  for (Vec3d& p : s.positions) p = f(p);
+  return s;
+}
+
+/// One Boolean, checked: answered, closed, not self-intersecting, CGAL's
+/// volume. Returns the result (nothing if refused).
+std::optional<BooleanReport> checked(const PolygonSoup& a, const PolygonSoup& b, BooleanOp op, const std::string& what,
+                                     Tally& t, bool prepare_result = false) {
+  BooleanOptions o;
+  o.op = op;
+  o.prepare_result = prepare_result;
+  o.exact_refinement = std::getenv("ATELIER_CAMPAIGN_EXACT_REFINEMENT") != nullptr;  // the reference path
+  ++t.booleans;
+  auto r = net_boolean(a, b, o);
+  if (!r) {
+    t.fail(what + ": refused: " + r.status().to_string());
+    return std::nullopt;
+  }
+  const double scale = std::abs(soup_volume(a)) + std::abs(soup_volume(b));
+  if (r->result.face_count() > 0) {
+    if (auto c = net_test::closed_model(r->result); !c) t.fail(what + ": not a closed model: " + c.message());
+    if (has_coincident_vertices(r->result))
+      ++t.pinched;
+    else if (PMP::does_self_intersect(mesh_of<Kin>(r->result)))
+      t.fail(what + ": the result intersects itself");
+  }
+  if (std::abs(r->volume - soup_volume(r->result)) > 1e-12 * scale) t.fail(what + ": reported volume differs");
+  if (auto want = corefined_volume(a, b, op)) {
+    if (!(std::abs(r->volume - *want) <= 1e-9 * scale))
+      t.fail(what + ": volume " + std::to_string(r->volume) + ", CGAL " + std::to_string(*want));
+  } else {
+    ++t.cgal_declined;
+  }
+  return std::move(*r);
+}
+
+/// All four operations of a and b (exact mode), the volumes adding up,
+/// paper mode's union and difference, and chains against c.
+void check_pair(const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup& c, const std::string& family,
+                const std::string& what, Tally& t) {
+  for (const PolygonSoup* s : {&a, &b, &c})
+    if (auto p = PreparedNet::prepare(*s); !p) {
+      // Only a net CGAL also finds self-intersecting may be refused here
+      // (snapping can fold a net); anything else is a wrong refusal.
+      if (!PMP::does_self_intersect(mesh_of<Kex>(*s)) && p.status().message().find("degenerate") == std::string::npos &&
+          p.status().message().find("duplicate") == std::string::npos)
+        t.fail(what + ": a valid input refused: " + p.status().to_string());
+      ++t.invalid_inputs;
+      return;
+    }
+  ++t.cases[family];
+  double v[4] = {};
+  bool all = true;
+  for (BooleanOp op : kOps) {
+    auto r = checked(a, b, op, what + " op " + std::to_string(static_cast<int>(op)), t);
+    if (r)
+      v[static_cast<int>(op)] = r->volume;
+    else
+      all = false;
+  }
+  const double va = soup_volume(a), vb = soup_volume(b), scale = std::abs(va) + std::abs(vb);
+  if (all && (std::abs(v[0] + v[1] - va - vb) > 1e-12 * scale || std::abs(v[2] - (va - v[1])) > 1e-12 * scale ||
+              std::abs(v[3] - (vb - v[1])) > 1e-12 * scale))
+    t.fail(what + ": volumes do not add up");
+  for (BooleanOp op : {BooleanOp::kUnion, BooleanOp::kAMinusB}) {
+    BooleanOptions o;
+    o.op = op;
+    o.mode = BooleanMode::kPaper;
+    auto r = net_boolean(a, b, o);
+    if (r)
+      ++t.paper_ok;
+    else if (r.status().code() == ErrorCode::kInternal)
+      t.fail(what + " paper op " + std::to_string(static_cast<int>(op)) + ": " + r.status().to_string());
+    else
+      ++t.paper_refused;
+  }
+  // Chains: (A op B) op2 C by soups, and by the prepared result against a
+  // prepared C (the same volume).
+  for (BooleanOp op : {BooleanOp::kUnion, BooleanOp::kAMinusB}) {
+    const std::string w1 = what + " chain op " + std::to_string(static_cast<int>(op));
+    auto r = checked(a, b, op, w1, t, true);
+    if (!r || r->result.face_count() == 0 || r->prepared.empty()) continue;
+    auto pc = PreparedNet::prepare(c, PrepareOptions{"B", true});
+    if (!pc) continue;
+    for (BooleanOp op2 : {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB}) {
+      ++t.chains;
+      const std::string w2 = w1 + " then op " + std::to_string(static_cast<int>(op2));
+      auto s = checked(r->result, c, op2, w2, t);
+      BooleanOptions o;
+      o.op = op2;
+      o.check_self_intersection = true;
+      auto p = net_boolean(r->prepared, *pc, o);
+      if (!p)
+        t.fail(w2 + " (prepared): refused: " + p.status().to_string());
+      else if (s && p->volume != s->volume)
+        t.fail(w2 + " (prepared): volume " + std::to_string(p->volume) + " against " + std::to_string(s->volume));
+    }
+  }
+}
+
+// ---- the families -------------------------------------------------------
+
+/// A base shape: icospheres (levels 1-3), boxes (quads or triangles),
+/// prisms over n-gons, UV spheres (quads and fans). Sizes are powers of two
+/// or simple, centres on a coarse grid.
+PolygonSoup base_shape(std::mt19937& rng, std::string& name, int& symmetry) {
+  std::uniform_int_distribution<int> kind(0, 4), level(1, 3), ngon(0, 5);
+  const int sides[] = {3, 4, 5, 6, 8, 12};
+  switch (kind(rng)) {
+    case 0:
+    case 1: {
+      const int l = level(rng);
+      name = "icosphere" + std::to_string(l);
+      symmetry = 5;
+      return net_test::icosphere(l, 1.0, {0, 0, 0});
+    }
+    case 2:
+      name = "box";
+      symmetry = 4;
+      return rng() % 2 ? net_test::box({0, 0, 0}, {1, 1, 1}) : net_test::box_triangles({0, 0, 0}, {1, 1, 1});
+    case 3: {
+      const int n = sides[ngon(rng)];
+      name = "prism" + std::to_string(n);
+      symmetry = n;
+      return net_test::prism(n, 1.0, {0, 0, 0}, -0.5, 0.5);
+    }
+    default: {
+      const int n = 4 * (2 + static_cast<int>(rng() % 3));
+      name = "uvsphere" + std::to_string(n);
+      symmetry = n;
+      return net_test::from_shapes(shapes::uv_sphere(n, n / 2, 1.0));
+    }
+  }
+}
+
+Vec3d axis_step(std::mt19937& rng, int max_k) {
+  Vec3d d = Vec3d::Zero();
+  const int axes = 1 + static_cast<int>(rng() % 2);
+  for (int i = 0; i < axes; ++i) {
+    const int k = static_cast<int>(rng() % (max_k + 1));
+    const int j = 1 + static_cast<int>(rng() % 3);
+    d[rng() % 3] = (rng() % 2 ? 1 : -1) * std::ldexp(double(j), -k);
+  }
+  return d;
+}
+
+/// A quarter turn about an axis, exact: coordinates permuted and negated.
+Vec3d quarter_turn(const Vec3d& p, int axis, int turns) {
+  Vec3d q = p;
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  for (int k = 0; k < turns % 4; ++k) {
+    const double a = q[i], b = q[j];
+    q[i] = -b;
+    q[j] = a;
+  }
+  return q;
+}
+
+struct Bounds {
+  Vec3d lo, hi;
+};
+Bounds bounds(const PolygonSoup& s) {
+  Bounds b{Vec3d::Constant(HUGE_VAL), Vec3d::Constant(-HUGE_VAL)};
+  for (const Vec3d& p : s.positions) {
+    b.lo = b.lo.cwiseMin(p);
+    b.hi = b.hi.cwiseMax(p);
+  }
+  return b;
+}
+
+const char* const kFamilies[] = {"shift", "quarter-turn", "symmetry-turn", "scale", "snap", "touch", "inside"};
+
+/// The copy B of A for family f (and the third net C of the chains: the
+/// same family drawn again).
+PolygonSoup transformed(const PolygonSoup& a, int symmetry, int f, std::mt19937& rng) {
+  switch (f) {
+    case 0: {
+      const Vec3d d = axis_step(rng, 4);
+      return mapped(a, [&](const Vec3d& p) { return Vec3d(p + d); });
+    }
+    case 1: {
+      const int axis = static_cast<int>(rng() % 3), turns = 1 + static_cast<int>(rng() % 3);
+      const Vec3d d = rng() % 3 ? axis_step(rng, 3) : Vec3d::Zero();
+      return mapped(a, [&](const Vec3d& p) { return Vec3d(quarter_turn(p, axis, turns) + d); });
+    }
+    case 2: {
+      // The shape's own symmetry (an n-gon's turn about z; the
+      // icosahedron's fifth turn about a vertex axis; a box's quarter turn
+      // about its centre's axis), inexact: near-copies.
+      Vec3d axis = Vec3d::UnitZ(), centre = bounds(a).lo / 2 + bounds(a).hi / 2;
+      if (symmetry == 5) axis = Vec3d(0, 1, (1.0 + std::sqrt(5.0)) / 2).normalized();
+      const double turn = 2.0 * M_PI * (1 + rng() % 2) / symmetry;
+      const Eigen::AngleAxisd q(turn, axis);
+      const Vec3d d = rng() % 2 ? axis_step(rng, 3) : Vec3d::Zero();
+      return mapped(a, [&](const Vec3d& p) { return Vec3d(centre + q * (p - centre) + d); });
+    }
+    case 3: {
+      const double s = std::ldexp(1.0, static_cast<int>(rng() % 5) - 2);
+      const Vec3d d = rng() % 2 ? axis_step(rng, 2) : Vec3d::Zero();
+      return mapped(a, [&](const Vec3d& p) { return Vec3d(s * p + d); });
+    }
+    case 4: {
+      const double h = std::ldexp(1.0, -2 - static_cast<int>(rng() % 3));
+      const Vec3d d = axis_step(rng, 3);
+      return mapped(a, [&](const Vec3d& p) { return Vec3d(((p + d) / h).array().round().matrix() * h); });
+    }
+    case 5: {
+      // Touching at a face, an edge or a vertex: B's low sides on A's high
+      // sides along 1, 2 or 3 axes (exact on symmetric shapes: lo = -hi).
+      const Bounds ba = bounds(a);
+      const int axes = 1 + static_cast<int>(rng() % 3);
+      Vec3d d = Vec3d::Zero();
+      const int first = static_cast<int>(rng() % 3);
+      for (int k = 0; k < axes; ++k) d[(first + k) % 3] = ba.hi[(first + k) % 3] - ba.lo[(first + k) % 3];
+      return mapped(a, [&](const Vec3d& p) { return Vec3d(p + d); });
+    }
+    default: {
+      // Inside A, sharing (part of) A's lowest face: halved towards the
+      // point below the centre on A's lowest z.
+      const Bounds ba = bounds(a);
+      const int axis = static_cast<int>(rng() % 3);
+      Vec3d o = ba.lo / 2 + ba.hi / 2;
+      o[axis] = ba.lo[axis];
+      return mapped(a, [&](const Vec3d& p) {
+        Vec3d q = o + (p - o) / 2;
+        q[axis] = p[axis] == ba.lo[axis] ? ba.lo[axis] : q[axis];
+        return q;
+      });
+    }
+  }
+}
+
+void dump_obj(const PolygonSoup& s, const char* file) {
+  std::FILE* f = std::fopen(file, "w");
+  for (const Vec3d& p : s.positions) std::fprintf(f, "v %.17g %.17g %.17g\n", p.x(), p.y(), p.z());
+  for (std::size_t k = 0; k < s.face_count(); ++k) {
+    std::fprintf(f, "f");
+    for (std::uint32_t v : s.face(k)) std::fprintf(f, " %u", v + 1);
+    std::fprintf(f, "\n");
+  }
+  std::fclose(f);
+}
+
+/// Cases 0 .. cases-1 of the campaign drawn from `seed` (family n % 7),
+/// or only case `only` of them (the draws before it still made).
+void run_campaign(std::uint32_t seed, int cases, Tally& t, int only = -1) {
+  std::mt19937 rng(seed);
+  for (int n = 0; n < cases; ++n) {
+    std::string name;
+    int symmetry = 4;
+    PolygonSoup a = base_shape(rng, name, symmetry);
+    const int f = n % 7;
+    PolygonSoup b = transformed(a, symmetry, f, rng);
+    PolygonSoup c = transformed(a, symmetry, f, rng);
+    if (f == 4) a = mapped(a, [&](const Vec3d& p) { return Vec3d((p * 8).array().round().matrix() / 8); });
+    const std::string what = std::string(kFamilies[f]) + " " + name + " case " + std::to_string(n);
+    if (only >= 0 && only != n) continue;
+    if (const char* dump = std::getenv("ATELIER_CAMPAIGN_DUMP"); dump && std::atoi(dump) == n) {
+      dump_obj(a, "/tmp/bool17_a.obj");
+      dump_obj(b, "/tmp/bool17_b.obj");
+      dump_obj(c, "/tmp/bool17_c.obj");
+    }
+    check_pair(a, b, c, kFamilies[f], what, t);
+  }
+}
+
+void report(const Tally& t) {
+  std::cout << "booleans " << t.booleans << ", chains " << t.chains << ", CGAL declined " << t.cgal_declined
+            << ", pinched results " << t.pinched << ", invalid inputs " << t.invalid_inputs << ", paper ok "
+            << t.paper_ok << ", paper refused " << t.paper_refused << "\n";
+  for (const auto& [k, v] : t.cases) std::cout << "  " << k << ": " << v << " pairs\n";
+  for (const std::string& s : t.failures) std::cout << "FAIL " << s << "\n";
+}
+
+TEST(NetDegeneratePairs, DISABLED_BroadCampaign) {
+  const char* env = std::getenv("ATELIER_CAMPAIGN_CASES");
+  const int cases = env ? std::atoi(env) : 700;
+  const char* seed = std::getenv("ATELIER_CAMPAIGN_SEED");
+  const char* only = std::getenv("ATELIER_CAMPAIGN_ONLY");
+  Tally t;
+  run_campaign(seed ? static_cast<std::uint32_t>(std::atoi(seed)) : 1u, cases, t, only ? std::atoi(only) : -1);
+  report(t);
+  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " failures";
+}
+
+/// The compact campaign: the first nine cases of seed 1 (every family once,
+/// shifts and quarter turns twice; case 9 on is where the broad campaign's
+/// first failure lies, kept below as a disabled test). A few seconds.
+TEST(NetDegeneratePairs, CompactCampaignAgreesWithCgal) {
+  Tally t;
+  run_campaign(1u, 9, t);
+  if (!t.failures.empty()) report(t);
+  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " failures";
+  for (const char* f : kFamilies) EXPECT_GE(t.cases[f], 1) << f;
+  EXPECT_EQ(t.invalid_inputs, 0);
+  EXPECT_GE(t.booleans, 9 * 6);
+  EXPECT_GE(t.chains, 9);
+}
+
+/// The failures the broad campaign found (seed 1, 70 cases), not yet fixed
+/// (issue 24, round 17): each runs its one case; enable once fixed.
+void known_case(int n, std::uint32_t seed = 1u) {
+  Tally t;
+  run_campaign(seed, n + 1, t, n);
+  report(t);
+  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " failures";
+}
+
+// Exact inputs: an icosphere (level 1) and two quarter-turned copies; A u B
+// is fine, (A u B) op C intersects itself (op 0, 1) or has an edge of four
+// faces (op 2), by soups and by the prepared result alike.
+TEST(NetDegeneratePairs, DISABLED_KnownQuarterTurnChainOfIcospheres) {
+  known_case(15);
+}
+// A UV sphere (16 x 8) and its half, scaled about a point on the line of an
+// equator edge (the faces there coplanar and overlapping): every operation's
+// result intersects itself (by CGAL, and by the Boolean's own check when it
+// is used as an operand).
+TEST(NetDegeneratePairs, DISABLED_KnownHalfSizeUvSphereInsideSharingFaces) {
+  known_case(20);
+}
+// A box and its copy turned a quarter turn about its centre's z axis by
+// Eigen's AngleAxis (inexact: a near-copy): results intersect themselves.
+TEST(NetDegeneratePairs, DISABLED_KnownNearCopyOfABox) {
+  known_case(9);
+}
+// An icosphere (level 1) turned a fifth turn about the axis through its
+// vertex 0 (a near-copy sharing the fan about vertex 0): A - B has an edge
+// of four faces.
+TEST(NetDegeneratePairs, DISABLED_KnownFifthTurnOfAnIcosphere) {
+  known_case(44);
+}
+// A prism over a 12-gon and its copy shifted by 1/8 along its axis (side
+// quads coplanar and overlapping, caps split around their centroids): the
+// pair of seed 2's case 56 below, here with the volumes by hand (the prisms
+// overlap over 7/8 of their height).
+TEST(NetDegeneratePairs, APrismShiftedAlongItsAxisHasTheVolumesByHand) {
+  const PolygonSoup a = net_test::prism(12, 1.0, {0, 0, 0}, -0.5, 0.5);
+  const PolygonSoup b = mapped(a, [](const Vec3d& p) { return Vec3d(p + Vec3d(0, 0, -0.125)); });
+  const double v = soup_volume(a);
+  const double want[4] = {v * 9 / 8, v * 7 / 8, v / 8, v / 8};
+  for (BooleanOp op : kOps) {
+    BooleanOptions o;
+    o.op = op;
+    const auto r = net_boolean(a, b, o);
+    ASSERT_TRUE(r.has_value()) << r.status().to_string();
+    EXPECT_TRUE(net_test::closed_model(r->result));
+    EXPECT_NEAR(r->volume, want[static_cast<int>(op)], 1e-12 * v);
+  }
+}
+// A crash: seed 2's case 56 (that prism and its shifted copy, with a third
+// shifted copy C for the chains) segfaults in CGAL's Orientation_2 inside
+// refine_triangle's constrained triangulation, under net_boolean's cut of
+// two prepared nets (one of the chains or paper mode's calls; the four
+// exact operations of A and B alone pass, above).
+TEST(NetDegeneratePairs, DISABLED_KnownCrashOnShiftedPrisms) {
+  known_case(56, 2u);
+}
+// UV spheres turned by their own symmetry (inexact): an edge of four faces.
+TEST(NetDegeneratePairs, DISABLED_KnownSymmetryTurnsOfUvSpheres) {
+  known_case(30);
+  known_case(37);
+}
+
+}  // namespace
+}  // namespace atelier::degenerate_pairs
