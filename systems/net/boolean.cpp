@@ -497,8 +497,7 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
     rep.area = soup_area(out);
   }
   if (opt.prepare_result) {
-    const bool by_construction = opt.mode == BooleanMode::kExact && opt.join == BooleanJoin::kCut;
-    rep.prepared = prepare_result(rep.result, A.name, by_construction, ctx, rep.prepared_status);
+    rep.prepared = prepare_result(rep.result, A.name, ctx, rep.prepared_status);
   }
   if (Status s = stage_done(ctx, "boolean: result", first_stage + 2, stages); !s) return s;
   return rep;

@@ -34,8 +34,9 @@
 // them once and net_boolean(PreparedNet, PreparedNet) reuses them; the
 // one-call net_boolean(soup, soup) is prepare + prepare + that Boolean (the
 // same bits and errors). With BooleanOptions::prepare_result the result
-// comes prepared too, without the self-intersection test (the cut makes it
-// by construction), so a chain A - B1 - B2 - ... checks each net once.
+// comes prepared too, with all of prepare()'s checks (the rounded cut can
+// fold a sliver over a neighbour), so a chain A - B1 - B2 - ... builds and
+// checks each net once.
 //
 // Reads: the two polygon soups. Writes: nothing (the result is returned).
 // Errors (nothing returned): kInvalidArgument, kDegenerate, kTopology,
@@ -100,10 +101,10 @@ struct BooleanOptions {
   /// against; the results differ at most in the diagonals chosen).
   bool exact_refinement = false;
   /// Also return the result as a PreparedNet (BooleanReport::prepared),
-  /// named like a. In exact mode joined by the cut its self-intersection
-  /// test is skipped (the result is not self-intersecting by construction);
-  /// paper mode and connecting meshes move or add faces, so their result is
-  /// prepared with the full checks.
+  /// named like a, with prepare()'s checks, self-intersection included: the
+  /// exact cut does not cross itself, but its points rounded to doubles can
+  /// (a sliver folded over a neighbour), and paper mode and connecting
+  /// meshes move or add faces.
   bool prepare_result = false;
 };
 
@@ -175,7 +176,8 @@ struct BooleanReport {
   /// With BooleanOptions::prepare_result: the result as an operand, or
   /// empty with the reason in prepared_status (an empty result, or a result
   /// that prepare() would refuse: coincident copies of a pinched vertex,
-  /// paper mode's merged points crossing).
+  /// paper mode's merged points crossing, a rounded sliver crossing a
+  /// neighbour).
   PreparedNet prepared;
   Status prepared_status;
 };

@@ -339,10 +339,11 @@ void prepare_data(PreparedData& d, std::string name, bool check_self_intersectio
                   PrepareSteps& steps);
 
 /// The result of a Boolean as a prepared net named `name`, checked as
-/// prepare() checks it except for self-intersection when `by_construction`
-/// (then marked self_checked); empty with the reason in `why` otherwise.
-[[nodiscard]] PreparedNet prepare_result(const PolygonSoup& result, std::string name, bool by_construction,
-                                         const ExecContext& ctx, Status& why);
+/// prepare() checks it, self-intersection included (the cut's rounded
+/// points can fold a sliver over a neighbour: issue 24, round 18); empty
+/// with the reason in `why` otherwise.
+[[nodiscard]] PreparedNet prepare_result(const PolygonSoup& result, std::string name, const ExecContext& ctx,
+                                         Status& why);
 
 /// The tables behind a PreparedNet (nullptr when empty), and a PreparedNet
 /// over given tables.

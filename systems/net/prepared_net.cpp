@@ -84,15 +84,20 @@ Expected<PreparedNet> finish_prepare(std::shared_ptr<PreparedData> d, const Prep
 
 }  // namespace
 
-PreparedNet prepare_result(const PolygonSoup& result, std::string name, bool by_construction, const ExecContext& ctx,
-                           Status& why) {
+PreparedNet prepare_result(const PolygonSoup& result, std::string name, const ExecContext& ctx, Status& why) {
   auto d = std::make_shared<PreparedData>();
   d->owned.positions = result.positions;
   d->owned.face_offsets = result.face_offsets;
   d->owned.face_nodes = result.face_nodes;
-  why = prepare_owned(*d, std::move(name), !by_construction, ctx);
+  // The self-intersection test runs on results too: the exact cut is not
+  // self-intersecting, but its rounding to doubles can fold a near-flat
+  // piece over its neighbour (a 12-gon prism and its copy shifted by 1/8
+  // along the axis: the union's cap leaves a sliver crossing a side
+  // triangle). A prepared net marked self_checked that crosses itself sends
+  // cut_nets into a constrained triangulation of crossing segments (a
+  // segfault in CGAL); the soup path refuses the same net with this test.
+  why = prepare_owned(*d, std::move(name), true, ctx);
   if (!why) return {};
-  d->self_checked = true;
   return PreparedAccess::make(std::move(d));
 }
 
