@@ -462,13 +462,71 @@ TEST(NetDegeneratePairs, APrismShiftedAlongItsAxisHasTheVolumesByHand) {
     EXPECT_NEAR(r->volume, want[static_cast<int>(op)], 1e-12 * v);
   }
 }
-// A crash: seed 2's case 56 (that prism and its shifted copy, with a third
-// shifted copy C for the chains) segfaults in CGAL's Orientation_2 inside
-// refine_triangle's constrained triangulation, under net_boolean's cut of
-// two prepared nets (one of the chains or paper mode's calls; the four
-// exact operations of A and B alone pass, above).
-TEST(NetDegeneratePairs, DISABLED_KnownCrashOnShiftedPrisms) {
-  known_case(56, 2u);
+// Seed 2's case 56 (issue 24, round 18): that prism and its copies shifted
+// by 1/8 and 3/16 along the axis. The union's intersection points, rounded
+// to doubles, fold a sliver of A's cap over a side triangle (the exact
+// union does not cross itself: the sliver is the cap poking 1e-17 out of
+// B's side quads, split about their rounded centroids). The prepared result
+// skipped the self-intersection test, so the prepared chain (A u B) op C
+// crashed in CGAL's constrained triangulation (a segfault on main). Now a
+// result is prepared exactly when CGAL finds it free of crossings and of
+// coincident vertex copies; otherwise prepared_status names the faces, as
+// the soup chain's error does. Prepared chains agree with the soup chains
+// and with CGAL's volume.
+TEST(NetDegeneratePairs, ShiftedPrismsChainRefusesAFoldedResultClearly) {
+  const PolygonSoup a = net_test::prism(12, 1.0, {0, 0, 0}, -0.5, 0.5);
+  const PolygonSoup b = mapped(a, [](const Vec3d& p) { return Vec3d(p + Vec3d(0, 0, -0.125)); });
+  const PolygonSoup c = mapped(a, [](const Vec3d& p) { return Vec3d(p + Vec3d(0, 0, -0.1875)); });
+  const auto pc = PreparedNet::prepare(c, PrepareOptions{"B", true});
+  ASSERT_TRUE(pc.has_value()) << pc.status().to_string();
+  const double scale = 2 * soup_volume(a);
+  int refused_crossing = 0;
+  for (BooleanOp op : {BooleanOp::kUnion, BooleanOp::kAMinusB}) {
+    BooleanOptions o;
+    o.op = op;
+    o.prepare_result = true;
+    const auto r = net_boolean(a, b, o);
+    ASSERT_TRUE(r.has_value()) << r.status().to_string();
+    EXPECT_TRUE(net_test::closed_model(r->result));
+    const auto want = corefined_volume(a, b, op);
+    ASSERT_TRUE(want.has_value());
+    EXPECT_NEAR(r->volume, *want, 1e-9 * scale);
+    const bool coincident = has_coincident_vertices(r->result);
+    const bool crosses = !coincident && PMP::does_self_intersect(mesh_of<Kin>(r->result));
+    EXPECT_EQ(r->prepared.empty(), coincident || crosses)
+        << "op " << static_cast<int>(op) << ": " << r->prepared_status.to_string();
+    if (crosses) {
+      // The same refusal as the soup chain's, naming the two faces.
+      ++refused_crossing;
+      EXPECT_EQ(r->prepared_status.code(), ErrorCode::kTopology);
+      EXPECT_NE(r->prepared_status.message().find("intersects itself: faces "), std::string::npos);
+      BooleanOptions o2;
+      const auto s = net_boolean(r->result, c, o2);
+      ASSERT_FALSE(s.has_value());
+      EXPECT_EQ(s.status().message(), r->prepared_status.message());
+    }
+    if (r->prepared.empty()) continue;
+    for (BooleanOp op2 : {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB}) {
+      BooleanOptions o2;
+      o2.op = op2;
+      o2.check_self_intersection = true;
+      const auto p = net_boolean(r->prepared, *pc, o2);
+      const auto s = net_boolean(r->result, c, o2);
+      ASSERT_EQ(p.has_value(), s.has_value());
+      if (!p) {
+        EXPECT_EQ(p.status().message(), s.status().message());
+        continue;
+      }
+      EXPECT_EQ(p->volume, s->volume);
+      EXPECT_TRUE(net_test::closed_model(p->result));
+      if (const auto w = corefined_volume(r->result, c, op2)) {
+        EXPECT_NEAR(p->volume, *w, 1e-9 * scale);
+      }
+    }
+  }
+  // Today the union is the folded one (the rounding defect left open,
+  // docs/performance.md); the checks above hold either way.
+  RecordProperty("refused_crossing", refused_crossing);
 }
 // UV spheres turned by their own symmetry (inexact): an edge of four faces.
 TEST(NetDegeneratePairs, DISABLED_KnownSymmetryTurnsOfUvSpheres) {
