@@ -57,7 +57,7 @@ manifold, no duplicate vertices, not self-intersecting unless
 ``self_check=False``) and given its box hierarchy. ``boolean`` takes it in
 place of a mesh and does none of this again; several threads may use it
 at once. A chain A - B1 - B2 - ... prepares each tool once and takes each
-result as ``report["prepared"]`` (``prepare_result=True``), not re-checked.
+result as ``report["prepared"]`` (``prepare_result=True``), checked once.
 )doc")
       .def(py::init([](const MeshLike& net, bool self_check, int threads, const Progress& progress) {
              PrepareOptions o;
@@ -178,9 +178,9 @@ exact_refinement: re-triangulate every cut triangle with the exact
     constrained triangulation instead of the certified double fast path
     (``--exact-refinement``; the results differ at most in the diagonals).
 prepare_result: also return the result as a PreparedNet in
-    ``report["prepared"]`` (exact mode: without the self-intersection test,
-    the result is not self-intersecting by construction), or the reason it
-    cannot be one in ``report["prepared_error"]`` (an empty result).
+    ``report["prepared"]`` (with prepare's checks, self-intersection
+    included: rounding can fold a sliver), or the reason it cannot be one
+    in ``report["prepared_error"]`` (an empty or self-crossing result).
 
 Returns (vertices, faces, report): the result's (n, 3) float64 vertices and
 faces (views onto the result, zero copy; the same bits as the CLI for the
