@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include "boolean_detail.h"
@@ -29,11 +30,74 @@ std::uint64_t edge_key(std::uint32_t u, std::uint32_t v) {
   return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
 }
 
+/// The faces of one edge u -> v (u < v) in their exact angular order about
+/// the axis v - u, each face's half-plane named by its first vertex after
+/// the edge not collinear with it: angle 0 is the first face's half-plane,
+/// the angle grows with orient3d's positive side. Then each face traversing
+/// v -> u (its solid side at larger angles) pairs with the next face, which
+/// must traverse u -> v: the solid wedges between them stay apart, as two
+/// solids touching along an edge stay apart. False (nothing paired) when
+/// the edge has faces without such a vertex, coincident half-planes or
+/// orientations that do not alternate about the edge.
+template <class Half>
+bool pair_about_edge(const PolygonSoup& out, std::span<const Half> half, std::span<const std::uint32_t> group,
+                     std::span<std::uint32_t> twin) {
+  const std::uint32_t iu = static_cast<std::uint32_t>(half[group[0]].key >> 32),
+                      iv = static_cast<std::uint32_t>(half[group[0]].key);
+  const Vec3d &u = out.positions[iu], &v = out.positions[iv];
+  std::vector<Vec3d> w(group.size());
+  for (std::size_t g = 0; g < group.size(); ++g) {
+    const auto c = out.face(half[group[g]].face);
+    bool found = false;
+    for (std::size_t k = 2; k < c.size() && !found; ++k) {
+      const Vec3d& p = out.positions[c[(half[group[g]].corner + k) % c.size()]];
+      found = !collinear(u, v, p);
+      w[g] = p;
+    }
+    if (!found) return false;
+  }
+  // A point off the plane of the first face, to tell its half-plane from the
+  // opposite one among the faces coplanar with it.
+  std::optional<Vec3d> off;
+  for (int k = 0; k < 3 && !off; ++k)
+    if (orient3d(u, v, w[0], u + Vec3d::Unit(k)) != 0) off = u + Vec3d::Unit(k);
+  if (!off) return false;
+  std::vector<int> lower(group.size());  // 0: angle in [0, pi), 1: [pi, 2 pi)
+  for (std::size_t g = 0; g < group.size(); ++g) {
+    const int s = orient3d(u, v, w[0], w[g]);
+    lower[g] = s > 0 || (s == 0 && orient3d(u, v, *off, w[g]) == orient3d(u, v, *off, w[0])) ? 0 : 1;
+  }
+  std::vector<std::uint32_t> order(group.size());
+  std::iota(order.begin(), order.end(), 0u);
+  bool tie = false;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    if (lower[a] != lower[b]) return lower[a] < lower[b];
+    if (a == b) return false;
+    const int o = orient3d(u, v, w[a], w[b]);
+    tie |= o == 0;
+    return o != 0 ? o > 0 : a < b;
+  });
+  if (tie) return false;
+  const std::size_t m = order.size();
+  std::size_t start = 0;  // a face traversing v -> u
+  while (start < m && half[group[order[start]]].forward) ++start;
+  if (start == m) return false;
+  for (std::size_t k = 0; k < m; ++k)
+    if (half[group[order[(start + k) % m]]].forward != (k % 2 == 1)) return false;
+  for (std::size_t k = 0; k < m; k += 2) {
+    const std::uint32_t hb = group[order[(start + k) % m]], hf = group[order[(start + k + 1) % m]];
+    twin[hb] = hf;
+    twin[hf] = hb;
+  }
+  return true;
+}
+
 /// Solids that touch along an edge or at a vertex (a union of two boxes
 /// sharing an edge) leave edges in four faces and vertices with several
-/// fans. The result stays a 2-manifold: at such an edge each net's faces
-/// pair with their own net's (the two solids stay apart there), and a
-/// vertex with several fans gets one copy per fan (coincident vertices).
+/// fans. The result stays a 2-manifold: at such an edge the faces pair by
+/// their angular order about it (pair_about_edge; failing that, each net's
+/// faces with their own net's), and a vertex with several fans gets one copy
+/// per fan (coincident vertices).
 Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
   const std::size_t nf = out.face_count();
   struct Half {
@@ -60,6 +124,10 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
     std::size_t j = i;
     while (j < id.size() && half[id[j]].key == half[id[i]].key) ++j;
     pinched |= j - i != 2;
+    if (j - i > 2 && pair_about_edge<Half>(out, half, std::span(id).subspan(i, j - i), twin)) {
+      i = j;
+      continue;
+    }
     // Pair forward with backward halfedges, a net's with its own first.
     for (int pass = 0; pass < 2; ++pass)
       for (std::size_t x = i; x < j; ++x) {
