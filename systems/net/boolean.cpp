@@ -120,10 +120,12 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
   sort_edge_keys(keys, out.positions.size(), id);
   std::vector<std::uint32_t> twin(half.size(), kNil);
   bool pinched = false;
+  std::vector<std::pair<std::size_t, std::size_t>> many;  // [i, j) of id: the edges of more than two faces
   for (std::size_t i = 0; i < id.size();) {
     std::size_t j = i;
     while (j < id.size() && half[id[j]].key == half[id[i]].key) ++j;
     pinched |= j - i != 2;
+    if (j - i > 2) many.emplace_back(i, j);
     if (j - i > 2 && pair_about_edge<Half>(out, half, std::span(id).subspan(i, j - i), twin)) {
       i = j;
       continue;
@@ -154,18 +156,59 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
     const std::uint32_t f = half[h].face, n = half_begin[f + 1] - half_begin[f];
     return half_begin[f] + (half[h].corner + n - 1) % n;
   };
+  auto next_in_face = [&](std::uint32_t h) {
+    const std::uint32_t f = half[h].face, n = half_begin[f + 1] - half_begin[f];
+    return half_begin[f] + (half[h].corner + 1) % n;
+  };
   const std::size_t nv = out.positions.size();
   std::vector<std::uint32_t> fans(nv, 0);
   std::vector<std::uint32_t> fan_of(half.size(), kNil);  // per outgoing halfedge (its tail's fan)
-  for (std::uint32_t h = 0; h < half.size(); ++h) {
-    if (fan_of[h] != kNil) continue;
-    const std::uint32_t v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
-    const std::uint32_t fan = fans[v]++;
-    std::uint32_t x = h;
-    do {
-      fan_of[x] = fan;
-      x = twin[prev_in_face(x)];
-    } while (x != h && fan_of[x] == kNil);
+  std::vector<std::uint64_t> ends;
+  std::vector<std::uint32_t> backward;
+  for (int attempt = 0;; ++attempt) {
+    std::fill(fans.begin(), fans.end(), 0u);
+    std::fill(fan_of.begin(), fan_of.end(), kNil);
+    for (std::uint32_t h = 0; h < half.size(); ++h) {
+      if (fan_of[h] != kNil) continue;
+      const std::uint32_t v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
+      const std::uint32_t fan = fans[v]++;
+      std::uint32_t x = h;
+      do {
+        fan_of[x] = fan;
+        x = twin[prev_in_face(x)];
+      } while (x != h && fan_of[x] == kNil);
+    }
+    // An edge of many faces stays in them all when two of its face pairs
+    // end in the same fans at both ends (each end one fan: the sheets meet
+    // elsewhere about both). Rounded constructed points can leave such an
+    // edge without a consistent angular order (pair_about_edge declines and
+    // the net-by-net pairing is taken); its halfedges are then re-paired,
+    // each backward one with the next's partner, until the fans split it.
+    bool again = false;
+    for (const auto& [i, j] : many) {
+      ends.clear();
+      backward.clear();
+      for (std::size_t x = i; x < j; ++x) {
+        const std::uint32_t h = id[x];
+        if (!half[h].forward) continue;
+        ends.push_back((std::uint64_t{fan_of[h]} << 32) | fan_of[next_in_face(h)]);
+        backward.push_back(twin[h]);
+      }
+      std::sort(ends.begin(), ends.end());
+      if (std::adjacent_find(ends.begin(), ends.end()) == ends.end() || attempt >= 8) continue;
+      const std::vector<std::uint32_t> partner = [&] {
+        std::vector<std::uint32_t> r;
+        for (std::uint32_t hb : backward) r.push_back(twin[hb]);
+        return r;
+      }();
+      for (std::size_t k = 0; k < backward.size(); ++k) {
+        const std::uint32_t hb = backward[k], hf = partner[(k + 1) % partner.size()];
+        twin[hb] = hf;
+        twin[hf] = hb;
+      }
+      again = true;
+    }
+    if (!again) break;
   }
   for (std::uint32_t v = 0; v < nv; ++v) pinched |= fans[v] > 1;
   if (!pinched) return {};
