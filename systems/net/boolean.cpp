@@ -6,7 +6,8 @@
 //
 // Why this file is long: the cut and the choice of pieces share the
 // per-net tables built here (pairs per triangle, refined triangles, piece
-// components), and splitting them would pass a dozen arrays across files.
+// components), and splitting them would pass a dozen arrays across files;
+// unpinch (the result's edges of many faces) stays beside its one caller.
 #include <atelier/engine/parallel.h>
 #include <atelier/systems/net/boolean.h>
 
@@ -164,7 +165,7 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
   std::vector<std::uint32_t> fans(nv, 0);
   std::vector<std::uint32_t> fan_of(half.size(), kNil);  // per outgoing halfedge (its tail's fan)
   std::vector<std::uint64_t> ends;
-  std::vector<std::uint32_t> backward;
+  std::vector<std::uint32_t> forward, backward;
   for (int attempt = 0;; ++attempt) {
     std::fill(fans.begin(), fans.end(), 0u);
     std::fill(fan_of.begin(), fan_of.end(), kNil);
@@ -187,22 +188,19 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
     bool again = false;
     for (const auto& [i, j] : many) {
       ends.clear();
-      backward.clear();
+      forward.clear();
       for (std::size_t x = i; x < j; ++x) {
         const std::uint32_t h = id[x];
         if (!half[h].forward) continue;
         ends.push_back((std::uint64_t{fan_of[h]} << 32) | fan_of[next_in_face(h)]);
-        backward.push_back(twin[h]);
+        forward.push_back(h);
       }
       std::sort(ends.begin(), ends.end());
       if (std::adjacent_find(ends.begin(), ends.end()) == ends.end() || attempt >= 8) continue;
-      const std::vector<std::uint32_t> partner = [&] {
-        std::vector<std::uint32_t> r;
-        for (std::uint32_t hb : backward) r.push_back(twin[hb]);
-        return r;
-      }();
-      for (std::size_t k = 0; k < backward.size(); ++k) {
-        const std::uint32_t hb = backward[k], hf = partner[(k + 1) % partner.size()];
+      backward.clear();
+      for (std::uint32_t hf : forward) backward.push_back(twin[hf]);
+      for (std::size_t k = 0; k < forward.size(); ++k) {
+        const std::uint32_t hb = backward[k], hf = forward[(k + 1) % forward.size()];
         twin[hb] = hf;
         twin[hf] = hb;
       }
