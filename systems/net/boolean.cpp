@@ -6,13 +6,15 @@
 //
 // Why this file is long: the cut and the choice of pieces share the
 // per-net tables built here (pairs per triangle, refined triangles, piece
-// components), and splitting them would pass a dozen arrays across files.
+// components), and splitting them would pass a dozen arrays across files;
+// unpinch (the result's edges of many faces) stays beside its one caller.
 #include <atelier/engine/parallel.h>
 #include <atelier/systems/net/boolean.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include "boolean_detail.h"
@@ -29,11 +31,74 @@ std::uint64_t edge_key(std::uint32_t u, std::uint32_t v) {
   return (std::uint64_t{std::min(u, v)} << 32) | std::max(u, v);
 }
 
+/// The faces of one edge u -> v (u < v) in their exact angular order about
+/// the axis v - u, each face's half-plane named by its first vertex after
+/// the edge not collinear with it: angle 0 is the first face's half-plane,
+/// the angle grows with orient3d's positive side. Then each face traversing
+/// v -> u (its solid side at larger angles) pairs with the next face, which
+/// must traverse u -> v: the solid wedges between them stay apart, as two
+/// solids touching along an edge stay apart. False (nothing paired) when
+/// the edge has faces without such a vertex, coincident half-planes or
+/// orientations that do not alternate about the edge.
+template <class Half>
+bool pair_about_edge(const PolygonSoup& out, std::span<const Half> half, std::span<const std::uint32_t> group,
+                     std::span<std::uint32_t> twin) {
+  const std::uint32_t iu = static_cast<std::uint32_t>(half[group[0]].key >> 32),
+                      iv = static_cast<std::uint32_t>(half[group[0]].key);
+  const Vec3d &u = out.positions[iu], &v = out.positions[iv];
+  std::vector<Vec3d> w(group.size());
+  for (std::size_t g = 0; g < group.size(); ++g) {
+    const auto c = out.face(half[group[g]].face);
+    bool found = false;
+    for (std::size_t k = 2; k < c.size() && !found; ++k) {
+      const Vec3d& p = out.positions[c[(half[group[g]].corner + k) % c.size()]];
+      found = !collinear(u, v, p);
+      w[g] = p;
+    }
+    if (!found) return false;
+  }
+  // A point off the plane of the first face, to tell its half-plane from the
+  // opposite one among the faces coplanar with it.
+  std::optional<Vec3d> off;
+  for (int k = 0; k < 3 && !off; ++k)
+    if (orient3d(u, v, w[0], u + Vec3d::Unit(k)) != 0) off = u + Vec3d::Unit(k);
+  if (!off) return false;
+  std::vector<int> lower(group.size());  // 0: angle in [0, pi), 1: [pi, 2 pi)
+  for (std::size_t g = 0; g < group.size(); ++g) {
+    const int s = orient3d(u, v, w[0], w[g]);
+    lower[g] = s > 0 || (s == 0 && orient3d(u, v, *off, w[g]) == orient3d(u, v, *off, w[0])) ? 0 : 1;
+  }
+  std::vector<std::uint32_t> order(group.size());
+  std::iota(order.begin(), order.end(), 0u);
+  bool tie = false;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    if (lower[a] != lower[b]) return lower[a] < lower[b];
+    if (a == b) return false;
+    const int o = orient3d(u, v, w[a], w[b]);
+    tie |= o == 0;
+    return o != 0 ? o > 0 : a < b;
+  });
+  if (tie) return false;
+  const std::size_t m = order.size();
+  std::size_t start = 0;  // a face traversing v -> u
+  while (start < m && half[group[order[start]]].forward) ++start;
+  if (start == m) return false;
+  for (std::size_t k = 0; k < m; ++k)
+    if (half[group[order[(start + k) % m]]].forward != (k % 2 == 1)) return false;
+  for (std::size_t k = 0; k < m; k += 2) {
+    const std::uint32_t hb = group[order[(start + k) % m]], hf = group[order[(start + k + 1) % m]];
+    twin[hb] = hf;
+    twin[hf] = hb;
+  }
+  return true;
+}
+
 /// Solids that touch along an edge or at a vertex (a union of two boxes
 /// sharing an edge) leave edges in four faces and vertices with several
-/// fans. The result stays a 2-manifold: at such an edge each net's faces
-/// pair with their own net's (the two solids stay apart there), and a
-/// vertex with several fans gets one copy per fan (coincident vertices).
+/// fans. The result stays a 2-manifold: at such an edge the faces pair by
+/// their angular order about it (pair_about_edge; failing that, each net's
+/// faces with their own net's), and a vertex with several fans gets one copy
+/// per fan (coincident vertices).
 Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
   const std::size_t nf = out.face_count();
   struct Half {
@@ -56,10 +121,16 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
   sort_edge_keys(keys, out.positions.size(), id);
   std::vector<std::uint32_t> twin(half.size(), kNil);
   bool pinched = false;
+  std::vector<std::pair<std::size_t, std::size_t>> many;  // [i, j) of id: the edges of more than two faces
   for (std::size_t i = 0; i < id.size();) {
     std::size_t j = i;
     while (j < id.size() && half[id[j]].key == half[id[i]].key) ++j;
     pinched |= j - i != 2;
+    if (j - i > 2) many.emplace_back(i, j);
+    if (j - i > 2 && pair_about_edge<Half>(out, half, std::span(id).subspan(i, j - i), twin)) {
+      i = j;
+      continue;
+    }
     // Pair forward with backward halfedges, a net's with its own first.
     for (int pass = 0; pass < 2; ++pass)
       for (std::size_t x = i; x < j; ++x) {
@@ -86,18 +157,56 @@ Status unpinch(PolygonSoup& out, std::span<const std::uint8_t> face_side) {
     const std::uint32_t f = half[h].face, n = half_begin[f + 1] - half_begin[f];
     return half_begin[f] + (half[h].corner + n - 1) % n;
   };
+  auto next_in_face = [&](std::uint32_t h) {
+    const std::uint32_t f = half[h].face, n = half_begin[f + 1] - half_begin[f];
+    return half_begin[f] + (half[h].corner + 1) % n;
+  };
   const std::size_t nv = out.positions.size();
   std::vector<std::uint32_t> fans(nv, 0);
   std::vector<std::uint32_t> fan_of(half.size(), kNil);  // per outgoing halfedge (its tail's fan)
-  for (std::uint32_t h = 0; h < half.size(); ++h) {
-    if (fan_of[h] != kNil) continue;
-    const std::uint32_t v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
-    const std::uint32_t fan = fans[v]++;
-    std::uint32_t x = h;
-    do {
-      fan_of[x] = fan;
-      x = twin[prev_in_face(x)];
-    } while (x != h && fan_of[x] == kNil);
+  std::vector<std::uint64_t> ends;
+  std::vector<std::uint32_t> forward, backward;
+  for (int attempt = 0;; ++attempt) {
+    std::fill(fans.begin(), fans.end(), 0u);
+    std::fill(fan_of.begin(), fan_of.end(), kNil);
+    for (std::uint32_t h = 0; h < half.size(); ++h) {
+      if (fan_of[h] != kNil) continue;
+      const std::uint32_t v = out.face_nodes[out.face_offsets[half[h].face] + half[h].corner];
+      const std::uint32_t fan = fans[v]++;
+      std::uint32_t x = h;
+      do {
+        fan_of[x] = fan;
+        x = twin[prev_in_face(x)];
+      } while (x != h && fan_of[x] == kNil);
+    }
+    // An edge of many faces stays in them all when two of its face pairs
+    // end in the same fans at both ends (each end one fan: the sheets meet
+    // elsewhere about both). Rounded constructed points can leave such an
+    // edge without a consistent angular order (pair_about_edge declines and
+    // the net-by-net pairing is taken); its halfedges are then re-paired,
+    // each backward one with the next's partner, until the fans split it.
+    bool again = false;
+    for (const auto& [i, j] : many) {
+      ends.clear();
+      forward.clear();
+      for (std::size_t x = i; x < j; ++x) {
+        const std::uint32_t h = id[x];
+        if (!half[h].forward) continue;
+        ends.push_back((std::uint64_t{fan_of[h]} << 32) | fan_of[next_in_face(h)]);
+        forward.push_back(h);
+      }
+      std::sort(ends.begin(), ends.end());
+      if (std::adjacent_find(ends.begin(), ends.end()) == ends.end() || attempt >= 8) continue;
+      backward.clear();
+      for (std::uint32_t hf : forward) backward.push_back(twin[hf]);
+      for (std::size_t k = 0; k < forward.size(); ++k) {
+        const std::uint32_t hb = backward[k], hf = forward[(k + 1) % forward.size()];
+        twin[hb] = hf;
+        twin[hf] = hb;
+      }
+      again = true;
+    }
+    if (!again) break;
   }
   for (std::uint32_t v = 0; v < nv; ++v) pinched |= fans[v] > 1;
   if (!pinched) return {};
