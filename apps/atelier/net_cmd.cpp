@@ -93,7 +93,7 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
     r = named(net_boolean(a, bs[0], o, ctx), opt.a, opt.b[0]);
   } else {
     // A chain: every net prepared (converted, checked, its hierarchy built)
-    // once, each result prepared without a re-check for the next step.
+    // once, each result prepared (with prepare()'s checks) for the next step.
     PrepareOptions pa, pb;
     pa.check_self_intersection = pb.check_self_intersection = o.check_self_intersection;
     pb.name = "B";

@@ -149,7 +149,7 @@ class PreparedNet {
   [[nodiscard]] double volume() const noexcept;  // soup_volume
   [[nodiscard]] double area() const noexcept;    // soup_area
   [[nodiscard]] std::size_t triangle_count() const noexcept;
-  /// Tested for self-intersection, or a Boolean's result made without.
+  /// Tested for self-intersection (a Boolean's prepared result always is).
   [[nodiscard]] bool self_checked() const noexcept;
 
  private:

@@ -322,7 +322,7 @@ struct PreparedData {
   PolygonSoup owned;            // the polygons, when the prepared net owns them
   PolygonSoupView soup;         // their arrays: owned's, or the caller's (the one-call net_boolean)
   double volume = 0, area = 0;  // soup_volume, soup_area
-  bool self_checked = false;    // tested for self-intersection, or a Boolean's result by construction
+  bool self_checked = false;    // tested for self-intersection (a Boolean's prepared result always is)
 };
 
 /// The outcome of each step of prepare_data, kept apart so that the
