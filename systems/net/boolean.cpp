@@ -612,6 +612,14 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
   return rep;
 }
 
+/// An internal error of a Boolean on a net not checked for self-intersection
+/// (its caller's promise): the crossing faces when it crosses itself.
+Expected<BooleanReport> explained_by_crossing(Expected<BooleanReport> r, const PreparedData& pa, const PreparedData& pb,
+                                              const ExecContext& ctx) {
+  if (r || (pa.self_checked && pb.self_checked)) return r;
+  return explain_by_crossing(r.status(), pa.mesh, pa.bvh, pb.mesh, pb.bvh, ctx, 0);
+}
+
 }  // namespace
 
 Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoupView& sb, const BooleanOptions& opt,
@@ -646,7 +654,7 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   for (const PrepareSteps& st : steps)
     if (!st.crossing) return st.crossing;
   if (Status s = stage_done(ctx, "boolean: self-intersection check", 2, kStages); !s) return s;
-  return boolean_of(pa, pb, opt, ctx, 3, kStages);
+  return explained_by_crossing(boolean_of(pa, pb, opt, ctx, 3, kStages), pa, pb, ctx);
 }
 
 Expected<BooleanReport> net_boolean(const PreparedNet& a, const PreparedNet& b, const BooleanOptions& opt,
@@ -662,7 +670,7 @@ Expected<BooleanReport> net_boolean(const PreparedNet& a, const PreparedNet& b, 
                     "check_self_intersection = false");
   ExecContext ctx = ctx_in;
   if (pa->soup.face_count() + pb->soup.face_count() < ctx.sequential_threshold) ctx.threads = 1;
-  return boolean_of(*pa, *pb, opt, ctx, 1, 3);
+  return explained_by_crossing(boolean_of(*pa, *pb, opt, ctx, 1, 3), *pa, *pb, ctx);
 }
 
 }  // namespace atelier

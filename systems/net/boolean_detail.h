@@ -301,6 +301,14 @@ struct Cut {
   }
 };
 
+/// A cut or a Boolean that failed (st) on nets a and b: when either net
+/// crosses itself (a caller's promise broken with the self-intersection
+/// check off: the cut is not defined for it), the check's own error naming
+/// the first crossing pair of faces, the other net (side 1 - first) first;
+/// else st. Runs the self-intersection test: failure paths only.
+[[nodiscard]] Status explain_by_crossing(Status st, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
+                                         const Bvh& bvh_b, const ExecContext& ctx, int first = 1);
+
 /// Cuts A and B along their intersection (either may be open: trimming).
 /// exact_only: every cut triangle by the exact triangulation (the
 /// reference the certified fast path is tested against).

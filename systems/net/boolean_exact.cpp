@@ -749,6 +749,17 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
       std::sort(list.begin(), list.end(), [&](const auto& x, const auto& y) {
         return up ? x.first[ax] < y.first[ax] : y.first[ax] < x.first[ax];
       });
+      // Two points of one edge at one place (different simplices of the
+      // other net there: that net crosses itself, a promise broken with the
+      // self-intersection check off). Inserted "into the edge", the second
+      // would be a zero-length edge: the triangulation is then corrupt (the
+      // crash of issue 24), so refuse it; cut_nets names the crossing faces.
+      for (std::size_t i = 0; i + 1 < list.size(); ++i)
+        if (!(list[i].first[ax] != list[i + 1].first[ax])) {
+          std::ostringstream msg;
+          msg << "net boolean: two intersection points coincide on an edge of triangle " << t << " of " << m.name;
+          return {ErrorCode::kInternal, msg.str()};
+        }
       Ct::Vertex_handle prev = corner[q];
       for (const auto& [p, k] : list) {
         Ct::Face_handle f;

@@ -241,7 +241,7 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
         for (auto& v : tri) v = canon[v];
     });
     for (const Status& st : status)
-      if (!st) return st;
+      if (!st) return explain_by_crossing(st, A, bvh_a, B, bvh_b, ctx, 1 - s.side);
   }
   std::vector<Vec3d> new_points(new_keys.size());
   par::for_each_n(ctx, new_keys.size(), [&](std::size_t i) {
@@ -340,9 +340,14 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
           i = j;
           continue;
         }
-        if (q == kNil) return fail(ErrorCode::kInternal, "net boolean: refined net ", m.name, " has an unmatched edge");
+        if (q == kNil)
+          return explain_by_crossing(
+              fail(ErrorCode::kInternal, "net boolean: refined net ", m.name, " has an unmatched edge"), A, bvh_a, B,
+              bvh_b, ctx, 1 - s.side);
       } else {
-        return fail(ErrorCode::kInternal, "net boolean: refined net ", m.name, " has an edge in ", j - i, " triangles");
+        return explain_by_crossing(
+            fail(ErrorCode::kInternal, "net boolean: refined net ", m.name, " has an edge in ", j - i, " triangles"), A,
+            bvh_a, B, bvh_b, ctx, 1 - s.side);
       }
       if (!cut_edge && s.coplanar[p] == 0 && s.coplanar[q] == 0) uf.unite(p, q);
       i = j;
@@ -361,6 +366,22 @@ Status cut_nets(const TriMesh& A, const Bvh& bvh_a, const TriMesh& B, const Bvh&
   out.new_boxes = std::move(boxes);
   out.ids = std::move(ids);
   return {};
+}
+
+Status explain_by_crossing(Status st, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
+                           const ExecContext& ctx, int first) {
+  if (st || st.code() != ErrorCode::kInternal) return st;
+  for (int k = 0; k < 2; ++k) {
+    const bool use_b = (k == 0) == (first == 1);
+    const TriMesh& m = use_b ? b : a;
+    if (m.tri.empty()) continue;
+    const auto bad = first_self_crossing(m, use_b ? bvh_b : bvh_a, ctx);
+    if (bad[0] != kNil)
+      return fail(ErrorCode::kTopology, "net ", m.name, " intersects itself: faces ", m.face_of[bad[0]], " and ",
+                  m.face_of[bad[1]], " cross (found when the cut failed: check_self_intersection was off, and the ",
+                  "Booleans are not defined for a net that crosses itself)");
+  }
+  return st;
 }
 
 void emit_side(const Cut& cut, const TriMesh& a, const TriMesh& b, int side, const PolygonSoupView& soup, bool reverse,
