@@ -378,8 +378,8 @@ Status explain_by_crossing(Status st, const TriMesh& a, const Bvh& bvh_a, const 
     const auto bad = first_self_crossing(m, use_b ? bvh_b : bvh_a, ctx);
     if (bad[0] != kNil)
       return fail(ErrorCode::kTopology, "net ", m.name, " intersects itself: faces ", m.face_of[bad[0]], " and ",
-                  m.face_of[bad[1]], " cross (found when the cut failed: check_self_intersection was off, and the ",
-                  "Booleans are not defined for a net that crosses itself)");
+                  m.face_of[bad[1]], " cross (the cut failed: it is not defined for a net that crosses itself; ",
+                  "check_self_intersection = false skips the test that refuses such a net up front)");
   }
   return st;
 }

@@ -109,7 +109,7 @@ TEST(NetPromise, CrossingNetsMetByTheCutAreRefusedNamingTheFaces) {
             // The check's own words and faces, then why it was found late.
             EXPECT_EQ(r.status().message().substr(0, expected.size()), expected)
                 << where << ": " << r.status().message();
-            EXPECT_NE(r.status().message().find("check_self_intersection was off"), std::string::npos) << where;
+            EXPECT_NE(r.status().message().find("check_self_intersection = false skips"), std::string::npos) << where;
           }
       // With the check the one-call refuses the same faces up front.
       const auto checked = net_boolean(a, b, {});
