@@ -94,7 +94,10 @@ struct BooleanOptions {
   BooleanJoin join = BooleanJoin::kCut;
   ConnectRule rule = ConnectRule::kTriShortest;  // join by meshes only
   /// Refuse self-intersecting nets (exact test over box-overlapping pairs).
-  /// Off saves about a third of the time when the caller knows.
+  /// Off saves about a third of the time when the caller knows. A crossing
+  /// the cut meets is still refused (kTopology naming two crossing faces,
+  /// found once the cut fails); one it does not meet is copied into the
+  /// result unseen.
   bool check_self_intersection = true;
   /// Re-triangulate every cut triangle in exact arithmetic, without the
   /// certified fast path on doubles (the reference the fast path is tested
