@@ -19,7 +19,9 @@
 // every call) report x_manifold against `ms` and x_manifold_build against
 // `ms_build`; the rows .../prepared/threads:N time net_boolean on two
 // PreparedNets made outside the timing (counter prepare_ms: making both,
-// once) and report x_manifold against `ms`.
+// once; cut_ms, classify_ms, result_ms: the stages' medians) and report
+// x_manifold against `ms`. BM_NetBooleanChain rows time A - B - B' as two
+// one-calls and through a prepared result (BooleanOptions::prepare_result).
 //
 // Pairs: triangulated UV spheres of about 10k, 100k and 1M triangles each
 // (B shifted and turned so the pair is generic), and the shared pairs
