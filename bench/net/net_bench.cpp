@@ -19,7 +19,9 @@
 // every call) report x_manifold against `ms` and x_manifold_build against
 // `ms_build`; the rows .../prepared/threads:N time net_boolean on two
 // PreparedNets made outside the timing (counter prepare_ms: making both,
-// once) and report x_manifold against `ms`.
+// once; cut_ms, classify_ms, result_ms: the stages' medians) and report
+// x_manifold against `ms`. BM_NetBooleanChain rows time A - B - B' as two
+// one-calls and through a prepared result (BooleanOptions::prepare_result).
 //
 // Pairs: triangulated UV spheres of about 10k, 100k and 1M triangles each
 // (B shifted and turned so the pair is generic), and the shared pairs
@@ -36,6 +38,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -45,6 +48,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace {
 
@@ -292,12 +297,87 @@ void BM_NetBooleanPrepared(benchmark::State& state, std::string pair, BooleanOp 
   auto pb = PreparedNet::prepare(c.b, pb_opt, ctx);
   const double prepare_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!pa || !pb) return state.SkipWithError((pa ? pb.status() : pa.status()).to_string().c_str());
+  // The stages' split (cut, classification, result), timed at the stage
+  // reports (ctx.progress is called as each stage ends): medians in ms.
+  std::array<std::vector<double>, 3> stage;
+  std::chrono::steady_clock::time_point last;
+  ctx.progress = [&](std::string_view, std::size_t done, std::size_t) {
+    const auto now = std::chrono::steady_clock::now();
+    if (done >= 1 && done <= 3) stage[done - 1].push_back(std::chrono::duration<double>(now - last).count());
+    last = now;
+  };
   double volume = NAN;
   const double t = median_seconds(
-      state, [&] { return net_boolean(*pa, *pb, o, ctx); }, volume);
+      state,
+      [&] {
+        last = std::chrono::steady_clock::now();
+        return net_boolean(*pa, *pb, o, ctx);
+      },
+      volume);
   if (t <= 0) return;
   report_against_peers(state, pair + op_name(op), t, volume, true);
   state.counters["prepare_ms"] = prepare_s * 1e3;
+  const char* names[] = {"cut_ms", "classify_ms", "result_ms"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (stage[k].empty()) continue;
+    std::sort(stage[k].begin(), stage[k].end());
+    state.counters[names[k]] = stage[k][stage[k].size() / 2] * 1e3;
+  }
+}
+
+/// How BM_NetBooleanChain runs the chain A - B - B'.
+enum class ChainMode { kOneCalls, kPrepared, kFirstStepPrepared };
+
+/// A chain A - B - B' (B' is B moved by a tenth of A's box diagonal, so it
+/// cuts A elsewhere; Cray's B is a slab at FLT_MAX, whose own box would move
+/// it off A). kPrepared: A and both B's are prepared outside the timing and
+/// the first result is returned prepared (BooleanOptions::prepare_result:
+/// its split, every check, its hierarchy) for the second step; kOneCalls:
+/// two one-calls on soups; kFirstStepPrepared: the first step alone with
+/// prepare_result, so that less the .../prepared/threads:1 row of
+/// difference is what the checked prepared result costs (issue 24).
+void BM_NetBooleanChain(benchmark::State& state, std::string pair, int threads, ChainMode mode) {
+  const bool prepared = mode != ChainMode::kOneCalls;
+  Case& c = get_case(pair);
+  if (!c.a.face_count()) return state.SkipWithError("shared data absent");
+  PolygonSoup b2 = c.b;
+  {
+    Vec3d lo = Vec3d::Constant(INFINITY), hi = -lo;
+    for (const Vec3d& p : c.a.positions) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const Vec3d d = 0.1 * (hi - lo).norm() * Vec3d(0.48, 0.6, 0.64);
+    for (Vec3d& p : b2.positions) p += d;
+  }
+  ExecContext ctx;
+  ctx.threads = threads;
+  BooleanOptions o = bench_options(BooleanOp::kAMinusB, true);
+  PrepareOptions pa_opt, pb_opt;
+  pb_opt.name = "B";
+  auto pa = PreparedNet::prepare(c.a, pa_opt, ctx);
+  auto pb = PreparedNet::prepare(c.b, pb_opt, ctx);
+  auto pb2 = PreparedNet::prepare(b2, pb_opt, ctx);
+  if (!pa || !pb || !pb2) return state.SkipWithError("prepare failed");
+  double volume = NAN;
+  const double t = median_seconds(
+      state,
+      [&]() -> Expected<BooleanReport> {
+        if (prepared) {
+          BooleanOptions first = o;
+          first.prepare_result = true;
+          auto r1 = net_boolean(*pa, *pb, first, ctx);
+          if (!r1) return r1;
+          if (!r1->prepared_status) return r1->prepared_status;
+          if (mode == ChainMode::kFirstStepPrepared) return r1;
+          return net_boolean(r1->prepared, *pb2, o, ctx);
+        }
+        auto r1 = net_boolean(c.a, c.b, o, ctx);
+        if (!r1) return r1;
+        return net_boolean(r1->result, b2, o, ctx);
+      },
+      volume);
+  if (t > 0) state.counters["volume"] = volume;
 }
 
 const int kRegistered = [] {
@@ -327,6 +407,16 @@ const int kRegistered = [] {
             ->Unit(benchmark::kMillisecond)
             ->Iterations(std::max(iters, 3));
     }
+  for (const auto& [pair, iters] : pairs) {
+    if (std::string_view(pair) != "cray" && std::string_view(pair) != "sphere100k") continue;
+    for (const auto& [mode, tag] :
+         {std::pair{ChainMode::kOneCalls, "one-call"}, std::pair{ChainMode::kPrepared, "prepared"},
+          std::pair{ChainMode::kFirstStepPrepared, "first-step-prepared"}})
+      benchmark::RegisterBenchmark(("BM_NetBooleanChain/" + std::string(pair) + "/" + tag + "/threads:1").c_str(),
+                                   BM_NetBooleanChain, std::string(pair), 1, mode)
+          ->Unit(benchmark::kMillisecond)
+          ->Iterations(std::max(iters, 3));
+  }
   return 0;
 }();
 

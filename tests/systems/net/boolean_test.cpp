@@ -139,6 +139,39 @@ TEST(NetBoolean, SameBitsForAnyThreadCountAtDefaultSettings) {
   EXPECT_GT(r1.intersection_points, 0u);
 }
 
+// Below the sequential threshold the two nets are still prepared side by
+// side when the caller allows two threads (each task sequential inside):
+// the same bits as one thread in all four operations, and with both nets
+// bad the error is still A's, whichever task ends first.
+TEST(NetBoolean, SmallPairsPreparedSideBySideGiveTheSequentialBits) {
+  const PolygonSoup a = net_test::icosphere(2, 1.0, {0, 0, 0});
+  const PolygonSoup b = net_test::icosphere(2, 0.9, {0.43, 0.17, -0.11});
+  ASSERT_LT(a.face_count() + b.face_count(), ExecContext{}.sequential_threshold);
+  ExecContext two;
+  two.threads = 2;
+  for (BooleanOp op : {BooleanOp::kUnion, BooleanOp::kIntersection, BooleanOp::kAMinusB, BooleanOp::kBMinusA}) {
+    const BooleanReport r1 = run(a, b, op, ExecContext::sequential());
+    const BooleanReport r2 = run(a, b, op, two);
+    ASSERT_EQ(r1.result.positions.size(), r2.result.positions.size()) << static_cast<int>(op);
+    ASSERT_GT(r1.result.positions.size(), 0u);
+    EXPECT_EQ(0, std::memcmp(r1.result.positions.data(), r2.result.positions.data(),
+                             r1.result.positions.size() * sizeof(Vec3d)));
+    EXPECT_EQ(r1.result.face_nodes, r2.result.face_nodes);
+    EXPECT_EQ(std::memcmp(&r1.volume, &r2.volume, sizeof(double)), 0);
+    EXPECT_TRUE(closed_model(r2.result));
+  }
+  // A open (a face missing), B crossing itself: A's error every time.
+  PolygonSoup open = box({0, 0, 0}, {1, 1, 1});
+  open.face_offsets.pop_back();
+  open.face_nodes.resize(open.face_offsets.back());
+  const PolygonSoup crossing = net_test::two_boxes_in_one_net();
+  for (int k = 0; k < 20; ++k) {
+    auto r = net_boolean(open, crossing, {}, two);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_NE(r.status().message().find("net A is open"), std::string::npos) << r.status().message();
+  }
+}
+
 TEST(NetBoolean, TouchingAndNestedCases) {
   const auto a = box({0, 0, 0}, {1, 1, 1});
   // Face to face from outside: the union is one box, the shared face goes.
