@@ -572,10 +572,12 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
   }
   if (opt.join == BooleanJoin::kMeshes) {
     if (Status st = connect_gaps(out, face_side, opt.rule, rep); !st) return st;
-  } else {
+  } else if (opt.mode == BooleanMode::kExact) {
     // The exact result does not cross itself; rounding its new points can
-    // flatten a sliver or fold it over a neighbour (issue 24, round 19):
-    // flat ones are flipped away, and a folded result is never returned.
+    // flatten a sliver or fold it over a neighbour (issue 24, fold15): flat
+    // ones are flipped away, and a folded result is never returned. Not in
+    // paper mode, whose merge moves the points again (and pairs them by
+    // out_index, which a collapse would leave stale).
     std::vector<std::uint8_t> is_new(out.positions.size(), 0);
     for (std::uint32_t id = nA + nB; id < n_ids; ++id)
       if (out_index[id] != kNil) is_new[out_index[id]] = 1;

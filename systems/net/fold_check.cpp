@@ -260,9 +260,7 @@ Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
   TriMesh suspect_mesh = fn.mesh;
   Bvh sb;
   build_bvh(suspect_mesh, sb, ctx);
-  std::vector<std::array<std::uint32_t, 2>> pairs;
-  for (const auto& [i, j] : overlapping_pairs(suspect_mesh, sb, suspect_mesh, sb, ctx))
-    if (i < j) pairs.push_back({i, j});
+  std::vector<std::array<std::uint32_t, 2>> pairs;  // suspect - neighbour, then suspect - suspect
   // Neighbours: the kept pieces of the nets' triangles near a suspect that
   // have no new point (the others are suspects), in output ids; the
   // centroid of a whole n-gon (not in the output) gets an id past them.
@@ -319,16 +317,46 @@ Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     const auto& v = fn.mesh.tri[t];
     flat[t] = collinear(fn.mesh.p[v[0]], fn.mesh.p[v[1]], fn.mesh.p[v[2]]) ? 1 : 0;
   });
-  // Decided in parallel, the first crossing pair in list order reported:
-  // the same answer for any thread count.
-  std::vector<std::uint8_t> crosses(pairs.size(), 0);
-  par::for_each_n(ctx, pairs.size(), [&](std::size_t k) {
-    if (flat[pairs[k][0]] || flat[pairs[k][1]]) return;
-    crosses[k] = triangles_cross(fn.mesh, pairs[k][0], pairs[k][1]) ? 1 : 0;
-  });
-  const auto hit = std::find(crosses.begin(), crosses.end(), std::uint8_t{1});
-  if (hit == crosses.end()) return {};
-  const auto& pr = pairs[static_cast<std::size_t>(hit - crosses.begin())];
+  // The fold net as an open net through the self-check's
+  // first_self_crossing: its certified rules and embedded patches decide
+  // almost every pair without exact arithmetic (the pieces of one cut
+  // triangle are nearly coplanar, where orient3d's filter fails). Where the
+  // fold net is no 2-manifold with boundary (merged copies of a pinched
+  // vertex), the listed pairs are tested one by one instead.
+  std::array<std::uint32_t, 2> pr{kNil, kNil};
+  bool decided = false;
+  {
+    PolygonSoup soup;
+    soup.positions = fn.mesh.p;
+    std::vector<std::uint32_t> back;
+    for (std::uint32_t t = 0; t < fn.mesh.tri.size(); ++t)
+      if (!flat[t]) {
+        soup.add_face(fn.mesh.tri[t]);
+        back.push_back(t);
+      }
+    TriMesh m;
+    if (!back.empty() && build_tri_mesh(soup, "result", m, ctx, true)) {
+      Bvh bvh;
+      build_bvh(m, bvh, ctx);
+      const auto c = first_self_crossing(m, bvh, ctx);
+      decided = true;
+      if (c[0] != kNil) pr = {back[c[0]], back[c[1]]};
+    }
+  }
+  if (!decided) {
+    for (const auto& [i, j] : overlapping_pairs(suspect_mesh, sb, suspect_mesh, sb, ctx))
+      if (i < j) pairs.push_back({i, j});
+    // Decided in parallel, the first crossing pair in list order reported:
+    // the same answer for any thread count.
+    std::vector<std::uint8_t> crosses(pairs.size(), 0);
+    par::for_each_n(ctx, pairs.size(), [&](std::size_t k) {
+      if (flat[pairs[k][0]] || flat[pairs[k][1]]) return;
+      crosses[k] = triangles_cross(fn.mesh, pairs[k][0], pairs[k][1]) ? 1 : 0;
+    });
+    const auto hit = std::find(crosses.begin(), crosses.end(), std::uint8_t{1});
+    if (hit != crosses.end()) pr = pairs[static_cast<std::size_t>(hit - crosses.begin())];
+  }
+  if (pr[0] == kNil) return {};
   // The shortest edge of the two triangles within a few ulps, with a new
   // point: the caller collapses it and checks again (the sliver's points
   // snapped together, a move of a few ulps).
