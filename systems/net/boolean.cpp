@@ -572,6 +572,24 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
   }
   if (opt.join == BooleanJoin::kMeshes) {
     if (Status st = connect_gaps(out, face_side, opt.rule, rep); !st) return st;
+  } else if (opt.mode == BooleanMode::kExact) {
+    // The exact result does not cross itself; rounding its new points can
+    // flatten a sliver or fold it over a neighbour (issue 24, fold15): flat
+    // ones are flipped away, and a folded result is never returned. Not in
+    // paper mode, whose merge moves the points again (and pairs them by
+    // out_index, which a collapse would leave stale).
+    std::vector<std::uint8_t> is_new(out.positions.size(), 0);
+    for (std::uint32_t id = nA + nB; id < n_ids; ++id)
+      if (out_index[id] != kNil) is_new[out_index[id]] = 1;
+    std::vector<std::uint64_t> split_edges;
+    std::array<std::uint32_t, 2> collapse{kNil, kNil};
+    for (int round = 0;; ++round) {
+      const std::size_t fixed =
+          repair_flat_triangles(out, face_side, is_new, split_edges, std::span(&collapse, collapse[0] == kNil ? 0 : 1));
+      Status st = check_rounded_result(cut, A, bvh_a, B, bvh_b, out, out_index, is_new, split_edges, collapse, ctx);
+      if (st) break;
+      if (collapse[0] == kNil || round == 16 || (round > 0 && fixed == 0)) return st;
+    }
   }
   if (Status st = unpinch(out, face_side); !st) return st;
   for (std::uint64_t e : common)

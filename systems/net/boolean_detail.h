@@ -315,6 +315,30 @@ struct Cut {
 [[nodiscard]] Status cut_nets(const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
                               const ExecContext& ctx, Cut& out, bool exact_only = false);
 
+/// The rounded result's repair and fold check (fold_check.cpp, issue 24,
+/// round 19), on the result before unpinch. is_new: per output vertex, a
+/// new (rounded) point. repair_flat_triangles removes each triangle with a
+/// new point whose corners rounded onto one line, the middle one strictly
+/// between the others, and splits the face across its long edge at that
+/// corner (a fan from it); returns how many, split_edges gets the removed
+/// long edges (undirected keys). check_rounded_result tests the result's
+/// triangles with a new point against each other and against the kept
+/// pieces of both nets near them (exact triangles_cross; coincident points
+/// count as one; flat triangles left out): a kTopology error naming them
+/// when a pair crosses, and in short_edge the shortest edge of the two
+/// within 16 ulps that has a new point (else kNil): collapse = {that edge}
+/// first (the new point snapped onto the other end when the link condition
+/// allows it), then the check again, may remove the fold.
+std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& face_side,
+                                  std::span<const std::uint8_t> is_new, std::vector<std::uint64_t>& split_edges,
+                                  std::span<const std::array<std::uint32_t, 2>> collapse = {});
+[[nodiscard]] Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
+                                          const Bvh& bvh_b, const PolygonSoup& out,
+                                          std::span<const std::uint32_t> out_index,
+                                          std::span<const std::uint8_t> is_new,
+                                          std::span<const std::uint64_t> split_edges,
+                                          std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx);
+
 /// Appends the kept pieces of one side (`keep` of its CutSide) to `out`:
 /// untouched polygons whole (n-gons stay n-gons), cut ones as triangles;
 /// out_index maps ids to output vertices (kNil: not yet used), face_side

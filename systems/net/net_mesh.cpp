@@ -67,6 +67,36 @@ bool has_equal_positions(std::span<const Vec3d> p, std::span<const std::uint32_t
   return false;
 }
 
+/// Whether the polygon with corners c (four or more) is exactly planar and
+/// strictly convex, decided with exact orient3d against one point q off its
+/// plane: every corner on the plane of the first three, every turn
+/// (c[i], c[i+1], c[i+2]) and every fan triangle (c[0], c[i], c[i+1]) of
+/// the same nonzero sign (the fan condition rules out stars, whose turns
+/// all agree). Such a polygon is split as the fan from its first corner,
+/// without a new point: the centroid, rounded to doubles, is in general off
+/// the plane, and the bent triangles about it can cross a neighbour once
+/// the Boolean's new points are rounded (issue 24, round 19;
+/// docs/glossary.md, "fan split of planar n-gons").
+bool planar_convex(std::span<const Vec3d> p, std::span<const std::uint32_t> c) {
+  const std::size_t n = c.size();
+  const Vec3d &p0 = p[c[0]], &p1 = p[c[1]], &p2 = p[c[2]];
+  int s = 0;
+  Vec3d q = p0;
+  for (int k = 0; k < 3 && s == 0; ++k) {
+    q = p0;
+    q[k] += 1.0 + std::abs(q[k]);  // always moves q[k] (no overflow below 1e308)
+    s = orient3d(p0, p1, p2, q);
+  }
+  if (s == 0) return false;  // p0, p1, p2 collinear (or q did not leave the line)
+  for (std::size_t i = 3; i < n; ++i)
+    if (orient3d(p0, p1, p2, p[c[i]]) != 0) return false;
+  for (std::size_t i = 0; i < n; ++i)
+    if (orient3d(p[c[i]], p[c[(i + 1) % n]], p[c[(i + 2) % n]], q) != s) return false;
+  for (std::size_t i = 2; i + 1 < n; ++i)
+    if (orient3d(p0, p[c[i]], p[c[i + 1]], q) != s) return false;
+  return true;
+}
+
 }  // namespace
 
 void sort_edge_keys(std::span<const std::uint64_t> key, std::size_t n_vertices, std::vector<std::uint32_t>& order) {
@@ -105,6 +135,7 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
   std::vector<std::uint8_t> used(nv, 0);
   std::vector<std::uint32_t> face_using(nv, kNil);  // a face using each vertex, for messages
   std::size_t extra = 0, tris = 0;
+  std::vector<std::uint8_t> fan_split(nf, 0);  // per polygon: split as a fan (planar_convex)
   for (std::size_t f = 0; f < nf; ++f) {
     const std::uint32_t b = soup.face_offsets[f], e = soup.face_offsets[f + 1];
     if (e < b || e - b < 3) return fail(ErrorCode::kDegenerate, "net ", nm, ": face ", f, " has fewer than 3 corners");
@@ -119,8 +150,15 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
       used[v] = 1;
       if (face_using[v] == kNil) face_using[v] = static_cast<std::uint32_t>(f);
     }
-    if (e - b > 3) ++extra;
-    tris += e - b > 3 ? e - b : 1;
+  }
+  par::for_each_n(ctx, nf, [&](std::size_t f) {
+    const std::uint32_t b = soup.face_offsets[f], e = soup.face_offsets[f + 1];
+    if (e - b > 3) fan_split[f] = planar_convex(soup.positions, soup.face_nodes.subspan(b, e - b)) ? 1 : 0;
+  });
+  for (std::size_t f = 0; f < nf; ++f) {
+    const std::uint32_t n = soup.face_offsets[f + 1] - soup.face_offsets[f];
+    extra += n > 3 && !fan_split[f] ? 1 : 0;
+    tris += n == 3 ? 1 : (fan_split[f] ? n - 2 : n);
   }
   out.p.assign(soup.positions.begin(), soup.positions.end());
   out.net_vertices = nv;
@@ -134,6 +172,13 @@ Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& ou
     if (e - b == 3) {
       out.tri.push_back({soup.face_nodes[b], soup.face_nodes[b + 1], soup.face_nodes[b + 2]});
       out.face_of.push_back(static_cast<std::uint32_t>(f));
+      continue;
+    }
+    if (fan_split[f]) {
+      for (std::uint32_t i = b + 1; i + 1 < e; ++i) {
+        out.tri.push_back({soup.face_nodes[b], soup.face_nodes[i], soup.face_nodes[i + 1]});
+        out.face_of.push_back(static_cast<std::uint32_t>(f));
+      }
       continue;
     }
     // Seed 004 section 2: an n-gon becomes n triangles around its centroid.

@@ -42,17 +42,41 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 using Kex = CGAL::Exact_predicates_exact_constructions_kernel;
 using Kin = CGAL::Exact_predicates_inexact_constructions_kernel;
 
+/// Whether the Booleans split polygon c as the fan from its first corner:
+/// exactly planar and strictly convex (docs/glossary.md, "fan split of
+/// planar n-gons"). Decided here with CGAL's exact coplanar and
+/// coplanar_orientation, apart from the library's own test.
+bool split_as_fan(const PolygonSoup& s, std::span<const std::uint32_t> c) {
+  std::vector<Kin::Point_3> p;
+  for (std::uint32_t v : c) p.emplace_back(s.positions[v].x(), s.positions[v].y(), s.positions[v].z());
+  const std::size_t n = p.size();
+  if (CGAL::collinear(p[0], p[1], p[2])) return false;
+  for (std::size_t i = 3; i < n; ++i)
+    if (!CGAL::coplanar(p[0], p[1], p[2], p[i])) return false;
+  const auto turn = CGAL::coplanar_orientation(p[0], p[1], p[2]);
+  for (std::size_t i = 0; i < n; ++i)
+    if (CGAL::coplanar_orientation(p[i], p[(i + 1) % n], p[(i + 2) % n]) != turn) return false;
+  for (std::size_t i = 2; i + 1 < n; ++i)
+    if (CGAL::coplanar_orientation(p[0], p[i], p[i + 1]) != turn) return false;
+  return true;
+}
+
 template <class K>
 CGAL::Surface_mesh<typename K::Point_3> mesh_of(const PolygonSoup& s) {
   std::vector<typename K::Point_3> pts;
   for (const Vec3d& p : s.positions) pts.emplace_back(p.x(), p.y(), p.z());
-  // n-gons split around their centroid as the Booleans split them (CGAL's
-  // own triangulation would pick diagonals of slightly warped quads).
+  // n-gons split as the Booleans split them (CGAL's own triangulation
+  // would pick diagonals of slightly warped quads): planar convex ones as a
+  // fan, the others around their centroid.
   std::vector<std::vector<std::size_t>> polys;
   for (std::size_t f = 0; f < s.face_count(); ++f) {
     const auto c = s.face(f);
     if (c.size() == 3) {
       polys.emplace_back(c.begin(), c.end());
+      continue;
+    }
+    if (split_as_fan(s, c)) {
+      for (std::size_t i = 1; i + 1 < c.size(); ++i) polys.push_back({c[0], c[i], c[i + 1]});
       continue;
     }
     Vec3d m = Vec3d::Zero();
@@ -140,7 +164,8 @@ constexpr BooleanOp kOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, Boole
 struct Tally {
   std::map<std::string, int> cases;  // per family
   int booleans = 0, cgal_declined = 0, pinched = 0, invalid_inputs = 0, chains = 0, paper_ok = 0, paper_refused = 0;
-  std::vector<std::string> failures;
+  int fold_refused = 0;  // refused as folded once rounded (the guarantee's error, issue 24 fold15)
+  std::vector<std::string> failures, folds;
   void fail(const std::string& s) {
     if (failures.size() < 200) failures.push_back(s);
   }
@@ -162,7 +187,15 @@ std::optional<BooleanReport> checked(const PolygonSoup& a, const PolygonSoup& b,
   ++t.booleans;
   auto r = net_boolean(a, b, o);
   if (!r) {
-    t.fail(what + ": refused: " + r.status().to_string());
+    // A result that crosses itself once rounded is refused with the faces
+    // named (never returned as ok): counted and listed, not a failure.
+    if (r.status().code() == ErrorCode::kTopology &&
+        r.status().message().find("crosses itself once its new points are rounded") != std::string::npos) {
+      ++t.fold_refused;
+      if (t.folds.size() < 200) t.folds.push_back(what + ": " + r.status().message());
+    } else {
+      t.fail(what + ": refused: " + r.status().to_string());
+    }
     return std::nullopt;
   }
   const double scale = std::abs(soup_volume(a)) + std::abs(soup_volume(b));
@@ -241,7 +274,10 @@ void check_pair(const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup& c
       o.op = op2;
       o.check_self_intersection = true;
       auto p = net_boolean(r->prepared, *pc, o);
-      if (!p)
+      if (!p && p.status().code() == ErrorCode::kTopology &&
+          p.status().message().find("crosses itself once its new points are rounded") != std::string::npos)
+        ++t.fold_refused;
+      else if (!p)
         t.fail(w2 + " (prepared): refused: " + p.status().to_string());
       else if (s && p->volume != s->volume)
         t.fail(w2 + " (prepared): volume " + std::to_string(p->volume) + " against " + std::to_string(s->volume));
@@ -424,7 +460,8 @@ void run_campaign(std::uint32_t seed, int cases, Tally& t, int only = -1) {
 void report(const Tally& t) {
   std::cout << "booleans " << t.booleans << ", chains " << t.chains << ", CGAL declined " << t.cgal_declined
             << ", pinched results " << t.pinched << ", invalid inputs " << t.invalid_inputs << ", paper ok "
-            << t.paper_ok << ", paper refused " << t.paper_refused << "\n";
+            << t.paper_ok << ", paper refused " << t.paper_refused << ", refused as folded " << t.fold_refused << "\n";
+  for (const std::string& s : t.folds) std::cout << "FOLD " << s << "\n";
   for (const auto& [k, v] : t.cases) std::cout << "  " << k << ": " << v << " pairs\n";
   for (const std::string& s : t.failures) std::cout << "FAIL " << s << "\n";
 }
@@ -441,8 +478,8 @@ TEST(NetDegeneratePairs, DISABLED_BroadCampaign) {
 }
 
 /// The compact campaign: the first nine cases of seed 1 (every family once,
-/// shifts and quarter turns twice; case 9 on is where the broad campaign's
-/// first failure lies, kept below as a disabled test). A few seconds.
+/// shifts and quarter turns twice; case 9, the broad campaign's first
+/// failure on main, is its own test below). A few seconds.
 TEST(NetDegeneratePairs, CompactCampaignAgreesWithCgal) {
   Tally t;
   run_campaign(1u, 9, t);
@@ -477,9 +514,18 @@ TEST(NetDegeneratePairs, DISABLED_KnownHalfSizeUvSphereInsideSharingFaces) {
   known_case(20);
 }
 // A box and its copy turned a quarter turn about its centre's z axis by
-// Eigen's AngleAxis (inexact: a near-copy): results intersect themselves.
-TEST(NetDegeneratePairs, DISABLED_KnownNearCopyOfABox) {
-  known_case(9);
+// Eigen's AngleAxis (inexact: a near-copy): results intersected themselves
+// (issue 24, round 17). The boxes' quads are planar and convex: split as
+// fans now, without centroids off their planes (issue 24, fold15), the
+// results pass check_pair (CGAL's volume, closed_model, CGAL's
+// self-intersection test) with no fold refused.
+TEST(NetDegeneratePairs, NearCopyOfABoxDoesNotFold) {
+  Tally t;
+  run_campaign(1u, 10, t, 9);
+  report(t);
+  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " failures";
+  EXPECT_EQ(t.fold_refused, 0);
+  EXPECT_GE(t.booleans, 6);
 }
 // An icosphere (level 1) turned a fifth turn about the axis through its
 // vertex 0 (a near-copy sharing the fan about vertex 0): A - B had an edge
@@ -570,9 +616,10 @@ TEST(NetDegeneratePairs, ShiftedPrismsChainRefusesAFoldedResultClearly) {
       }
     }
   }
-  // Today the union is the folded one (the rounding defect left open,
-  // docs/performance.md); the checks above hold either way.
-  RecordProperty("refused_crossing", refused_crossing);
+  // The union folded on main (its side quads split about centroids off
+  // their planes); split as fans (issue 24, fold15) neither result crosses
+  // itself, so both are prepared.
+  EXPECT_EQ(refused_crossing, 0);
 }
 // UV spheres turned by their own symmetry (inexact): B - A (case 30) and
 // A - B (37) had an edge of four faces (issue 24, round 18): unpinch paired
