@@ -70,6 +70,8 @@ CLI::App* add_boolean_subcommand(CLI::App& app, NetBooleanOptions& opt) {
   c->add_flag("--no-self-check", opt.no_self_check, "skip the self-intersection test of the inputs");
   c->add_flag("--exact-refinement", opt.exact_refinement,
               "re-triangulate every cut triangle exactly (no certified double fast path)");
+  c->add_flag("--check-result", opt.check_result,
+              "exact mode: repair and check the result after rounding; refuse one that crosses itself");
   return c;
 }
 
@@ -82,6 +84,7 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
   o.rule = need(parse_connect_rule(opt.rule));
   o.check_self_intersection = !opt.no_self_check;
   o.exact_refinement = opt.exact_refinement;
+  o.check_result = opt.check_result;
   check_mesh_output(opt.out);
   PolygonSoup a = read_net(opt.a);
   std::vector<PolygonSoup> bs;

@@ -27,6 +27,7 @@ struct NetBooleanOptions {
   std::string rule = "a";
   bool no_self_check = false;
   bool exact_refinement = false;  // BooleanOptions::exact_refinement
+  bool check_result = false;      // BooleanOptions::check_result
 };
 struct NetTrimOptions {
   std::filesystem::path mesh, curve, out, json, band_out;

@@ -369,6 +369,7 @@ def boolean(
     self_check: bool = True,
     exact_refinement: bool = False,
     prepare_result: bool = False,
+    check_result: bool = False,
     threads: int = 0,
     progress: Progress = None,
 ) -> tuple[npt.NDArray[np.float64], Union[npt.NDArray[np.uint32], list[npt.NDArray[np.uint32]]], dict[str, Any]]:

@@ -83,7 +83,7 @@ Long call. Raises ValueError with the engine's message (naming the face).
       "boolean",
       [](const MeshLike& a, const MeshLike& b, const std::string& op, const std::string& mode,
          const std::string& correspondence, const std::string& join, const std::string& rule, bool self_check,
-         bool exact_refinement, bool prepare_result, int threads, const Progress& progress) {
+         bool exact_refinement, bool prepare_result, bool check_result, int threads, const Progress& progress) {
         BooleanOptions o;
         o.op = unwrap(parse_boolean_op(op));
         o.mode = unwrap(parse_boolean_mode(mode));
@@ -93,6 +93,7 @@ Long call. Raises ValueError with the engine's message (naming the face).
         o.check_self_intersection = self_check;
         o.exact_refinement = exact_refinement;
         o.prepare_result = prepare_result;
+        o.check_result = check_result;
         BooleanReport r;
         if (py::isinstance<PreparedNet>(a) || py::isinstance<PreparedNet>(b) || prepare_result) {
           // A mesh operand is prepared (named "A" or "B", as the one-call
@@ -162,7 +163,7 @@ Long call. Raises ValueError with the engine's message (naming the face).
       py::arg("a"), py::arg("b"), py::kw_only(), py::arg("op") = "union", py::arg("mode") = "exact",
       py::arg("correspondence") = "visual", py::arg("join") = "cut", py::arg("rule") = "a",
       py::arg("self_check") = true, py::arg("exact_refinement") = false, py::arg("prepare_result") = false,
-      py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
+      py::arg("check_result") = false, py::arg("threads") = 0, py::arg("progress") = py::none(), R"doc(
 Union, intersection or difference of two closed nets (``atelier boolean``; seed 004).
 
 a, b: the nets, each a Mesh (``read_mesh``), a (vertices, faces) pair
@@ -181,6 +182,9 @@ prepare_result: also return the result as a PreparedNet in
     ``report["prepared"]`` (with prepare's checks, self-intersection
     included: rounding can fold a sliver), or the reason it cannot be one
     in ``report["prepared_error"]`` (an empty or self-crossing result).
+check_result: exact mode: repair the result once its new points are
+    rounded to doubles and refuse it (ValueError naming two triangles) if it
+    still crosses itself (``--check-result``; costs 1.2-2.3x a Boolean).
 
 Returns (vertices, faces, report): the result's (n, 3) float64 vertices and
 faces (views onto the result, zero copy; the same bits as the CLI for the

@@ -572,7 +572,7 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
   }
   if (opt.join == BooleanJoin::kMeshes) {
     if (Status st = connect_gaps(out, face_side, opt.rule, rep); !st) return st;
-  } else if (opt.mode == BooleanMode::kExact) {
+  } else if (opt.mode == BooleanMode::kExact && opt.check_result) {
     // The exact result does not cross itself; rounding its new points can
     // flatten a sliver or fold it over a neighbour (issue 24, fold15): flat
     // ones are flipped away, and a folded result is never returned. Not in

@@ -109,6 +109,15 @@ struct BooleanOptions {
   /// (a sliver folded over a neighbour), and paper mode and connecting
   /// meshes move or add faces.
   bool prepare_result = false;
+  /// Exact mode, joined by the cut: repair and check the result once its
+  /// new points are rounded to doubles (fold_check.cpp). Slivers that
+  /// rounded flat are flipped away, a fold within 16 ulps collapsed; a
+  /// result that still crosses itself is refused (kTopology naming two
+  /// triangles) rather than returned. Off by default: folds occur only on
+  /// degenerate pairs (near-copies, ulp-scale touches: 72 of 2,850 Booleans
+  /// of the seed-2 degenerate campaign), and the check costs 1.2-2.3x a
+  /// Boolean (docs/performance.md, fold15). prepare_result checks fully.
+  bool check_result = false;
 };
 
 /// Valences (edge counts) of the vertices of the merged intersection

@@ -164,7 +164,8 @@ constexpr BooleanOp kOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, Boole
 struct Tally {
   std::map<std::string, int> cases;  // per family
   int booleans = 0, cgal_declined = 0, pinched = 0, invalid_inputs = 0, chains = 0, paper_ok = 0, paper_refused = 0;
-  int fold_refused = 0;  // refused as folded once rounded (the guarantee's error, issue 24 fold15)
+  int fold_refused = 0;      // refused as folded once rounded (the guarantee's error, issue 24 fold15)
+  bool check_result = true;  // BooleanOptions::check_result of the campaign's Booleans
   std::vector<std::string> failures, folds;
   void fail(const std::string& s) {
     if (failures.size() < 200) failures.push_back(s);
@@ -183,6 +184,7 @@ std::optional<BooleanReport> checked(const PolygonSoup& a, const PolygonSoup& b,
   BooleanOptions o;
   o.op = op;
   o.prepare_result = prepare_result;
+  o.check_result = t.check_result;  // the guarantee under test: never ok with a fold
   o.exact_refinement = std::getenv("ATELIER_CAMPAIGN_EXACT_REFINEMENT") != nullptr;  // the reference path
   ++t.booleans;
   auto r = net_boolean(a, b, o);
@@ -273,6 +275,7 @@ void check_pair(const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup& c
       BooleanOptions o;
       o.op = op2;
       o.check_self_intersection = true;
+      o.check_result = t.check_result;
       auto p = net_boolean(r->prepared, *pc, o);
       if (!p && p.status().code() == ErrorCode::kTopology &&
           p.status().message().find("crosses itself once its new points are rounded") != std::string::npos)
@@ -519,6 +522,25 @@ TEST(NetDegeneratePairs, DISABLED_KnownHalfSizeUvSphereInsideSharingFaces) {
 // fans now, without centroids off their planes (issue 24, fold15), the
 // results pass check_pair (CGAL's volume, closed_model, CGAL's
 // self-intersection test) with no fold refused.
+// BooleanOptions::check_result is what keeps a folded result from being
+// returned: the half-size UV sphere inside sharing faces (case 20) gives
+// results that cross themselves by CGAL's exact test without it, and with
+// it every such result is refused as folded (none returned crossing).
+TEST(NetDegeneratePairs, CheckResultRefusesWhatRoundingFolds) {
+  Tally off;
+  off.check_result = false;
+  run_campaign(1u, 21, off, 20);
+  const auto crossing = std::count_if(off.failures.begin(), off.failures.end(), [](const std::string& f) {
+    return f.find("the result intersects itself") != std::string::npos;
+  });
+  EXPECT_GE(crossing, 1) << "case 20 no longer folds without the check: pick another case";
+  EXPECT_EQ(off.fold_refused, 0);
+  Tally on;
+  run_campaign(1u, 21, on, 20);
+  report(on);
+  EXPECT_TRUE(on.failures.empty()) << on.failures.size() << " failures";
+  EXPECT_GE(on.fold_refused, 1);  // fewer than `crossing`: a refused step has no chain after it
+}
 TEST(NetDegeneratePairs, NearCopyOfABoxDoesNotFold) {
   Tally t;
   run_campaign(1u, 10, t, 9);
@@ -663,7 +685,9 @@ TEST(NetDegeneratePairs, AChainIntoTheCavityItFillsHasTheVolumesByHand) {
     ASSERT_TRUE(r.has_value()) << i << ": " << r.status().to_string();
     EXPECT_NEAR(r->volume, by_hand[i], tol) << i;
     EXPECT_EQ(r->result.face_count(), faces[i]) << i;
-    if (faces[i] > 0) EXPECT_TRUE(net_test::closed_model(r->result)) << i;
+    if (faces[i] > 0) {
+      EXPECT_TRUE(net_test::closed_model(r->result)) << i;
+    }
     const auto p = net_boolean(x->prepared, *pc, q);
     ASSERT_TRUE(p.has_value()) << i << ": " << p.status().to_string();
     EXPECT_EQ(p->volume, r->volume) << i;
