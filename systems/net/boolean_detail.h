@@ -98,6 +98,9 @@ struct TriMesh {
 [[nodiscard]] Status build_tri_mesh(const PolygonSoupView& soup, std::string name, TriMesh& out, const ExecContext& ctx,
                                     bool open = false);
 
+/// Triangle t's box: min x, y, z then max x, y, z (net_mesh.cpp).
+[[nodiscard]] std::array<double, 6> tri_box(const TriMesh& m, std::uint32_t t);
+
 /// Indices of `key` (undirected edges (min << 32) | max over vertices
 /// below n_vertices) in order of (key, index): a counting sort on the
 /// smaller vertex, then each vertex's few edges sorted in place. Linear in

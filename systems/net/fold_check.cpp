@@ -83,14 +83,9 @@ struct FoldNet {
     }
     mesh.box.resize(mesh.tri.size());
     for (std::size_t t = 0; t < mesh.tri.size(); ++t) {
-      auto& v = mesh.tri[t];
-      for (auto& x : v)
+      for (auto& x : mesh.tri[t])
         x = local[static_cast<std::size_t>(std::lower_bound(used.begin(), used.end(), x) - used.begin())];
-      auto& b = mesh.box[t];
-      for (int k = 0; k < 3; ++k) {
-        b[static_cast<std::size_t>(k)] = std::min({mesh.p[v[0]][k], mesh.p[v[1]][k], mesh.p[v[2]][k]});
-        b[static_cast<std::size_t>(k + 3)] = std::max({mesh.p[v[0]][k], mesh.p[v[1]][k], mesh.p[v[2]][k]});
-      }
+      mesh.box[t] = tri_box(mesh, static_cast<std::uint32_t>(t));
     }
   }
 };

@@ -15,8 +15,6 @@
 
 namespace atelier::net_detail {
 
-namespace {
-
 std::array<double, 6> tri_box(const TriMesh& m, std::uint32_t t) {
   const auto& v = m.tri[t];
   std::array<double, 6> b{};
@@ -26,6 +24,8 @@ std::array<double, 6> tri_box(const TriMesh& m, std::uint32_t t) {
   }
   return b;
 }
+
+namespace {
 
 bool overlap(const std::array<double, 6>& x, const std::array<double, 6>& y) noexcept {
   return x[0] <= y[3] && y[0] <= x[3] && x[1] <= y[4] && y[1] <= x[4] && x[2] <= y[5] && y[2] <= x[5];
