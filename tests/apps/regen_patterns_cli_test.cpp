@@ -102,7 +102,9 @@ TEST(RegenPatternsCli, TheTopIsCutAlongItsMarkedSeamsUnlessTold) {
     const auto p = nlohmann::json::parse(read_bytes(recs[0]))["patterns"]["top"];
     EXPECT_EQ(p["pieces"].get<std::size_t>(), marked ? 5u : 2u);
     EXPECT_EQ(p["flipped"].get<std::size_t>(), 0u);
-    if (marked) EXPECT_LT(p["max_seam_difference_mm"].get<double>(), 2.0);
+    if (marked) {
+      EXPECT_LT(p["max_seam_difference_mm"].get<double>(), 2.0);
+    }
   }
 }
 

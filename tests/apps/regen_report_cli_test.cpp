@@ -89,7 +89,9 @@ TEST(RegenReportCli, TheCsvHoldsEveryRecordAndThePicturesAreColouredByTheFit) {
               read_bytes(d / "t2" / "pictures" / (most_strained + kind)))
         << kind;
   }
-  if (twice) EXPECT_EQ(read_bytes(o / "bodies.csv"), read_bytes(d / "t2" / "bodies.csv"));
+  if (twice) {
+    EXPECT_EQ(read_bytes(o / "bodies.csv"), read_bytes(d / "t2" / "bodies.csv"));
+  }
 
   const std::string html = read_bytes(o / "report.html");
   EXPECT_TRUE(contains(html, "<a id=\"csv\" href=\"bodies.csv\" download>"));

@@ -121,7 +121,9 @@ TEST(FeatureFile, FamilyMembersCarryTheCurvesByTopology) {
     const auto a = *feature_curve_polyline(*moved, got->id), b = *feature_curve_polyline(*member, c.id);
     EXPECT_LE(polyline_gap(a, b), 1e-9) << c.name;
     // Not trivially: the member's curve is elsewhere than the reference's.
-    if (c.name == "waist") EXPECT_GT(polyline_gap(a, *feature_curve_polyline(*ref, got->id)), 0.01);
+    if (c.name == "waist") {
+      EXPECT_GT(polyline_gap(a, *feature_curve_polyline(*ref, got->id)), 0.01);
+    }
   }
 }
 

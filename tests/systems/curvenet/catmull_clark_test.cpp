@@ -163,7 +163,9 @@ TEST(CatmullClark, CountsFollowTheFormulas) {
         const auto [a, b] = c.edge_verts[e];
         EXPECT_NE(rebuilt->find_edge(a, b), kNoCorner);
         for (std::uint32_t k : c.edge_corners[e])
-          if (k != kNoCorner) EXPECT_EQ(c.corner_edge[k], e);
+          if (k != kNoCorner) {
+            EXPECT_EQ(c.corner_edge[k], e);
+          }
       }
     }
     // The refined surface is a valid oriented manifold.

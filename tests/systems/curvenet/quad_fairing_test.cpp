@@ -74,7 +74,9 @@ TEST(QuadFairing, PerturbedPlanarGridReturnsToTheGrid) {
   EXPECT_GT(r->energy_before, 1e-2);
   EXPECT_LT(r->energy_after, 1e-20);
   for (std::size_t v = 0; v < before.size(); ++v)
-    if (g.fixed[v]) EXPECT_EQ(0, std::memcmp(g.mesh.positions[v].data(), before[v].data(), sizeof(Vec3d)));
+    if (g.fixed[v]) {
+      EXPECT_EQ(0, std::memcmp(g.mesh.positions[v].data(), before[v].data(), sizeof(Vec3d)));
+    }
 }
 
 TEST(QuadFairing, NeverRaisesTheEnergyNorMovesFixedVertices) {
@@ -99,7 +101,9 @@ TEST(QuadFairing, NeverRaisesTheEnergyNorMovesFixedVertices) {
     EXPECT_NEAR(f->energy_before, fairing_energy(start, cm.mesh).value(), 1e-9 * f->energy_before);
     EXPECT_NEAR(f->energy_after, fairing_energy(p, cm.mesh).value(), 1e-9 * f->energy_before);
     for (std::size_t v = 0; v < p.size(); ++v)
-      if (cm.fixed[v]) ASSERT_EQ(0, std::memcmp(p[v].data(), start[v].data(), sizeof(Vec3d)));
+      if (cm.fixed[v]) {
+        ASSERT_EQ(0, std::memcmp(p[v].data(), start[v].data(), sizeof(Vec3d)));
+      }
     // A minimum: moving free vertices at random never lowers E.
     const double e0 = f->energy_after;
     for (int k = 0; k < 5; ++k) {
