@@ -281,7 +281,8 @@ int iterate_float(const EdgeTransfer& t, std::span<const Vec3d> decoded, std::sp
         for (std::size_t v = 0; v < n; ++v) {
           F3 s = g_prev[v];
           for (std::size_t c = 0; c < cols; ++c)
-            for (int k = 0; k < 3; ++k) s[k] -= static_cast<float>(gamma[static_cast<Eigen::Index>(c)]) * dg[c * n + v][k];
+            for (int k = 0; k < 3; ++k)
+              s[k] -= static_cast<float>(gamma[static_cast<Eigen::Index>(c)]) * dg[c * n + v][k];
           u[v] = s;
         }
         const double e_aa = turn_f(u);
