@@ -250,6 +250,8 @@ struct PointBox {
 /// default; off: every cut triangle through CGAL's CDT, the reference the
 /// tests compare with). Process-wide; for tests and measurements.
 void set_direct_split(bool on) noexcept;
+/// How many cut triangles the two-point split took so far (all threads).
+[[nodiscard]] std::uint64_t direct_split_count() noexcept;
 
 /// Refines triangle t of one side (0: A, 1: B) by the given intersection
 /// points (keys whose simplex on this side lies in the triangle's closure)

@@ -841,8 +841,13 @@ struct SplitPattern {
 };
 constexpr int kSplitKeys = 27;  // 3 x 3 edge pairs (6 used) x 3 in-circle signs
 std::atomic<bool> direct_split_on{true};
+std::atomic<std::uint64_t> direct_split_taken{0};
 
 }  // namespace
+
+std::uint64_t direct_split_count() noexcept {
+  return direct_split_taken.load(std::memory_order_relaxed);
+}
 
 void set_direct_split(bool on) noexcept {
   direct_split_on.store(on, std::memory_order_relaxed);
@@ -1028,6 +1033,7 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
           }
           out.push_back({vert[tr[0]].id, vert[tr[1]].id, vert[tr[2]].id});
         }
+        direct_split_taken.fetch_add(1, std::memory_order_relaxed);
         return true;
       }
     }
