@@ -9,7 +9,9 @@
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <random>
 
@@ -67,9 +69,9 @@ TEST(NetCutDirect, LevelPlaneRoundingIsTheExactValueRoundedToNearest) {
       q[j] = unit(rng) * scale;
     }
     // The ends on both sides of the plane.
-    const double gap = std::abs(unit(rng)) * scale + 1e-3 * scale;
-    p[k] = level + gap;
-    q[k] = level - std::abs(unit(rng)) * scale - 1e-3 * scale;
+    const double reach = std::max(scale, std::abs(level));  // the ends off the plane in doubles
+    p[k] = level + (std::abs(unit(rng)) + 1e-3) * reach;
+    q[k] = level - (std::abs(unit(rng)) + 1e-3) * reach;
     if (kind == 1) {
       // An exact midpoint: symmetric ends, so t = 1/2 and x_j = (p_j + q_j) / 2,
       // with p_j + q_j an odd multiple of the smallest ulp: a tie.
@@ -89,7 +91,7 @@ TEST(NetCutDirect, LevelPlaneRoundingIsTheExactValueRoundedToNearest) {
     const Vec3d want = cut_direct_reference(p, q, k, level);
     Vec3d got(NAN, NAN, NAN);
     ++checked;
-    if (!round_edge_through_level_plane(p, q, k, level, got)) continue;
+    if (!net_detail::round_edge_through_level_plane(p, q, k, level, got)) continue;
     ++taken;
     ties += kind == 1;
     EXPECT_TRUE(cut_direct_same_bits(got, want)) << "trial " << trial << " k " << k << ": got (" << got.transpose() << ") want ("
@@ -103,14 +105,14 @@ TEST(NetCutDirect, LevelPlaneRoundingIsTheExactValueRoundedToNearest) {
 TEST(NetCutDirect, LevelPlaneRoundingRefusesWhatItCannotTell) {
   Vec3d x(7, 7, 7);
   // The edge in the plane.
-  EXPECT_FALSE(round_edge_through_level_plane({0, 0, 1}, {1, 1, 1}, 2, 1.0, x));
+  EXPECT_FALSE(net_detail::round_edge_through_level_plane({0, 0, 1}, {1, 1, 1}, 2, 1.0, x));
   // Huge coordinates (products would overflow).
-  EXPECT_FALSE(round_edge_through_level_plane({1e300, 0, 1}, {-1e300, 1, -1}, 2, 0.0, x));
+  EXPECT_FALSE(net_detail::round_edge_through_level_plane({1e300, 0, 1}, {-1e300, 1, -1}, 2, 0.0, x));
   // A coordinate rounding to zero (the guess is zero).
-  EXPECT_FALSE(round_edge_through_level_plane({-1, 1, 1}, {1, 1, -1}, 2, 0.0, x));
+  EXPECT_FALSE(net_detail::round_edge_through_level_plane({-1, 1, 1}, {1, 1, -1}, 2, 0.0, x));
   EXPECT_EQ(x, Vec3d(7, 7, 7));
   // Cray-like: a small edge across the slab's top.
-  ASSERT_TRUE(round_edge_through_level_plane({1234.5, -77.25, -99.0}, {1240.0, -70.0, -101.5}, 2, -100.0, x));
+  ASSERT_TRUE(net_detail::round_edge_through_level_plane({1234.5, -77.25, -99.0}, {1240.0, -70.0, -101.5}, 2, -100.0, x));
   EXPECT_TRUE(cut_direct_same_bits(x, cut_direct_reference({1234.5, -77.25, -99.0}, {1240.0, -70.0, -101.5}, 2, -100.0)));
   EXPECT_EQ(x.z(), -100.0);
 }
@@ -162,21 +164,21 @@ TEST(NetCutDirect, TwoPointSplitsGiveTheCdtsBytes) {
   }
   // Cray's kind: spheres across the FLT_MAX slab.
   for (PolygonSoup& s : net_test::spheres_across_the_slab(4)) pairs.emplace_back(std::move(s), net_test::flt_max_slab());
-  const std::uint64_t taken0 = direct_split_count();
+  const std::uint64_t taken0 = net_detail::direct_split_count();
   int compared = 0;
   for (std::size_t i = 0; i < pairs.size(); ++i)
     for (BooleanOp op : net_test::kAllOps) {
       BooleanOptions o;
       o.op = op;
-      set_direct_split(false);
+      net_detail::set_direct_split(false);
       const auto want = net_boolean(pairs[i].first, pairs[i].second, o);
-      set_direct_split(true);
+      net_detail::set_direct_split(true);
       const auto got = net_boolean(pairs[i].first, pairs[i].second, o);
       EXPECT_TRUE(cut_direct_same(got, want)) << "pair " << i << " op " << static_cast<int>(op);
       ++compared;
     }
-  set_direct_split(true);
-  const std::uint64_t taken = direct_split_count() - taken0;
+  net_detail::set_direct_split(true);
+  const std::uint64_t taken = net_detail::direct_split_count() - taken0;
   EXPECT_EQ(compared, static_cast<int>(pairs.size()) * 4);
   EXPECT_GT(taken, 1000u) << "the direct split was hardly taken";
   // Two threads on a pair above the sequential threshold (per-thread
@@ -187,9 +189,9 @@ TEST(NetCutDirect, TwoPointSplitsGiveTheCdtsBytes) {
   ExecContext one, two;
   one.threads = 1;
   two.threads = 2;
-  set_direct_split(false);
+  net_detail::set_direct_split(false);
   const auto want = net_boolean(a, b, o, one);
-  set_direct_split(true);
+  net_detail::set_direct_split(true);
   EXPECT_TRUE(cut_direct_same(net_boolean(a, b, o, two), want));
   EXPECT_TRUE(cut_direct_same(net_boolean(a, b, o, one), want));
 }
