@@ -874,12 +874,27 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
     std::uint32_t id;
     std::array<double, 4> box;
   };
-  std::vector<Vert> vert;
+  // Per-thread scratch (cray16): the vectors keep their room from one cut
+  // triangle to the next instead of six allocations per triangle. Not
+  // re-entered: nothing below calls refine_triangle_fast.
+  struct Scratch {
+    std::vector<Vert> vert;
+    std::array<std::vector<std::uint32_t>, 3> on_edge;
+    std::vector<std::uint32_t> inside, chain;
+    std::vector<std::pair<PointKey, std::uint32_t>> by_key;
+    std::vector<Ki::Point_2> frame;
+  };
+  thread_local Scratch scratch;
+  std::vector<Vert>& vert = scratch.vert;
+  vert.clear();
   vert.reserve(points.size() + 3);
   for (std::size_t q = 0; q < 3; ++q) vert.push_back({tv[q] + ctri.offset, {c[q][u], c[q][v], c[q][u], c[q][v]}});
-  std::array<std::vector<std::uint32_t>, 3> on_edge;  // indices into vert
-  std::vector<std::uint32_t> inside;
-  std::vector<std::pair<PointKey, std::uint32_t>> by_key;  // (key, index into vert)
+  std::array<std::vector<std::uint32_t>, 3>& on_edge = scratch.on_edge;  // indices into vert
+  for (auto& l : on_edge) l.clear();
+  std::vector<std::uint32_t>& inside = scratch.inside;
+  inside.clear();
+  std::vector<std::pair<PointKey, std::uint32_t>>& by_key = scratch.by_key;  // (key, index into vert)
+  by_key.clear();
   by_key.reserve(points.size());
   for (const PointKey& k : points) {
     const std::uint64_t s = own(k);
@@ -924,7 +939,8 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
     const auto& x = vert[i].box;
     return std::array<double, 2>{centre(x[0], x[2]) - p0u, centre(x[1], x[3]) - p0v};
   };
-  std::vector<Ki::Point_2> frame(vert.size());
+  std::vector<Ki::Point_2>& frame = scratch.frame;
+  frame.assign(vert.size(), Ki::Point_2(0.0, 0.0));
   frame[0] = {0.0, 0.0};
   frame[1] = {1.0, 0.0};
   frame[2] = {0.0, 1.0};
@@ -979,7 +995,8 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   };
   // Points on an edge in their certified order along it (a coordinate in
   // which the edge is monotone; disjoint intervals).
-  std::vector<std::uint32_t> chain;  // the boundary: corner, edge points, next corner, ...
+  std::vector<std::uint32_t>& chain = scratch.chain;  // the boundary: corner, edge points, next corner, ...
+  chain.clear();
   for (std::size_t q = 0; q < 3; ++q) {
     auto& list = on_edge[q];
     const Vec3d d = c[(q + 1) % 3] - c[q];
