@@ -236,7 +236,8 @@ struct PointBox {
 /// when the rounding cannot be done without the lazy kernel.
 [[nodiscard]] bool rounded_box(const TriMesh& a, const TriMesh& b, const PointKey& k, PointBox& box, Vec3d& x);
 
-// ---- cray16: new points rounded by exact expansions (round_exact.cpp)
+// ---- cray16: new points rounded by exact expansions (round_exact.cpp), the
+// two-point split of a cut triangle (boolean_exact.cpp)
 /// The point where edge (p, q) crosses a triangle lying in the plane
 /// x_k = level, rounded to nearest (ties to even, +0 for a zero): the same
 /// doubles as rounded_point's Mpzf rounding, from Shewchuk's expansions.
