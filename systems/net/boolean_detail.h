@@ -236,6 +236,24 @@ struct PointBox {
 /// when the rounding cannot be done without the lazy kernel.
 [[nodiscard]] bool rounded_box(const TriMesh& a, const TriMesh& b, const PointKey& k, PointBox& box, Vec3d& x);
 
+// ---- cray16: new points rounded by exact expansions (round_exact.cpp), the
+// two-point split of a cut triangle (boolean_exact.cpp)
+/// The point where edge (p, q) crosses a triangle lying in the plane
+/// x_k = level, rounded to nearest (ties to even, +0 for a zero): the same
+/// doubles as rounded_point's Mpzf rounding, from Shewchuk's expansions.
+/// False (out untouched) when it cannot tell cheaply (inputs outside
+/// [2^-400, 2^400], a zero or tiny coordinate, the edge in the plane): the
+/// caller rounds in Mpzf.
+[[nodiscard]] bool round_edge_through_level_plane(const Vec3d& p, const Vec3d& q, int k, double level,
+                                                  Vec3d& out) noexcept;
+
+/// The two-point split of refine_triangle_fast without CGAL's CDT (on by
+/// default; off: every cut triangle through CGAL's CDT, the reference the
+/// tests compare with). Process-wide; for tests and measurements.
+void set_direct_split(bool on) noexcept;
+/// How many cut triangles the two-point split took so far (all threads).
+[[nodiscard]] std::uint64_t direct_split_count() noexcept;
+
 /// Refines triangle t of one side (0: A, 1: B) by the given intersection
 /// points (keys whose simplex on this side lies in the triangle's closure)
 /// and constraint segments, by a constrained triangulation in exact

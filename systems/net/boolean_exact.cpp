@@ -821,6 +821,38 @@ Status refine_triangle(const TriMesh& a, const TriMesh& b, int side, std::uint32
   return {};
 }
 
+namespace {
+
+/// cray16: CGAL's constrained Delaunay triangulation of the commonest cut
+/// triangle (two cut points, on two different edges, joined by the one cut
+/// segment) is a function of a few bits: which edge each point is on, in
+/// which order they go in, and the Delaunay choice of the diagonal of the
+/// quadrilateral left after the corner (the sign of one in-circle test,
+/// CGAL's own exact predicate on the same doubles). The insertions, the
+/// flip and the constraint are then the same operations on the same
+/// containers, so the triangles come out in the same order with the same
+/// first vertex. The first triangulation of each key is CGAL's (recorded
+/// here, per thread); later ones reuse its list of local vertex triples,
+/// with the same certificates. A key's record is the same on every thread:
+/// no bit depends on which thread saw a key first.
+struct SplitPattern {
+  bool known = false;
+  std::array<std::array<std::uint8_t, 3>, 3> tri{};
+};
+constexpr int kSplitKeys = 27;  // 3 x 3 edge pairs (6 used) x 3 in-circle signs
+std::atomic<bool> direct_split_on{true};
+std::atomic<std::uint64_t> direct_split_taken{0};
+
+}  // namespace
+
+std::uint64_t direct_split_count() noexcept {
+  return direct_split_taken.load(std::memory_order_relaxed);
+}
+
+void set_direct_split(bool on) noexcept {
+  direct_split_on.store(on, std::memory_order_relaxed);
+}
+
 bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uint32_t t,
                           std::span<const PointKey> points, std::span<const std::array<PointKey, 2>> constraints,
                           const PointIds& ids, std::span<const PointBox> boxes, std::uint32_t first_new,
@@ -842,12 +874,27 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
     std::uint32_t id;
     std::array<double, 4> box;
   };
-  std::vector<Vert> vert;
+  // Per-thread scratch (cray16): the vectors keep their room from one cut
+  // triangle to the next instead of six allocations per triangle. Not
+  // re-entered: nothing below calls refine_triangle_fast.
+  struct Scratch {
+    std::vector<Vert> vert;
+    std::array<std::vector<std::uint32_t>, 3> on_edge;
+    std::vector<std::uint32_t> inside, chain;
+    std::vector<std::pair<PointKey, std::uint32_t>> by_key;
+    std::vector<Ki::Point_2> frame;
+  };
+  thread_local Scratch scratch;
+  std::vector<Vert>& vert = scratch.vert;
+  vert.clear();
   vert.reserve(points.size() + 3);
   for (std::size_t q = 0; q < 3; ++q) vert.push_back({tv[q] + ctri.offset, {c[q][u], c[q][v], c[q][u], c[q][v]}});
-  std::array<std::vector<std::uint32_t>, 3> on_edge;  // indices into vert
-  std::vector<std::uint32_t> inside;
-  std::vector<std::pair<PointKey, std::uint32_t>> by_key;  // (key, index into vert)
+  std::array<std::vector<std::uint32_t>, 3>& on_edge = scratch.on_edge;  // indices into vert
+  for (auto& l : on_edge) l.clear();
+  std::vector<std::uint32_t>& inside = scratch.inside;
+  inside.clear();
+  std::vector<std::pair<PointKey, std::uint32_t>>& by_key = scratch.by_key;  // (key, index into vert)
+  by_key.clear();
   by_key.reserve(points.size());
   for (const PointKey& k : points) {
     const std::uint64_t s = own(k);
@@ -892,7 +939,8 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
     const auto& x = vert[i].box;
     return std::array<double, 2>{centre(x[0], x[2]) - p0u, centre(x[1], x[3]) - p0v};
   };
-  std::vector<Ki::Point_2> frame(vert.size());
+  std::vector<Ki::Point_2>& frame = scratch.frame;
+  frame.assign(vert.size(), Ki::Point_2(0.0, 0.0));
   frame[0] = {0.0, 0.0};
   frame[1] = {1.0, 0.0};
   frame[2] = {0.0, 1.0};
@@ -947,7 +995,8 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
   };
   // Points on an edge in their certified order along it (a coordinate in
   // which the edge is monotone; disjoint intervals).
-  std::vector<std::uint32_t> chain;  // the boundary: corner, edge points, next corner, ...
+  std::vector<std::uint32_t>& chain = scratch.chain;  // the boundary: corner, edge points, next corner, ...
+  chain.clear();
   for (std::size_t q = 0; q < 3; ++q) {
     auto& list = on_edge[q];
     const Vec3d d = c[(q + 1) % 3] - c[q];
@@ -965,6 +1014,46 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
       if (!(hi(list[i]) < lo(list[i + 1]))) return false;
     chain.push_back(static_cast<std::uint32_t>(q));
     chain.insert(chain.end(), list.begin(), list.end());
+  }
+  // The two-point split (SplitPattern): its key, and its record when known.
+  int split_key = -1;
+  std::size_t split_n = 0;
+  thread_local std::array<SplitPattern, kSplitKeys> split_memo;
+  if (!projected && vert.size() == 5 && by_key.size() == 2 && inside.empty() && constraints.size() == 1 &&
+      direct_split_on.load(std::memory_order_relaxed)) {
+    const auto& sg = constraints[0];
+    const bool joined = (sg[0] == by_key[0].first && sg[1] == by_key[1].first) ||
+                        (sg[0] == by_key[1].first && sg[1] == by_key[0].first);
+    int qa = -1, qb = -1;
+    for (int q = 0; q < 3; ++q)
+      for (const std::uint32_t i : on_edge[static_cast<std::size_t>(q)]) (i == 3 ? qa : qb) = q;
+    // Each point strictly inside its edge in doubles (not on a corner: CGAL
+    // would merge it, a different sequence of operations).
+    auto off_corners = [&](std::uint32_t i) {
+      return frame[i] != frame[0] && frame[i] != frame[1] && frame[i] != frame[2];
+    };
+    if (joined && qa >= 0 && qb >= 0 && qa != qb && off_corners(3) && off_corners(4)) {
+      // The corner the segment cuts off is the one the two edges share; the
+      // quadrilateral left is (point 3, point 4, the other two corners).
+      const int cut_corner = (qa + 1) % 3 == qb ? qb : qa;
+      const Ki::Point_2 &o1 = frame[static_cast<std::size_t>((cut_corner + 1) % 3)],
+                        &o2 = frame[static_cast<std::size_t>((cut_corner + 2) % 3)];
+      const int circle = static_cast<int>(CGAL::side_of_oriented_circle(frame[3], frame[4], o1, o2)) + 1;
+      split_key = (qa * 3 + qb) * 3 + circle;
+      const SplitPattern& pat = split_memo[static_cast<std::size_t>(split_key)];
+      if (pat.known) {
+        const std::size_t before = out.size();
+        for (const auto& tr : pat.tri) {
+          if (orient_box(tr[0], tr[1], tr[2]) != pr.sign) {
+            out.resize(before);
+            return false;
+          }
+          out.push_back({vert[tr[0]].id, vert[tr[1]].id, vert[tr[2]].id});
+        }
+        direct_split_taken.fetch_add(1, std::memory_order_relaxed);
+        return true;
+      }
+    }
   }
   try {
     Ct ct;
@@ -1061,7 +1150,14 @@ bool refine_triangle_fast(const TriMesh& a, const TriMesh& b, int side, std::uin
         out.push_back({vert[i0].id, vert[i2].id, vert[i1].id});
       else
         out.push_back({vert[i0].id, vert[i1].id, vert[i2].id});
+      if (split_key >= 0) {
+        if (split_n < 3)
+          split_memo[static_cast<std::size_t>(split_key)].tri[split_n] = {
+              static_cast<std::uint8_t>(i0), static_cast<std::uint8_t>(i1), static_cast<std::uint8_t>(i2)};
+        ++split_n;
+      }
     }
+    if (split_key >= 0 && split_n == 3) split_memo[static_cast<std::size_t>(split_key)].known = true;
   } catch (const std::exception&) {
     return false;  // constraints cross in doubles: the exact path decides
   }
@@ -1231,6 +1327,13 @@ bool rounded_point(const TriMesh& a, const TriMesh& b, const PointKey& k, const 
     EdgeFace ef;
     if (!edge_face_of(a, b, k, ef)) return false;
     const Vec3d &p = *ef.p, &q = *ef.q, &c0 = *ef.c[0];
+    // A triangle in a plane of constant coordinate (Cray's slab): exact
+    // expansions of a degree-2 form instead of Mpzf (round_exact.cpp).
+    for (int j = 0; j < 3; ++j)
+      if (c0[j] == (*ef.c[1])[j] && c0[j] == (*ef.c[2])[j]) {
+        if (round_edge_through_level_plane(p, q, j, c0[j], out)) return true;
+        break;
+      }
     const auto n = cross(diff(*ef.c[1], c0), diff(*ef.c[2], c0));
     const Z op = dot(n, diff(p, c0)), oq = dot(n, diff(q, c0));
     den = op - oq;
