@@ -428,8 +428,9 @@ struct CertTri {
   double n[3] = {}, nabs[3] = {};
 };
 
-void cert_tri(const Cut& cut, const TriMesh& a, const TriMesh& b, const std::array<std::uint32_t, 3>& piece,
-              CertTri& r) noexcept {
+/// The corners and box (cert_tri's first half: the box tests need no more).
+void cert_corners(const Cut& cut, const TriMesh& a, const TriMesh& b, const std::array<std::uint32_t, 3>& piece,
+                  CertTri& r) noexcept {
   for (std::size_t k = 0; k < 3; ++k) {
     r.v[k] = cut.canon[piece[k]];
     r.p[k] = cut.position(a, b, r.v[k]);
@@ -438,6 +439,10 @@ void cert_tri(const Cut& cut, const TriMesh& a, const TriMesh& b, const std::arr
     r.box[static_cast<std::size_t>(k)] = std::min({r.p[0][k], r.p[1][k], r.p[2][k]});
     r.box[static_cast<std::size_t>(k + 3)] = std::max({r.p[0][k], r.p[1][k], r.p[2][k]});
   }
+}
+
+/// The rounded normal and the permanents of the side test.
+void cert_normal(CertTri& r) noexcept {
   const Vec3d u = r.p[1] - r.p[0], w = r.p[2] - r.p[0];
   r.n[0] = u.y() * w.z() - u.z() * w.y();
   r.n[1] = u.z() * w.x() - u.x() * w.z();
@@ -445,6 +450,12 @@ void cert_tri(const Cut& cut, const TriMesh& a, const TriMesh& b, const std::arr
   r.nabs[0] = std::abs(u.y() * w.z()) + std::abs(u.z() * w.y());
   r.nabs[1] = std::abs(u.z() * w.x()) + std::abs(u.x() * w.z());
   r.nabs[2] = std::abs(u.x() * w.y()) + std::abs(u.y() * w.x());
+}
+
+void cert_tri(const Cut& cut, const TriMesh& a, const TriMesh& b, const std::array<std::uint32_t, 3>& piece,
+              CertTri& r) noexcept {
+  cert_corners(cut, a, b, piece, r);
+  cert_normal(r);
 }
 
 bool cert_boxes_meet(const std::array<double, 6>& x, const std::array<double, 6>& y) noexcept {
@@ -544,6 +555,97 @@ bool cert_apart(const CertTri& x, const CertTri& y) noexcept {
   return separated_by_edges(x, y) || separated_by_edges(y, x);
 }
 
+/// A certified strict separation along axis n (any double vector), from
+/// origin o: sharing a corner (o, skipped by `skip_x` / `skip_y`, bit k:
+/// corner k), every other corner of x at n . (p - o) < 0 and of y at > 0,
+/// or the other way round; sharing none, the values of x's corners all
+/// below those of y's, or all above. Each p - o is rounded once (relative
+/// error eps) and the dot product adds gamma_3, so
+/// |error| <= 8e-16 * sum |n_i| |w_i| bounds both with room (eps = 2^-53).
+bool cert_separates(const Vec3d& n, const Vec3d& o, const CertTri& x, unsigned skip_x, const CertTri& y,
+                    unsigned skip_y) noexcept {
+  // Per triangle: the lowest value minus its bound, the highest plus its.
+  auto range = [&](const CertTri& t, unsigned skip, double& lo, double& hi) {
+    lo = HUGE_VAL;
+    hi = -HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      if (skip >> k & 1u) continue;
+      const Vec3d& p = t.p[static_cast<std::size_t>(k)];
+      const double wx = p.x() - o.x(), wy = p.y() - o.y(), wz = p.z() - o.z();
+      const double d = n.x() * wx + n.y() * wy + n.z() * wz;
+      const double e = 8e-16 * (std::abs(n.x() * wx) + std::abs(n.y() * wy) + std::abs(n.z() * wz)) + 1e-300;
+      lo = std::min(lo, d - e);
+      hi = std::max(hi, d + e);
+    }
+    return lo - lo == 0 && hi - hi == 0;  // finite
+  };
+  double xl = 0, xh = 0, yl = 0, yh = 0;
+  if (!range(x, skip_x, xl, xh) || !range(y, skip_y, yl, yh)) return false;
+  if (skip_x != 0)  // through the shared corner: strictly on opposite sides of 0
+    return (xh < 0 && yl > 0) || (xl > 0 && yh < 0);
+  return xh < yl || yh < xl;
+}
+
+/// Second-stage filters for a pair cert_apart leaves open (shared corners
+/// by id, at most one): a plane that certainly separates them, through the
+/// shared corner if any (then they meet only there). Candidate normals:
+/// both triangles' normals, the cross products of their edges (the
+/// separating axes of two triangles in space), and each edge crossed with
+/// its triangle's normal (a line in a common plane: coplanar pieces of one
+/// cut triangle). Sharing a corner v, also the disjointness of their angles
+/// at v seen along each triangle's axis (two convex angles meeting only at
+/// v, each triangle projected one-to-one: they meet only at v).
+bool cert_apart_more(const CertTri& x, const CertTri& y) noexcept {
+  unsigned in_y = 0, in_x = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (x.v[static_cast<std::size_t>(i)] == y.v[static_cast<std::size_t>(j)]) {
+        in_y |= 1u << i;
+        in_x |= 1u << j;
+      }
+  const int shared = std::popcount(in_y);
+  const Vec3d nx(x.n[0], x.n[1], x.n[2]), ny(y.n[0], y.n[1], y.n[2]);
+  if (shared == 2) {
+    // A plane through the shared edge, across either triangle's own plane,
+    // with the third corners strictly on opposite sides.
+    const int ox = std::countr_zero(~in_y & 7u);
+    const Vec3d& u = x.p[static_cast<std::size_t>((ox + 1) % 3)];
+    const Vec3d e = x.p[static_cast<std::size_t>((ox + 2) % 3)] - u;
+    return cert_separates(nx.cross(e), u, x, in_y, y, in_x) || cert_separates(ny.cross(e), u, x, in_y, y, in_x);
+  }
+  if (shared > 2) return false;
+  const Vec3d o = shared == 1 ? x.p[static_cast<std::size_t>(std::countr_zero(in_y))] : x.p[0];
+  if (shared == 1) {
+    const int ix = std::countr_zero(in_y), iy = std::countr_zero(in_x);
+    const Vec3d& v = o;
+    const Vec3d &x1 = x.p[static_cast<std::size_t>((ix + 1) % 3)], &x2 = x.p[static_cast<std::size_t>((ix + 2) % 3)];
+    const Vec3d &y1 = y.p[static_cast<std::size_t>((iy + 1) % 3)], &y2 = y.p[static_cast<std::size_t>((iy + 2) % 3)];
+    for (const int axis : {cert_axis(x), cert_axis(y)}) {
+      const int sx = certified_orient2(v, x1, x2, axis), sy = certified_orient2(v, y1, y2, axis);
+      if (sx == 0 || sy == 0) continue;
+      // Ray r strictly outside the angle (a, b) of orientation s at v.
+      auto outside = [&](const Vec3d& a, const Vec3d& b, int s, const Vec3d& r) {
+        return certified_orient2(v, a, r, axis) == -s || certified_orient2(v, r, b, axis) == -s;
+      };
+      if (outside(x1, x2, sx, y1) && outside(x1, x2, sx, y2) && outside(y1, y2, sy, x1) && outside(y1, y2, sy, x2))
+        return true;
+    }
+  }
+  if (cert_separates(nx, o, x, in_y, y, in_x) || cert_separates(ny, o, x, in_y, y, in_x)) return true;
+  Vec3d ex[3], ey[3];
+  for (std::size_t k = 0; k < 3; ++k) {
+    ex[k] = x.p[(k + 1) % 3] - x.p[k];
+    ey[k] = y.p[(k + 1) % 3] - y.p[k];
+  }
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t j = 0; j < 3; ++j)
+      if (cert_separates(ex[i].cross(ey[j]), o, x, in_y, y, in_x)) return true;
+  for (std::size_t k = 0; k < 3; ++k)
+    if (cert_separates(nx.cross(ex[k]), o, x, in_y, y, in_x) || cert_separates(ny.cross(ey[k]), o, x, in_y, y, in_x))
+      return true;
+  return false;
+}
+
 /// The exact answer for a pair the filters leave open: triangles_cross on
 /// the two triangles alone (corners shared by id).
 bool cert_cross_exact(const CertTri& x, const CertTri& y) {
@@ -601,8 +703,11 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     const std::uint32_t t = items[i][1];
     const CutSide& s = cut.sides[side];
     // The suspects (kept pieces with a new point), keyed (side, piece).
-    std::vector<CertTri> sus;
-    std::vector<std::uint64_t> sus_key;
+    thread_local std::vector<CertTri> sus;
+    thread_local std::vector<std::uint64_t> sus_key;
+    thread_local std::vector<std::uint32_t> stack;
+    sus.clear();
+    sus_key.clear();
     std::array<double, 6> q{HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
     for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p) {
       if (!s.keep[p] || !is_suspect(s.piece[p])) continue;
@@ -623,7 +728,6 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
       q[k + 3] += delta;
     }
     std::size_t n_pairs = 0, n_exact = 0;
-    std::vector<std::uint32_t> stack;
     CertTri x;
     for (int o = 0; o < 2 && !failed.load(std::memory_order_relaxed); ++o) {
       const Bvh& h = *bvhs[o];
@@ -646,18 +750,23 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
             if (!so.keep[p]) continue;
             const std::uint64_t key = (std::uint64_t{static_cast<std::uint32_t>(o)} << 32) | p;
             const bool suspect = is_suspect(so.piece[p]);
-            bool made = false;
+            int made = 0;  // 1: corners and box, 2: and the normal
             for (std::size_t k = 0; k < sus.size(); ++k) {
               // A pair of suspects once, from the smaller key's side (its
               // query finds the other: the boxes' relation is symmetric).
               if (key == sus_key[k] || (suspect && key < sus_key[k])) continue;
-              if (!made) {
-                cert_tri(cut, a, b, so.piece[p], x);
-                made = true;
+              if (made == 0) {
+                cert_corners(cut, a, b, so.piece[p], x);
+                made = 1;
+                if (!cert_boxes_meet(q, x.box)) break;
               }
               if (!cert_boxes_meet(sus[k].box, x.box)) continue;
+              if (made == 1) {
+                cert_normal(x);
+                made = 2;
+              }
               ++n_pairs;
-              if (cert_apart(sus[k], x)) continue;
+              if (cert_apart(sus[k], x) || cert_apart_more(sus[k], x)) continue;
               ++n_exact;
               if (cert_cross_exact(sus[k], x)) {
                 failed = true;
