@@ -593,7 +593,16 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
           repair_flat_triangles(out, face_side, is_new, split_edges, std::span(&collapse, collapse[0] == kNil ? 0 : 1));
       Status st = check_rounded_result(cut, A, bvh_a, B, bvh_b, out, out_index, is_new, split_edges, collapse, ctx);
       if (st) break;
-      if (collapse[0] == kNil || round == 16 || (round > 0 && fixed == 0)) return st;
+      if (collapse[0] == kNil || round == 16 || (round > 0 && fixed == 0)) {
+        // A net not tested for self-intersection (the caller's promise)
+        // that crosses itself where the check looks: that crossing is the
+        // error, as for the cut's own failures (explain_by_crossing).
+        if (!(pa.self_checked && pb.self_checked))
+          if (Status why = explain_by_crossing(Status(ErrorCode::kInternal, st.message()), A, bvh_a, B, bvh_b, ctx, 0);
+              why.code() != ErrorCode::kInternal)
+            return why;
+        return st;
+      }
     }
   }
   if (Status st = unpinch(out, face_side); !st) return st;
