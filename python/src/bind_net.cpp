@@ -184,8 +184,8 @@ prepare_result: also return the result as a PreparedNet in
     in ``report["prepared_error"]`` (an empty or self-crossing result).
 check_result: exact mode: repair the result once its new points are
     rounded to doubles and refuse it (ValueError naming two triangles) if it
-    still crosses itself (on by default; a certificate decides most results
-    for a few percent of a Boolean; False, ``--no-check-result``: the
+    still crosses itself (on by default; a certificate decides most results,
+    at 1.07-1.6x the unchecked Boolean; False, ``--no-check-result``: the
     rounded result unchecked).
 
 Returns (vertices, faces, report): the result's (n, 3) float64 vertices and
