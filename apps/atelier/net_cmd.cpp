@@ -71,7 +71,9 @@ CLI::App* add_boolean_subcommand(CLI::App& app, NetBooleanOptions& opt) {
   c->add_flag("--exact-refinement", opt.exact_refinement,
               "re-triangulate every cut triangle exactly (no certified double fast path)");
   c->add_flag("--check-result", opt.check_result,
-              "exact mode: repair and check the result after rounding; refuse one that crosses itself");
+              "exact mode: repair and check the result after rounding; refuse one that crosses itself (the default)");
+  c->add_flag("--no-check-result", opt.no_check_result,
+              "exact mode: return the rounded result unchecked (it may cross itself on degenerate pairs)");
   return c;
 }
 
@@ -84,7 +86,9 @@ int run_boolean(const Common& common, const NetBooleanOptions& opt, Log& log) {
   o.rule = need(parse_connect_rule(opt.rule));
   o.check_self_intersection = !opt.no_self_check;
   o.exact_refinement = opt.exact_refinement;
-  o.check_result = opt.check_result;
+  if (opt.check_result && opt.no_check_result)
+    throw Error(Status(ErrorCode::kInvalidArgument, "--check-result and --no-check-result contradict each other"));
+  o.check_result = !opt.no_check_result;
   check_mesh_output(opt.out);
   PolygonSoup a = read_net(opt.a);
   std::vector<PolygonSoup> bs;

@@ -27,7 +27,8 @@ struct NetBooleanOptions {
   std::string rule = "a";
   bool no_self_check = false;
   bool exact_refinement = false;  // BooleanOptions::exact_refinement
-  bool check_result = false;      // BooleanOptions::check_result
+  bool check_result = false;      // --check-result: BooleanOptions::check_result (on by default: accepted, no effect)
+  bool no_check_result = false;   // --no-check-result: BooleanOptions::check_result off
 };
 struct NetTrimOptions {
   std::filesystem::path mesh, curve, out, json, band_out;

@@ -9,8 +9,12 @@
 // x_manifold = t_manifold / t_ours (>1: ours is faster), and the relative
 // volume differences to each peer (vol_cgal, vol_manifold). Rows ending in
 // /nocheck skip the self-intersection test of the inputs (the peers do not
-// check theirs); the default rows include it. CPU time is the main
-// thread's: with threads:2 it misses the second core's work.
+// check theirs); the default rows include it. Rows ending in
+// /resultcheck:off switch BooleanOptions::check_result off (on by default
+// since fold16: the rounded result's certificate, then the repair and exact
+// fold check where it cannot certify); the default rows report counter
+// certified, the share of calls the certificate decided alone. CPU time is
+// the main thread's: with threads:2 it misses the second core's work.
 //
 // Like for like: manifold's `ms` is the Boolean of two ready Manifolds (its
 // constructor already sorted, checked and built its collider), `ms_build`
@@ -36,6 +40,8 @@
 #include <atelier/io/obj.h>
 #include <atelier/systems/net/boolean.h>
 #include <benchmark/benchmark.h>
+
+#include "systems/net/boolean_detail.h"  // result_check_counts (the certified counter)
 
 #include <algorithm>
 #include <array>
@@ -244,10 +250,11 @@ void report_against_peers(benchmark::State& state, const std::string& key, doubl
   state.counters["volume"] = volume;
 }
 
-BooleanOptions bench_options(BooleanOp op, bool check) {
+BooleanOptions bench_options(BooleanOp op, bool check, bool check_result = BooleanOptions{}.check_result) {
   BooleanOptions o;
   o.op = op == BooleanOp::kUnion ? BooleanOp::kUnion : BooleanOp::kAMinusB;
   o.check_self_intersection = check;  // the peers do not check their inputs
+  o.check_result = check_result;
   return o;
 }
 
@@ -270,16 +277,22 @@ double median_seconds(benchmark::State& state, Call&& call, double& volume) {
   return times[times.size() / 2];
 }
 
-void BM_NetBoolean(benchmark::State& state, std::string pair, BooleanOp op, int threads, bool check) {
+void BM_NetBoolean(benchmark::State& state, std::string pair, BooleanOp op, int threads, bool check,
+                   bool check_result) {
   Case& c = get_case(pair);
   if (!c.a.face_count()) return state.SkipWithError("shared data absent");
-  const BooleanOptions o = bench_options(op, check);
+  const BooleanOptions o = bench_options(op, check, check_result);
   ExecContext ctx;
   ctx.threads = threads;
   double volume = NAN;
+  auto& counts = net_detail::result_check_counts();
+  const std::size_t certified0 = counts.certified, full0 = counts.full;
   const double t = median_seconds(
       state, [&] { return net_boolean(c.a, c.b, o, ctx); }, volume);
-  if (t > 0) report_against_peers(state, pair + op_name(op), t, volume, false);
+  if (t <= 0) return;
+  report_against_peers(state, pair + op_name(op), t, volume, false);
+  const std::size_t certified = counts.certified - certified0, full = counts.full - full0;
+  if (certified + full > 0) state.counters["certified"] = double(certified) / double(certified + full);
 }
 
 /// Both operands prepared outside the timing (as manifold's `ms` takes two
@@ -394,13 +407,19 @@ const int kRegistered = [] {
           ->Unit(benchmark::kMillisecond)
           ->UseManualTime()
           ->Iterations(1);
-      for (int threads : {2, 1})
+      for (int threads : {2, 1}) {
         for (bool check : {true, false})
           benchmark::RegisterBenchmark(
               ("BM_NetBoolean/" + tag + "/threads:" + std::to_string(threads) + (check ? "" : "/nocheck")).c_str(),
-              BM_NetBoolean, std::string(pair), op, threads, check)
+              BM_NetBoolean, std::string(pair), op, threads, check, true)
               ->Unit(benchmark::kMillisecond)
               ->Iterations(std::max(iters, 3));
+        benchmark::RegisterBenchmark(
+            ("BM_NetBoolean/" + tag + "/threads:" + std::to_string(threads) + "/resultcheck:off").c_str(),
+            BM_NetBoolean, std::string(pair), op, threads, true, false)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(std::max(iters, 3));
+      }
       for (int threads : {2, 1})
         benchmark::RegisterBenchmark(("BM_NetBoolean/" + tag + "/prepared/threads:" + std::to_string(threads)).c_str(),
                                      BM_NetBooleanPrepared, std::string(pair), op, threads)

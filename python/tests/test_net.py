@@ -3,12 +3,13 @@ systems/net, seed 004): volumes against the analytic boxes, the same bits
 as `atelier boolean` for the same files, a trimmed plane against the
 polygon's area, and a ValueError with the engine's message for bad input."""
 import json
+import subprocess
 
 import numpy as np
 import pytest
 
 import atelier
-from conftest import run_cli
+from conftest import cli, run_cli
 
 
 def box(lo, hi):
@@ -100,22 +101,29 @@ def test_exact_refinement_same_volume_every_cut_triangle_exact_as_the_cli(scratc
 
 
 def test_check_result_keeps_a_result_that_does_not_fold_as_the_cli(scratch):
-    """check_result (``--check-result``): a result that does not fold once
-    rounded comes back with the same bytes as without the check, here and
-    from the CLI (the refusals of folded results are the C++ campaign's,
+    """check_result (on by default since fold16; ``--no-check-result`` and
+    check_result=False switch it off): a result that does not fold once
+    rounded comes back with the same bytes with and without the check, here
+    and from the CLI (the refusals of folded results are the C++ campaign's,
     NetDegeneratePairs.CheckResultRefusesWhatRoundingFolds)."""
     for op in ("union", "intersection", "difference"):
         v, f, _ = atelier.boolean(A, B, op=op)
-        cv, cf, _ = atelier.boolean(A, B, op=op, check_result=True)
-        assert v.tobytes() == cv.tobytes() and polygons(f) == polygons(cf)
+        ov, of, _ = atelier.boolean(A, B, op=op, check_result=False)
+        assert v.tobytes() == ov.tobytes() and polygons(f) == polygons(of)
     atelier.write_mesh(scratch / "a.obj", *A)
     atelier.write_mesh(scratch / "b.obj", *B)
-    run_cli("--threads", 1, "boolean", scratch / "a.obj", scratch / "b.obj", "--out", scratch / "out.obj",
-            "--check-result")
-    mine_v, mine_f, _ = atelier.boolean(atelier.read_mesh(scratch / "a.obj"), atelier.read_mesh(scratch / "b.obj"),
-                                        check_result=True, threads=1)
-    tv, tf = atelier.read_mesh(scratch / "out.obj")
-    assert mine_v.tobytes() == tv.tobytes() and polygons(mine_f) == polygons(tf)
+    ma, mb = atelier.read_mesh(scratch / "a.obj"), atelier.read_mesh(scratch / "b.obj")
+    for flag, check in (("--check-result", True), ("--no-check-result", False), (None, True)):
+        args = ["--threads", 1, "boolean", scratch / "a.obj", scratch / "b.obj", "--out", scratch / "out.obj"]
+        run_cli(*(args + ([flag] if flag else [])))
+        mine_v, mine_f, _ = atelier.boolean(ma, mb, check_result=check, threads=1)
+        tv, tf = atelier.read_mesh(scratch / "out.obj")
+        assert mine_v.tobytes() == tv.tobytes() and polygons(mine_f) == polygons(tf)
+    # Both flags at once: a clear error, not a silent pick.
+    r = subprocess.run([cli(), "boolean", str(scratch / "a.obj"), str(scratch / "b.obj"), "--out",
+                        str(scratch / "out.obj"), "--check-result", "--no-check-result"],
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and "contradict" in (r.stdout + r.stderr)
 
 
 def plane_and_ellipse(n=12):

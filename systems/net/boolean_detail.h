@@ -11,6 +11,7 @@
 #include <atelier/storage/union_find.h>
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -359,6 +360,32 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
                                           std::span<const std::uint8_t> is_new,
                                           std::span<const std::uint64_t> split_edges,
                                           std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx);
+
+// ---- fold16: the rounded result's certificate (fold_check.cpp)
+/// What certify_rounded_result looked at: the cut triangles with a kept
+/// piece that has a new point, the pairs of triangles whose boxes meet (each
+/// with such a piece), how many of them the filters left to the exact
+/// test, and the verdict.
+struct CertifyStats {
+  std::size_t cut_triangles = 0, pairs = 0, exact_pairs = 0;
+  bool certified = false;
+};
+/// True when the rounded result (the kept pieces of `cut`, its new points
+/// rounded) certainly needs neither repair nor fold check: every kept piece
+/// with a new point is certainly not flat and meets every other kept piece
+/// (of both nets) at most in the corners it shares with it (by canonical
+/// id). Floating-point filters with Shewchuk's bounds, triangles_cross
+/// where they cannot tell; false as soon as a pair is not certainly apart.
+/// Then repair_flat_triangles and check_rounded_result would leave the
+/// result as it is and find no crossing.
+[[nodiscard]] bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
+                                          const Bvh& bvh_b, const ExecContext& ctx, CertifyStats* stats = nullptr);
+/// Process-wide counts of certify_rounded_result's verdicts (tests and the
+/// bench read them): results certified, results sent to the full check.
+struct ResultCheckCounts {
+  std::atomic<std::size_t> certified{0}, full{0};
+};
+[[nodiscard]] ResultCheckCounts& result_check_counts() noexcept;
 
 /// Appends the kept pieces of one side (`keep` of its CutSide) to `out`:
 /// untouched polygons whole (n-gons stay n-gons), cut ones as triangles;

@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "../../../systems/net/boolean_detail.h"  // result_check_counts: which results the certificate passed
 #include "net_shapes.h"
 
 namespace atelier::degenerate_pairs {
@@ -164,8 +165,13 @@ constexpr BooleanOp kOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, Boole
 struct Tally {
   std::map<std::string, int> cases;  // per family
   int booleans = 0, cgal_declined = 0, pinched = 0, invalid_inputs = 0, chains = 0, paper_ok = 0, paper_refused = 0;
-  int fold_refused = 0;      // refused as folded once rounded (the guarantee's error, issue 24 fold15)
-  bool check_result = true;  // BooleanOptions::check_result of the campaign's Booleans
+  int fold_refused = 0;  // refused as folded once rounded (the guarantee's error, issue 24 fold15)
+  int ok = 0, crossing = 0;  // answered; answered but crossing itself by CGAL's exact test
+  // BooleanOptions::check_result of the campaign's Booleans: the default
+  // (on since fold16), or ATELIER_CAMPAIGN_CHECK_RESULT=0 / 1.
+  bool check_result = std::getenv("ATELIER_CAMPAIGN_CHECK_RESULT")
+                          ? std::atoi(std::getenv("ATELIER_CAMPAIGN_CHECK_RESULT")) != 0
+                          : BooleanOptions{}.check_result;
   std::vector<std::string> failures, folds;
   void fail(const std::string& s) {
     if (failures.size() < 200) failures.push_back(s);
@@ -200,13 +206,16 @@ std::optional<BooleanReport> checked(const PolygonSoup& a, const PolygonSoup& b,
     }
     return std::nullopt;
   }
+  ++t.ok;
   const double scale = std::abs(soup_volume(a)) + std::abs(soup_volume(b));
   if (r->result.face_count() > 0) {
     if (auto c = net_test::closed_model(r->result); !c) t.fail(what + ": not a closed model: " + c.message());
-    if (has_coincident_vertices(r->result))
+    if (has_coincident_vertices(r->result)) {
       ++t.pinched;
-    else if (PMP::does_self_intersect(mesh_of<Kin>(r->result)))
+    } else if (PMP::does_self_intersect(mesh_of<Kin>(r->result))) {
+      ++t.crossing;
       t.fail(what + ": the result intersects itself");
+    }
   }
   if (std::abs(r->volume - soup_volume(r->result)) > 1e-12 * scale) t.fail(what + ": reported volume differs");
   if (auto want = corefined_volume(a, b, op)) {
@@ -438,32 +447,43 @@ void dump_obj(const PolygonSoup& s, const char* file) {
 }
 
 /// Cases 0 .. cases-1 of the campaign drawn from `seed` (family n % 7),
-/// or only case `only` of them (the draws before it still made).
-void run_campaign(std::uint32_t seed, int cases, Tally& t, int only = -1) {
+/// or only case `only` of them (the draws before it still made): each as
+/// f(a, b, c, family, what).
+template <class F>
+void for_each_case(std::uint32_t seed, int cases, int only, F&& f) {
   std::mt19937 rng(seed);
   for (int n = 0; n < cases; ++n) {
     std::string name;
     int symmetry = 4;
     PolygonSoup a = base_shape(rng, name, symmetry);
-    const int f = n % 7;
-    PolygonSoup b = transformed(a, symmetry, f, rng);
-    PolygonSoup c = transformed(a, symmetry, f, rng);
-    if (f == 4) a = mapped(a, [&](const Vec3d& p) { return Vec3d((p * 8).array().round().matrix() / 8); });
-    const std::string what = std::string(kFamilies[f]) + " " + name + " case " + std::to_string(n);
+    const int fam = n % 7;
+    PolygonSoup b = transformed(a, symmetry, fam, rng);
+    PolygonSoup c = transformed(a, symmetry, fam, rng);
+    if (fam == 4) a = mapped(a, [&](const Vec3d& p) { return Vec3d((p * 8).array().round().matrix() / 8); });
+    const std::string what = std::string(kFamilies[fam]) + " " + name + " case " + std::to_string(n);
     if (only >= 0 && only != n) continue;
     if (const char* dump = std::getenv("ATELIER_CAMPAIGN_DUMP"); dump && std::atoi(dump) == n) {
       dump_obj(a, "/tmp/bool17_a.obj");
       dump_obj(b, "/tmp/bool17_b.obj");
       dump_obj(c, "/tmp/bool17_c.obj");
     }
-    check_pair(a, b, c, kFamilies[f], what, t);
+    f(a, b, c, kFamilies[fam], what);
   }
+}
+
+/// The campaign's cases checked by check_pair.
+void run_campaign(std::uint32_t seed, int cases, Tally& t, int only = -1) {
+  for_each_case(seed, cases, only,
+                [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup& c, const char* family,
+                    const std::string& what) { check_pair(a, b, c, family, what, t); });
 }
 
 void report(const Tally& t) {
   std::cout << "booleans " << t.booleans << ", chains " << t.chains << ", CGAL declined " << t.cgal_declined
             << ", pinched results " << t.pinched << ", invalid inputs " << t.invalid_inputs << ", paper ok "
-            << t.paper_ok << ", paper refused " << t.paper_refused << ", refused as folded " << t.fold_refused << "\n";
+            << t.paper_ok << ", paper refused " << t.paper_refused << ", refused as folded " << t.fold_refused
+            << ", ok " << t.ok << ", ok but crossing (CGAL) " << t.crossing << ", check_result " << t.check_result
+            << "\n";
   for (const std::string& s : t.folds) std::cout << "FOLD " << s << "\n";
   for (const auto& [k, v] : t.cases) std::cout << "  " << k << ": " << v << " pairs\n";
   for (const std::string& s : t.failures) std::cout << "FAIL " << s << "\n";
@@ -525,7 +545,8 @@ TEST(NetDegeneratePairs, DISABLED_KnownHalfSizeUvSphereInsideSharingFaces) {
 // BooleanOptions::check_result is what keeps a folded result from being
 // returned: the half-size UV sphere inside sharing faces (case 20) gives
 // results that cross themselves by CGAL's exact test without it, and with
-// it every such result is refused as folded (none returned crossing).
+// it every such result is refused as folded (none returned crossing). It is
+// the default since fold16: the "on" tally leaves the option as it is.
 TEST(NetDegeneratePairs, CheckResultRefusesWhatRoundingFolds) {
   Tally off;
   off.check_result = false;
@@ -536,6 +557,7 @@ TEST(NetDegeneratePairs, CheckResultRefusesWhatRoundingFolds) {
   EXPECT_GE(crossing, 1) << "case 20 no longer folds without the check: pick another case";
   EXPECT_EQ(off.fold_refused, 0);
   Tally on;
+  on.check_result = BooleanOptions{}.check_result;  // the default, whatever the environment says
   run_campaign(1u, 21, on, 20);
   report(on);
   EXPECT_TRUE(on.failures.empty()) << on.failures.size() << " failures";
@@ -703,6 +725,103 @@ TEST(NetDegeneratePairs, AChainIntoTheCavityItFillsHasTheVolumesByHand) {
       EXPECT_LE(std::abs(rc->volume - by_hand[i]), 1.01 * std::abs(soup_volume(c) - vb)) << i << " " << s;
     }
   }
+}
+
+// The rounded result's certificate (issue 24, fold16) against CGAL's exact
+// self-intersection test, brute force over the campaign's results: every
+// Boolean of seed 1's cases 0-21 (the compact campaign's nine, the near-copy
+// box of case 9, the quarter-turn chain of case 15, the half-size UV sphere
+// of case 20) with the check on (the default) and off. Where the
+// certificate decides alone, the result is the unchecked one byte for byte
+// and CGAL finds it free of crossings (pinched results, which CGAL counts
+// as crossings, only compared byte for byte); every unchecked result CGAL
+// finds crossing must have gone to the full check.
+TEST(NetDegeneratePairs, CertificateNeverPassesAResultThatCrosses) {
+  auto& counts = net_detail::result_check_counts();
+  int certified = 0, full = 0, crossing_off = 0, certified_checked_by_cgal = 0, no_result_stage = 0;
+  for_each_case(1u, 22, -1,
+                [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup&, const char*,
+                    const std::string& what) {
+                  if (!PreparedNet::prepare(a) || !PreparedNet::prepare(b)) return;
+                  for (BooleanOp op : kOps) {
+                    BooleanOptions off;
+                    off.op = op;
+                    off.check_result = false;
+                    BooleanOptions on = off;
+                    on.check_result = true;
+                    const auto r_off = net_boolean(a, b, off);
+                    const std::size_t c0 = counts.certified, f0 = counts.full;
+                    const auto r_on = net_boolean(a, b, on);
+                    const bool passed = counts.certified - c0 == 1, sent = counts.full - f0 == 1;
+                    if (!r_off) {
+                      EXPECT_FALSE(r_on.has_value()) << what;
+                      continue;
+                    }
+                    const bool pinched = has_coincident_vertices(r_off->result);
+                    const bool crosses = r_off->result.face_count() > 0 && !pinched &&
+                                         PMP::does_self_intersect(mesh_of<Kin>(r_off->result));
+                    crossing_off += crosses;
+                    ASSERT_FALSE(passed && sent) << what << ": one verdict per Boolean";
+                    if (!passed && !sent) {
+                      ++no_result_stage;  // answered before the result's assembly (no cut)
+                      continue;
+                    }
+                    if (passed) {
+                      ++certified;
+                      EXPECT_FALSE(crosses) << what << " op " << static_cast<int>(op)
+                                            << ": certified, but CGAL finds the result crossing itself";
+                      ASSERT_TRUE(r_on.has_value()) << what;
+                      EXPECT_EQ(r_on->result.positions, r_off->result.positions) << what;
+                      EXPECT_EQ(r_on->result.face_nodes, r_off->result.face_nodes) << what;
+                      certified_checked_by_cgal += !pinched;
+                    } else {
+                      ++full;
+                    }
+                  }
+                });
+  std::cout << "certified " << certified << " (CGAL-checked " << certified_checked_by_cgal << "), full check "
+            << full << ", crossing without the check " << crossing_off << ", no result check " << no_result_stage
+            << "\n";
+  EXPECT_GE(crossing_off, 1) << "no crossing result left to test the certificate against: pick other cases";
+  EXPECT_GE(certified_checked_by_cgal, 20);
+  EXPECT_GE(full, crossing_off);
+}
+
+// The default check gives the same bits on one and two threads, where the
+// certificate passes (a generic pair of icospheres) and where it sends the
+// result to the full check (case 20: refused or repaired alike), with the
+// sequential threshold lowered so that two threads do run.
+TEST(NetDegeneratePairs, DefaultCheckGivesTheSameBitsForOneAndTwoThreads) {
+  std::vector<std::array<PolygonSoup, 2>> pairs;
+  pairs.push_back({net_test::icosphere(3, 1.0, {0, 0, 0}), net_test::icosphere(3, 0.9, {0.31, 0.17, 0.05})});
+  for_each_case(1u, 21, 20,
+                [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup&, const char*, const std::string&) {
+                  pairs.push_back({a, b});
+                });
+  ASSERT_EQ(pairs.size(), 2u);
+  auto& counts = net_detail::result_check_counts();
+  std::size_t full0 = counts.full, certified0 = counts.certified;
+  for (const auto& [a, b] : pairs)
+    for (BooleanOp op : kOps) {
+      BooleanOptions o;
+      o.op = op;
+      ExecContext one, two;
+      one.threads = 1;
+      two.threads = 2;
+      one.sequential_threshold = two.sequential_threshold = 2;
+      const auto r1 = net_boolean(a, b, o, one);
+      const auto r2 = net_boolean(a, b, o, two);
+      ASSERT_EQ(r1.has_value(), r2.has_value());
+      if (!r1) {
+        EXPECT_EQ(r1.status().to_string(), r2.status().to_string());
+        continue;
+      }
+      EXPECT_EQ(r1->result.positions, r2->result.positions);
+      EXPECT_EQ(r1->result.face_nodes, r2->result.face_nodes);
+      EXPECT_EQ(r1->result.face_offsets, r2->result.face_offsets);
+    }
+  EXPECT_GE(counts.full - full0, 2u) << "case 20 no longer needs the full check";
+  EXPECT_GE(counts.certified - certified0, 2u) << "the icospheres are no longer certified";
 }
 
 }  // namespace
