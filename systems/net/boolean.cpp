@@ -412,10 +412,22 @@ PolygonSoup net_polygons(const Model& m) {
 
 namespace {
 
+/// ctx with another thread count: the result's certificate is a few hundred
+/// cut triangles of microseconds each, worth two threads on small pairs
+/// too (its verdict does not depend on them).
+ExecContext with_threads(const ExecContext& ctx, int threads) {
+  ExecContext c = ctx;
+  c.threads = threads;
+  return c;
+}
+
 /// Steps 2-5 of the Boolean on two prepared nets (checked), reported to
 /// ctx.progress as stages first_stage .. first_stage + 2 of `stages`.
+/// caller_threads: the caller's thread count before the small-pair rule
+/// (ctx.threads is 1 for small pairs), for the result's certificate.
 Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& pb, const BooleanOptions& opt,
-                                   const ExecContext& ctx, std::size_t first_stage, std::size_t stages) {
+                                   const ExecContext& ctx, int caller_threads, std::size_t first_stage,
+                                   std::size_t stages) {
   BooleanReport rep;
   const TriMesh &A = pa.mesh, &B = pb.mesh;
   const Bvh &bvh_a = pa.bvh, &bvh_b = pb.bvh;
@@ -573,7 +585,7 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
   if (opt.join == BooleanJoin::kMeshes) {
     if (Status st = connect_gaps(out, face_side, opt.rule, rep); !st) return st;
   } else if (opt.mode == BooleanMode::kExact && opt.check_result &&
-             !certify_rounded_result(cut, A, bvh_a, B, bvh_b, ctx)) {
+             !certify_rounded_result(cut, A, bvh_a, B, bvh_b, with_threads(ctx, caller_threads))) {
     // The exact result does not cross itself; rounding its new points can
     // flatten a sliver or fold it over a neighbour (issue 24, fold15): flat
     // ones are flipped away, and a folded result is never returned. Not in
@@ -692,7 +704,7 @@ Expected<BooleanReport> net_boolean(const PolygonSoupView& sa, const PolygonSoup
   for (const PrepareSteps& st : steps)
     if (!st.crossing) return st.crossing;
   if (Status s = stage_done(ctx, "boolean: self-intersection check", 2, kStages); !s) return s;
-  return explained_by_crossing(boolean_of(pa, pb, opt, ctx, 3, kStages), pa, pb, ctx);
+  return explained_by_crossing(boolean_of(pa, pb, opt, ctx, ctx_in.threads, 3, kStages), pa, pb, ctx);
 }
 
 Expected<BooleanReport> net_boolean(const PreparedNet& a, const PreparedNet& b, const BooleanOptions& opt,
@@ -708,7 +720,7 @@ Expected<BooleanReport> net_boolean(const PreparedNet& a, const PreparedNet& b, 
                     "check_self_intersection = false");
   ExecContext ctx = ctx_in;
   if (pa->soup.face_count() + pb->soup.face_count() < ctx.sequential_threshold) ctx.threads = 1;
-  return explained_by_crossing(boolean_of(*pa, *pb, opt, ctx, 1, 3), *pa, *pb, ctx);
+  return explained_by_crossing(boolean_of(*pa, *pb, opt, ctx, ctx_in.threads, 1, 3), *pa, *pb, ctx);
 }
 
 }  // namespace atelier

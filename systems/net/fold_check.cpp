@@ -697,7 +697,14 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
   std::atomic<bool> failed{false};
   std::atomic<std::size_t> pairs{0}, exact{0};
   const Bvh* bvhs[2] = {&bvh_a, &bvh_b};
-  par::for_each_n(ctx, items.size(), [&](std::size_t i) {
+  // A cut triangle's pairs are microseconds of work, so even a few dozen
+  // are worth the second thread (the context's threshold is sized for loops
+  // of cheap elements). The verdict is an "and" over the triangles: the same
+  // for any thread count and order.
+  ExecContext pctx = ctx;
+  pctx.sequential_threshold = 16;
+  pctx.grain = 4;
+  par::for_each_n(pctx, items.size(), [&](std::size_t i) {
     if (failed.load(std::memory_order_relaxed)) return;
     const int side = static_cast<int>(items[i][0]);
     const std::uint32_t t = items[i][1];
