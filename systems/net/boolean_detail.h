@@ -361,7 +361,7 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
                                           std::span<const std::uint64_t> split_edges,
                                           std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx);
 
-// ---- fold16: the rounded result's certificate (fold_check.cpp)
+// ---- fold16: the rounded result's certificate (fold_certificate.cpp)
 /// What certify_rounded_result looked at: the cut triangles with a kept
 /// piece that has a new point, the pairs of triangles whose boxes meet (each
 /// with such a piece), how many of them the filters left to the exact

@@ -1,0 +1,421 @@
+// The rounded result's certificate (issue 24, fold16): before the repair
+// and fold check of fold_check.cpp, floating-point filters show for most
+// results that no triangle with a rounded point is flat or near another,
+// so both are skipped. Split from fold_check.cpp, whose fold semantics
+// (which pairs count, coincident corners) it shares: read them together.
+#include <atelier/engine/parallel.h>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include "boolean_detail.h"
+
+namespace atelier::net_detail {
+
+// ---- The certificate (issue 24, fold16) ---------------------------------
+//
+// The fold check above builds a fold net, its hierarchy and the nets'
+// neighbour pieces for every Boolean: 1.2-2.3x the Boolean's own time. Most
+// results need none of it: every triangle with a new point is certainly not
+// flat and certainly apart from every triangle of the result near it, which
+// floating-point filters with Shewchuk's bounds show for almost every pair
+// of a generic cut. certify_rounded_result tests exactly that, in the cut's
+// own ids, before the output is touched; when it holds, the repair finds no
+// flat triangle and the check no crossing (the same pairs, or more: it does
+// not merge coincident copies), so the result is returned as the check
+// would return it. When any filter fails, the whole repair and check run
+// as before. Complete: a triangle of the result is a kept piece X of a net
+// triangle u (a whole polygon is its triangles' pieces), its exact corners
+// lie in u, and each rounded corner moved by at most delta per coordinate,
+// so box(X) lies in box(u) grown by delta: every X whose box meets a
+// suspect S's box is found by asking the nets' hierarchies for the
+// triangles whose boxes meet box(S) grown by delta.
+namespace {
+
+/// A triangle of the rounded result in the cut's canonical ids, with its
+/// corners, box and rounded normal (the self-check's SelfTri with points).
+struct CertTri {
+  std::array<std::uint32_t, 3> v{};
+  std::array<Vec3d, 3> p;
+  std::array<double, 6> box{};
+  double n[3] = {}, nabs[3] = {};
+};
+
+/// The corners and box (cert_tri's first half: the box tests need no more).
+void cert_corners(const Cut& cut, const TriMesh& a, const TriMesh& b, const std::array<std::uint32_t, 3>& piece,
+                  CertTri& r) noexcept {
+  for (std::size_t k = 0; k < 3; ++k) {
+    r.v[k] = cut.canon[piece[k]];
+    r.p[k] = cut.position(a, b, r.v[k]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    r.box[static_cast<std::size_t>(k)] = std::min({r.p[0][k], r.p[1][k], r.p[2][k]});
+    r.box[static_cast<std::size_t>(k + 3)] = std::max({r.p[0][k], r.p[1][k], r.p[2][k]});
+  }
+}
+
+/// The rounded normal and the permanents of the side test.
+void cert_normal(CertTri& r) noexcept {
+  const Vec3d u = r.p[1] - r.p[0], w = r.p[2] - r.p[0];
+  r.n[0] = u.y() * w.z() - u.z() * w.y();
+  r.n[1] = u.z() * w.x() - u.x() * w.z();
+  r.n[2] = u.x() * w.y() - u.y() * w.x();
+  r.nabs[0] = std::abs(u.y() * w.z()) + std::abs(u.z() * w.y());
+  r.nabs[1] = std::abs(u.z() * w.x()) + std::abs(u.x() * w.z());
+  r.nabs[2] = std::abs(u.x() * w.y()) + std::abs(u.y() * w.x());
+}
+
+void cert_tri(const Cut& cut, const TriMesh& a, const TriMesh& b, const std::array<std::uint32_t, 3>& piece,
+              CertTri& r) noexcept {
+  cert_corners(cut, a, b, piece, r);
+  cert_normal(r);
+}
+
+bool cert_boxes_meet(const std::array<double, 6>& x, const std::array<double, 6>& y) noexcept {
+  return (x[0] <= y[3]) & (y[0] <= x[3]) & (x[1] <= y[4]) & (y[1] <= x[4]) & (x[2] <= y[5]) & (y[2] <= x[5]);
+}
+
+/// The side of q against x's plane, certified by Shewchuk's first-stage
+/// orient3d bound (7 + 56 eps) eps on the permanent (self_check_pairs.cpp's
+/// self_side), 0 when the filter cannot tell.
+int cert_side(const CertTri& x, const Vec3d& q) noexcept {
+  const Vec3d& a = x.p[0];
+  const double wx = q.x() - a.x(), wy = q.y() - a.y(), wz = q.z() - a.z();
+  const double det = wx * x.n[0] + wy * x.n[1] + wz * x.n[2];
+  const double perm = std::abs(wx) * x.nabs[0] + std::abs(wy) * x.nabs[1] + std::abs(wz) * x.nabs[2];
+  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
+  if (!(perm > 1e-250) || !(perm < std::numeric_limits<double>::infinity())) return 0;
+  const double bound = kBound * perm;
+  return det > bound ? 1 : (-det > bound ? -1 : 0);
+}
+
+int cert_axis(const CertTri& x) noexcept {
+  const double a = std::abs(x.n[0]), b = std::abs(x.n[1]), c = std::abs(x.n[2]);
+  return a >= b ? (a >= c ? 0 : 2) : (b >= c ? 1 : 2);
+}
+
+/// Certainly not flat: a certain orientation seen along some axis (then its
+/// corners are not collinear, which repair_flat_triangles looks for). Where
+/// no filter can tell (a piece of a triangle far larger than the cut, as
+/// Cray's slab at FLT_MAX), the caller asks the exact collinear().
+bool cert_not_flat(const CertTri& x) noexcept {
+  for (int k = 0; k < 3; ++k)
+    if (certified_orient2(x.p[0], x.p[1], x.p[2], k) != 0) return true;
+  return false;
+}
+
+/// True when x and y certainly meet at most in the corners (ids) they
+/// share: the self-check's rules (self_check_pairs.cpp, self_apart), on
+/// the triangles' own points. False: not known.
+bool cert_apart(const CertTri& x, const CertTri& y) noexcept {
+  unsigned in_y = 0, in_x = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (x.v[static_cast<std::size_t>(i)] == y.v[static_cast<std::size_t>(j)]) {
+        in_y |= 1u << i;
+        in_x |= 1u << j;
+      }
+  auto one_side = [](const CertTri& s, const CertTri& o, unsigned shared_of_o) {
+    int side = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (shared_of_o >> k & 1u) continue;
+      const int d = cert_side(s, o.p[static_cast<std::size_t>(k)]);
+      if (d == 0 || (side != 0 && d != side)) return false;
+      side = d;
+    }
+    return side != 0;
+  };
+  if (one_side(x, y, in_x) || one_side(y, x, in_y)) return true;
+  const int shared = std::popcount(in_y);
+  const int axis = cert_axis(x);
+  auto P = [](const CertTri& t, int k) -> const Vec3d& { return t.p[static_cast<std::size_t>((k % 3 + 3) % 3)]; };
+  if (shared == 3) return false;
+  if (shared == 2) {
+    // The third corners certainly on opposite sides of the shared edge.
+    const int ox = std::countr_zero(~in_y & 7u), oy = std::countr_zero(~in_x & 7u);
+    const Vec3d &u = P(x, ox + 1), &w = P(x, ox + 2);
+    const int sx = certified_orient2(u, w, P(x, ox), axis), sy = certified_orient2(u, w, P(y, oy), axis);
+    return sx != 0 && sy != 0 && sx != sy;
+  }
+  if (shared == 1) {
+    // Both keep a certain orientation along the axis, and a line through
+    // the shared corner along one's edge has the other's far corners
+    // strictly on the far side.
+    const int ix = std::countr_zero(in_y), iy = std::countr_zero(in_x);
+    const Vec3d& v = P(x, ix);
+    const Vec3d &x1 = P(x, ix + 1), &x2 = P(x, ix + 2), &y1 = P(y, iy + 1), &y2 = P(y, iy + 2);
+    const int sx = certified_orient2(v, x1, x2, axis), sy = certified_orient2(v, y1, y2, axis);
+    if (sx == 0 || sy == 0) return false;
+    auto separates = [&](const Vec3d& e, int s, const Vec3d& q1, const Vec3d& q2) {
+      return certified_orient2(v, e, q1, axis) == -s && certified_orient2(v, e, q2, axis) == -s;
+    };
+    return separates(x1, sx, y1, y2) || separates(x2, -sx, y1, y2) || separates(y1, sy, x1, x2) ||
+           separates(y2, -sy, x1, x2);
+  }
+  // No shared corner: an edge line of one triangle, along x's axis, with
+  // its third corner strictly on one side and the other's corners strictly
+  // on the other (disjoint projections).
+  auto separated_by_edges = [&](const CertTri& s, const CertTri& o) {
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d &e0 = P(s, k), &e1 = P(s, k + 1);
+      const int d = certified_orient2(e0, e1, P(s, k + 2), axis);
+      if (d != 0 && certified_orient2(e0, e1, o.p[0], axis) == -d && certified_orient2(e0, e1, o.p[1], axis) == -d &&
+          certified_orient2(e0, e1, o.p[2], axis) == -d)
+        return true;
+    }
+    return false;
+  };
+  return separated_by_edges(x, y) || separated_by_edges(y, x);
+}
+
+/// A certified strict separation along axis n (any double vector), from
+/// origin o: sharing a corner (o, skipped by `skip_x` / `skip_y`, bit k:
+/// corner k), every other corner of x at n . (p - o) < 0 and of y at > 0,
+/// or the other way round; sharing none, the values of x's corners all
+/// below those of y's, or all above. Each p - o is rounded once (relative
+/// error eps) and the dot product adds gamma_3, so
+/// |error| <= 8e-16 * sum |n_i| |w_i| bounds both with room (eps = 2^-53).
+bool cert_separates(const Vec3d& n, const Vec3d& o, const CertTri& x, unsigned skip_x, const CertTri& y,
+                    unsigned skip_y) noexcept {
+  // Per triangle: the lowest value minus its bound, the highest plus its.
+  auto range = [&](const CertTri& t, unsigned skip, double& lo, double& hi) {
+    lo = HUGE_VAL;
+    hi = -HUGE_VAL;
+    for (int k = 0; k < 3; ++k) {
+      if (skip >> k & 1u) continue;
+      const Vec3d& p = t.p[static_cast<std::size_t>(k)];
+      const double wx = p.x() - o.x(), wy = p.y() - o.y(), wz = p.z() - o.z();
+      const double d = n.x() * wx + n.y() * wy + n.z() * wz;
+      const double e = 8e-16 * (std::abs(n.x() * wx) + std::abs(n.y() * wy) + std::abs(n.z() * wz)) + 1e-300;
+      lo = std::min(lo, d - e);
+      hi = std::max(hi, d + e);
+    }
+    return lo - lo == 0 && hi - hi == 0;  // finite
+  };
+  double xl = 0, xh = 0, yl = 0, yh = 0;
+  if (!range(x, skip_x, xl, xh) || !range(y, skip_y, yl, yh)) return false;
+  if (skip_x != 0)  // through the shared corner: strictly on opposite sides of 0
+    return (xh < 0 && yl > 0) || (xl > 0 && yh < 0);
+  return xh < yl || yh < xl;
+}
+
+/// Second-stage filters for a pair cert_apart leaves open (shared corners
+/// by id, at most one): a plane that certainly separates them, through the
+/// shared corner if any (then they meet only there). Candidate normals:
+/// both triangles' normals, the cross products of their edges (the
+/// separating axes of two triangles in space), and each edge crossed with
+/// its triangle's normal (a line in a common plane: coplanar pieces of one
+/// cut triangle). Sharing a corner v, also the disjointness of their angles
+/// at v seen along each triangle's axis (two convex angles meeting only at
+/// v, each triangle projected one-to-one: they meet only at v).
+bool cert_apart_more(const CertTri& x, const CertTri& y) noexcept {
+  unsigned in_y = 0, in_x = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (x.v[static_cast<std::size_t>(i)] == y.v[static_cast<std::size_t>(j)]) {
+        in_y |= 1u << i;
+        in_x |= 1u << j;
+      }
+  const int shared = std::popcount(in_y);
+  const Vec3d nx(x.n[0], x.n[1], x.n[2]), ny(y.n[0], y.n[1], y.n[2]);
+  if (shared == 2) {
+    // A plane through the shared edge, across either triangle's own plane,
+    // with the third corners strictly on opposite sides.
+    const int ox = std::countr_zero(~in_y & 7u);
+    const Vec3d& u = x.p[static_cast<std::size_t>((ox + 1) % 3)];
+    const Vec3d e = x.p[static_cast<std::size_t>((ox + 2) % 3)] - u;
+    return cert_separates(nx.cross(e), u, x, in_y, y, in_x) || cert_separates(ny.cross(e), u, x, in_y, y, in_x);
+  }
+  if (shared > 2) return false;
+  const Vec3d o = shared == 1 ? x.p[static_cast<std::size_t>(std::countr_zero(in_y))] : x.p[0];
+  if (shared == 1) {
+    const int ix = std::countr_zero(in_y), iy = std::countr_zero(in_x);
+    const Vec3d& v = o;
+    const Vec3d &x1 = x.p[static_cast<std::size_t>((ix + 1) % 3)], &x2 = x.p[static_cast<std::size_t>((ix + 2) % 3)];
+    const Vec3d &y1 = y.p[static_cast<std::size_t>((iy + 1) % 3)], &y2 = y.p[static_cast<std::size_t>((iy + 2) % 3)];
+    for (const int axis : {cert_axis(x), cert_axis(y)}) {
+      const int sx = certified_orient2(v, x1, x2, axis), sy = certified_orient2(v, y1, y2, axis);
+      if (sx == 0 || sy == 0) continue;
+      // Ray r strictly outside the angle (a, b) of orientation s at v.
+      auto outside = [&](const Vec3d& a, const Vec3d& b, int s, const Vec3d& r) {
+        return certified_orient2(v, a, r, axis) == -s || certified_orient2(v, r, b, axis) == -s;
+      };
+      if (outside(x1, x2, sx, y1) && outside(x1, x2, sx, y2) && outside(y1, y2, sy, x1) && outside(y1, y2, sy, x2))
+        return true;
+    }
+  }
+  if (cert_separates(nx, o, x, in_y, y, in_x) || cert_separates(ny, o, x, in_y, y, in_x)) return true;
+  Vec3d ex[3], ey[3];
+  for (std::size_t k = 0; k < 3; ++k) {
+    ex[k] = x.p[(k + 1) % 3] - x.p[k];
+    ey[k] = y.p[(k + 1) % 3] - y.p[k];
+  }
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t j = 0; j < 3; ++j)
+      if (cert_separates(ex[i].cross(ey[j]), o, x, in_y, y, in_x)) return true;
+  for (std::size_t k = 0; k < 3; ++k)
+    if (cert_separates(nx.cross(ex[k]), o, x, in_y, y, in_x) || cert_separates(ny.cross(ey[k]), o, x, in_y, y, in_x))
+      return true;
+  return false;
+}
+
+/// The exact answer for a pair the filters leave open: triangles_cross on
+/// the two triangles alone (corners shared by id).
+bool cert_cross_exact(const CertTri& x, const CertTri& y) {
+  TriMesh m;
+  std::array<std::uint32_t, 3> tx{}, ty{};
+  std::vector<std::uint32_t> ids;
+  auto local = [&](std::uint32_t v, const Vec3d& p) {
+    for (std::uint32_t k = 0; k < ids.size(); ++k)
+      if (ids[k] == v) return k;
+    ids.push_back(v);
+    m.p.push_back(p);
+    return static_cast<std::uint32_t>(ids.size() - 1);
+  };
+  for (std::size_t k = 0; k < 3; ++k) tx[k] = local(x.v[k], x.p[k]);
+  for (std::size_t k = 0; k < 3; ++k) ty[k] = local(y.v[k], y.p[k]);
+  m.tri = {tx, ty};
+  return triangles_cross(m, 0, 1);
+}
+
+}  // namespace
+
+bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
+                            const ExecContext& ctx, CertifyStats* stats) {
+  const std::uint32_t first_new = cut.nA + cut.nB;
+  // delta: how far a rounded point may lie from its exact value, per
+  // coordinate. point_coordinates takes a box's centre (within 2 ulps) or
+  // rounds to nearest (half an ulp); an ulp of x is at most 2^-52 |x|, so
+  // 2^-48 of the largest coordinate is 8 times that bound.
+  double largest = 0;
+  for (const Vec3d& p : cut.new_points) {
+    if (!p.allFinite()) return false;
+    largest = std::max(largest, p.cwiseAbs().maxCoeff());
+  }
+  const double delta = std::ldexp(largest, -48) + 1e-300;
+  auto is_suspect = [&](const std::array<std::uint32_t, 3>& piece) {
+    return cut.canon[piece[0]] >= first_new || cut.canon[piece[1]] >= first_new || cut.canon[piece[2]] >= first_new;
+  };
+  // The cut triangles with a kept piece that has a new point.
+  std::vector<std::array<std::uint32_t, 2>> items;  // side, triangle
+  for (int side = 0; side < 2; ++side) {
+    const CutSide& s = cut.sides[side];
+    for (const std::uint32_t t : s.cut)
+      for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p)
+        if (s.keep[p] && is_suspect(s.piece[p])) {
+          items.push_back({static_cast<std::uint32_t>(side), t});
+          break;
+        }
+  }
+  std::atomic<bool> failed{false};
+  std::atomic<std::size_t> pairs{0}, exact{0};
+  const Bvh* bvhs[2] = {&bvh_a, &bvh_b};
+  // A cut triangle's pairs are microseconds of work, so even a few dozen
+  // are worth the second thread (the context's threshold is sized for loops
+  // of cheap elements). The verdict is an "and" over the triangles: the same
+  // for any thread count and order.
+  ExecContext pctx = ctx;
+  pctx.sequential_threshold = 16;
+  pctx.grain = 4;
+  par::for_each_n(pctx, items.size(), [&](std::size_t i) {
+    if (failed.load(std::memory_order_relaxed)) return;
+    const int side = static_cast<int>(items[i][0]);
+    const std::uint32_t t = items[i][1];
+    const CutSide& s = cut.sides[side];
+    // The suspects (kept pieces with a new point), keyed (side, piece).
+    thread_local std::vector<CertTri> sus;
+    thread_local std::vector<std::uint64_t> sus_key;
+    thread_local std::vector<std::uint32_t> stack;
+    sus.clear();
+    sus_key.clear();
+    std::array<double, 6> q{HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p) {
+      if (!s.keep[p] || !is_suspect(s.piece[p])) continue;
+      sus.emplace_back();
+      cert_tri(cut, a, b, s.piece[p], sus.back());
+      if (!cert_not_flat(sus.back()) && collinear(sus.back().p[0], sus.back().p[1], sus.back().p[2])) {
+        failed = true;
+        return;
+      }
+      sus_key.push_back((std::uint64_t{static_cast<std::uint32_t>(side)} << 32) | p);
+      for (std::size_t k = 0; k < 3; ++k) {
+        q[k] = std::min(q[k], sus.back().box[k]);
+        q[k + 3] = std::max(q[k + 3], sus.back().box[k + 3]);
+      }
+    }
+    for (std::size_t k = 0; k < 3; ++k) {
+      q[k] -= delta;
+      q[k + 3] += delta;
+    }
+    std::size_t n_pairs = 0, n_exact = 0;
+    CertTri x;
+    for (int o = 0; o < 2 && !failed.load(std::memory_order_relaxed); ++o) {
+      const Bvh& h = *bvhs[o];
+      const CutSide& so = cut.sides[o];
+      if (h.nodes.empty()) continue;
+      stack.assign(1, 0);
+      while (!stack.empty()) {
+        const Bvh::Node& nd = h.nodes[stack.back()];
+        stack.pop_back();
+        if (!cert_boxes_meet(nd.box, q)) continue;
+        if (nd.left != kNil) {
+          stack.push_back(nd.left);
+          stack.push_back(nd.left + 1);
+          continue;
+        }
+        for (std::uint32_t j = nd.first; j < nd.first + nd.count; ++j) {
+          if (!cert_boxes_meet(h.box[j], q)) continue;
+          const std::uint32_t u = h.order[j];
+          for (std::uint32_t p = so.piece_begin[u]; p < so.piece_begin[u + 1]; ++p) {
+            if (!so.keep[p]) continue;
+            const std::uint64_t key = (std::uint64_t{static_cast<std::uint32_t>(o)} << 32) | p;
+            const bool suspect = is_suspect(so.piece[p]);
+            int made = 0;  // 1: corners and box, 2: and the normal
+            for (std::size_t k = 0; k < sus.size(); ++k) {
+              // A pair of suspects once, from the smaller key's side (its
+              // query finds the other: the boxes' relation is symmetric).
+              if (key == sus_key[k] || (suspect && key < sus_key[k])) continue;
+              if (made == 0) {
+                cert_corners(cut, a, b, so.piece[p], x);
+                made = 1;
+                if (!cert_boxes_meet(q, x.box)) break;
+              }
+              if (!cert_boxes_meet(sus[k].box, x.box)) continue;
+              if (made == 1) {
+                cert_normal(x);
+                made = 2;
+              }
+              ++n_pairs;
+              if (cert_apart(sus[k], x) || cert_apart_more(sus[k], x)) continue;
+              ++n_exact;
+              if (cert_cross_exact(sus[k], x)) {
+                failed = true;
+                return;
+              }
+            }
+          }
+        }
+      }
+    }
+    pairs += n_pairs;
+    exact += n_exact;
+  });
+  (failed ? result_check_counts().full : result_check_counts().certified) += 1;
+  if (stats != nullptr) {
+    stats->cut_triangles = items.size();
+    stats->pairs = pairs;
+    stats->exact_pairs = exact;
+    stats->certified = !failed;
+  }
+  return !failed;
+}
+
+ResultCheckCounts& result_check_counts() noexcept {
+  static ResultCheckCounts counts;
+  return counts;
+}
+
+}  // namespace atelier::net_detail
