@@ -133,6 +133,24 @@ void build_bvh(const TriMesh& m, Bvh& out, const ExecContext& ctx);
 [[nodiscard]] std::array<std::uint32_t, 2> first_self_crossing(const TriMesh& m, const Bvh& bvh,
                                                                const ExecContext& ctx);
 
+/// The side of q against the plane through a with the rounded normal n:
+/// orient3d expanded along q - a, the same products as Shewchuk's
+/// expansion, so his first-stage bound (7 + 56 eps) eps times the permanent
+/// holds (every input a double, each difference rounded once). nabs[k] is
+/// n[k]'s permanent (the sum of its two products' magnitudes). 0 when the
+/// filter cannot tell: below 1e-250 underflow could exceed the bound, and
+/// infinity voids it. The self-check's and the result certificate's test.
+[[nodiscard]] inline int filtered_plane_side(const double* n, const double* nabs, const Vec3d& a,
+                                             const Vec3d& q) noexcept {
+  const double wx = q.x() - a.x(), wy = q.y() - a.y(), wz = q.z() - a.z();
+  const double det = wx * n[0] + wy * n[1] + wz * n[2];
+  const double perm = std::abs(wx) * nabs[0] + std::abs(wy) * nabs[1] + std::abs(wz) * nabs[2];
+  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
+  if (!(perm > 1e-250) || !(perm < std::numeric_limits<double>::infinity())) return 0;
+  const double bound = kBound * perm;
+  return det > bound ? 1 : (-det > bound ? -1 : 0);
+}
+
 /// The orientation of (a, b, c) seen along `axis` (coordinates axis + 1 and
 /// axis + 2): +1 or -1 when Shewchuk's orient2d bound (3 + 16 eps) eps
 /// certifies it, 0 when the filter cannot tell.

@@ -29,6 +29,7 @@
 #include <sstream>
 
 #include "boolean_detail.h"
+#include "expansion.h"
 
 namespace atelier::net_detail {
 
@@ -363,43 +364,9 @@ int winding_any(const TriMesh& m, const Bvh& bvh, const typename K::Point_3& q, 
   throw Error(Status(ErrorCode::kInternal, "net boolean: no generic ray direction found for a winding number"));
 }
 
-// Shewchuk's exact arithmetic (Adaptive Precision Floating-Point
-// Arithmetic, 1997): Two-Sum (Theorem 7), Two-Product by a fused
-// multiply-add, Grow-Expansion with zero elimination (Theorem 10).
-void two_sum(double a, double b, double& s, double& e) noexcept {
-  s = a + b;
-  const double bv = s - a, av = s - bv;
-  e = (a - av) + (b - bv);
-}
-
-/// An exact sum of doubles, as a nonoverlapping expansion in increasing
-/// magnitude. Grow-Expansion of an m-component expansion and one double has
-/// at most m + 1 components, so eight doubles never need more than eight:
-/// the room is left uninitialised (zeroing a 64-slot array, three per
-/// call, was a sixth of the cofactor's time on Cray).
-struct Expansion {
-  std::array<double, 8> e;  // components [0, n) are set before they are read
-  std::size_t n = 0;
-  bool full = false;  // more components than room: the caller goes to CGAL
-  void add(double b) noexcept {
-    if (b == 0.0) return;
-    double q = b;
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      double h;
-      two_sum(q, e[i], q, h);
-      if (h != 0.0) e[k++] = h;
-    }
-    if (q != 0.0) {
-      if (k == e.size()) {
-        full = true;
-        return;
-      }
-      e[k++] = q;
-    }
-    n = k;
-  }
-};
+// Shewchuk's exact arithmetic (expansion.h): eight doubles never need more
+// than eight components.
+using Expansion = GrowExpansion<8>;
 
 /// The sign of det[b - a, c - a, d - c] (= orient3d) when d - c is exact
 /// in doubles: the cofactor row n = (c - a) x (d - c) = c x r3 - a x r3 is

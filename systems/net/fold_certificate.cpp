@@ -78,19 +78,9 @@ bool cert_boxes_meet(const std::array<double, 6>& x, const std::array<double, 6>
   return (x[0] <= y[3]) & (y[0] <= x[3]) & (x[1] <= y[4]) & (y[1] <= x[4]) & (x[2] <= y[5]) & (y[2] <= x[5]);
 }
 
-/// The side of q against x's plane, certified by Shewchuk's first-stage
-/// orient3d bound (7 + 56 eps) eps on the permanent (self_check_pairs.cpp's
-/// self_side), 0 when the filter cannot tell.
-int cert_side(const CertTri& x, const Vec3d& q) noexcept {
-  const Vec3d& a = x.p[0];
-  const double wx = q.x() - a.x(), wy = q.y() - a.y(), wz = q.z() - a.z();
-  const double det = wx * x.n[0] + wy * x.n[1] + wz * x.n[2];
-  const double perm = std::abs(wx) * x.nabs[0] + std::abs(wy) * x.nabs[1] + std::abs(wz) * x.nabs[2];
-  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
-  if (!(perm > 1e-250) || !(perm < std::numeric_limits<double>::infinity())) return 0;
-  const double bound = kBound * perm;
-  return det > bound ? 1 : (-det > bound ? -1 : 0);
-}
+/// The side of q against x's plane (filtered_plane_side), 0 when the
+/// filter cannot tell.
+int cert_side(const CertTri& x, const Vec3d& q) noexcept { return filtered_plane_side(x.n, x.nabs, x.p[0], q); }
 
 int cert_axis(const CertTri& x) noexcept {
   const double a = std::abs(x.n[0]), b = std::abs(x.n[1]), c = std::abs(x.n[2]);

@@ -10,44 +10,15 @@
 #include <cmath>
 
 #include "boolean_detail.h"
+#include "expansion.h"
 
 namespace atelier::net_detail {
 
 namespace {
 
-// Shewchuk, Adaptive Precision Floating-Point Arithmetic and Fast Robust
-// Geometric Predicates (1997): Two-Sum (Theorem 7), Two-Product (here by a
-// fused multiply-add), Grow-Expansion with zero elimination (Theorem 10).
-void two_sum(double a, double b, double& s, double& e) noexcept {
-  s = a + b;
-  const double bv = s - a, av = s - bv;
-  e = (a - av) + (b - bv);
-}
-
-/// An exact sum of doubles as a nonoverlapping expansion in increasing
-/// magnitude; its sign is its last (largest) component's.
-struct Sum {
-  std::array<double, 24> e;  // components [0, n) are set before they are read
-  std::size_t n = 0;
-  bool full = false;  // more components than room: the caller gives up
-  void add(double b) noexcept {
-    if (b == 0.0) return;
-    double q = b;
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      double h;
-      two_sum(q, e[i], q, h);
-      if (h != 0.0) e[k++] = h;
-    }
-    if (q != 0.0) {
-      if (k == e.size()) {
-        full = true;
-        return;
-      }
-      e[k++] = q;
-    }
-    n = k;
-  }
+// Shewchuk's expansions (expansion.h), with Two-Product by a fused
+// multiply-add.
+struct Sum : GrowExpansion<24> {
   /// x y exactly (head and tail), both factors in the range checked below.
   void add_product(double x, double y) noexcept {
     const double h = x * y;

@@ -50,20 +50,9 @@ bool self_nodes_meet(const std::array<double, 6>& x, const std::array<double, 6>
   return (x[0] <= y[3]) & (y[0] <= x[3]) & (x[1] <= y[4]) & (y[1] <= x[4]) & (x[2] <= y[5]) & (y[2] <= x[5]);
 }
 
-/// The side of p against the plane of triangle x (first corner a): +1 or
-/// -1 when certified, 0 when the filter cannot tell. det = (p - a) . n is
-/// orient3d expanded along p - a: the same products as Shewchuk's
-/// expansion, so his first-stage bound (7 + 56 eps) eps times the
-/// permanent holds (every input a double, each difference rounded once).
+/// The side of p against x's plane through a (filtered_plane_side).
 inline int self_side(const SelfTri& x, const Vec3d& a, const Vec3d& p) noexcept {
-  const double wx = p.x() - a.x(), wy = p.y() - a.y(), wz = p.z() - a.z();
-  const double det = wx * x.n[0] + wy * x.n[1] + wz * x.n[2];
-  const double perm = std::abs(wx) * x.nabs[0] + std::abs(wy) * x.nabs[1] + std::abs(wz) * x.nabs[2];
-  constexpr double kBound = 7.7715611723761027e-16;  // (7 + 56 eps) eps, eps = 2^-53
-  // Below 1e-250 underflow could exceed the bound; infinity voids it.
-  if (!(perm > 1e-250) || !(perm < std::numeric_limits<double>::infinity())) return 0;
-  const double bound = kBound * perm;
-  return det > bound ? 1 : (-det > bound ? -1 : 0);
+  return filtered_plane_side(x.n, x.nabs, a, p);
 }
 
 /// The axis along which triangle x's rounded normal is longest: the
