@@ -80,7 +80,9 @@ bool cert_boxes_meet(const std::array<double, 6>& x, const std::array<double, 6>
 
 /// The side of q against x's plane (filtered_plane_side), 0 when the
 /// filter cannot tell.
-int cert_side(const CertTri& x, const Vec3d& q) noexcept { return filtered_plane_side(x.n, x.nabs, x.p[0], q); }
+int cert_side(const CertTri& x, const Vec3d& q) noexcept {
+  return filtered_plane_side(x.n, x.nabs, x.p[0], q);
+}
 
 int cert_axis(const CertTri& x) noexcept {
   const double a = std::abs(x.n[0]), b = std::abs(x.n[1]), c = std::abs(x.n[2]);
@@ -97,17 +99,23 @@ bool cert_not_flat(const CertTri& x) noexcept {
   return false;
 }
 
-/// True when x and y certainly meet at most in the corners (ids) they
-/// share: the self-check's rules (self_check_pairs.cpp, self_apart), on
-/// the triangles' own points. False: not known.
-bool cert_apart(const CertTri& x, const CertTri& y) noexcept {
-  unsigned in_y = 0, in_x = 0;
+/// The corners x and y share by id: bit i of in_y when x's corner i is one
+/// of y's, bit j of in_x when y's corner j is one of x's.
+void cert_shared_corners(const CertTri& x, const CertTri& y, unsigned& in_y, unsigned& in_x) noexcept {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       if (x.v[static_cast<std::size_t>(i)] == y.v[static_cast<std::size_t>(j)]) {
         in_y |= 1u << i;
         in_x |= 1u << j;
       }
+}
+
+/// True when x and y certainly meet at most in the corners (ids) they
+/// share: the self-check's rules (self_check_pairs.cpp, self_apart), on
+/// the triangles' own points. False: not known.
+bool cert_apart(const CertTri& x, const CertTri& y) noexcept {
+  unsigned in_y = 0, in_x = 0;
+  cert_shared_corners(x, y, in_y, in_x);
   auto one_side = [](const CertTri& s, const CertTri& o, unsigned shared_of_o) {
     int side = 0;
     for (int k = 0; k < 3; ++k) {
@@ -203,12 +211,7 @@ bool cert_separates(const Vec3d& n, const Vec3d& o, const CertTri& x, unsigned s
 /// v, each triangle projected one-to-one: they meet only at v).
 bool cert_apart_more(const CertTri& x, const CertTri& y) noexcept {
   unsigned in_y = 0, in_x = 0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (x.v[static_cast<std::size_t>(i)] == y.v[static_cast<std::size_t>(j)]) {
-        in_y |= 1u << i;
-        in_x |= 1u << j;
-      }
+  cert_shared_corners(x, y, in_y, in_x);
   const int shared = std::popcount(in_y);
   const Vec3d nx(x.n[0], x.n[1], x.n[2]), ny(y.n[0], y.n[1], y.n[2]);
   if (shared == 2) {
