@@ -256,7 +256,9 @@ TEST(ExtrudeCli, RecipeReplaysTheDomeOnAnotherCup) {
   ASSERT_EQ(big_out.num_nodes(), once.num_nodes());
   for (std::uint32_t v = 0; v < once.nodes.slots.capacity(); ++v) {
     EXPECT_NEAR((again.position(NodeIdx{v}) - once.position(NodeIdx{v})).norm(), 0, 1e-9) << v;
-    if (v > 3 * kRing) EXPECT_NEAR(big_out.position(NodeIdx{v}).norm(), 2.0, 1e-6) << v;
+    if (v > 3 * kRing) {
+      EXPECT_NEAR(big_out.position(NodeIdx{v}).norm(), 2.0, 1e-6) << v;
+    }
   }
   const TopologyCounts t = count_topology(big_out);
   EXPECT_EQ(t.nodes - t.edges + t.faces, 2);

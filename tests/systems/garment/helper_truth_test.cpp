@@ -334,7 +334,9 @@ TEST(HelperTruth, MakeHumanHelpersOnAdults) {
     // to 0.05 mm (measured, 100 adults: tights 3.98 -> 3.93 mm, skirt
     // 10.62 -> 9.93 mm; 8 adults: 3.72 -> 3.72, 11.77 -> 10.51).
     EXPECT_LE(v(1, 0), v(0, 0) + 5e-5) << helpers[h].name;
-    if (!tights) EXPECT_LT(v(1, 0), v(0, 0) - 3e-4) << helpers[h].name;  // the skirt gains over 0.3 mm
+    if (!tights) {  // the skirt gains over 0.3 mm
+      EXPECT_LT(v(1, 0), v(0, 0) - 3e-4) << helpers[h].name;
+    }
     // Levels reached (issue 26 asks 2 and 5 mm: not reached, see
     // docs/performance.md; a regression past these fails).
     EXPECT_LT(v(1, 0), tights ? 0.0045 : 0.0115) << helpers[h].name;
