@@ -402,8 +402,51 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
       }
     }
   }
+  // cert17: per cut slot, bit 0: its pieces certified an embedded
+  // triangulation once rounded (rounded_pieces_embedded); bit k + 1: with
+  // its neighbour across edge k. Only triangles cut into many pieces (below
+  // kEmbedPieces the pair tests cost less), both of a neighbouring pair;
+  // the pair first, as its union being embedded makes each part so. Made
+  // here once (deterministic), not per item: the test is ~0.4 us a piece.
+  std::vector<std::uint8_t> embed_ok[2];
+  std::size_t n_neighbour_patches = 0;
+  const bool shortcut = embedding_shortcut_on().load(std::memory_order_relaxed);
+  for (int side = 0; side < 2; ++side) {
+    const CutSide& s = cut.sides[side];
+    const TriMesh& m = *s.m;
+    embed_ok[side].assign(s.cut.size(), 0);
+    if (!shortcut) continue;
+    auto many = [&](std::uint32_t t) {
+      return t != kNil && s.slot[t] != kNil && s.piece_begin[t + 1] - s.piece_begin[t] >= kEmbedPieces;
+    };
+    for (std::size_t c = 0; c < s.cut.size(); ++c) {
+      const std::uint32_t t = s.cut[c];
+      if (!many(t)) continue;
+      for (std::uint8_t k = 0; k < 3; ++k) {
+        const auto& et = m.edge_tri[m.tri_edge[t][k]];
+        const std::uint32_t u = et[0] == t ? et[1] : et[0];
+        if (!many(u)) continue;
+        std::uint8_t& mine = embed_ok[side][c];
+        if (u < t) {  // made from u's side: copy its verdict
+          const std::uint8_t theirs = embed_ok[side][s.slot[u]];
+          for (std::uint8_t l = 0; l < 3; ++l) {
+            const auto& eu = m.edge_tri[m.tri_edge[u][l]];
+            if ((eu[0] == u ? eu[1] : eu[0]) == t && (theirs >> (l + 1) & 1u)) mine |= static_cast<std::uint8_t>(1u | 2u << k);
+          }
+          continue;
+        }
+        const std::uint32_t two[2] = {t, u};
+        if (rounded_pieces_embedded(cut, a, b, side, two)) {
+          mine |= static_cast<std::uint8_t>(1u | 2u << k);
+          ++n_neighbour_patches;
+        }
+      }
+      const std::uint32_t own[1] = {t};
+      if (!(embed_ok[side][c] & 1u) && rounded_pieces_embedded(cut, a, b, side, own)) embed_ok[side][c] |= 1u;
+    }
+  }
   std::atomic<bool> failed{false};
-  std::atomic<std::size_t> pairs{0}, exact{0}, embedded{0}, neighbours{0};
+  std::atomic<std::size_t> pairs{0}, exact{0}, embedded{0};
   const Bvh* bvhs[2] = {&bvh_a, &bvh_b};
   // A cut triangle's pairs are microseconds of work, so even a few dozen
   // are worth the second thread (the context's threshold is sized for loops
@@ -442,36 +485,23 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
       q[k] -= delta;
       q[k + 3] += delta;
     }
-    std::size_t n_pairs = 0, n_exact = 0, n_embedded = 0, n_neighbours = 0;
+    std::size_t n_pairs = 0, n_exact = 0, n_embedded = 0;
     // cert17: pairs of two pieces of u, or of u and a neighbour across one
     // of its edges, need no test when those pieces certainly form an
     // embedded triangulation once rounded (rounded_pieces_embedded,
     // fold_embedding.cpp): they meet only in the corners they share by id,
-    // which is all the pair tests below show. The neighbours' verdicts are
-    // made when a query first finds them.
-    const std::uint32_t own[1] = {t};
-    const bool shortcut = embedding_shortcut_on().load(std::memory_order_relaxed);
-    auto many_pieces = [&](std::uint32_t u) { return s.piece_begin[u + 1] - s.piece_begin[u] >= kEmbedPieces; };
-    const bool own_embedded = shortcut && many_pieces(t) && rounded_pieces_embedded(cut, a, b, side, own);
+    // which is all the pair tests below show (verdicts made before the
+    // loop: embed_ok).
+    const std::uint32_t slot_t = s.slot[t];
+    const bool own_embedded = embed_ok[side][slot_t] & 1u;
     n_embedded += own_embedded ? 1 : 0;
     const TriMesh& mt = *s.m;
-    std::uint32_t nbr[3];
-    std::int8_t nbr_ok[3] = {-1, -1, -1};
-    for (std::size_t k = 0; k < 3; ++k) {
-      const auto& et = mt.edge_tri[mt.tri_edge[t][k]];
-      nbr[k] = et[0] == t ? et[1] : et[0];
-    }
     auto same_patch = [&](std::uint32_t u) {
       if (u == t || !own_embedded) return own_embedded;
-      for (std::size_t k = 0; k < 3; ++k)
-        if (nbr[k] == u) {
-          if (nbr_ok[k] < 0) {
-            const std::uint32_t two[2] = {t, u};
-            nbr_ok[k] = many_pieces(u) && rounded_pieces_embedded(cut, a, b, side, two) ? 1 : 0;
-            n_neighbours += static_cast<std::size_t>(nbr_ok[k]);
-          }
-          return nbr_ok[k] == 1;
-        }
+      for (std::size_t k = 0; k < 3; ++k) {
+        const auto& et = mt.edge_tri[mt.tri_edge[t][k]];
+        if ((et[0] == t ? et[1] : et[0]) == u) return (embed_ok[side][slot_t] >> (k + 1) & 1u) != 0;
+      }
       return false;
     };
     CertTri x;
@@ -537,7 +567,6 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     pairs += n_pairs;
     exact += n_exact;
     embedded += n_embedded;
-    neighbours += n_neighbours;
   });
   (failed ? result_check_counts().full : result_check_counts().certified) += 1;
   result_check_counts().pairs += pairs;
@@ -548,7 +577,7 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     stats->exact_pairs = exact;
     stats->certified = !failed;
     stats->embedded_triangles = embedded;
-    stats->embedded_neighbours = neighbours;
+    stats->embedded_neighbours = n_neighbour_patches;
   }
   return !failed;
 }
