@@ -416,9 +416,9 @@ struct CertifyStats {
 /// Floating-point filters only: false when one cannot tell.
 [[nodiscard]] bool rounded_pieces_embedded(const Cut& cut, const TriMesh& a, const TriMesh& b, int side,
                                            std::span<const std::uint32_t> tris);
-/// The shortcut on (the default) or off (every pair tested: the reference
-/// the tests compare verdicts and bytes with). Process-wide; for tests and
-/// measurements.
+/// cert17's rules on (the default) or off (no pair skipped, no level-plane
+/// rule: fold16's certificate, the reference the tests compare verdicts and
+/// bytes with). Process-wide; for tests and measurements.
 void set_embedding_shortcut(bool on) noexcept;
 /// Process-wide counts of certify_rounded_result's verdicts (tests and the
 /// bench read them): results certified, results sent to the full check.

@@ -527,6 +527,8 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
           const CertTri* pre_u = slot != kNil && pre_begin[o][slot] != kNil ? &pre[o][pre_begin[o][slot]] : nullptr;
           for (std::uint32_t p = so.piece_begin[u]; p < so.piece_begin[u + 1]; ++p) {
             if (!so.keep[p]) continue;
+            // A made piece's box first: most of a fan's miss a small query.
+            if (pre_u != nullptr && !cert_boxes_meet(q, pre_u[p - so.piece_begin[u]].box)) continue;
             const std::uint64_t key = (std::uint64_t{static_cast<std::uint32_t>(o)} << 32) | p;
             const bool suspect = is_suspect(so.piece[p]);
             int made = 0;  // 1: corners and box, 2: and the normal
@@ -551,8 +553,8 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
                 made = 2;
               }
               ++n_pairs;
-              if (cert_level_apart(sus[k], *xp) || cert_level_apart(*xp, sus[k]) || cert_apart(sus[k], *xp) ||
-                  cert_apart_more(sus[k], *xp))
+              if ((shortcut && (cert_level_apart(sus[k], *xp) || cert_level_apart(*xp, sus[k]))) ||
+                  cert_apart(sus[k], *xp) || cert_apart_more(sus[k], *xp))
                 continue;
               ++n_exact;
               if (cert_cross_exact(sus[k], *xp)) {
