@@ -416,6 +416,13 @@ struct CertifyStats {
 /// Floating-point filters only: false when one cannot tell.
 [[nodiscard]] bool rounded_pieces_embedded(const Cut& cut, const TriMesh& a, const TriMesh& b, int side,
                                            std::span<const std::uint32_t> tris);
+/// The certificate's level-plane rule (cert17) on two triangles given by
+/// corners and ids (equal ids: the same point): true when y lies in a plane
+/// x_k = l, x does not, and they certainly meet at most in the corners they
+/// share by id. For the tests (the certificate calls it on its own pieces).
+[[nodiscard]] bool level_plane_pieces_apart(const std::array<Vec3d, 3>& y, const std::array<std::uint32_t, 3>& y_ids,
+                                            const std::array<Vec3d, 3>& x,
+                                            const std::array<std::uint32_t, 3>& x_ids) noexcept;
 /// cert17's rules on (the default) or off (no pair skipped, no level-plane
 /// rule: fold16's certificate, the reference the tests compare verdicts and
 /// bytes with). Process-wide; for tests and measurements.

@@ -353,6 +353,16 @@ std::atomic<bool>& embedding_shortcut_on() noexcept {
 
 }  // namespace
 
+bool level_plane_pieces_apart(const std::array<Vec3d, 3>& y, const std::array<std::uint32_t, 3>& y_ids,
+                              const std::array<Vec3d, 3>& x, const std::array<std::uint32_t, 3>& x_ids) noexcept {
+  CertTri ty, tx;
+  ty.p = y;
+  ty.v = y_ids;
+  tx.p = x;
+  tx.v = x_ids;
+  return cert_level_apart(ty, tx);
+}
+
 void set_embedding_shortcut(bool on) noexcept {
   embedding_shortcut_on().store(on, std::memory_order_relaxed);
 }

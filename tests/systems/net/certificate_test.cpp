@@ -198,6 +198,79 @@ TEST(NetCertificateEmbedding, FoldsAreRefused) {
   }
 }
 
+// The level-plane rule against the exact pair test: y in a plane z = l, x
+// with corners on the plane (shared with y by id, or not: inside y, on its
+// edges, outside) and off it on one side or both; whatever the rule calls
+// apart, triangles_cross (corners merged by id) finds apart, and touching
+// or crossing pairs occur and are refused.
+TEST(NetCertificateEmbedding, LevelPlaneRuleAgreesWithTheExactTest) {
+  std::mt19937_64 rng(1717);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int apart = 0, meeting = 0, refused_apart = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double l = trial % 3 == 0 ? -100.0 : 0.375 * unit(rng);
+    const double big = trial % 5 == 0 ? 3.4028234699999998e+38 : 1.0;
+    std::array<Vec3d, 3> y;
+    for (auto& p : y) p = Vec3d(unit(rng), unit(rng), l);
+    if (trial % 5 == 0) y[0] = Vec3d(-big, -big, l);  // Cray's fan from a far corner
+    const std::array<std::uint32_t, 3> y_ids = {0, 1, 2};
+    std::array<Vec3d, 3> x;
+    std::array<std::uint32_t, 3> x_ids = {10, 11, 12};
+    const int n_on = 1 + static_cast<int>(rng() % 2);
+    const bool both_sides = rng() % 8 == 0;
+    for (int c = 0; c < 3; ++c) {
+      if (c < n_on) {
+        const int kind = static_cast<int>(rng() % 4);
+        if (kind == 0) {  // a corner of y, by id
+          std::uint32_t k = static_cast<std::uint32_t>(rng() % 3);
+          if (c == 1 && x_ids[0] == k) k = (k + 1) % 3;
+          x[static_cast<std::size_t>(c)] = y[k];
+          x_ids[static_cast<std::size_t>(c)] = k;
+        } else if (kind == 1) {  // on an edge of y (rounded: on or near it)
+          const double t = 0.5 + 0.4 * unit(rng);
+          x[static_cast<std::size_t>(c)] = y[1] + (y[2] - y[1]) * t;
+          x[static_cast<std::size_t>(c)].z() = l;
+        } else {
+          x[static_cast<std::size_t>(c)] = Vec3d(1.5 * unit(rng), 1.5 * unit(rng), l);
+        }
+      } else {
+        const double up = both_sides && c == 2 ? -1.0 : 1.0;
+        x[static_cast<std::size_t>(c)] = Vec3d(unit(rng), unit(rng), l + up * (0.01 + std::abs(unit(rng))));
+      }
+    }
+    if (n_on == 2 && x_ids[1] == 11 && x_ids[0] != 10 && rng() % 2 == 0) {
+      // the edge from a shared corner into or out of y
+      x[1] = y[x_ids[0]] + (y[(x_ids[0] + 1) % 3] - y[x_ids[0]]) * 0.3 + Vec3d(0.2 * unit(rng), 0.2 * unit(rng), 0);
+      x[1].z() = l;
+    }
+    TriMesh m;
+    std::array<std::uint32_t, 3> tx{}, ty = {0, 1, 2};
+    m.p.assign(y.begin(), y.end());
+    for (std::size_t c = 0; c < 3; ++c) {
+      if (x_ids[c] < 3) {
+        tx[c] = x_ids[c];
+      } else {
+        m.p.push_back(x[c]);
+        tx[c] = static_cast<std::uint32_t>(m.p.size() - 1);
+      }
+    }
+    if (tx[0] == tx[1] || tx[1] == tx[2] || tx[0] == tx[2]) continue;
+    if (net_detail::collinear(m.p[tx[0]], m.p[tx[1]], m.p[tx[2]]) || net_detail::collinear(y[0], y[1], y[2])) continue;
+    m.tri = {ty, tx};
+    const bool says = net_detail::level_plane_pieces_apart(y, y_ids, x, x_ids);
+    const bool crosses = net_detail::triangles_cross(m, 0, 1);
+    if (says) {
+      ++apart;
+      EXPECT_FALSE(crosses) << "trial " << trial << ": called apart, but the triangles meet";
+    } else {
+      crosses ? ++meeting : ++refused_apart;
+    }
+  }
+  std::cout << "apart " << apart << ", meeting (refused) " << meeting << ", refused but apart " << refused_apart << "\n";
+  EXPECT_GE(apart, 5000);
+  EXPECT_GE(meeting, 1000);
+}
+
 const std::filesystem::path kPairs = std::filesystem::path(ATELIER_SHARED_DATA) / "meshes" / "boolean-pairs";
 
 /// The certificate with and without the shortcut: the same verdict and the
