@@ -342,9 +342,10 @@ bool cert_cross_exact(const CertTri& x, const CertTri& y) {
 
 /// Cut triangles with at least this many pieces have them made once per
 /// certificate and their pairs skipped when rounded_pieces_embedded holds:
-/// below it the pair tests cost less than the embedding test (measured on
-/// Cray: the test on every triangle and neighbour cost 0.5 ms a Boolean).
-constexpr std::uint32_t kEmbedPieces = 12;
+/// below it the pair tests cost less than the embedding test (~0.4 us a
+/// piece; on every triangle and neighbour it cost Cray 0.5 ms a Boolean,
+/// and at 12 Offset3 x Offset4 2-5%; Cray's slab top has 93).
+constexpr std::uint32_t kEmbedPieces = 32;
 
 std::atomic<bool>& embedding_shortcut_on() noexcept {
   static std::atomic<bool> on{true};
@@ -563,8 +564,12 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
                 made = 2;
               }
               ++n_pairs;
-              if ((shortcut && (cert_level_apart(sus[k], *xp) || cert_level_apart(*xp, sus[k]))) ||
-                  cert_apart(sus[k], *xp) || cert_apart_more(sus[k], *xp))
+              // The level-plane rule after the self-check's rules (which
+              // decide most pairs of a generic cut at no extra cost), before
+              // the separating planes (17 candidates).
+              if (cert_apart(sus[k], *xp) ||
+                  (shortcut && (cert_level_apart(sus[k], *xp) || cert_level_apart(*xp, sus[k]))) ||
+                  cert_apart_more(sus[k], *xp))
                 continue;
               ++n_exact;
               if (cert_cross_exact(sus[k], *xp)) {

@@ -322,7 +322,7 @@ TEST(NetCertificateEmbedding, ShortcutKeepsVerdictsAndBytes) {
   compare_shortcut(net_test::box({0, 0, 0}, {1, 1, 1}), net_test::box({0.5, 0.25, -0.5}, {1.5, 1.25, 0.5}), "boxes",
                    shapes);
   compare_shortcut(net_test::box_triangles({-1e30, -1e30, -1e30}, {1e30, 1e30, -100.0}),
-                   net_test::icosphere(2, 2.5e4, {3.0, -7.0, -100.0}), "slab and sphere", shapes);
+                   net_test::icosphere(3, 2.5e4, {3.0, -7.0, -100.0}), "slab and sphere", shapes);
   EXPECT_GE(shapes.certified, 16u);
   EXPECT_GE(shapes.embedded, 1u);
   EXPECT_LE(shapes.pairs_on, shapes.pairs_off);
