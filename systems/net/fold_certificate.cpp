@@ -200,9 +200,7 @@ bool cert_level_apart(const CertTri& y, const CertTri& x) noexcept {
   }
   if (!(l - l == 0)) return false;
   if (n_on == 0) return true;
-  auto shared = [&](std::size_t c) {
-    return x.v[c] == y.v[0] || x.v[c] == y.v[1] || x.v[c] == y.v[2];
-  };
+  auto shared = [&](std::size_t c) { return x.v[c] == y.v[0] || x.v[c] == y.v[1] || x.v[c] == y.v[2]; };
   auto P = [&](int i) -> const Vec3d& { return y.p[static_cast<std::size_t>((i % 3 + 3) % 3)]; };
   // Points strictly beyond one edge line of y (its third corner strictly
   // on the other side).
@@ -442,7 +440,8 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
           const std::uint8_t theirs = embed_ok[side][s.slot[u]];
           for (std::uint8_t l = 0; l < 3; ++l) {
             const auto& eu = m.edge_tri[m.tri_edge[u][l]];
-            if ((eu[0] == u ? eu[1] : eu[0]) == t && (theirs >> (l + 1) & 1u)) mine |= static_cast<std::uint8_t>(1u | 2u << k);
+            if ((eu[0] == u ? eu[1] : eu[0]) == t && (theirs >> (l + 1) & 1u))
+              mine |= static_cast<std::uint8_t>(1u | 2u << k);
           }
           continue;
         }

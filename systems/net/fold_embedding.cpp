@@ -187,7 +187,8 @@ bool rounded_pieces_embedded(const Cut& cut, const TriMesh& a, const TriMesh& b,
     const auto it = std::lower_bound(sc.boundary.begin(), sc.boundary.end(), std::uint64_t{v} << 32);
     if (it == sc.boundary.end() || (*it >> 32) != v) return false;
     v = static_cast<std::uint32_t>(*it & 0xffffffffu);
-    if (next_corner < nc && v == corner[next_corner]) at[next_corner++] = step + 1;
+    if (next_corner < nc && v == corner[next_corner])
+      at[next_corner++] = step + 1;
     else if (v != corner[0])
       for (int k = 0; k < nc; ++k)
         if (v == corner[k]) return false;  // a corner out of order
@@ -246,7 +247,8 @@ bool rounded_pieces_embedded(const Cut& cut, const TriMesh& a, const TriMesh& b,
     const double mi = ai / la + bi / lb, mj = aj / la + bj / lb;
     const double ni = -mj, nj = mi;
     double l0 = 0, h0 = 0, l1 = 0, h1 = 0;
-    if (!chain_range((k + nc - 1) % nc, false, true, ni, nj, c, l0, h0) || !chain_range(k, true, false, ni, nj, c, l1, h1))
+    if (!chain_range((k + nc - 1) % nc, false, true, ni, nj, c, l0, h0) ||
+        !chain_range(k, true, false, ni, nj, c, l1, h1))
       return false;
     if (!((h0 < 0 && l1 > 0) || (l0 > 0 && h1 < 0))) return false;
   }

@@ -266,7 +266,8 @@ TEST(NetCertificateEmbedding, LevelPlaneRuleAgreesWithTheExactTest) {
       crosses ? ++meeting : ++refused_apart;
     }
   }
-  std::cout << "apart " << apart << ", meeting (refused) " << meeting << ", refused but apart " << refused_apart << "\n";
+  std::cout << "apart " << apart << ", meeting (refused) " << meeting << ", refused but apart " << refused_apart
+            << "\n";
   EXPECT_GE(apart, 5000);
   EXPECT_GE(meeting, 1000);
 }
