@@ -3,6 +3,9 @@
 // results that no triangle with a rounded point is flat or near another,
 // so both are skipped. Split from fold_check.cpp, whose fold semantics
 // (which pairs count, coincident corners) it shares: read them together.
+// cert17: no pair tests among the pieces of a cut triangle certified an
+// embedded triangulation once rounded (fold_embedding.cpp), and a rule for
+// pieces lying in a plane x_k = l (cert_level_apart).
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
