@@ -387,6 +387,10 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
 struct CertifyStats {
   std::size_t cut_triangles = 0, pairs = 0, exact_pairs = 0;
   bool certified = false;
+  /// cert17: the cut triangles whose own pieces rounded_pieces_embedded
+  /// certified (their pairs skipped), and the neighbouring pairs of net
+  /// triangles it certified together.
+  std::size_t embedded_triangles = 0, embedded_neighbours = 0;
 };
 /// True when the rounded result (the kept pieces of `cut`, its new points
 /// rounded) certainly needs neither repair nor fold check: every kept piece
@@ -398,10 +402,38 @@ struct CertifyStats {
 /// result as it is and find no crossing.
 [[nodiscard]] bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
                                           const Bvh& bvh_b, const ExecContext& ctx, CertifyStats* stats = nullptr);
+
+// ---- cert17: the certificate's shortcut within a net triangle (fold_embedding.cpp)
+/// True when the pieces (kept or not) of `tris` on `side` -- one cut
+/// triangle u, or u and a neighbour sharing an edge with it, u first --
+/// certainly form an embedded triangulation at their rounded positions,
+/// seen along the dominant axis of u's normal: every piece with a certain
+/// orient2d sign equal to u's, and the boundary (u's or the
+/// quadrilateral's corners, the points on its edges between them)
+/// certainly a simple polygon. Then two of those pieces meet only in the
+/// corners they share by id (Floater 2003; the proof at the top of
+/// fold_embedding.cpp), and certify_rounded_result skips their pairs.
+/// Floating-point filters only: false when one cannot tell.
+[[nodiscard]] bool rounded_pieces_embedded(const Cut& cut, const TriMesh& a, const TriMesh& b, int side,
+                                           std::span<const std::uint32_t> tris);
+/// The certificate's level-plane rule (cert17) on two triangles given by
+/// corners and ids (equal ids: the same point): true when y lies in a plane
+/// x_k = l, x does not, and they certainly meet at most in the corners they
+/// share by id. For the tests (the certificate calls it on its own pieces).
+[[nodiscard]] bool level_plane_pieces_apart(const std::array<Vec3d, 3>& y, const std::array<std::uint32_t, 3>& y_ids,
+                                            const std::array<Vec3d, 3>& x,
+                                            const std::array<std::uint32_t, 3>& x_ids) noexcept;
+/// cert17's rules on (the default) or off (no pair skipped, no level-plane
+/// rule: fold16's certificate, the reference the tests compare verdicts and
+/// bytes with). Process-wide; for tests and measurements.
+void set_embedding_shortcut(bool on) noexcept;
 /// Process-wide counts of certify_rounded_result's verdicts (tests and the
 /// bench read them): results certified, results sent to the full check.
 struct ResultCheckCounts {
   std::atomic<std::size_t> certified{0}, full{0};
+  /// cert17: the pairs the certificate tested, and the cut triangles whose
+  /// own pieces rounded_pieces_embedded certified.
+  std::atomic<std::size_t> pairs{0}, embedded{0};
 };
 [[nodiscard]] ResultCheckCounts& result_check_counts() noexcept;
 

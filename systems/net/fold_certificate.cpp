@@ -3,6 +3,9 @@
 // results that no triangle with a rounded point is flat or near another,
 // so both are skipped. Split from fold_check.cpp, whose fold semantics
 // (which pairs count, coincident corners) it shares: read them together.
+// cert17: no pair tests among the pieces of a cut triangle certified an
+// embedded triangulation once rounded (fold_embedding.cpp), and a rule for
+// pieces lying in a plane x_k = l (cert_level_apart).
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
@@ -169,6 +172,70 @@ bool cert_apart(const CertTri& x, const CertTri& y) noexcept {
   return separated_by_edges(x, y) || separated_by_edges(y, x);
 }
 
+/// cert17: y lies in a plane x_k = l (its three k coordinates equal: CAD
+/// faces, Cray's slab top, whose new points round onto the plane exactly)
+/// and x does not; x's corners off the plane all strictly on one side
+/// (exact comparisons of doubles). Then x meets the plane only in its
+/// corners on it, q (none, one, or the edge of two), so x meets y at most
+/// in y's part of hull(q): apart when q is shared with y by id (a corner,
+/// or an edge of y), else when the unshared corner lies strictly outside y,
+/// or the edge from a shared corner leaves y's angle there strictly, or the
+/// edge and y are strictly apart by a line (certified orient2d along k).
+/// The CAD pairs' common case: a small cut triangle's pieces against a
+/// plane's fan of pieces whose far corners defeat the general filters.
+bool cert_level_apart(const CertTri& y, const CertTri& x) noexcept {
+  int k = 0;
+  while (k < 3 && !(y.p[0][k] == y.p[1][k] && y.p[1][k] == y.p[2][k])) ++k;
+  if (k == 3) return false;
+  const double l = y.p[0][k];
+  int side = 0, n_on = 0;
+  std::size_t on[2] = {0, 0};
+  for (std::size_t c = 0; c < 3; ++c) {
+    const double v = x.p[c][k];
+    if (v == l) {
+      if (n_on == 2) return false;  // x in the plane too
+      on[n_on++] = c;
+      continue;
+    }
+    const int sd = v > l ? 1 : -1;
+    if (side != 0 && sd != side) return false;
+    side = sd;
+  }
+  if (!(l - l == 0)) return false;
+  if (n_on == 0) return true;
+  auto shared = [&](std::size_t c) { return x.v[c] == y.v[0] || x.v[c] == y.v[1] || x.v[c] == y.v[2]; };
+  auto P = [&](int i) -> const Vec3d& { return y.p[static_cast<std::size_t>((i % 3 + 3) % 3)]; };
+  // Points strictly beyond one edge line of y (its third corner strictly
+  // on the other side).
+  auto outside_y = [&](const Vec3d* q, int n) {
+    for (int e = 0; e < 3; ++e) {
+      const int d = certified_orient2(P(e), P(e + 1), P(e + 2), k);
+      if (d == 0) continue;
+      bool all = true;
+      for (int i = 0; i < n && all; ++i) all = certified_orient2(P(e), P(e + 1), q[i], k) == -d;
+      if (all) return true;
+    }
+    return false;
+  };
+  if (n_on == 1) return shared(on[0]) || outside_y(&x.p[on[0]], 1);
+  const bool s0 = shared(on[0]), s1 = shared(on[1]);
+  if (s0 && s1) return true;
+  if (s0 || s1) {
+    const std::size_t cv = s0 ? on[0] : on[1];
+    const Vec3d& v = x.p[cv];
+    const Vec3d& r = x.p[s0 ? on[1] : on[0]];
+    int iv = 0;
+    while (y.v[static_cast<std::size_t>(iv)] != x.v[cv]) ++iv;  // shared: one of y's ids
+    const Vec3d &a = P(iv + 1), &b = P(iv + 2);
+    const int sy = certified_orient2(v, a, b, k);
+    return sy != 0 && (certified_orient2(v, a, r, k) == -sy || certified_orient2(v, r, b, k) == -sy);
+  }
+  const Vec3d q[2] = {x.p[on[0]], x.p[on[1]]};
+  if (outside_y(q, 2)) return true;
+  const int d = certified_orient2(q[0], q[1], y.p[0], k);
+  return d != 0 && certified_orient2(q[0], q[1], y.p[1], k) == d && certified_orient2(q[0], q[1], y.p[2], k) == d;
+}
+
 /// A certified strict separation along axis n (any double vector), from
 /// origin o: sharing a corner (o, skipped by `skip_x` / `skip_y`, bit k:
 /// corner k), every other corner of x at n . (p - o) < 0 and of y at > 0,
@@ -274,7 +341,33 @@ bool cert_cross_exact(const CertTri& x, const CertTri& y) {
   return triangles_cross(m, 0, 1);
 }
 
+/// Cut triangles with at least this many pieces have them made once per
+/// certificate and their pairs skipped when rounded_pieces_embedded holds:
+/// below it the pair tests cost less than the embedding test (~0.4 us a
+/// piece; on every triangle and neighbour it cost Cray 0.5 ms a Boolean,
+/// and at 12 Offset3 x Offset4 2-5%; Cray's slab top has 93).
+constexpr std::uint32_t kEmbedPieces = 32;
+
+std::atomic<bool>& embedding_shortcut_on() noexcept {
+  static std::atomic<bool> on{true};
+  return on;
+}
+
 }  // namespace
+
+bool level_plane_pieces_apart(const std::array<Vec3d, 3>& y, const std::array<std::uint32_t, 3>& y_ids,
+                              const std::array<Vec3d, 3>& x, const std::array<std::uint32_t, 3>& x_ids) noexcept {
+  CertTri ty, tx;
+  ty.p = y;
+  ty.v = y_ids;
+  tx.p = x;
+  tx.v = x_ids;
+  return cert_level_apart(ty, tx);
+}
+
+void set_embedding_shortcut(bool on) noexcept {
+  embedding_shortcut_on().store(on, std::memory_order_relaxed);
+}
 
 bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
                             const ExecContext& ctx, CertifyStats* stats) {
@@ -303,8 +396,70 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
           break;
         }
   }
+  // cert17: the kept pieces of cut triangles cut into many (Cray's slab
+  // top: ~90 each, found by nearly every query) made once, not per query
+  // (their corners, box and normal: the same values cert_tri gives).
+  std::vector<std::uint32_t> pre_begin[2];  // per cut slot: index in pre, or kNil
+  std::vector<CertTri> pre[2];
+  for (int side = 0; side < 2; ++side) {
+    const CutSide& s = cut.sides[side];
+    pre_begin[side].assign(s.cut.size(), kNil);
+    for (std::size_t c = 0; c < s.cut.size(); ++c) {
+      const std::uint32_t t = s.cut[c];
+      if (s.piece_begin[t + 1] - s.piece_begin[t] < kEmbedPieces) continue;
+      pre_begin[side][c] = static_cast<std::uint32_t>(pre[side].size());
+      for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p) {
+        pre[side].emplace_back();
+        if (s.keep[p]) cert_tri(cut, a, b, s.piece[p], pre[side].back());
+      }
+    }
+  }
+  // cert17: per cut slot, bit 0: its pieces certified an embedded
+  // triangulation once rounded (rounded_pieces_embedded); bit k + 1: with
+  // its neighbour across edge k. Only triangles cut into many pieces (below
+  // kEmbedPieces the pair tests cost less), both of a neighbouring pair;
+  // the pair first, as its union being embedded makes each part so. Made
+  // here once (deterministic), not per item: the test is ~0.4 us a piece.
+  std::vector<std::uint8_t> embed_ok[2];
+  std::size_t n_neighbour_patches = 0;
+  const bool shortcut = embedding_shortcut_on().load(std::memory_order_relaxed);
+  for (int side = 0; side < 2; ++side) {
+    const CutSide& s = cut.sides[side];
+    const TriMesh& m = *s.m;
+    embed_ok[side].assign(s.cut.size(), 0);
+    if (!shortcut) continue;
+    auto many = [&](std::uint32_t t) {
+      return t != kNil && s.slot[t] != kNil && s.piece_begin[t + 1] - s.piece_begin[t] >= kEmbedPieces;
+    };
+    for (std::size_t c = 0; c < s.cut.size(); ++c) {
+      const std::uint32_t t = s.cut[c];
+      if (!many(t)) continue;
+      for (std::uint8_t k = 0; k < 3; ++k) {
+        const auto& et = m.edge_tri[m.tri_edge[t][k]];
+        const std::uint32_t u = et[0] == t ? et[1] : et[0];
+        if (!many(u)) continue;
+        std::uint8_t& mine = embed_ok[side][c];
+        if (u < t) {  // made from u's side: copy its verdict
+          const std::uint8_t theirs = embed_ok[side][s.slot[u]];
+          for (std::uint8_t l = 0; l < 3; ++l) {
+            const auto& eu = m.edge_tri[m.tri_edge[u][l]];
+            if ((eu[0] == u ? eu[1] : eu[0]) == t && (theirs >> (l + 1) & 1u))
+              mine |= static_cast<std::uint8_t>(1u | 2u << k);
+          }
+          continue;
+        }
+        const std::uint32_t two[2] = {t, u};
+        if (rounded_pieces_embedded(cut, a, b, side, two)) {
+          mine |= static_cast<std::uint8_t>(1u | 2u << k);
+          ++n_neighbour_patches;
+        }
+      }
+      const std::uint32_t own[1] = {t};
+      if (!(embed_ok[side][c] & 1u) && rounded_pieces_embedded(cut, a, b, side, own)) embed_ok[side][c] |= 1u;
+    }
+  }
   std::atomic<bool> failed{false};
-  std::atomic<std::size_t> pairs{0}, exact{0};
+  std::atomic<std::size_t> pairs{0}, exact{0}, embedded{0};
   const Bvh* bvhs[2] = {&bvh_a, &bvh_b};
   // A cut triangle's pairs are microseconds of work, so even a few dozen
   // are worth the second thread (the context's threshold is sized for loops
@@ -343,7 +498,25 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
       q[k] -= delta;
       q[k + 3] += delta;
     }
-    std::size_t n_pairs = 0, n_exact = 0;
+    std::size_t n_pairs = 0, n_exact = 0, n_embedded = 0;
+    // cert17: pairs of two pieces of u, or of u and a neighbour across one
+    // of its edges, need no test when those pieces certainly form an
+    // embedded triangulation once rounded (rounded_pieces_embedded,
+    // fold_embedding.cpp): they meet only in the corners they share by id,
+    // which is all the pair tests below show (verdicts made before the
+    // loop: embed_ok).
+    const std::uint32_t slot_t = s.slot[t];
+    const bool own_embedded = embed_ok[side][slot_t] & 1u;
+    n_embedded += own_embedded ? 1 : 0;
+    const TriMesh& mt = *s.m;
+    auto same_patch = [&](std::uint32_t u) {
+      if (u == t || !own_embedded) return own_embedded;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const auto& et = mt.edge_tri[mt.tri_edge[t][k]];
+        if ((et[0] == t ? et[1] : et[0]) == u) return (embed_ok[side][slot_t] >> (k + 1) & 1u) != 0;
+      }
+      return false;
+    };
     CertTri x;
     for (int o = 0; o < 2 && !failed.load(std::memory_order_relaxed); ++o) {
       const Bvh& h = *bvhs[o];
@@ -362,29 +535,46 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
         for (std::uint32_t j = nd.first; j < nd.first + nd.count; ++j) {
           if (!cert_boxes_meet(h.box[j], q)) continue;
           const std::uint32_t u = h.order[j];
+          if (o == side && same_patch(u)) continue;
+          const std::uint32_t slot = so.slot[u];
+          const CertTri* pre_u = slot != kNil && pre_begin[o][slot] != kNil ? &pre[o][pre_begin[o][slot]] : nullptr;
           for (std::uint32_t p = so.piece_begin[u]; p < so.piece_begin[u + 1]; ++p) {
             if (!so.keep[p]) continue;
+            // A made piece's box first: most of a fan's miss a small query.
+            if (pre_u != nullptr && !cert_boxes_meet(q, pre_u[p - so.piece_begin[u]].box)) continue;
             const std::uint64_t key = (std::uint64_t{static_cast<std::uint32_t>(o)} << 32) | p;
             const bool suspect = is_suspect(so.piece[p]);
             int made = 0;  // 1: corners and box, 2: and the normal
+            const CertTri* xp = &x;
             for (std::size_t k = 0; k < sus.size(); ++k) {
               // A pair of suspects once, from the smaller key's side (its
               // query finds the other: the boxes' relation is symmetric).
               if (key == sus_key[k] || (suspect && key < sus_key[k])) continue;
               if (made == 0) {
-                cert_corners(cut, a, b, so.piece[p], x);
-                made = 1;
-                if (!cert_boxes_meet(q, x.box)) break;
+                if (pre_u != nullptr) {
+                  xp = pre_u + (p - so.piece_begin[u]);
+                  made = 2;
+                } else {
+                  cert_corners(cut, a, b, so.piece[p], x);
+                  made = 1;
+                }
+                if (!cert_boxes_meet(q, xp->box)) break;
               }
-              if (!cert_boxes_meet(sus[k].box, x.box)) continue;
+              if (!cert_boxes_meet(sus[k].box, xp->box)) continue;
               if (made == 1) {
                 cert_normal(x);
                 made = 2;
               }
               ++n_pairs;
-              if (cert_apart(sus[k], x) || cert_apart_more(sus[k], x)) continue;
+              // The level-plane rule after the self-check's rules (which
+              // decide most pairs of a generic cut at no extra cost), before
+              // the separating planes (17 candidates).
+              if (cert_apart(sus[k], *xp) ||
+                  (shortcut && (cert_level_apart(sus[k], *xp) || cert_level_apart(*xp, sus[k]))) ||
+                  cert_apart_more(sus[k], *xp))
+                continue;
               ++n_exact;
-              if (cert_cross_exact(sus[k], x)) {
+              if (cert_cross_exact(sus[k], *xp)) {
                 failed = true;
                 return;
               }
@@ -395,13 +585,18 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     }
     pairs += n_pairs;
     exact += n_exact;
+    embedded += n_embedded;
   });
   (failed ? result_check_counts().full : result_check_counts().certified) += 1;
+  result_check_counts().pairs += pairs;
+  result_check_counts().embedded += embedded;
   if (stats != nullptr) {
     stats->cut_triangles = items.size();
     stats->pairs = pairs;
     stats->exact_pairs = exact;
     stats->certified = !failed;
+    stats->embedded_triangles = embedded;
+    stats->embedded_neighbours = n_neighbour_patches;
   }
   return !failed;
 }
