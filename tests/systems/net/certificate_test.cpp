@@ -203,6 +203,42 @@ TEST(NetCertificateEmbedding, FoldsAreRefused) {
 // edges, outside) and off it on one side or both; whatever the rule calls
 // apart, triangles_cross (corners merged by id) finds apart, and touching
 // or crossing pairs occur and are refused.
+// A fold only the boundary tests see: u cut at level 2 (corners (0, 0),
+// (1, 0), (0, 1) in the plane z = 3/8; new points the edges' midpoints),
+// the midpoint of edge 0 -> 1 moved to (-0.17, -0.08) and that of edge
+// 0 -> 2 to (-1.99, -1.00) (found by a random search over level-2 moves):
+// every piece keeps u's orientation, but the boundary crosses itself and
+// the piece at corner 0 overlaps the piece at corner 1. Without the chain
+// and corner tests the rule certifies it (the orientation test alone
+// passes all four pieces).
+TEST(NetCertificateEmbedding, AFoldedBoundaryWithEveryPieceKeepingItsOrientationIsRefused) {
+  const std::array<Vec3d, 4> c = {Vec3d(0, 0, 0.375), Vec3d(1, 0, 0.375), Vec3d(0, 1, 0.375), Vec3d(0, 0, 0)};
+  GridPatch g = grid_patch(c, 2, false);
+  const std::uint32_t u0[1] = {0};
+  ASSERT_TRUE(net_detail::rounded_pieces_embedded(g.cut, g.a, g.b, 0, u0));
+  int moved = 0;
+  for (std::size_t k = 0; k < g.exact.size(); ++k) {
+    if ((g.exact[k] - Vec3d(0.5, 0, 0.375)).norm() < 1e-12) {
+      g.cut.new_points[k] = Vec3d(-0.1672374460150512, -0.07913906662479198, 0.375);
+      ++moved;
+    }
+    if ((g.exact[k] - Vec3d(0, 0.5, 0.375)).norm() < 1e-12) {
+      g.cut.new_points[k] = Vec3d(-1.988498063963907, -1.0048435595000953, 0.375);
+      ++moved;
+    }
+  }
+  ASSERT_EQ(moved, 2);
+  // Every piece still has u's orientation (so only the boundary tests can
+  // refuse), and two pieces cross (so they must).
+  for (const auto& t : g.cut.sides[0].piece) {
+    const Vec3d p0 = g.cut.position(g.a, g.b, t[0]), p1 = g.cut.position(g.a, g.b, t[1]),
+                p2 = g.cut.position(g.a, g.b, t[2]);
+    EXPECT_GT((p1 - p0).cross(p2 - p0).z(), 1e-3);
+  }
+  EXPECT_TRUE(some_pieces_cross(g));
+  EXPECT_FALSE(net_detail::rounded_pieces_embedded(g.cut, g.a, g.b, 0, u0));
+}
+
 TEST(NetCertificateEmbedding, LevelPlaneRuleAgreesWithTheExactTest) {
   std::mt19937_64 rng(1717);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
