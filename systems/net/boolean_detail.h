@@ -369,9 +369,16 @@ struct Cut {
 /// within 16 ulps that has a new point (else kNil): collapse = {that edge}
 /// first (the new point snapped onto the other end when the link condition
 /// allows it), then the check again, may remove the fold.
+/// touched (snap17; per output vertex, when given): set for the vertex a
+/// collapse keeps and the corner a flip fans from, so that the caller
+/// passes is_new | touched to check_rounded_result as its suspects (a face
+/// changed by the repair whose corners are all the nets' own vertices is
+/// otherwise tested by nobody: not a suspect, and its cut piece, holding
+/// the collapsed new point, not a neighbour).
 std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& face_side,
                                   std::span<const std::uint8_t> is_new, std::vector<std::uint64_t>& split_edges,
-                                  std::span<const std::array<std::uint32_t, 2>> collapse = {});
+                                  std::span<const std::array<std::uint32_t, 2>> collapse = {},
+                                  std::vector<std::uint8_t>* touched = nullptr);
 /// snap17: the crossing pair check_rounded_result found, when `pair` is
 /// given: per triangle, its corners' output ids (kNil for a point not in
 /// the output: a whole n-gon's centroid) and positions.
@@ -395,15 +402,16 @@ struct FoldPair {
 /// star never flat and crossing nothing near it, exactly tested) or
 /// snapped onto a neighbour (an edge collapse under the link condition),
 /// and check_rounded_result runs again, up to a budget of rounds. Returns
-/// the check's last status: ok when the result no longer crosses itself
+/// the check's last status (its suspects: `suspect`, is_new | touched,
+/// updated by the collapses): ok when the result no longer crosses itself
 /// (then `out` and face_side hold the repaired result), else the error
 /// (`out` may hold some moves: the caller refuses the Boolean).
 /// Sequential and in a fixed order: the same bits for any thread count.
 [[nodiscard]] Status repair_folds(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
                                   const Bvh& bvh_b, PolygonSoup& out, std::vector<std::uint8_t>& face_side,
                                   std::span<const std::uint32_t> out_index, std::span<const std::uint8_t> is_new,
-                                  std::vector<std::uint64_t>& split_edges, Status st, FoldPair pair,
-                                  const ExecContext& ctx);
+                                  std::vector<std::uint64_t>& split_edges, std::vector<std::uint8_t>& suspect,
+                                  Status st, FoldPair pair, const ExecContext& ctx);
 /// Process-wide count of Booleans whose fold repair_folds removed (tests
 /// and the bench read it).
 [[nodiscard]] std::atomic<std::size_t>& fold_repair_count() noexcept;

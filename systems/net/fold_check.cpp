@@ -97,7 +97,13 @@ struct FoldNet {
 
 std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& face_side,
                                   std::span<const std::uint8_t> is_new, std::vector<std::uint64_t>& split_edges,
-                                  std::span<const std::array<std::uint32_t, 2>> collapse) {
+                                  std::span<const std::array<std::uint32_t, 2>> collapse,
+                                  std::vector<std::uint8_t>* touched) {
+  auto touch = [&](std::uint32_t v) {
+    if (touched == nullptr) return;
+    if (touched->size() < out.positions.size()) touched->resize(out.positions.size(), 0);
+    (*touched)[v] = 1;
+  };
   const std::size_t nf = out.face_count();
   auto flat_at = [&](std::uint32_t f) {
     const auto c = out.face(f);
@@ -167,6 +173,7 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
       std::replace(cg.begin(), cg.end(), w, u);
       add_edges(g);
     }
+    touch(u);
     return true;
   };
   auto collapse_coincident = [&](std::uint32_t f) {
@@ -209,6 +216,7 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
     if (!fresh) continue;
     gone[f] = 1;
     gone[n] = 1;
+    touch(x);
     split_edges.push_back(fold_directed(std::min(a, b), std::max(a, b)));
     edge_face.erase(fold_directed(b, a));
     for (std::size_t k = 0; k + 1 < ring.size(); ++k) {

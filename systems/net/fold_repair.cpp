@@ -194,8 +194,8 @@ std::atomic<std::size_t>& fold_repair_count() noexcept {
 
 Status repair_folds(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
                     PolygonSoup& out, std::vector<std::uint8_t>& face_side, std::span<const std::uint32_t> out_index,
-                    std::span<const std::uint8_t> is_new, std::vector<std::uint64_t>& split_edges, Status st,
-                    FoldPair pair, const ExecContext& ctx) {
+                    std::span<const std::uint8_t> is_new, std::vector<std::uint64_t>& split_edges,
+                    std::vector<std::uint8_t>& suspect, Status st, FoldPair pair, const ExecContext& ctx) {
   std::vector<std::pair<std::uint32_t, Vec3d>> visited;
   for (int round = 0; round < kMaxRounds && !st; ++round) {
     // The pair's new points, each once, in corner order.
@@ -230,11 +230,13 @@ Status repair_folds(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const Tr
           PolygonSoup trial = out;
           std::vector<std::uint8_t> sides = face_side;
           std::vector<std::uint64_t> split = split_edges;
+          std::vector<std::uint8_t> marks = suspect;
           const std::array<std::uint32_t, 2> e{v, w};
-          if (repair_flat_triangles(trial, sides, is_new, split, std::span(&e, 1)) == 0) continue;
+          if (repair_flat_triangles(trial, sides, is_new, split, std::span(&e, 1), &marks) == 0) continue;
           out = std::move(trial);
           face_side = std::move(sides);
           split_edges = std::move(split);
+          suspect = std::move(marks);
           moved = true;
           break;
         }
@@ -243,7 +245,7 @@ Status repair_folds(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const Tr
     }
     if (!moved) return st;
     std::array<std::uint32_t, 2> short_edge{};
-    st = check_rounded_result(cut, a, bvh_a, b, bvh_b, out, out_index, is_new, split_edges, short_edge, ctx, &pair);
+    st = check_rounded_result(cut, a, bvh_a, b, bvh_b, out, out_index, suspect, split_edges, short_edge, ctx, &pair);
   }
   if (st) ++fold_repair_count();
   return st;
