@@ -185,6 +185,17 @@ bool reround(PolygonSoup& out, std::uint32_t v, const FoldPair& pair,
   return false;
 }
 
+/// Triangles with a suspect corner whose corners are collinear.
+std::size_t flat_count(const PolygonSoup& out, std::span<const std::uint8_t> suspect) {
+  std::size_t n = 0;
+  for (std::uint32_t f = 0; f < out.face_count(); ++f) {
+    const auto c = out.face(f);
+    if (c.size() == 3 && (suspect[c[0]] || suspect[c[1]] || suspect[c[2]]))
+      n += collinear(out.positions[c[0]], out.positions[c[1]], out.positions[c[2]]) ? 1 : 0;
+  }
+  return n;
+}
+
 }  // namespace
 
 std::atomic<std::size_t>& fold_repair_count() noexcept {
@@ -233,6 +244,8 @@ Status repair_folds(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const Tr
           std::vector<std::uint8_t> marks = suspect;
           const std::array<std::uint32_t, 2> e{v, w};
           if (repair_flat_triangles(trial, sides, is_new, split, std::span(&e, 1), &marks) == 0) continue;
+          // The check leaves flat triangles out: a collapse must not add any.
+          if (flat_count(trial, marks) > flat_count(out, suspect)) continue;
           out = std::move(trial);
           face_side = std::move(sides);
           split_edges = std::move(split);
