@@ -398,8 +398,8 @@ struct FoldPair {
 /// Called when fold15's repair and check leave the result crossing itself
 /// (`st`, the check's error, and `pair`, its crossing pair): new points of
 /// each crossing pair are moved to a nearby double (another rounding of
-/// their exact value's neighbourhood: up to 16 ulps per coordinate, the
-/// star never flat and crossing nothing near it, exactly tested) or
+/// their exact value's neighbourhood: up to 1024 ulps per coordinate, the
+/// star never flat and crossing fewer triangles near it, exactly counted) or
 /// snapped onto a neighbour (an edge collapse under the link condition),
 /// and check_rounded_result runs again, up to a budget of rounds. Returns
 /// the check's last status (its suspects: `suspect`, is_new | touched,

@@ -7,15 +7,19 @@
 // Lenhardt, "Practical 3D snap rounding", 2018: a point is moved within
 // its box, or snapped onto a vertex, until nothing crosses), each crossing
 // pair's new points get:
-//  1. another rounding: the doubles within 1, 2, 4, 8, 16 ulps in each
-//     coordinate (the exact value is within 2 ulps of the rounded one, so
-//     these are its box's other corners first); the first under which the
-//     point's star is not flat and crosses no triangle near it (exact
-//     triangles_cross) is kept;
-//  2. else a snap: the edge to its nearest neighbour collapsed (fold15's
-//     collapse, under the link condition), when that edge is short (a
-//     move of at most 2^-24 of the coordinates: far below the campaign's
-//     volume tolerance).
+//  1. another rounding: the doubles 1, 2, 4, 8, 16, then 64, 256, 1024
+//     ulps away in each coordinate (the exact value is within 2 ulps of
+//     the rounded one, so the first steps are its box's other corners; the
+//     last ones leave the box, by at most ~2.3e-13 of the coordinates), 26
+//     directions per step: the smallest step whose best direction lowers
+//     the number of triangles the point's star crosses (counted exactly
+//     with triangles_cross), never flat, never onto another corner, never
+//     a position the point had before (moves undoing each other would
+//     cycle to the budget);
+//  2. else a snap: a short edge from it collapsed (fold15's collapse,
+//     under the link condition; a move of at most 2^-24 of the
+//     coordinates, far below the campaign's volume tolerance), unless the
+//     collapse adds a flat triangle (the check leaves those out).
 // After each move check_rounded_result runs again on the whole result (it
 // alone decides): the repair ends when it finds no crossing, or refuses
 // after a budget of rounds. Sequential, in a fixed order: the same bits for
@@ -31,7 +35,7 @@ namespace atelier::net_detail {
 
 namespace {
 
-constexpr int kMaxRounds = 96;          // global checks per Boolean
+constexpr int kMaxRounds = 96;                             // whole checks per Boolean
 constexpr int kSteps[] = {1, 2, 4, 8, 16, 64, 256, 1024};  // ulps per coordinate
 
 using Tri = std::array<Vec3d, 3>;
@@ -101,7 +105,8 @@ Neighbourhood neighbourhood(const PolygonSoup& out, std::uint32_t v, const FoldP
     }
   }
   for (std::size_t k = 0; k < 3; ++k) {
-    const double grow = 4096 * std::numeric_limits<double>::epsilon() * std::max(std::abs(box[k]), std::abs(box[k + 3]));
+    const double grow =
+        4096 * std::numeric_limits<double>::epsilon() * std::max(std::abs(box[k]), std::abs(box[k + 3]));
     box[k] -= grow;
     box[k + 3] += grow;
   }

@@ -906,39 +906,38 @@ TEST(NetDegeneratePairs, FoldedResultsAreRepairedNotRefused) {
   auto& repaired = net_detail::fold_repair_count();
   int ran = 0, refused = 0, pinched = 0;
   for (const int n : {6, 16, 20, 23})
-    for_each_case(1u, n + 1, n,
-                  [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup&, const char*,
-                      const std::string& what) {
-                    for (BooleanOp op : kOps) {
-                      BooleanOptions o;
-                      o.op = op;
-                      const std::size_t r0 = repaired;
-                      const auto r = net_boolean(a, b, o);
-                      const std::string w = what + " op " + std::to_string(static_cast<int>(op));
-                      if (!r) {
-                        refused += r.status().message().find("crosses itself once") != std::string::npos;
-                        continue;
-                      }
-                      if (repaired == r0) continue;
-                      ++ran;
-                      EXPECT_TRUE(net_test::closed_model(r->result)) << w;
-                      Model m;
-                      ASSERT_TRUE(add_polygon_surface(m, "r", r->result).has_value()) << w;
-                      EXPECT_TRUE(validate(m).is_ok()) << w;
-                      const double scale = std::abs(soup_volume(a)) + std::abs(soup_volume(b));
-                      if (auto want = corefined_volume(a, b, op)) {
-                        EXPECT_LE(std::abs(r->volume - *want), 1e-9 * scale) << w;
-                      }
-                      if (has_coincident_vertices(r->result)) {
-                        ++pinched;
-                        EXPECT_FALSE(pinched_result_crosses(r->result)) << w;
-                      } else {
-                        EXPECT_FALSE(PMP::does_self_intersect(mesh_of<Kin>(r->result))) << w;
-                      }
-                    }
-                  });
-  std::cout << "repaired " << ran << " (pinched " << pinched << "), refused as folded " << refused
-            << "\n";
+    for_each_case(
+        1u, n + 1, n,
+        [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup&, const char*, const std::string& what) {
+          for (BooleanOp op : kOps) {
+            BooleanOptions o;
+            o.op = op;
+            const std::size_t r0 = repaired;
+            const auto r = net_boolean(a, b, o);
+            const std::string w = what + " op " + std::to_string(static_cast<int>(op));
+            if (!r) {
+              refused += r.status().message().find("crosses itself once") != std::string::npos;
+              continue;
+            }
+            if (repaired == r0) continue;
+            ++ran;
+            EXPECT_TRUE(net_test::closed_model(r->result)) << w;
+            Model m;
+            ASSERT_TRUE(add_polygon_surface(m, "r", r->result).has_value()) << w;
+            EXPECT_TRUE(validate(m).is_ok()) << w;
+            const double scale = std::abs(soup_volume(a)) + std::abs(soup_volume(b));
+            if (auto want = corefined_volume(a, b, op)) {
+              EXPECT_LE(std::abs(r->volume - *want), 1e-9 * scale) << w;
+            }
+            if (has_coincident_vertices(r->result)) {
+              ++pinched;
+              EXPECT_FALSE(pinched_result_crosses(r->result)) << w;
+            } else {
+              EXPECT_FALSE(PMP::does_self_intersect(mesh_of<Kin>(r->result))) << w;
+            }
+          }
+        });
+  std::cout << "repaired " << ran << " (pinched " << pinched << "), refused as folded " << refused << "\n";
   EXPECT_GE(ran, 7);  // fold16: 0 (10 of these 16 Booleans refused as folded)
   EXPECT_LE(refused, 3);
 }
