@@ -601,10 +601,15 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
       if (out_index[id] != kNil) is_new[out_index[id]] = 1;
     std::vector<std::uint64_t> split_edges;
     std::array<std::uint32_t, 2> collapse{kNil, kNil};
+    FoldPair pair;
+    // The check's suspects: the new points, and the vertices a repair
+    // collapsed into or fanned from (snap17: the faces they changed).
+    std::vector<std::uint8_t> suspect = is_new;
     for (int round = 0;; ++round) {
-      const std::size_t fixed =
-          repair_flat_triangles(out, face_side, is_new, split_edges, std::span(&collapse, collapse[0] == kNil ? 0 : 1));
-      Status st = check_rounded_result(cut, A, bvh_a, B, bvh_b, out, out_index, is_new, split_edges, collapse, ctx);
+      const std::size_t fixed = repair_flat_triangles(out, face_side, is_new, split_edges,
+                                                      std::span(&collapse, collapse[0] == kNil ? 0 : 1), &suspect);
+      Status st =
+          check_rounded_result(cut, A, bvh_a, B, bvh_b, out, out_index, suspect, split_edges, collapse, ctx, &pair);
       if (st) break;
       if (collapse[0] == kNil || round == 16 || (round > 0 && fixed == 0)) {
         // A net not tested for self-intersection (the caller's promise)
@@ -614,6 +619,13 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
           if (Status why = explain_by_crossing(Status(ErrorCode::kInternal, st.message()), A, bvh_a, B, bvh_b, ctx, 0);
               why.code() != ErrorCode::kInternal)
             return why;
+        // What fold15's repair leaves folded: the crossing pairs' new points
+        // moved to other roundings or snapped onto a neighbour, each move
+        // checked exactly (snap17, fold_repair.cpp); refused only when that
+        // fails too.
+        st = repair_folds(cut, A, bvh_a, B, bvh_b, out, face_side, out_index, is_new, split_edges, suspect,
+                          std::move(st), pair, ctx);
+        if (st) break;
         return st;
       }
     }

@@ -369,15 +369,52 @@ struct Cut {
 /// within 16 ulps that has a new point (else kNil): collapse = {that edge}
 /// first (the new point snapped onto the other end when the link condition
 /// allows it), then the check again, may remove the fold.
+/// touched (snap17; per output vertex, when given): set for the vertex a
+/// collapse keeps and the corner a flip fans from, so that the caller
+/// passes is_new | touched to check_rounded_result as its suspects (a face
+/// changed by the repair whose corners are all the nets' own vertices is
+/// otherwise tested by nobody: not a suspect, and its cut piece, holding
+/// the collapsed new point, not a neighbour).
 std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& face_side,
                                   std::span<const std::uint8_t> is_new, std::vector<std::uint64_t>& split_edges,
-                                  std::span<const std::array<std::uint32_t, 2>> collapse = {});
+                                  std::span<const std::array<std::uint32_t, 2>> collapse = {},
+                                  std::vector<std::uint8_t>* touched = nullptr);
+/// snap17: the crossing pair check_rounded_result found, when `pair` is
+/// given: per triangle, its corners' output ids (kNil for a point not in
+/// the output: a whole n-gon's centroid) and positions.
+struct FoldPair {
+  std::array<std::array<std::uint32_t, 3>, 2> v{};
+  std::array<std::array<Vec3d, 3>, 2> p{};
+};
 [[nodiscard]] Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
                                           const Bvh& bvh_b, const PolygonSoup& out,
                                           std::span<const std::uint32_t> out_index,
                                           std::span<const std::uint8_t> is_new,
                                           std::span<const std::uint64_t> split_edges,
-                                          std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx);
+                                          std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx,
+                                          FoldPair* pair = nullptr);
+
+// ---- snap17: folds repaired by moving new points (fold_repair.cpp)
+/// Called when fold15's repair and check leave the result crossing itself
+/// (`st`, the check's error, and `pair`, its crossing pair): new points of
+/// each crossing pair are moved to a nearby double (another rounding of
+/// their exact value's neighbourhood: up to 1024 ulps per coordinate, the
+/// star never flat and crossing fewer triangles near it, exactly counted) or
+/// snapped onto a neighbour (an edge collapse under the link condition),
+/// and check_rounded_result runs again, up to a budget of rounds. Returns
+/// the check's last status (its suspects: `suspect`, is_new | touched,
+/// updated by the collapses): ok when the result no longer crosses itself
+/// (then `out` and face_side hold the repaired result), else the error
+/// (`out` may hold some moves: the caller refuses the Boolean).
+/// Sequential and in a fixed order: the same bits for any thread count.
+[[nodiscard]] Status repair_folds(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b,
+                                  const Bvh& bvh_b, PolygonSoup& out, std::vector<std::uint8_t>& face_side,
+                                  std::span<const std::uint32_t> out_index, std::span<const std::uint8_t> is_new,
+                                  std::vector<std::uint64_t>& split_edges, std::vector<std::uint8_t>& suspect,
+                                  Status st, FoldPair pair, const ExecContext& ctx);
+/// Process-wide count of Booleans whose fold repair_folds removed (tests
+/// and the bench read it).
+[[nodiscard]] std::atomic<std::size_t>& fold_repair_count() noexcept;
 
 // ---- fold16: the rounded result's certificate (fold_certificate.cpp)
 /// What certify_rounded_result looked at: the cut triangles with a kept

@@ -97,7 +97,13 @@ struct FoldNet {
 
 std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& face_side,
                                   std::span<const std::uint8_t> is_new, std::vector<std::uint64_t>& split_edges,
-                                  std::span<const std::array<std::uint32_t, 2>> collapse) {
+                                  std::span<const std::array<std::uint32_t, 2>> collapse,
+                                  std::vector<std::uint8_t>* touched) {
+  auto touch = [&](std::uint32_t v) {
+    if (touched == nullptr) return;
+    if (touched->size() < out.positions.size()) touched->resize(out.positions.size(), 0);
+    (*touched)[v] = 1;
+  };
   const std::size_t nf = out.face_count();
   auto flat_at = [&](std::uint32_t f) {
     const auto c = out.face(f);
@@ -167,6 +173,7 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
       std::replace(cg.begin(), cg.end(), w, u);
       add_edges(g);
     }
+    touch(u);
     return true;
   };
   auto collapse_coincident = [&](std::uint32_t f) {
@@ -209,6 +216,7 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
     if (!fresh) continue;
     gone[f] = 1;
     gone[n] = 1;
+    touch(x);
     split_edges.push_back(fold_directed(std::min(a, b), std::max(a, b)));
     edge_face.erase(fold_directed(b, a));
     for (std::size_t k = 0; k + 1 < ring.size(); ++k) {
@@ -240,7 +248,7 @@ std::size_t repair_flat_triangles(PolygonSoup& out, std::vector<std::uint8_t>& f
 Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
                             const PolygonSoup& out, std::span<const std::uint32_t> out_index,
                             std::span<const std::uint8_t> is_new, std::span<const std::uint64_t> split_edges,
-                            std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx) {
+                            std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx, FoldPair* pair) {
   short_edge = {kNil, kNil};
   FoldNet fn;
   // Suspects: the result's triangles with a new point (a repaired face's
@@ -355,6 +363,21 @@ Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     if (hit != crosses.end()) pr = pairs[static_cast<std::size_t>(hit - crosses.begin())];
   }
   if (pr[0] == kNil) return {};
+  if (pair != nullptr)
+    for (std::size_t i = 0; i < 2; ++i) {
+      const std::uint32_t t = pr[i];
+      std::array<std::uint32_t, 3> v{};
+      if (t < suspects) {
+        const auto c = out.face(fn.face[t]);
+        v = {c[0], c[1], c[2]};
+      } else {
+        v = neighbour_ids[t - suspects];
+      }
+      for (std::size_t k = 0; k < 3; ++k) {
+        pair->v[i][k] = v[k] < out.positions.size() ? v[k] : kNil;
+        pair->p[i][k] = fn.mesh.p[fn.mesh.tri[t][k]];
+      }
+    }
   // The shortest edge of the two triangles within a few ulps, with a new
   // point: the caller collapses it and checks again (the sliver's points
   // snapped together, a move of a few ulps).
