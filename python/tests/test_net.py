@@ -104,8 +104,8 @@ def test_check_result_keeps_a_result_that_does_not_fold_as_the_cli(scratch):
     """check_result (on by default since fold16; ``--no-check-result`` and
     check_result=False switch it off): a result that does not fold once
     rounded comes back with the same bytes with and without the check, here
-    and from the CLI (the refusals of folded results are the C++ campaign's,
-    NetDegeneratePairs.CheckResultRefusesWhatRoundingFolds)."""
+    and from the CLI (folded results repaired or refused: the C++ campaign's
+    NetDegeneratePairs.CheckResultNeverReturnsWhatRoundingFolds)."""
     for op in ("union", "intersection", "difference"):
         v, f, _ = atelier.boolean(A, B, op=op)
         ov, of, _ = atelier.boolean(A, B, op=op, check_result=False)
