@@ -363,16 +363,16 @@ Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     if (hit != crosses.end()) pr = pairs[static_cast<std::size_t>(hit - crosses.begin())];
   }
   if (pr[0] == kNil) return {};
+  // A fold net triangle's corners as the result's vertex ids.
+  auto corners_of = [&](std::uint32_t t) -> std::array<std::uint32_t, 3> {
+    if (t >= suspects) return neighbour_ids[t - suspects];
+    const auto c = out.face(fn.face[t]);
+    return {c[0], c[1], c[2]};
+  };
   if (pair != nullptr)
     for (std::size_t i = 0; i < 2; ++i) {
       const std::uint32_t t = pr[i];
-      std::array<std::uint32_t, 3> v{};
-      if (t < suspects) {
-        const auto c = out.face(fn.face[t]);
-        v = {c[0], c[1], c[2]};
-      } else {
-        v = neighbour_ids[t - suspects];
-      }
+      const std::array<std::uint32_t, 3> v = corners_of(t);
       for (std::size_t k = 0; k < 3; ++k) {
         pair->v[i][k] = v[k] < out.positions.size() ? v[k] : kNil;
         pair->p[i][k] = fn.mesh.p[fn.mesh.tri[t][k]];
@@ -383,13 +383,7 @@ Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
   // snapped together, a move of a few ulps).
   double best = HUGE_VAL;
   for (const std::uint32_t t : pr) {
-    std::array<std::uint32_t, 3> v{};
-    if (t < suspects) {
-      const auto c = out.face(fn.face[t]);
-      v = {c[0], c[1], c[2]};
-    } else {
-      v = neighbour_ids[t - suspects];
-    }
+    const std::array<std::uint32_t, 3> v = corners_of(t);
     for (std::size_t k = 0; k < 3; ++k) {
       const std::uint32_t x = v[k], y = v[(k + 1) % 3];
       if (x >= is_new.size() || y >= is_new.size() || !(is_new[x] || is_new[y])) continue;
