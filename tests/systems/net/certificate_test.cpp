@@ -23,7 +23,9 @@
 #include "../../../systems/net/boolean_detail.h"
 #include "net_shapes.h"
 
-namespace atelier {
+// Its own namespace: the net tests build as unity batches, and other
+// files define kPairs, Tally and the like in atelier's anonymous namespace.
+namespace atelier::certificate_test {
 namespace {
 
 using net_detail::Cut;
@@ -375,4 +377,4 @@ TEST(NetCertificateEmbedding, ShortcutKeepsVerdictsAndBytes) {
 }
 
 }  // namespace
-}  // namespace atelier
+}  // namespace atelier::certificate_test
