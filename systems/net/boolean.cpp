@@ -647,9 +647,11 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
   // certainly crosses itself. prepare_result also refuses two ids rounded
   // to one position (duplicate vertices) before it tests crossings: such a
   // result, not moved, is returned as before (the check's verdict).
+  PreparedNet self_tested;  // kept for opt.prepare_result: the same test on the same result
+  Status why;
   if (full_checked) {
-    Status why;
-    if (prepare_result(out, A.name, ctx, why).empty() || !why) {
+    self_tested = prepare_result(out, A.name, ctx, why);
+    if (self_tested.empty() || !why) {
       if (!moved_refusal) return moved_refusal;
       if (why.message().find("intersects itself") != std::string::npos)
         return Status(
@@ -689,7 +691,12 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
     rep.area = soup_area(out);
   }
   if (opt.prepare_result) {
-    rep.prepared = prepare_result(rep.result, A.name, ctx, rep.prepared_status);
+    if (full_checked) {  // exact mode: the result is as self-tested above
+      rep.prepared = std::move(self_tested);
+      rep.prepared_status = std::move(why);
+    } else {
+      rep.prepared = prepare_result(rep.result, A.name, ctx, rep.prepared_status);
+    }
   }
   if (Status s = stage_done(ctx, "boolean: result", first_stage + 2, stages); !s) return s;
   return rep;

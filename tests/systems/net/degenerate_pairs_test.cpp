@@ -203,7 +203,7 @@ constexpr BooleanOp kOps[] = {BooleanOp::kUnion, BooleanOp::kIntersection, Boole
 struct Tally {
   std::map<std::string, int> cases;  // per family
   int booleans = 0, cgal_declined = 0, pinched = 0, invalid_inputs = 0, chains = 0, paper_ok = 0, paper_refused = 0;
-  int fold_refused = 0;  // refused as folded once rounded (the guarantee's error, issue 24 fold15)
+  int fold_refused = 0;      // refused as folded once rounded (the guarantee's error, issue 24 fold15)
   int ok = 0, crossing = 0;  // answered; answered but crossing itself by CGAL's exact test
   // BooleanOptions::check_result of the campaign's Booleans: the default
   // (on since fold16), or ATELIER_CAMPAIGN_CHECK_RESULT=0 / 1.
@@ -558,11 +558,16 @@ TEST(NetDegeneratePairs, CompactCampaignAgreesWithCgal) {
 
 /// The failures the broad campaign found (seed 1, 70 cases), not yet fixed
 /// (issue 24, round 17): each runs its one case; enable once fixed.
-void known_case(int n, std::uint32_t seed = 1u) {
+/// One case of the campaign, reported and expected free of failures.
+Tally one_case(int n, std::uint32_t seed = 1u) {
   Tally t;
   run_campaign(seed, n + 1, t, n);
   report(t);
-  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " failures";
+  EXPECT_TRUE(t.failures.empty()) << "case " << n << ": " << t.failures.size() << " failures";
+  return t;
+}
+void known_case(int n, std::uint32_t seed = 1u) {
+  (void)one_case(n, seed);
 }
 
 // Exact inputs: an icosphere (level 1) and two quarter-turned copies (case
@@ -578,10 +583,7 @@ void known_case(int n, std::uint32_t seed = 1u) {
 // each case).
 TEST(NetDegeneratePairs, RepairedResultsPassTheWholeSelfTestOrAreRefused) {
   for (const int n : {15, 49}) {
-    Tally t;
-    run_campaign(1u, n + 1, t, n);
-    if (!t.failures.empty()) report(t);
-    EXPECT_TRUE(t.failures.empty()) << "case " << n << ": " << t.failures.size() << " failures";
+    const Tally t = one_case(n);
     EXPECT_GE(t.fold_refused, 1) << "case " << n << " is no longer refused: pick another case";
     EXPECT_GE(t.ok, 6) << "case " << n;
   }
@@ -595,10 +597,7 @@ TEST(NetDegeneratePairs, RepairedResultsPassTheWholeSelfTestOrAreRefused) {
 // unpinched, so CGAL's exact test checks every one (the test fails without
 // the repair: fold_refused 3).
 TEST(NetDegeneratePairs, HalfSizeUvSphereInsideSharingFacesIsRepairedNotRefused) {
-  Tally t;
-  run_campaign(1u, 21, t, 20);
-  report(t);
-  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " failures";
+  const Tally t = one_case(20);
   EXPECT_EQ(t.fold_refused, 0);
   EXPECT_GE(t.ok, 12);
 }
@@ -632,10 +631,7 @@ TEST(NetDegeneratePairs, CheckResultNeverReturnsWhatRoundingFolds) {
   EXPECT_EQ(on.fold_refused, 0);
 }
 TEST(NetDegeneratePairs, NearCopyOfABoxDoesNotFold) {
-  Tally t;
-  run_campaign(1u, 10, t, 9);
-  report(t);
-  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " failures";
+  const Tally t = one_case(9);
   EXPECT_EQ(t.fold_refused, 0);
   EXPECT_GE(t.booleans, 6);
 }
@@ -807,49 +803,48 @@ TEST(NetDegeneratePairs, AChainIntoTheCavityItFillsHasTheVolumesByHand) {
 TEST(NetDegeneratePairs, CertificateNeverPassesAResultThatCrosses) {
   auto& counts = net_detail::result_check_counts();
   int certified = 0, full = 0, crossing_off = 0, certified_checked_by_cgal = 0, no_result_stage = 0;
-  for_each_case(1u, 22, -1,
-                [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup&, const char*,
-                    const std::string& what) {
-                  if (!PreparedNet::prepare(a) || !PreparedNet::prepare(b)) return;
-                  for (BooleanOp op : kOps) {
-                    BooleanOptions off;
-                    off.op = op;
-                    off.check_result = false;
-                    BooleanOptions on = off;
-                    on.check_result = true;
-                    const auto r_off = net_boolean(a, b, off);
-                    const std::size_t c0 = counts.certified, f0 = counts.full;
-                    const auto r_on = net_boolean(a, b, on);
-                    const bool passed = counts.certified - c0 == 1, sent = counts.full - f0 == 1;
-                    if (!r_off) {
-                      EXPECT_FALSE(r_on.has_value()) << what;
-                      continue;
-                    }
-                    const bool pinched = has_coincident_vertices(r_off->result);
-                    const bool crosses = r_off->result.face_count() > 0 && !pinched &&
-                                         PMP::does_self_intersect(mesh_of<Kin>(r_off->result));
-                    crossing_off += crosses;
-                    ASSERT_FALSE(passed && sent) << what << ": one verdict per Boolean";
-                    if (!passed && !sent) {
-                      ++no_result_stage;  // answered before the result's assembly (no cut)
-                      continue;
-                    }
-                    if (passed) {
-                      ++certified;
-                      EXPECT_FALSE(crosses) << what << " op " << static_cast<int>(op)
-                                            << ": certified, but CGAL finds the result crossing itself";
-                      ASSERT_TRUE(r_on.has_value()) << what;
-                      EXPECT_EQ(r_on->result.positions, r_off->result.positions) << what;
-                      EXPECT_EQ(r_on->result.face_nodes, r_off->result.face_nodes) << what;
-                      certified_checked_by_cgal += !pinched;
-                    } else {
-                      ++full;
-                    }
-                  }
-                });
-  std::cout << "certified " << certified << " (CGAL-checked " << certified_checked_by_cgal << "), full check "
-            << full << ", crossing without the check " << crossing_off << ", no result check " << no_result_stage
-            << "\n";
+  for_each_case(
+      1u, 22, -1,
+      [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup&, const char*, const std::string& what) {
+        if (!PreparedNet::prepare(a) || !PreparedNet::prepare(b)) return;
+        for (BooleanOp op : kOps) {
+          BooleanOptions off;
+          off.op = op;
+          off.check_result = false;
+          BooleanOptions on = off;
+          on.check_result = true;
+          const auto r_off = net_boolean(a, b, off);
+          const std::size_t c0 = counts.certified, f0 = counts.full;
+          const auto r_on = net_boolean(a, b, on);
+          const bool passed = counts.certified - c0 == 1, sent = counts.full - f0 == 1;
+          if (!r_off) {
+            EXPECT_FALSE(r_on.has_value()) << what;
+            continue;
+          }
+          const bool pinched = has_coincident_vertices(r_off->result);
+          const bool crosses =
+              r_off->result.face_count() > 0 && !pinched && PMP::does_self_intersect(mesh_of<Kin>(r_off->result));
+          crossing_off += crosses;
+          ASSERT_FALSE(passed && sent) << what << ": one verdict per Boolean";
+          if (!passed && !sent) {
+            ++no_result_stage;  // answered before the result's assembly (no cut)
+            continue;
+          }
+          if (passed) {
+            ++certified;
+            EXPECT_FALSE(crosses) << what << " op " << static_cast<int>(op)
+                                  << ": certified, but CGAL finds the result crossing itself";
+            ASSERT_TRUE(r_on.has_value()) << what;
+            EXPECT_EQ(r_on->result.positions, r_off->result.positions) << what;
+            EXPECT_EQ(r_on->result.face_nodes, r_off->result.face_nodes) << what;
+            certified_checked_by_cgal += !pinched;
+          } else {
+            ++full;
+          }
+        }
+      });
+  std::cout << "certified " << certified << " (CGAL-checked " << certified_checked_by_cgal << "), full check " << full
+            << ", crossing without the check " << crossing_off << ", no result check " << no_result_stage << "\n";
   EXPECT_GE(crossing_off, 1) << "no crossing result left to test the certificate against: pick other cases";
   EXPECT_GE(certified_checked_by_cgal, 20);
   EXPECT_GE(full, crossing_off);
