@@ -7,6 +7,9 @@
 // embedded triangulation once rounded (fold_embedding.cpp), and a rule for
 // pieces lying in a plane x_k = l (cert_level_apart). cert18: a piece
 // decided against a whole embedded level patch at once (fold_level_patch.cpp).
+// Over 600 lines: the pair filters and the one loop that applies them (with
+// cert17's and cert18's shortcuts, whose rules live in their own files) are
+// read together.
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
@@ -557,8 +560,7 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     const bool own_embedded = embed_ok[side][slot_t] & 1u;
     // cert18: t's own level patch: a found piece apart from it is apart
     // from every suspect (all pieces of t).
-    const LevelPatch* own_patch =
-        patch_of[side][slot_t] != kNil ? &patches[side][patch_of[side][slot_t]] : nullptr;
+    const LevelPatch* own_patch = patch_of[side][slot_t] != kNil ? &patches[side][patch_of[side][slot_t]] : nullptr;
     thread_local std::vector<std::uint8_t> skip;  // per suspect: apart from u's level patch
     std::size_t n_level = 0;
     n_embedded += own_embedded ? 1 : 0;

@@ -36,7 +36,6 @@
 #include "fold_level_patch.h"
 
 #include <algorithm>
-#include <cmath>
 
 namespace atelier::net_detail {
 namespace {
@@ -78,8 +77,8 @@ std::atomic<bool>& rule_on() noexcept {
 
 }  // namespace
 
-bool make_level_patch(const Cut& cut, const TriMesh& a, const TriMesh& b, int side,
-                      std::span<const std::uint32_t> tris, LevelPatch& pt) {
+bool make_level_patch(const Cut& cut, const TriMesh& a, const TriMesh& b, int side, std::span<const std::uint32_t> tris,
+                      LevelPatch& pt) {
   const CutSide& s = cut.sides[side];
   for (std::size_t i = 0; i < tris.size(); ++i) {
     int k = 0;

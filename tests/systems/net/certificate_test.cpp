@@ -440,7 +440,8 @@ TEST(NetCertificateLevelPatch, RuleAgreesWithTheExactTestOnEveryPiece) {
       p += Vec3d(unit(rng), unit(rng), 0.0) * (scale * h);
     }
     const std::uint32_t u0[1] = {0}, uw[2] = {0, 1};
-    const std::span<const std::uint32_t> tris = two ? std::span<const std::uint32_t>(uw) : std::span<const std::uint32_t>(u0);
+    const std::span<const std::uint32_t> tris =
+        two ? std::span<const std::uint32_t>(uw) : std::span<const std::uint32_t>(u0);
     if (!net_detail::rounded_pieces_embedded(g.cut, g.a, g.b, 0, tris)) ++folded_patches;
     const auto n = static_cast<std::uint32_t>(g.cut.canon.size());
     const auto& pieces = g.cut.sides[0].piece;
