@@ -5,7 +5,11 @@
 // (which pairs count, coincident corners) it shares: read them together.
 // cert17: no pair tests among the pieces of a cut triangle certified an
 // embedded triangulation once rounded (fold_embedding.cpp), and a rule for
-// pieces lying in a plane x_k = l (cert_level_apart).
+// pieces lying in a plane x_k = l (cert_level_apart). cert18: a piece
+// decided against a whole embedded level patch at once (fold_level_patch.cpp).
+// Over 600 lines: the pair filters and the one loop that applies them (with
+// cert17's and cert18's shortcuts, whose rules live in their own files) are
+// read together.
 #include <atelier/engine/parallel.h>
 
 #include <algorithm>
@@ -15,6 +19,7 @@
 #include <limits>
 
 #include "boolean_detail.h"
+#include "fold_level_patch.h"
 
 namespace atelier::net_detail {
 
@@ -458,8 +463,54 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
       if (!(embed_ok[side][c] & 1u) && rounded_pieces_embedded(cut, a, b, side, own)) embed_ok[side][c] |= 1u;
     }
   }
+  // cert18: the level patches (fold_level_patch.cpp, the proof at its
+  // top): per cut slot certified embedded whose pieces lie in one plane
+  // x_k = l, with the first level neighbour (same plane) certified embedded
+  // with it, if any. Made once here, in slot order (deterministic).
+  std::vector<std::uint32_t> patch_of[2];       // per cut slot: index in patches, or kNil
+  std::vector<std::uint32_t> patch_partner[2];  // per cut slot: the neighbour in its patch, or kNil
+  std::vector<LevelPatch> patches[2];
+  const bool level_rule = shortcut && level_patch_rule_on();
+  for (int side = 0; side < 2; ++side) {
+    const CutSide& s = cut.sides[side];
+    const TriMesh& m = *s.m;
+    patch_of[side].assign(s.cut.size(), kNil);
+    patch_partner[side].assign(s.cut.size(), kNil);
+    if (!level_rule) continue;
+    for (std::size_t c = 0; c < s.cut.size(); ++c) {
+      if (!(embed_ok[side][c] & 1u)) continue;
+      const std::uint32_t t = s.cut[c];
+      LevelPatch pt;
+      bool made = false;
+      for (std::size_t e = 0; e < 3 && !made; ++e) {  // with the first level neighbour certified with t
+        if (!(embed_ok[side][c] >> (e + 1) & 1u)) continue;
+        const auto& et = m.edge_tri[m.tri_edge[t][e]];
+        const std::uint32_t w = et[0] == t ? et[1] : et[0];
+        const std::uint32_t two[2] = {t, w};
+        // w's patch made already with t: the same pieces, shared.
+        const std::uint32_t cw = s.slot[w];
+        if (cw < c && patch_of[side][cw] != kNil && patch_partner[side][cw] == t) {
+          patch_of[side][c] = patch_of[side][cw];
+          patch_partner[side][c] = w;
+          made = true;
+          break;
+        }
+        pt = LevelPatch{};
+        made = make_level_patch(cut, a, b, side, two, pt);
+        if (made) patch_partner[side][c] = w;
+      }
+      if (made && patch_of[side][c] != kNil) continue;
+      if (!made) {
+        const std::uint32_t own[1] = {t};
+        pt = LevelPatch{};
+        if (!make_level_patch(cut, a, b, side, own, pt)) continue;
+      }
+      patch_of[side][c] = static_cast<std::uint32_t>(patches[side].size());
+      patches[side].push_back(std::move(pt));
+    }
+  }
   std::atomic<bool> failed{false};
-  std::atomic<std::size_t> pairs{0}, exact{0}, embedded{0};
+  std::atomic<std::size_t> pairs{0}, exact{0}, embedded{0}, level_skips{0};
   const Bvh* bvhs[2] = {&bvh_a, &bvh_b};
   // A cut triangle's pairs are microseconds of work, so even a few dozen
   // are worth the second thread (the context's threshold is sized for loops
@@ -507,6 +558,11 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     // loop: embed_ok).
     const std::uint32_t slot_t = s.slot[t];
     const bool own_embedded = embed_ok[side][slot_t] & 1u;
+    // cert18: t's own level patch: a found piece apart from it is apart
+    // from every suspect (all pieces of t).
+    const LevelPatch* own_patch = patch_of[side][slot_t] != kNil ? &patches[side][patch_of[side][slot_t]] : nullptr;
+    thread_local std::vector<std::uint8_t> skip;  // per suspect: apart from u's level patch
+    std::size_t n_level = 0;
     n_embedded += own_embedded ? 1 : 0;
     const TriMesh& mt = *s.m;
     auto same_patch = [&](std::uint32_t u) {
@@ -538,6 +594,22 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
           if (o == side && same_patch(u)) continue;
           const std::uint32_t slot = so.slot[u];
           const CertTri* pre_u = slot != kNil && pre_begin[o][slot] != kNil ? &pre[o][pre_begin[o][slot]] : nullptr;
+          // cert18: u in a level patch: the suspects apart from it skip
+          // all of u's pieces (fold_level_patch.cpp), and u is skipped when
+          // all are.
+          bool any_skip = false;
+          if (slot != kNil && patch_of[o][slot] != kNil) {
+            const LevelPatch& pu = patches[o][patch_of[o][slot]];
+            skip.assign(sus.size(), 0);
+            bool all = true;
+            for (std::size_t k = 0; k < sus.size(); ++k) {
+              skip[k] = level_patch_apart(pu, sus[k].p, sus[k].v) ? 1 : 0;
+              any_skip = any_skip || skip[k] != 0;
+              all = all && skip[k] != 0;
+            }
+            if (any_skip) ++n_level;
+            if (all) continue;
+          }
           for (std::uint32_t p = so.piece_begin[u]; p < so.piece_begin[u + 1]; ++p) {
             if (!so.keep[p]) continue;
             // A made piece's box first: most of a fan's miss a small query.
@@ -559,7 +631,12 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
                   made = 1;
                 }
                 if (!cert_boxes_meet(q, xp->box)) break;
+                if (own_patch != nullptr && level_patch_apart(*own_patch, xp->p, xp->v)) {
+                  ++n_level;
+                  break;
+                }
               }
+              if (any_skip && skip[k] != 0) continue;
               if (!cert_boxes_meet(sus[k].box, xp->box)) continue;
               if (made == 1) {
                 cert_normal(x);
@@ -586,8 +663,11 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
     pairs += n_pairs;
     exact += n_exact;
     embedded += n_embedded;
+    level_skips += n_level;
   });
   (failed ? result_check_counts().full : result_check_counts().certified) += 1;
+  level_patch_counts().patches += patches[0].size() + patches[1].size();
+  level_patch_counts().skips += level_skips;
   result_check_counts().pairs += pairs;
   result_check_counts().embedded += embedded;
   if (stats != nullptr) {

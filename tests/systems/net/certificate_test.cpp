@@ -15,12 +15,14 @@
 #include <array>
 #include <cfloat>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <random>
 #include <vector>
 
 #include "../../../systems/net/boolean_detail.h"
+#include "../../../systems/net/fold_level_patch.h"
 #include "net_shapes.h"
 
 // Its own namespace: the net tests build as unity batches, and other
@@ -374,6 +376,202 @@ TEST(NetCertificateEmbedding, ShortcutKeepsVerdictsAndBytes) {
   EXPECT_EQ(cray.certified, 8u);
   EXPECT_GE(cray.embedded, 16u) << "the slab's top triangles are no longer certified embedded";
   EXPECT_LT(cray.pairs_on, cray.pairs_off);
+}
+
+// ---- cert18: a whole level patch at once (LevelPatch in fold_certificate.cpp)
+
+/// Brute force: x (corners given by canonical id: a patch vertex's id keeps
+/// its rounded position, other ids are new points) crosses some piece of
+/// the patch (exact triangles_cross, corners merged by id).
+bool crosses_some_piece(const GridPatch& g, const std::array<Vec3d, 3>& x, const std::array<std::uint32_t, 3>& x_ids) {
+  TriMesh m;
+  const auto n = static_cast<std::uint32_t>(g.cut.canon.size());
+  for (std::uint32_t k = 0; k < n; ++k) m.p.push_back(g.cut.position(g.a, g.b, k));
+  std::array<std::uint32_t, 3> tx{};
+  for (std::size_t c = 0; c < 3; ++c) {
+    if (x_ids[c] < n) {
+      tx[c] = x_ids[c];
+    } else {
+      m.p.push_back(x[c]);
+      tx[c] = static_cast<std::uint32_t>(m.p.size() - 1);
+    }
+  }
+  m.tri = g.cut.sides[0].piece;
+  const auto ix = static_cast<std::uint32_t>(m.tri.size());
+  m.tri.push_back(tx);
+  for (std::uint32_t y = 0; y < ix; ++y)
+    if (net_detail::triangles_cross(m, ix, y)) return true;
+  return false;
+}
+
+// The level-patch rule against brute force: a patch (one cut triangle or
+// two sharing an edge) in a plane z = l, cut into a grid of levels 2-5, its
+// new points moved in the plane (by a few ulps to more than the spacing, so
+// some patches fold and must not count as embedded), sometimes with a
+// corner at 3.4e38 (Cray's fan); x touches the plane in nothing, a patch
+// vertex (by id, or a new id at the same place), a patch edge, two patch
+// vertices that are not an edge, a point inside or on an edge of a piece,
+// with its other corners above, or on both sides. Whatever the rule calls
+// apart from the whole patch crosses none of its pieces by the exact test.
+TEST(NetCertificateLevelPatch, RuleAgreesWithTheExactTestOnEveryPiece) {
+  std::mt19937_64 rng(1818);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const int trials = std::getenv("ATELIER_SKIP_LONG_TESTS") != nullptr ? 200 : 800;
+  const double scales[] = {0x1p-50, 1e-9, 0.05, 0.3, 0.7, 1.2};
+  int apart = 0, meeting = 0, refused_apart = 0, folded_patches = 0;
+  for (int trial = 0; trial < trials; ++trial) {
+    const bool two = trial % 2 == 1;
+    const int level = 2 + (trial / 2) % 4;
+    const double l = trial % 3 == 0 ? -100.0 : 0.375 * unit(rng);
+    std::array<Vec3d, 4> c;
+    for (auto& p : c) p = Vec3d(unit(rng), unit(rng), l);
+    const bool far = trial % 7 == 0;
+    if (far) c[2] = Vec3d(-3.4028234699999998e+38, 3.4028234699999998e+38, l);
+    const Vec3d mid = (c[0] + c[1]) * 0.5;
+    c[3] = mid - (c[2] - mid) * (0.5 + 0.5 * std::abs(unit(rng)));
+    c[3].z() = l;
+    if (far) c[3] = Vec3d(3.4028234699999998e+38, -3.4028234699999998e+38, l);
+    if (net_detail::collinear(c[0], c[1], c[2])) continue;
+    GridPatch g = grid_patch(c, level, two);
+    const double h = (c[1] - c[0]).norm() / level;
+    const double scale = scales[static_cast<std::size_t>(trial / 2) % std::size(scales)];
+    for (auto& p : g.cut.new_points) {
+      if (far && std::abs(p.x()) > 1e30) continue;  // a fan point: keep it where the grid put it
+      p += Vec3d(unit(rng), unit(rng), 0.0) * (scale * h);
+    }
+    const std::uint32_t u0[1] = {0}, uw[2] = {0, 1};
+    const std::span<const std::uint32_t> tris =
+        two ? std::span<const std::uint32_t>(uw) : std::span<const std::uint32_t>(u0);
+    if (!net_detail::rounded_pieces_embedded(g.cut, g.a, g.b, 0, tris)) ++folded_patches;
+    const auto n = static_cast<std::uint32_t>(g.cut.canon.size());
+    const auto& pieces = g.cut.sides[0].piece;
+    for (int q = 0; q < 12; ++q) {
+      std::array<Vec3d, 3> x;
+      std::array<std::uint32_t, 3> x_ids = {n, n + 1, n + 2};
+      const int kind = static_cast<int>(rng() % 7);
+      int n_on = 0;
+      auto vertex = [&](std::size_t c2, std::uint32_t id) {
+        x[c2] = g.cut.position(g.a, g.b, id);
+        x_ids[c2] = id;
+      };
+      const auto& piece = pieces[rng() % pieces.size()];
+      const std::size_t e = rng() % 3;
+      if (kind == 1) {  // a patch vertex by id
+        vertex(0, piece[e]);
+        n_on = 1;
+      } else if (kind == 2) {  // a patch edge by ids
+        vertex(0, piece[e]);
+        vertex(1, piece[(e + 1) % 3]);
+        n_on = 2;
+      } else if (kind == 3) {  // two patch vertices, most often not an edge
+        vertex(0, piece[e]);
+        vertex(1, static_cast<std::uint32_t>(rng() % n));
+        if (x_ids[1] == x_ids[0]) continue;
+        n_on = 2;
+      } else if (kind == 4) {  // a patch vertex's place under a new id
+        x[0] = g.cut.position(g.a, g.b, piece[e]);
+        n_on = 1;
+      } else if (kind == 5) {  // a point inside a piece, or on its edge
+        const Vec3d p0 = g.cut.position(g.a, g.b, piece[0]), p1 = g.cut.position(g.a, g.b, piece[1]),
+                    p2 = g.cut.position(g.a, g.b, piece[2]);
+        const double s = std::abs(unit(rng)), t = std::abs(unit(rng)) * (1 - s);
+        x[0] = rng() % 2 == 0 ? Vec3d(p0 + (p1 - p0) * s + (p2 - p0) * t) : Vec3d(p0 + (p1 - p0) * 0.5);
+        x[0].z() = l;
+        n_on = 1;
+        if (rng() % 2 == 0) {  // and an edge from a patch vertex to it
+          vertex(1, piece[e]);
+          n_on = 2;
+        }
+      } else if (kind == 6) {  // a corner of the net triangle (Cray's side faces)
+        vertex(0, static_cast<std::uint32_t>(rng() % (two ? 4 : 3)));
+        n_on = 1;
+      }
+      const bool both_sides = rng() % 6 == 0;
+      for (int c2 = n_on; c2 < 3; ++c2) {
+        const double up = both_sides && c2 == 2 ? -1.0 : 1.0;
+        x[static_cast<std::size_t>(c2)] =
+            Vec3d(1.2 * unit(rng), 1.2 * unit(rng), l + up * (rng() % 4 == 0 ? 1e-12 : 0.01 + std::abs(unit(rng))));
+      }
+      if (net_detail::collinear(x[0], x[1], x[2])) continue;
+      const bool says = net_detail::level_patch_pieces_apart(g.cut, g.a, g.b, 0, tris, x, x_ids);
+      const bool crosses = crosses_some_piece(g, x, x_ids);
+      if (says) {
+        ++apart;
+        EXPECT_FALSE(crosses) << "trial " << trial << " query " << q << " (kind " << kind << ", level " << level
+                              << ", scale " << scale << "): called apart, but x crosses a piece";
+      } else {
+        crosses ? ++meeting : ++refused_apart;
+      }
+    }
+  }
+  std::cout << "apart " << apart << ", meeting (refused) " << meeting << ", refused but apart " << refused_apart
+            << ", folded patches " << folded_patches << "\n";
+  EXPECT_GE(apart, trials * 2);
+  EXPECT_GE(meeting, trials / 2);
+  EXPECT_GE(folded_patches, trials / 20);
+}
+
+/// cert18's rule on and off (cert17's certificate): the same verdict and
+/// bytes on 1 and 2 threads; the pairs tested and the rule's skips.
+struct LevelCompared {
+  std::size_t pairs_on = 0, pairs_off = 0, skips = 0, certified = 0;
+};
+
+void compare_level_rule(const PolygonSoup& a, const PolygonSoup& b, const std::string& what, LevelCompared& out) {
+  auto& counts = net_detail::result_check_counts();
+  auto& level = net_detail::level_patch_counts();
+  for (BooleanOp op : net_test::kAllOps) {
+    BooleanOptions o;
+    o.op = op;
+    for (const int threads : {1, 2}) {
+      ExecContext ctx;
+      ctx.threads = threads;
+      ctx.sequential_threshold = 2;
+      net_detail::set_level_patch_rule(false);
+      const std::size_t c0 = counts.certified, p0 = counts.pairs;
+      const auto off = net_boolean(a, b, o, ctx);
+      const std::size_t c1 = counts.certified, p1 = counts.pairs, s1 = level.skips;
+      net_detail::set_level_patch_rule(true);
+      const auto on = net_boolean(a, b, o, ctx);
+      const std::size_t c2 = counts.certified, p2 = counts.pairs, s2 = level.skips;
+      ASSERT_EQ(on.has_value(), off.has_value()) << what;
+      EXPECT_EQ(c2 - c1, c1 - c0) << what << " op " << static_cast<int>(op) << ": the verdict changed";
+      out.certified += c2 - c1;
+      out.pairs_off += p1 - p0;
+      out.pairs_on += p2 - p1;
+      out.skips += s2 - s1;
+      if (!on) {
+        EXPECT_EQ(on.status().to_string(), off.status().to_string()) << what;
+        continue;
+      }
+      EXPECT_EQ(on->result.positions, off->result.positions) << what;
+      EXPECT_EQ(on->result.face_nodes, off->result.face_nodes) << what;
+      EXPECT_EQ(on->result.face_offsets, off->result.face_offsets) << what;
+    }
+  }
+}
+
+// The Booleans: the level-patch rule changes no verdict and no byte; on a
+// 1e30 slab with a sphere and on Cray (the slab top's fan against
+// Cray_left's cut triangles and the slab's side faces) it removes most of
+// the pairs cert17's certificate tests.
+TEST(NetCertificateLevelPatch, RuleKeepsVerdictsAndBytes) {
+  LevelCompared slab;
+  compare_level_rule(net_test::box_triangles({-1e30, -1e30, -1e30}, {1e30, 1e30, -100.0}),
+                     net_test::icosphere(3, 2.5e4, {3.0, -7.0, -100.0}), "slab and sphere", slab);
+  std::cout << "slab and sphere: certified " << slab.certified << " of 8, pairs " << slab.pairs_off << " -> "
+            << slab.pairs_on << ", skips " << slab.skips << "\n";
+  EXPECT_GE(slab.certified, 1u);
+  EXPECT_LE(slab.pairs_on, slab.pairs_off);
+  if (!std::filesystem::exists(kPairs)) GTEST_SKIP() << "shared data absent: " << kPairs;
+  LevelCompared cray;
+  compare_level_rule(net_polygons(read_obj(kPairs / "Cray_left.obj")),
+                     net_polygons(read_obj(kPairs / "Cray_right.obj")), "Cray", cray);
+  std::cout << "Cray: certified " << cray.certified << " of 8, pairs " << cray.pairs_off << " -> " << cray.pairs_on
+            << ", skips " << cray.skips << "\n";
+  EXPECT_EQ(cray.certified, 8u);
+  EXPECT_GT(cray.skips, 0u);
+  EXPECT_LT(cray.pairs_on * 5, cray.pairs_off * 3) << "the rule no longer decides the pairs against the slab top";
 }
 
 }  // namespace
