@@ -655,24 +655,24 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
       // cross18: a result with coincident vertex copies (two ids rounded to
       // one position, a pinch) is self-tested whole with the copies merged
       // (pinched_self_crossing): refused when two faces cross beyond the
-      // pinch (seed 1 case 43's chain), otherwise returned, moved or not.
+      // pinch, otherwise returned, moved or not.
       const bool pinched = why.message().find("(duplicate vertices)") != std::string::npos;
       if (pinched) {
-        // Nor may it have a flat face (the whole test's rule, which stopped
-        // at the copies): seed 1 case 43's chain (A u B) u C has a triangle
-        // with two corners rounded to one point whose edge the collapse
-        // could not remove (the link condition), which CGAL counts as a
-        // crossing of the face with itself.
-        const auto c = pinched_self_crossing(out, ctx, true);
+        // A moved result may have no flat face either (the whole test's
+        // rule, which stopped at the copies). A result not moved is returned
+        // with one, as before: seed 1 case 43's chain (A u B) u C and the
+        // union of NetBoolean.SpheresWithSharedVertices have a triangle
+        // with two corners (two ids) at one position (case 43: a zero-length
+        // edge fold15's collapse could not remove under the link
+        // condition), which CGAL counts as a crossing of the face with
+        // itself; refusing them breaks that test (docs/performance.md,
+        // cross18), merging them is not done yet.
+        const auto c = pinched_self_crossing(out, ctx, !moved_refusal);
         if (c[0] != kNil && !moved_refusal) return moved_refusal;
-        if (c[0] != kNil && c[0] != c[1])
+        if (c[0] != kNil)
           return fail(ErrorCode::kTopology,
                       "net boolean: the result crosses itself once its new points are rounded to doubles: faces ",
                       c[0], " and ", c[1], " of the result cross");
-        if (c[0] != kNil)
-          return fail(ErrorCode::kTopology,
-                      "net boolean: the result crosses itself once its new points are rounded to doubles: face ", c[0],
-                      " of the result is flat (two of its corners rounded to one point)");
       } else {
         if (!moved_refusal) return moved_refusal;
         if (why.message().find("intersects itself") != std::string::npos) {

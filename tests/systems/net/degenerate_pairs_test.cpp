@@ -589,10 +589,15 @@ void known_case(int n, std::uint32_t seed = 1u) {
 // boolean.cpp): no crossing is returned, and those Booleans are refused as
 // folded, as before the repair. Fails without that rule (a crossing in
 // each case).
+// cross18: case 15's moved results with coincident copies now pass
+// pinched_self_crossing (copies merged: no two faces cross) and are
+// returned, none crossing by CGAL's pinched oracle; case 49 op 3 is still
+// refused.
 TEST(NetDegeneratePairs, RepairedResultsPassTheWholeSelfTestOrAreRefused) {
   for (const int n : {15, 49}) {
     const Tally t = one_case(n);
-    EXPECT_GE(t.fold_refused, 1) << "case " << n << " is no longer refused: pick another case";
+    EXPECT_EQ(t.crossing, 0) << "case " << n;
+    if (n == 49) EXPECT_GE(t.fold_refused, 1) << "case " << n << " is no longer refused: pick another case";
     EXPECT_GE(t.ok, 6) << "case " << n;
   }
 }
@@ -918,15 +923,18 @@ TEST(NetDegeneratePairs, TwoFacesOnOneEdgeThroughAPinchAreATouchNotACrossing) {
 }
 
 // cross18: seed 1 case 43 (a prism over an octagon and two quarter-turned
-// copies): the chain (A u B) u C gave a pinched result with a triangle whose
-// two corners are distinct new points rounded to one position (face 326,
-// a zero-length edge the collapse could not remove under the link
-// condition), which CGAL counts as a crossing; prepare_result stops at the
-// duplicate vertices, so the whole self-test never saw it and the result
-// was returned. A result with coincident copies is now self-tested by
-// pinched_self_crossing (copies merged, a flat face refused): the Boolean
-// is refused, naming the face. Fails without it (returned, CGAL: crossing).
-TEST(NetDegeneratePairs, APinchedResultWithAFaceOfTwoCopiesIsRefusedNotReturned) {
+// copies): the chain (A u B) u C is a pinched result with a triangle whose
+// two corners (two ids) lie at one position, a zero-length edge fold15's
+// collapse could not remove under the link condition. CGAL's exact pairs
+// count the face as crossing itself; prepare_result stops at the duplicate
+// vertices, so the whole self-test never sees it. pinched_self_crossing
+// (copies merged) finds no two faces crossing and, asked to refuse flat
+// faces, names that one. The Boolean still returns it: refusing a flat
+// face of a result not moved also refuses NetBoolean.SpheresWithSharedVertices'
+// union (the same defect: CGAL's pinched oracle finds it crossing), which
+// that test expects answered; merging the copies is not done yet
+// (docs/performance.md, cross18). This test pins the diagnosis.
+TEST(NetDegeneratePairs, APinchedResultWithAFaceOfTwoCopiesIsFoundFlat) {
   std::vector<std::array<PolygonSoup, 3>> nets;
   for_each_case(1u, 44, 43,
                 [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup& c, const char*, const std::string&) {
@@ -934,15 +942,23 @@ TEST(NetDegeneratePairs, APinchedResultWithAFaceOfTwoCopiesIsRefusedNotReturned)
                 });
   ASSERT_EQ(nets.size(), 1u);
   const auto& [a, b, c] = nets[0];
-  BooleanOptions o;
-  const auto ab = net_boolean(a, b, o);
+  const auto ab = net_boolean(a, b, BooleanOptions{});
   ASSERT_TRUE(ab.has_value()) << ab.status().to_string();
-  const auto abc = net_boolean(ab->result, c, o);
-  ASSERT_FALSE(abc.has_value()) << "returned; CGAL finds it crossing: " << pinched_result_crosses(abc->result);
-  EXPECT_EQ(abc.status().code(), ErrorCode::kTopology);
-  EXPECT_NE(abc.status().message().find("of the result is flat (two of its corners rounded to one point)"),
-            std::string::npos)
-      << abc.status().to_string();
+  const auto abc = net_boolean(ab->result, c, BooleanOptions{});
+  ASSERT_TRUE(abc.has_value()) << abc.status().to_string();
+  ASSERT_TRUE(has_coincident_vertices(abc->result));
+  EXPECT_TRUE(pinched_result_crosses(abc->result)) << "CGAL no longer finds the flat face: enable the refusal";
+  const auto no_flat = net_detail::pinched_self_crossing(abc->result, ExecContext{}, false);
+  EXPECT_EQ(no_flat[0], net_detail::kNil) << "two faces cross";
+  const auto flat = net_detail::pinched_self_crossing(abc->result, ExecContext{}, true);
+  ASSERT_NE(flat[0], net_detail::kNil);
+  EXPECT_EQ(flat[0], flat[1]);
+  const auto f = abc->result.face(flat[0]);
+  ASSERT_EQ(f.size(), 3u);
+  int coincident = 0;
+  for (std::size_t k = 0; k < 3; ++k)
+    coincident += f[k] != f[(k + 1) % 3] && abc->result.positions[f[k]] == abc->result.positions[f[(k + 1) % 3]];
+  EXPECT_EQ(coincident, 1) << "the flat face has two corners at one position";
 }
 
 // snap17: what fold15's repair left folded is repaired, not refused. Seed
