@@ -394,6 +394,18 @@ struct FoldPair {
                                           std::array<std::uint32_t, 2>& short_edge, const ExecContext& ctx,
                                           FoldPair* pair = nullptr);
 
+// ---- cross18: the whole self-test of a result with coincident vertex copies (fold_check.cpp)
+/// The result's faces that cross (a pair of output face indices; {f, f}
+/// when face f itself is degenerate), or {kNil, kNil} when none: its
+/// polygons split as build_tri_mesh splits them, vertex ids merged by exact
+/// position (coincident copies of a pinched vertex count as one corner: a
+/// touch there is not a crossing, as in the fold check), flat triangles left
+/// out (or, with flat_refused, named as {f, f}), every pair whose boxes
+/// meet decided by triangles_cross. For results prepare_result stops at
+/// (duplicate vertices) before its crossing test.
+[[nodiscard]] std::array<std::uint32_t, 2> pinched_self_crossing(const PolygonSoup& out, const ExecContext& ctx,
+                                                                 bool flat_refused);
+
 // ---- snap17: folds repaired by moving new points (fold_repair.cpp)
 /// Called when fold15's repair and check leave the result crossing itself
 /// (`st`, the check's error, and `pair`, its crossing pair): new points of

@@ -412,4 +412,83 @@ Status check_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
               " crosses ", name(pr[1]));
 }
 
+std::array<std::uint32_t, 2> pinched_self_crossing(const PolygonSoup& out, const ExecContext& ctx, bool flat_refused) {
+  // The result's triangles as build_tri_mesh makes them: each n-gon split
+  // by build_tri_mesh itself (alone, as an open net), so the fan or the
+  // rounded centroid is the one every later test and the next operand see.
+  TriMesh m;
+  std::vector<std::uint32_t> face;  // per triangle: the output face
+  std::vector<Vec3d> pos(out.positions.begin(), out.positions.end());
+  const ExecContext one = [&] {
+    ExecContext c = ctx;
+    c.threads = 1;
+    return c;
+  }();
+  for (std::uint32_t f = 0; f < out.face_count(); ++f) {
+    const auto c = out.face(f);
+    if (c.size() == 3) {
+      m.tri.push_back({c[0], c[1], c[2]});
+      face.push_back(f);
+      continue;
+    }
+    PolygonSoup poly;
+    std::vector<std::uint32_t> local(c.size());
+    for (std::uint32_t k = 0; k < c.size(); ++k) {
+      poly.positions.push_back(out.positions[c[k]]);
+      local[k] = k;
+    }
+    poly.add_face(local);
+    TriMesh pm;
+    if (!build_tri_mesh(poly, "face", pm, one, true)) return {f, f};  // degenerate: named as it is
+    const auto centroid = static_cast<std::uint32_t>(pos.size());
+    if (pm.p.size() > c.size()) pos.push_back(pm.p[c.size()]);
+    for (const auto& t : pm.tri) {
+      std::array<std::uint32_t, 3> v{};
+      for (std::size_t k = 0; k < 3; ++k) v[k] = t[k] < c.size() ? c[t[k]] : centroid;
+      m.tri.push_back(v);
+      face.push_back(f);
+    }
+  }
+  // Positions merged: each id renamed to the first id of its exact position
+  // (coincident copies are one corner, as in the fold check).
+  std::vector<std::uint32_t> order(pos.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
+    const Vec3d &p = pos[x], &q = pos[y];
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return x < y;
+  });
+  std::vector<std::uint32_t> canon(pos.size());
+  m.p.clear();
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    if (i == 0 || pos[order[i]] != pos[order[i - 1]]) m.p.push_back(pos[order[i]]);
+    canon[order[i]] = static_cast<std::uint32_t>(m.p.size() - 1);
+  }
+  m.box.resize(m.tri.size());
+  std::vector<std::uint8_t> flat(m.tri.size(), 0);
+  for (std::size_t t = 0; t < m.tri.size(); ++t) {
+    for (auto& x : m.tri[t]) x = canon[x];
+    m.box[t] = tri_box(m, static_cast<std::uint32_t>(t));
+    const auto& v = m.tri[t];
+    flat[t] = collinear(m.p[v[0]], m.p[v[1]], m.p[v[2]]) ? 1 : 0;
+    if (flat[t] && flat_refused) return {face[t], face[t]};
+  }
+  Bvh bvh;
+  build_bvh(m, bvh, ctx);
+  std::vector<std::array<std::uint32_t, 2>> pairs;
+  for (const auto& [i, j] : overlapping_pairs(m, bvh, m, bvh, ctx))
+    if (i < j && !flat[i] && !flat[j]) pairs.push_back({i, j});
+  // Decided in parallel, the first crossing pair in list order reported:
+  // the same answer for any thread count.
+  std::vector<std::uint8_t> crosses(pairs.size(), 0);
+  par::for_each_n(ctx, pairs.size(),
+                  [&](std::size_t k) { crosses[k] = triangles_cross(m, pairs[k][0], pairs[k][1]) ? 1 : 0; });
+  const auto hit = std::find(crosses.begin(), crosses.end(), std::uint8_t{1});
+  if (hit == crosses.end()) return {kNil, kNil};
+  const auto& pr = pairs[static_cast<std::size_t>(hit - crosses.begin())];
+  return {face[pr[0]], face[pr[1]]};
+}
+
 }  // namespace atelier::net_detail

@@ -166,18 +166,16 @@ bool has_coincident_vertices(const PolygonSoup& s) {
 /// A result with coincident copies of a pinched vertex (or edge), which
 /// does_self_intersect counts as crossing where the copies' faces touch:
 /// CGAL's exact self_intersections, each pair's exact intersection
-/// ignored when it is a point, or a segment, whose ends are all coincident
-/// copies (a pinch: the faces touch there, as the exact result does); any
-/// other intersecting pair is a crossing (snap17: repaired results are
-/// often pinched, so the campaign checks them too).
+/// ignored when it is a point, or a segment, whose ends are all corners of
+/// both faces by position (a pinch: the faces touch at a vertex or along an
+/// edge, as the exact result does); any other intersecting pair is a
+/// crossing (snap17: repaired results are often pinched, so the campaign
+/// checks them too). cross18: the ends were required to be coincident
+/// copies; a segment from a corner both faces share by id to coincident
+/// copies (two faces on one edge by position, seed 2 case 60) was counted
+/// as a crossing, which it is not. Same rule as the Booleans' own
+/// pinched_self_crossing (triangles_cross with copies merged).
 bool pinched_result_crosses(const PolygonSoup& s) {
-  std::map<std::array<double, 3>, int> count;
-  for (const Vec3d& p : s.positions) ++count[{p.x(), p.y(), p.z()}];
-  auto pinched_at = [&](const Kex::Point_3& q) {
-    const std::array<double, 3> k{CGAL::to_double(q.x()), CGAL::to_double(q.y()), CGAL::to_double(q.z())};
-    const auto it = count.find(k);
-    return it != count.end() && it->second > 1 && Kex::Point_3(k[0], k[1], k[2]) == q;
-  };
   const auto m = mesh_of<Kex>(s);
   using Face = CGAL::Surface_mesh<Kex::Point_3>::Face_index;
   std::vector<std::pair<Face, Face>> pairs;
@@ -188,10 +186,20 @@ bool pinched_result_crosses(const PolygonSoup& s) {
     return Kex::Triangle_3(c[0], c[1], c[2]);
   };
   for (const auto& [f, g] : pairs) {
-    const auto hit = CGAL::intersection(tri(f), tri(g));
+    const Kex::Triangle_3 tf = tri(f), tg = tri(g);
+    const auto hit = CGAL::intersection(tf, tg);
     if (!hit) continue;
-    if (const auto* q = boost::get<Kex::Point_3>(&*hit); q && pinched_at(*q)) continue;
-    if (const auto* e = boost::get<Kex::Segment_3>(&*hit); e && pinched_at(e->source()) && pinched_at(e->target()))
+    auto corner_of_both = [&](const Kex::Point_3& q) {
+      bool in_f = false, in_g = false;
+      for (int k = 0; k < 3; ++k) {
+        in_f = in_f || tf.vertex(k) == q;
+        in_g = in_g || tg.vertex(k) == q;
+      }
+      return in_f && in_g;
+    };
+    if (const auto* q = boost::get<Kex::Point_3>(&*hit); q && corner_of_both(*q)) continue;
+    if (const auto* e = boost::get<Kex::Segment_3>(&*hit);
+        e && corner_of_both(e->source()) && corner_of_both(e->target()))
       continue;
     return true;
   }
@@ -581,10 +589,15 @@ void known_case(int n, std::uint32_t seed = 1u) {
 // boolean.cpp): no crossing is returned, and those Booleans are refused as
 // folded, as before the repair. Fails without that rule (a crossing in
 // each case).
+// cross18: case 15's moved results with coincident copies now pass
+// pinched_self_crossing (copies merged: no two faces cross) and are
+// returned, none crossing by CGAL's pinched oracle; case 49 op 3 is still
+// refused.
 TEST(NetDegeneratePairs, RepairedResultsPassTheWholeSelfTestOrAreRefused) {
   for (const int n : {15, 49}) {
     const Tally t = one_case(n);
-    EXPECT_GE(t.fold_refused, 1) << "case " << n << " is no longer refused: pick another case";
+    EXPECT_EQ(t.crossing, 0) << "case " << n;
+    if (n == 49) EXPECT_GE(t.fold_refused, 1) << "case " << n << " is no longer refused: pick another case";
     EXPECT_GE(t.ok, 6) << "case " << n;
   }
 }
@@ -889,6 +902,63 @@ TEST(NetDegeneratePairs, DefaultCheckGivesTheSameBitsForOneAndTwoThreads) {
   // snap17: case 20's folded results go through repair_folds (on one and
   // on two threads): its moves must give the same bits too.
   EXPECT_GE(net_detail::fold_repair_count() - repaired0, 4u) << "case 20 is no longer repaired by repair_folds";
+}
+
+// cross18: seed 2 case 60 (a UV sphere (8) snapped to a grid of 1/8): B -
+// A and its chain are pinched results in which CGAL's exact pairs meet two
+// faces along the segment from (3/4, 1/2, 0), a corner both share by id, to
+// (7/8, 3/8, 0), where each has its own copy of a pinched vertex: the two
+// faces lie on one edge by position (one above z = 0, one below), a touch
+// as in the exact result, not a crossing. The oracle required both ends to
+// be coincident copies and counted it (the two "crossings" of seed 2); it
+// now ignores a point or segment whose ends are corners of both faces, the
+// rule of the Booleans' own triangles_cross with the copies merged. Fails
+// with the old oracle (2 failures: "the (pinched) result intersects
+// itself").
+TEST(NetDegeneratePairs, TwoFacesOnOneEdgeThroughAPinchAreATouchNotACrossing) {
+  const Tally t = one_case(60, 2u);
+  EXPECT_GE(t.pinched, 2) << "case 60 is no longer pinched: pick another case";
+  EXPECT_EQ(t.crossing, 0);
+  EXPECT_EQ(t.fold_refused, 0);
+}
+
+// cross18: seed 1 case 43 (a prism over an octagon and two quarter-turned
+// copies): the chain (A u B) u C is a pinched result with a triangle whose
+// two corners (two ids) lie at one position, a zero-length edge fold15's
+// collapse could not remove under the link condition. CGAL's exact pairs
+// count the face as crossing itself; prepare_result stops at the duplicate
+// vertices, so the whole self-test never sees it. pinched_self_crossing
+// (copies merged) finds no two faces crossing and, asked to refuse flat
+// faces, names that one. The Boolean still returns it: refusing a flat
+// face of a result not moved also refuses NetBoolean.SpheresWithSharedVertices'
+// union (the same defect: CGAL's pinched oracle finds it crossing), which
+// that test expects answered; merging the copies is not done yet
+// (docs/performance.md, cross18). This test pins the diagnosis.
+TEST(NetDegeneratePairs, APinchedResultWithAFaceOfTwoCopiesIsFoundFlat) {
+  std::vector<std::array<PolygonSoup, 3>> nets;
+  for_each_case(1u, 44, 43,
+                [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup& c, const char*, const std::string&) {
+                  nets.push_back({a, b, c});
+                });
+  ASSERT_EQ(nets.size(), 1u);
+  const auto& [a, b, c] = nets[0];
+  const auto ab = net_boolean(a, b, BooleanOptions{});
+  ASSERT_TRUE(ab.has_value()) << ab.status().to_string();
+  const auto abc = net_boolean(ab->result, c, BooleanOptions{});
+  ASSERT_TRUE(abc.has_value()) << abc.status().to_string();
+  ASSERT_TRUE(has_coincident_vertices(abc->result));
+  EXPECT_TRUE(pinched_result_crosses(abc->result)) << "CGAL no longer finds the flat face: enable the refusal";
+  const auto no_flat = net_detail::pinched_self_crossing(abc->result, ExecContext{}, false);
+  EXPECT_EQ(no_flat[0], net_detail::kNil) << "two faces cross";
+  const auto flat = net_detail::pinched_self_crossing(abc->result, ExecContext{}, true);
+  ASSERT_NE(flat[0], net_detail::kNil);
+  EXPECT_EQ(flat[0], flat[1]);
+  const auto f = abc->result.face(flat[0]);
+  ASSERT_EQ(f.size(), 3u);
+  int coincident = 0;
+  for (std::size_t k = 0; k < 3; ++k)
+    coincident += f[k] != f[(k + 1) % 3] && abc->result.positions[f[k]] == abc->result.positions[f[(k + 1) % 3]];
+  EXPECT_EQ(coincident, 1) << "the flat face has two corners at one position";
 }
 
 // snap17: what fold15's repair left folded is repaired, not refused. Seed
