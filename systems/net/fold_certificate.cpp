@@ -7,7 +7,7 @@
 // embedded triangulation once rounded (fold_embedding.cpp), and a rule for
 // pieces lying in a plane x_k = l (cert_level_apart). cert18: a piece
 // decided against a whole embedded level patch at once (fold_level_patch.cpp).
-// Over 600 lines: the pair filters and the one loop that applies them (with
+// Why this file is long: the pair filters and the one loop that applies them (with
 // cert17's and cert18's shortcuts, whose rules live in their own files) are
 // read together.
 #include <atelier/engine/parallel.h>
