@@ -747,9 +747,12 @@ TEST(NetDegeneratePairs, ShiftedPrismsChainRefusesAFoldedResultClearly) {
 // them net by net, so both ends stayed one fan. Now paired by the faces'
 // exact order about the edge (pair_about_edge); checked against CGAL's
 // volume, closed_model and CGAL's self-intersection test by check_pair.
+// Under the sanitizers (ATELIER_SKIP_LONG_TESTS) case 30 alone: the two
+// cases cost about 120 s of CI's ASan stage, mostly the repair's exact
+// predicates and CGAL's oracle; case 37 runs in every Release `make test`.
 TEST(NetDegeneratePairs, SymmetryTurnsOfUvSpheresStayManifold) {
   known_case(30);
-  known_case(37);
+  if (std::getenv("ATELIER_SKIP_LONG_TESTS") == nullptr) known_case(37);
 }
 
 // Seed 2 case 129: A an icosphere, B = C = A scaled by 1/2 (exact). X = A - B
