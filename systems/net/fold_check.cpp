@@ -53,6 +53,40 @@ int fold_middle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2) {
   return 3;
 }
 
+// The mesh's ids renamed so that coincident positions are one corner (the
+// first id of each exact position, in lexicographic order), mesh.p the
+// distinct positions of the ids used, and the triangles' boxes made: a
+// touch at coincident copies is then a shared corner, not a crossing.
+template <class Position>
+void merge_positions(TriMesh& mesh, const Position& pos) {
+  std::vector<std::uint32_t> used;
+  for (const auto& t : mesh.tri) used.insert(used.end(), t.begin(), t.end());
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  std::vector<std::uint32_t> order(used.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto lex = [&](std::uint32_t x, std::uint32_t y) {
+    const Vec3d &p = pos(used[x]), &q = pos(used[y]);
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    if (p.z() != q.z()) return p.z() < q.z();
+    return x < y;
+  };
+  std::sort(order.begin(), order.end(), lex);
+  std::vector<std::uint32_t> local(used.size());
+  mesh.p.clear();
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    if (i == 0 || pos(used[order[i]]) != pos(used[order[i - 1]])) mesh.p.push_back(pos(used[order[i]]));
+    local[order[i]] = static_cast<std::uint32_t>(mesh.p.size() - 1);
+  }
+  mesh.box.resize(mesh.tri.size());
+  for (std::size_t t = 0; t < mesh.tri.size(); ++t) {
+    for (auto& x : mesh.tri[t])
+      x = local[static_cast<std::size_t>(std::lower_bound(used.begin(), used.end(), x) - used.begin())];
+    mesh.box[t] = tri_box(mesh, static_cast<std::uint32_t>(t));
+  }
+}
+
 /// The kept triangles of the result near its moved points, in output
 /// vertex ids merged by exact position (coincident copies count as one
 /// corner: a pinch is not a crossing), with boxes.
@@ -62,34 +96,8 @@ struct FoldNet {
   std::vector<std::array<std::uint32_t, 2>> origin;  // per net triangle: side, the side's triangle
   std::vector<Vec3d> extra;                          // positions of ids past the output's (centroids of whole n-gons)
   void finish(std::span<const Vec3d> out) {
-    auto pos = [&](std::uint32_t v) -> const Vec3d& { return v < out.size() ? out[v] : extra[v - out.size()]; };
-    // Positions merged: each output vertex named by the first of its position.
-    std::vector<std::uint32_t> used;
-    for (const auto& t : mesh.tri) used.insert(used.end(), t.begin(), t.end());
-    std::sort(used.begin(), used.end());
-    used.erase(std::unique(used.begin(), used.end()), used.end());
-    std::vector<std::uint32_t> order(used.size());
-    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-    auto lex = [&](std::uint32_t x, std::uint32_t y) {
-      const Vec3d &p = pos(used[x]), &q = pos(used[y]);
-      if (p.x() != q.x()) return p.x() < q.x();
-      if (p.y() != q.y()) return p.y() < q.y();
-      if (p.z() != q.z()) return p.z() < q.z();
-      return x < y;
-    };
-    std::sort(order.begin(), order.end(), lex);
-    std::vector<std::uint32_t> local(used.size());
-    mesh.p.clear();
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      if (i == 0 || pos(used[order[i]]) != pos(used[order[i - 1]])) mesh.p.push_back(pos(used[order[i]]));
-      local[order[i]] = static_cast<std::uint32_t>(mesh.p.size() - 1);
-    }
-    mesh.box.resize(mesh.tri.size());
-    for (std::size_t t = 0; t < mesh.tri.size(); ++t) {
-      for (auto& x : mesh.tri[t])
-        x = local[static_cast<std::size_t>(std::lower_bound(used.begin(), used.end(), x) - used.begin())];
-      mesh.box[t] = tri_box(mesh, static_cast<std::uint32_t>(t));
-    }
+    merge_positions(mesh,
+                    [&](std::uint32_t v) -> const Vec3d& { return v < out.size() ? out[v] : extra[v - out.size()]; });
   }
 };
 
@@ -449,28 +457,9 @@ std::array<std::uint32_t, 2> pinched_self_crossing(const PolygonSoup& out, const
       face.push_back(f);
     }
   }
-  // Positions merged: each id renamed to the first id of its exact position
-  // (coincident copies are one corner, as in the fold check).
-  std::vector<std::uint32_t> order(pos.size());
-  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
-    const Vec3d &p = pos[x], &q = pos[y];
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    if (p.z() != q.z()) return p.z() < q.z();
-    return x < y;
-  });
-  std::vector<std::uint32_t> canon(pos.size());
-  m.p.clear();
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    if (i == 0 || pos[order[i]] != pos[order[i - 1]]) m.p.push_back(pos[order[i]]);
-    canon[order[i]] = static_cast<std::uint32_t>(m.p.size() - 1);
-  }
-  m.box.resize(m.tri.size());
+  merge_positions(m, [&](std::uint32_t v) -> const Vec3d& { return pos[v]; });
   std::vector<std::uint8_t> flat(m.tri.size(), 0);
   for (std::size_t t = 0; t < m.tri.size(); ++t) {
-    for (auto& x : m.tri[t]) x = canon[x];
-    m.box[t] = tri_box(m, static_cast<std::uint32_t>(t));
     const auto& v = m.tri[t];
     flat[t] = collinear(m.p[v[0]], m.p[v[1]], m.p[v[2]]) ? 1 : 0;
     if (flat[t] && flat_refused) return {face[t], face[t]};
