@@ -14,12 +14,10 @@
 // same. The merge is taken when the result stays a 2-manifold about the
 // kept id: every edge at it in exactly two faces, one each way, and its
 // faces one fan (else the copies are a pinch unpinch made on purpose, or
-// the link condition fails). Otherwise the flat triangle and its neighbour
-// across the zero-length edge, (u, w, x) and (w, u, y), which as a pair
-// cover nothing, are replaced by a re-triangulation of the quad around
-// them that uses neither the zero-length edge nor a new edge already in
-// use: the neighbours across their other edges get the diagonal x - y
-// instead (docs/glossary.md, "Flat faces merged away").
+// the link condition fails). Otherwise the edge is left and the Boolean's
+// final guard (pinched_self_crossing with flat faces refused) refuses the
+// result: re-triangulating the neighbours of such a flat face is not done
+// (docs/glossary.md, "A pinched result's self-test").
 #include <algorithm>
 #include <numeric>
 

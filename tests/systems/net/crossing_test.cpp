@@ -275,7 +275,7 @@ TEST(NetCrossing, AZeroLengthEdgeWhoseMergeIsNotManifoldIsLeft) {
   // The bipyramid: ids n, s, a, b, c = 0..4.
   PolygonSoup bi;
   bi.positions = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {1, 0, 0}, {-1, 1, 0}};
-  for (const std::vector<std::uint32_t> f : {std::vector<std::uint32_t>{0, 2, 3}, {0, 3, 4}, {0, 4, 2}, {1, 3, 2},
+  for (const std::vector<std::uint32_t>& f : {std::vector<std::uint32_t>{0, 2, 3}, {0, 3, 4}, {0, 4, 2}, {1, 3, 2},
                                              {1, 4, 3}, {1, 2, 4}})
     bi.add_face(f);
   ASSERT_TRUE(net_test::closed_model(bi));
@@ -316,7 +316,9 @@ TEST(NetCrossing, SpheresSharingVerticesAreAnsweredWithoutAFlatFace) {
     const auto r = net_boolean(a, b, o);
     const int k = static_cast<int>(op);
     ASSERT_TRUE(r.has_value()) << k << ": " << r.status().to_string();
-    if (op == BooleanOp::kUnion) EXPECT_GT(net_detail::flat_merge_count().load(), merged);
+    if (op == BooleanOp::kUnion) {
+      EXPECT_GT(net_detail::flat_merge_count().load(), merged);
+    }
     EXPECT_TRUE(net_test::closed_model(r->result)) << k;
     const Verdict v = brute_force(r->result);
     EXPECT_EQ(v.polygons, 0u) << k;
