@@ -331,6 +331,17 @@ TEST(NetCrossing, SpheresSharingVerticesAreAnsweredWithoutAFlatFace) {
   }
   EXPECT_NEAR(volume[0] + volume[1], va + vb, 1e-12 * (va + vb));
   EXPECT_NEAR(volume[2], va - volume[1], 1e-12 * (va + vb));
+  // The merged union, the same bits for 1 and 2 threads (parallel below
+  // the default threshold too).
+  ExecContext one, two;
+  one.threads = 1;
+  two.threads = 2;
+  one.sequential_threshold = two.sequential_threshold = 2;
+  const auto r1 = net_boolean(a, b, BooleanOptions{}, one), r2 = net_boolean(a, b, BooleanOptions{}, two);
+  ASSERT_TRUE(r1.has_value() && r2.has_value());
+  EXPECT_EQ(r1->result.face_nodes, r2->result.face_nodes);
+  EXPECT_EQ(r1->result.face_offsets, r2->result.face_offsets);
+  EXPECT_EQ(r1->result.positions, r2->result.positions);
 }
 
 }  // namespace atelier::crossing_test
