@@ -636,6 +636,18 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
     }
   }
   if (Status st = unpinch(out, face_side); !st) return st;
+  if (full_checked) {
+    // flat19: a zero-length edge fold15's collapse left (its link condition
+    // failed before unpinch split the pinched vertex into copies) is merged
+    // away now, where the result stays a 2-manifold: no position moves, the
+    // faces on the edge lose the repeated corner (a flat triangle
+    // vanishes). What is left is refused below as a flat face.
+    std::vector<std::uint32_t> remap;
+    flat_merge_count() += merge_flat_edges(out, face_side, remap).merged;
+    if (!remap.empty())
+      for (std::uint32_t& x : out_index)
+        if (x != kNil) x = remap[x];
+  }
   // A result the certificate could not pass is self-tested whole
   // (prepare_result: exact triangles_cross over all pairs; the degenerate
   // path only, never on a certified result). The fold check looks at the
@@ -644,9 +656,9 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
   // (seed 1 case 43's chain; after snap17's moves, seed 1 cases 15 and 49).
   // A result repair_folds moved must pass it (else refused with the check's
   // own error, as before the repair); any other is refused when it
-  // certainly crosses itself. prepare_result also refuses two ids rounded
-  // to one position (duplicate vertices) before it tests crossings: such a
-  // result, not moved, is returned as before (the check's verdict).
+  // certainly crosses itself or has a flat face. prepare_result also
+  // refuses two ids rounded to one position (duplicate vertices) before it
+  // tests crossings: such a result is tested by pinched_self_crossing.
   PreparedNet self_tested;  // kept for opt.prepare_result: the same test on the same result
   Status why;
   if (full_checked) {
@@ -658,23 +670,30 @@ Expected<BooleanReport> boolean_of(const PreparedData& pa, const PreparedData& p
       // pinch, otherwise returned, moved or not.
       const bool pinched = why.message().find("(duplicate vertices)") != std::string::npos;
       if (pinched) {
-        // A moved result may have no flat face either (the whole test's
-        // rule, which stopped at the copies). A result not moved is returned
-        // with one, as before: seed 1 case 43's chain (A u B) u C and the
-        // union of NetBoolean.SpheresWithSharedVertices have a triangle
-        // with two corners (two ids) at one position (case 43: a zero-length
-        // edge fold15's collapse could not remove under the link
-        // condition), which CGAL counts as a crossing of the face with
-        // itself; refusing them breaks that test (docs/performance.md,
-        // cross18), merging them is not done yet.
-        const auto c = pinched_self_crossing(out, ctx, !moved_refusal);
+        // No result keeps a flat face (flat19): the zero-length edges were
+        // merged away above where the result stays a 2-manifold (seed 1
+        // case 43's chain, the union of NetBoolean.SpheresWithSharedVertices),
+        // and a flat triangle left (a merge that would not be manifold, or
+        // corners on one line) is refused, moved or not, as CGAL's exact
+        // test counts it as crossing itself.
+        const auto c = pinched_self_crossing(out, ctx, true);
         if (c[0] != kNil && !moved_refusal) return moved_refusal;
+        if (c[0] != kNil && c[0] == c[1])
+          return fail(ErrorCode::kTopology,
+                      "net boolean: the result crosses itself once its new points are rounded to doubles: face ",
+                      c[0], " of the result is flat (its corners on one line)");
         if (c[0] != kNil)
           return fail(ErrorCode::kTopology,
                       "net boolean: the result crosses itself once its new points are rounded to doubles: faces ",
                       c[0], " and ", c[1], " of the result cross");
       } else {
         if (!moved_refusal) return moved_refusal;
+        // flat19: a flat triangle without copies (corners on one line) is
+        // refused too, as in a pinched result.
+        if (why.message().find("is degenerate") != std::string::npos)
+          return Status(
+              ErrorCode::kTopology,
+              "net boolean: the result crosses itself once its new points are rounded to doubles: " + why.message());
         if (why.message().find("intersects itself") != std::string::npos) {
           // Reached only by a crossing the fold check does not look at
           // (it tests every triangle with a new point against all kept

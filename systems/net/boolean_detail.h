@@ -406,6 +406,27 @@ struct FoldPair {
 [[nodiscard]] std::array<std::uint32_t, 2> pinched_self_crossing(const PolygonSoup& out, const ExecContext& ctx,
                                                                  bool flat_refused);
 
+// ---- flat19: zero-length edges merged away (flat_merge.cpp)
+struct FlatMerge {
+  std::size_t merged = 0;  // zero-length edges whose two ids became one
+  std::size_t left = 0;    // zero-length edges left (the merge would not leave a 2-manifold)
+};
+/// On a result after unpinch: every edge whose two ids are at one position
+/// (a zero-length edge, as in a flat face two of whose corners coincide)
+/// has its ids merged into the smaller one when the result stays a
+/// 2-manifold about it (each edge at the kept id in exactly two faces, one
+/// each way, and its faces one fan): the faces using the edge lose the
+/// repeated corner (a triangle vanishes; it had no area), no position
+/// moves. Ids no face uses any more are dropped; remap gets, per old id,
+/// its new id (a merged id: its keeper's; kNil: dropped), identity-sized
+/// only when something changed (empty otherwise). face_side follows the
+/// faces.
+[[nodiscard]] FlatMerge merge_flat_edges(PolygonSoup& out, std::vector<std::uint8_t>& face_side,
+                                         std::vector<std::uint32_t>& remap);
+/// How many zero-length edges the Booleans merged away (process-wide, for
+/// the tests: a test shows the merge ran).
+[[nodiscard]] std::atomic<std::size_t>& flat_merge_count() noexcept;
+
 // ---- snap17: folds repaired by moving new points (fold_repair.cpp)
 /// Called when fold15's repair and check leave the result crossing itself
 /// (`st`, the check's error, and `pair`, its crossing pair): new points of
