@@ -27,6 +27,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <iostream>
 #include <map>
 #include <numeric>
@@ -617,7 +618,9 @@ TEST(NetDegeneratePairs, RepairedResultsPassTheWholeSelfTestOrAreRefused) {
 TEST(NetDegeneratePairs, HalfSizeUvSphereInsideSharingFacesIsRepairedNotRefused) {
   const Tally t = one_case(20);
   EXPECT_EQ(t.fold_refused, 0);
-  EXPECT_GE(t.ok, 12);
+  // 4 operations, and 2 chains of 4 Booleans (the union's only under
+  // ATELIER_SKIP_LONG_TESTS, check_pair).
+  EXPECT_GE(t.ok, std::getenv("ATELIER_SKIP_LONG_TESTS") ? 8 : 12);
 }
 // A box and its copy turned a quarter turn about its centre's z axis by
 // Eigen's AngleAxis (inexact: a near-copy): results intersected themselves
@@ -1028,13 +1031,14 @@ TEST(NetDegeneratePairs, FoldedResultsAreRepairedNotRefused) {
 // Boolean of the four operations on campaign cases whose results the
 // repair moves must give the same verdict, the same error text and the
 // same bytes, and the lean search the same on one and on two threads.
-// Seed 1's cases 6, 16, 20, 23 (FoldedResultsAreRepairedNotRefused), 44
-// (the fifth turn) and 49 (refused after the repair's rounds); under
-// ATELIER_SKIP_LONG_TESTS cases 20 and 49 only.
+// Seed 1's cases 6, 16, 20 (FoldedResultsAreRepairedNotRefused), 44 (the
+// fifth turn: A - B refused after 1.1-1.5 s of rounds) and 49 (B - A
+// refused); under ATELIER_SKIP_LONG_TESTS cases 20 and 49 only. Case 23
+// (3.6 s of rounds on snap17's search alone) is left out for the time.
 TEST(NetDegeneratePairs, LeanFoldRepairKeepsVerdictsAndBytes) {
   auto& lean = net_detail::fold_repair_lean();
   const bool was = lean;
-  std::vector<int> cases = {6, 16, 20, 23, 44, 49};
+  std::vector<int> cases = {6, 16, 20, 44, 49};
   if (std::getenv("ATELIER_SKIP_LONG_TESTS") != nullptr) cases = {20, 49};
   auto& repaired = net_detail::fold_repair_count();
   std::size_t repairs = 0;
@@ -1063,12 +1067,24 @@ TEST(NetDegeneratePairs, LeanFoldRepairKeepsVerdictsAndBytes) {
                       two.threads = 2;
                       one.sequential_threshold = two.sequential_threshold = 2;
                       const std::string w = what + " op " + std::to_string(static_cast<int>(op));
+                      // Thread CPU time of each one-thread Boolean (the
+                      // figures of docs/performance.md, degen19).
+                      auto cpu_ms = [] {
+                        timespec ts{};
+                        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+                        return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+                      };
                       lean = false;
+                      const double t0 = cpu_ms();
                       const auto old_one = net_boolean(a, b, o, one);
                       lean = true;
+                      const double t1 = cpu_ms();
                       const std::size_t r0 = repaired;
                       const auto lean_one = net_boolean(a, b, o, one);
+                      const double t2 = cpu_ms();
                       repairs += repaired - r0;
+                      std::cout << w << ": snap17's search " << t1 - t0 << " ms, lean " << t2 - t1 << " ms ("
+                                << (lean_one ? "ok" : "refused") << ")\n";
                       const auto lean_two = net_boolean(a, b, o, two);
                       same(old_one, lean_one, w + " (lean against snap17's search)");
                       same(lean_one, lean_two, w + " (lean, 1 against 2 threads)");
