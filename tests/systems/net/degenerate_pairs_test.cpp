@@ -985,11 +985,18 @@ TEST(NetDegeneratePairs, APinchedResultWithAFaceOfTwoCopiesIsFoundFlat) {
 TEST(NetDegeneratePairs, FoldedResultsAreRepairedNotRefused) {
   auto& repaired = net_detail::fold_repair_count();
   int ran = 0, refused = 0, pinched = 0;
+  // degen19: case 23's A - B and B - A are refused after the repair's whole
+  // budget (1.7-1.8 s of CPU each in Release, about 3/4 of this test):
+  // under ATELIER_SKIP_LONG_TESTS (CI's sanitizer stage) they are left out.
+  // Refused Booleans only count towards `refused` (at most 4), so `ran` is
+  // the same either way.
+  const bool short_run = std::getenv("ATELIER_SKIP_LONG_TESTS") != nullptr;
   for (const int n : {6, 16, 20, 23})
     for_each_case(
         1u, n + 1, n,
         [&](const PolygonSoup& a, const PolygonSoup& b, const PolygonSoup&, const char*, const std::string& what) {
           for (BooleanOp op : kOps) {
+            if (short_run && n == 23 && (op == BooleanOp::kAMinusB || op == BooleanOp::kBMinusA)) continue;
             BooleanOptions o;
             o.op = op;
             const std::size_t r0 = repaired;
