@@ -448,6 +448,12 @@ struct FlatMerge {
 /// Process-wide count of Booleans whose fold repair_folds removed (tests
 /// and the bench read it).
 [[nodiscard]] std::atomic<std::size_t>& fold_repair_count() noexcept;
+/// degen19: process-wide switch (tests) between repair_folds' lean search
+/// (true, the default: a candidate's crossings counted only until they
+/// reach the best so far, ulp steps computed once per step, boxes and
+/// scratch meshes reused) and snap17's search as merged (false). The same
+/// moves, verdicts and bytes either way (degenerate_pairs_test.cpp).
+[[nodiscard]] std::atomic<bool>& fold_repair_lean() noexcept;
 
 // ---- fold16: the rounded result's certificate (fold_certificate.cpp)
 /// What certify_rounded_result looked at: the cut triangles with a kept

@@ -26,6 +26,7 @@
 // any thread count. Only on results the certificate and fold15's repair
 // left folded, so it costs nothing on the certified path.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -56,9 +57,11 @@ bool boxes_meet(const std::array<double, 6>& x, const std::array<double, 6>& y) 
 }
 
 /// Exact: x and y meet beyond the corners they share (corners shared by
-/// position, as check_rounded_result merges them).
-bool cross(const Tri& x, const Tri& y) {
-  TriMesh m;
+/// position, as check_rounded_result merges them). `m`: a scratch mesh
+/// (degen19: reused, its p and tri cleared; triangles_cross reads nothing
+/// else, which a fresh TriMesh leaves empty too).
+bool cross(const Tri& x, const Tri& y, TriMesh& m) {
+  m.p.clear();
   std::array<std::uint32_t, 3> ix{}, iy{};
   auto id = [&](const Vec3d& p) {
     for (std::uint32_t i = 0; i < m.p.size(); ++i)
@@ -68,7 +71,7 @@ bool cross(const Tri& x, const Tri& y) {
   };
   for (std::size_t k = 0; k < 3; ++k) ix[k] = id(x[k]);
   for (std::size_t k = 0; k < 3; ++k) iy[k] = id(y[k]);
-  m.tri = {ix, iy};
+  m.tri.assign({ix, iy});
   return triangles_cross(m, 0, 1);
 }
 
@@ -85,6 +88,8 @@ double ulps(double x, int steps) {
 struct Neighbourhood {
   std::vector<std::array<std::uint32_t, 3>> star;
   std::vector<Tri> near;
+  std::vector<std::array<double, 6>> near_box;  // box_of(near[i]), once (degen19)
+  TriMesh scratch;                              // cross()'s mesh, reused (degen19)
 };
 
 Neighbourhood neighbourhood(const PolygonSoup& out, std::uint32_t v, const FoldPair& pair) {
@@ -122,13 +127,23 @@ Neighbourhood neighbourhood(const PolygonSoup& out, std::uint32_t v, const FoldP
   // whole n-gon about its centroid).
   for (std::size_t i = 0; i < 2; ++i)
     if (std::find(pair.v[i].begin(), pair.v[i].end(), v) == pair.v[i].end()) nb.near.push_back(pair.p[i]);
+  nb.near_box.reserve(nb.near.size());
+  for (const Tri& t : nb.near) nb.near_box.push_back(box_of(t));
   return nb;
 }
 
 /// v at q: the number of pairs its star crosses (star against the
 /// triangles near it, and star against star), or -1 when the star is flat
 /// there or q falls onto another corner.
-int star_crossings(const PolygonSoup& out, std::uint32_t v, const Vec3d& q, const Neighbourhood& nb) {
+/// degen19: the count stops once it reaches `limit` (the value returned is
+/// then >= limit, not the whole count). The caller takes q only when its
+/// count is below the best so far and passes that best as the limit: every
+/// term is 0 or 1, so a partial count at the limit means a whole count at or
+/// above it, a q the caller would reject anyway; below the limit the count
+/// is the whole one. The -1 cases are decided before any pair is counted.
+/// So the move chosen is the same as with whole counts (snap17's), with
+/// most of a losing candidate's exact tests left out.
+int star_crossings(const PolygonSoup& out, std::uint32_t v, const Vec3d& q, Neighbourhood& nb, int limit) {
   std::vector<Tri> moved;
   for (const auto& s : nb.star) {
     Tri t{};
@@ -145,9 +160,12 @@ int star_crossings(const PolygonSoup& out, std::uint32_t v, const Vec3d& q, cons
   int n_cross = 0;
   for (std::size_t i = 0; i < moved.size(); ++i) {
     const auto bi = box_of(moved[i]);
-    for (const Tri& n : nb.near) n_cross += boxes_meet(bi, box_of(n)) && cross(moved[i], n);
+    for (std::size_t k = 0; k < nb.near.size(); ++k)
+      if (boxes_meet(bi, nb.near_box[k]) && cross(moved[i], nb.near[k], nb.scratch) && ++n_cross >= limit)
+        return n_cross;
     for (std::size_t j = i + 1; j < moved.size(); ++j)
-      n_cross += boxes_meet(bi, box_of(moved[j])) && cross(moved[i], moved[j]);
+      if (boxes_meet(bi, box_of(moved[j])) && cross(moved[i], moved[j], nb.scratch) && ++n_cross >= limit)
+        return n_cross;
   }
   return n_cross;
 }
@@ -160,21 +178,32 @@ int star_crossings(const PolygonSoup& out, std::uint32_t v, const Vec3d& q, cons
 /// again (two points' moves undoing each other would cycle to the budget).
 bool reround(PolygonSoup& out, std::uint32_t v, const FoldPair& pair,
              std::vector<std::pair<std::uint32_t, Vec3d>>& visited) {
-  const Neighbourhood nb = neighbourhood(out, v, pair);
+  Neighbourhood nb = neighbourhood(out, v, pair);
   if (nb.star.empty()) return false;
   const Vec3d p = out.positions[v];
-  const int now = star_crossings(out, v, p, nb);
+  constexpr int kAll = std::numeric_limits<int>::max();
+  const int now = star_crossings(out, v, p, nb, kAll);  // whole: the bar every move must pass
   if (now <= 0) return false;  // v's star is clean (or flat): another point's move
+  const bool lean = fold_repair_lean().load(std::memory_order_relaxed);
   for (const int step : kSteps) {
     int best = now;
     Vec3d best_q = p;
+    // Each coordinate `step` ulps down, as is, and up: ulps() of the same
+    // arguments, computed once per step instead of once per direction
+    // (degen19; the same doubles, nextafter being exact).
+    std::array<std::array<double, 3>, 3> at{};
+    if (lean)
+      for (int k = 0; k < 3; ++k)
+        at[static_cast<std::size_t>(k)] = {ulps(p[k], -step), p[k], ulps(p[k], step)};
     for (int d = 0; d < 27 && best > 0; ++d) {
       if (d == 13) continue;  // no move
       const int dx = d % 3 - 1, dy = d / 3 % 3 - 1, dz = d / 9 - 1;
-      const Vec3d q(ulps(p.x(), dx * step), ulps(p.y(), dy * step), ulps(p.z(), dz * step));
+      const Vec3d q = lean ? Vec3d(at[0][static_cast<std::size_t>(dx + 1)], at[1][static_cast<std::size_t>(dy + 1)],
+                                   at[2][static_cast<std::size_t>(dz + 1)])
+                           : Vec3d(ulps(p.x(), dx * step), ulps(p.y(), dy * step), ulps(p.z(), dz * step));
       if (!std::isfinite(q.x()) || !std::isfinite(q.y()) || !std::isfinite(q.z())) continue;
       if (std::find(visited.begin(), visited.end(), std::pair(v, q)) != visited.end()) continue;
-      const int c = star_crossings(out, v, q, nb);
+      const int c = star_crossings(out, v, q, nb, lean ? best : kAll);
       if (c >= 0 && c < best) {
         best = c;
         best_q = q;
@@ -206,6 +235,11 @@ std::size_t flat_count(const PolygonSoup& out, std::span<const std::uint8_t> sus
 std::atomic<std::size_t>& fold_repair_count() noexcept {
   static std::atomic<std::size_t> count{0};
   return count;
+}
+
+std::atomic<bool>& fold_repair_lean() noexcept {
+  static std::atomic<bool> lean{true};
+  return lean;
 }
 
 Status repair_folds(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, const TriMesh& b, const Bvh& bvh_b,
