@@ -7,6 +7,8 @@
 // embedded triangulation once rounded (fold_embedding.cpp), and a rule for
 // pieces lying in a plane x_k = l (cert_level_apart). cert18: a piece
 // decided against a whole embedded level patch at once (fold_level_patch.cpp).
+// cert19: one walk of the hierarchies for a group of neighbouring cut
+// triangles.
 // Why this file is long: the pair filters and the one loop that applies them (with
 // cert17's and cert18's shortcuts, whose rules live in their own files) are
 // read together.
@@ -353,6 +355,16 @@ bool cert_cross_exact(const CertTri& x, const CertTri& y) {
 /// and at 12 Offset3 x Offset4 2-5%; Cray's slab top has 93).
 constexpr std::uint32_t kEmbedPieces = 32;
 
+/// cert19: at most this many neighbouring cut triangles share one walk of
+/// the hierarchies (their union box stays small: a few triangles along the
+/// intersection curve).
+constexpr std::size_t kWalkGroup = 8;
+
+std::atomic<bool>& grouped_walk_flag() noexcept {
+  static std::atomic<bool> on{true};
+  return on;
+}
+
 std::atomic<bool>& embedding_shortcut_on() noexcept {
   static std::atomic<bool> on{true};
   return on;
@@ -368,6 +380,19 @@ bool level_plane_pieces_apart(const std::array<Vec3d, 3>& y, const std::array<st
   tx.p = x;
   tx.v = x_ids;
   return cert_level_apart(ty, tx);
+}
+
+void set_grouped_walk(bool on) noexcept {
+  grouped_walk_flag().store(on, std::memory_order_relaxed);
+}
+
+bool grouped_walk_on() noexcept {
+  return grouped_walk_flag().load(std::memory_order_relaxed);
+}
+
+CertWalkCounts& cert_walk_counts() noexcept {
+  static CertWalkCounts counts;
+  return counts;
 }
 
 void set_embedding_shortcut(bool on) noexcept {
@@ -512,162 +537,247 @@ bool certify_rounded_result(const Cut& cut, const TriMesh& a, const Bvh& bvh_a, 
   std::atomic<bool> failed{false};
   std::atomic<std::size_t> pairs{0}, exact{0}, embedded{0}, level_skips{0};
   const Bvh* bvhs[2] = {&bvh_a, &bvh_b};
+  // cert19: the hierarchy walks shared. Neighbouring cut triangles of one
+  // side, each cut into few pieces (Cray_left's small cut triangles along
+  // the curve: ~90 queries of a few pieces each), are taken in groups of up
+  // to kWalkGroup: the hierarchies are walked once with the union of their
+  // query boxes, and each member's query keeps the found triangles whose
+  // boxes meet its own (the walk with a smaller box finds a subset, in the
+  // same order, so the pairs tested are exactly the same). Made here once,
+  // in item order (deterministic).
+  std::vector<std::uint32_t> group_begin{0}, group_items;
+  group_items.reserve(items.size());
+  {
+    const bool grouped = grouped_walk_on();
+    std::vector<std::uint32_t> item_of[2];  // per cut slot: index in items, or kNil
+    for (int side = 0; side < 2; ++side) item_of[side].assign(cut.sides[side].cut.size(), kNil);
+    for (std::size_t i = 0; i < items.size(); ++i)
+      item_of[items[i][0]][cut.sides[items[i][0]].slot[items[i][1]]] = static_cast<std::uint32_t>(i);
+    auto few = [&](std::uint32_t side, std::uint32_t t) {
+      const CutSide& s = cut.sides[side];
+      return s.piece_begin[t + 1] - s.piece_begin[t] < kEmbedPieces;
+    };
+    std::vector<std::uint8_t> taken(items.size(), 0);
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      if (taken[i]) continue;
+      taken[i] = 1;
+      group_items.push_back(static_cast<std::uint32_t>(i));
+      if (grouped && few(items[i][0], items[i][1])) {
+        const std::uint32_t side = items[i][0];
+        const CutSide& s = cut.sides[side];
+        const TriMesh& m = *s.m;
+        // Breadth first over edge neighbours that are items too.
+        for (std::size_t h = group_begin.back(); h < group_items.size(); ++h) {
+          const std::uint32_t t = items[group_items[h]][1];
+          for (std::size_t k = 0; k < 3; ++k) {
+            if (group_items.size() - group_begin.back() >= kWalkGroup) break;
+            const auto& et = m.edge_tri[m.tri_edge[t][k]];
+            const std::uint32_t u = et[0] == t ? et[1] : et[0];
+            if (u == kNil || s.slot[u] == kNil) continue;
+            const std::uint32_t j = item_of[side][s.slot[u]];
+            if (j == kNil || taken[j] || !few(side, u)) continue;
+            taken[j] = 1;
+            group_items.push_back(j);
+          }
+        }
+      }
+      group_begin.push_back(static_cast<std::uint32_t>(group_items.size()));
+    }
+  }
+  const std::size_t n_groups = group_begin.size() - 1;
+  std::atomic<std::size_t> walks{0};
   // A cut triangle's pairs are microseconds of work, so even a few dozen
   // are worth the second thread (the context's threshold is sized for loops
   // of cheap elements). The verdict is an "and" over the triangles: the same
   // for any thread count and order.
   ExecContext pctx = ctx;
-  pctx.sequential_threshold = 16;
-  pctx.grain = 4;
-  par::for_each_n(pctx, items.size(), [&](std::size_t i) {
+  pctx.sequential_threshold = 4;
+  pctx.grain = 1;
+  par::for_each_n(pctx, n_groups, [&](std::size_t g) {
     if (failed.load(std::memory_order_relaxed)) return;
-    const int side = static_cast<int>(items[i][0]);
-    const std::uint32_t t = items[i][1];
-    const CutSide& s = cut.sides[side];
-    // The suspects (kept pieces with a new point), keyed (side, piece).
-    thread_local std::vector<CertTri> sus;
-    thread_local std::vector<std::uint64_t> sus_key;
-    thread_local std::vector<std::uint32_t> stack;
-    sus.clear();
-    sus_key.clear();
-    std::array<double, 6> q{HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
-    for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p) {
-      if (!s.keep[p] || !is_suspect(s.piece[p])) continue;
-      sus.emplace_back();
-      cert_tri(cut, a, b, s.piece[p], sus.back());
-      if (!cert_not_flat(sus.back()) && collinear(sus.back().p[0], sus.back().p[1], sus.back().p[2])) {
-        failed = true;
-        return;
+    // The suspects (kept pieces with a new point) of every member, keyed
+    // (side, piece), and each member's query box.
+    thread_local std::vector<CertTri> sus_all;
+    thread_local std::vector<std::uint64_t> key_all;
+    thread_local std::vector<std::uint32_t> sus_begin;
+    thread_local std::vector<std::array<double, 6>> boxes;
+    thread_local std::vector<std::uint32_t> stack, found[2];
+    sus_all.clear();
+    key_all.clear();
+    sus_begin.assign(1, 0);
+    boxes.clear();
+    std::array<double, 6> group_q{HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (std::uint32_t mi = group_begin[g]; mi < group_begin[g + 1]; ++mi) {
+      const int side = static_cast<int>(items[group_items[mi]][0]);
+      const std::uint32_t t = items[group_items[mi]][1];
+      const CutSide& s = cut.sides[side];
+      std::array<double, 6> q{HUGE_VAL, HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+      for (std::uint32_t p = s.piece_begin[t]; p < s.piece_begin[t + 1]; ++p) {
+        if (!s.keep[p] || !is_suspect(s.piece[p])) continue;
+        sus_all.emplace_back();
+        cert_tri(cut, a, b, s.piece[p], sus_all.back());
+        if (!cert_not_flat(sus_all.back()) &&
+            collinear(sus_all.back().p[0], sus_all.back().p[1], sus_all.back().p[2])) {
+          failed = true;
+          return;
+        }
+        key_all.push_back((std::uint64_t{static_cast<std::uint32_t>(side)} << 32) | p);
+        for (std::size_t k = 0; k < 3; ++k) {
+          q[k] = std::min(q[k], sus_all.back().box[k]);
+          q[k + 3] = std::max(q[k + 3], sus_all.back().box[k + 3]);
+        }
       }
-      sus_key.push_back((std::uint64_t{static_cast<std::uint32_t>(side)} << 32) | p);
       for (std::size_t k = 0; k < 3; ++k) {
-        q[k] = std::min(q[k], sus.back().box[k]);
-        q[k + 3] = std::max(q[k + 3], sus.back().box[k + 3]);
+        q[k] -= delta;
+        q[k + 3] += delta;
+        group_q[k] = std::min(group_q[k], q[k]);
+        group_q[k + 3] = std::max(group_q[k + 3], q[k + 3]);
       }
+      sus_begin.push_back(static_cast<std::uint32_t>(sus_all.size()));
+      boxes.push_back(q);
     }
-    for (std::size_t k = 0; k < 3; ++k) {
-      q[k] -= delta;
-      q[k + 3] += delta;
-    }
-    std::size_t n_pairs = 0, n_exact = 0, n_embedded = 0;
-    // cert17: pairs of two pieces of u, or of u and a neighbour across one
-    // of its edges, need no test when those pieces certainly form an
-    // embedded triangulation once rounded (rounded_pieces_embedded,
-    // fold_embedding.cpp): they meet only in the corners they share by id,
-    // which is all the pair tests below show (verdicts made before the
-    // loop: embed_ok).
-    const std::uint32_t slot_t = s.slot[t];
-    const bool own_embedded = embed_ok[side][slot_t] & 1u;
-    // cert18: t's own level patch: a found piece apart from it is apart
-    // from every suspect (all pieces of t).
-    const LevelPatch* own_patch = patch_of[side][slot_t] != kNil ? &patches[side][patch_of[side][slot_t]] : nullptr;
-    thread_local std::vector<std::uint8_t> skip;  // per suspect: apart from u's level patch
-    std::size_t n_level = 0;
-    n_embedded += own_embedded ? 1 : 0;
-    const TriMesh& mt = *s.m;
-    auto same_patch = [&](std::uint32_t u) {
-      if (u == t || !own_embedded) return own_embedded;
-      for (std::size_t k = 0; k < 3; ++k) {
-        const auto& et = mt.edge_tri[mt.tri_edge[t][k]];
-        if ((et[0] == t ? et[1] : et[0]) == u) return (embed_ok[side][slot_t] >> (k + 1) & 1u) != 0;
-      }
-      return false;
-    };
-    CertTri x;
-    for (int o = 0; o < 2 && !failed.load(std::memory_order_relaxed); ++o) {
+    // The walks: every leaf entry whose box meets the group's box, in the
+    // hierarchy's order.
+    for (int o = 0; o < 2; ++o) {
       const Bvh& h = *bvhs[o];
-      const CutSide& so = cut.sides[o];
+      found[o].clear();
       if (h.nodes.empty()) continue;
       stack.assign(1, 0);
       while (!stack.empty()) {
         const Bvh::Node& nd = h.nodes[stack.back()];
         stack.pop_back();
-        if (!cert_boxes_meet(nd.box, q)) continue;
+        if (!cert_boxes_meet(nd.box, group_q)) continue;
         if (nd.left != kNil) {
           stack.push_back(nd.left);
           stack.push_back(nd.left + 1);
           continue;
         }
-        for (std::uint32_t j = nd.first; j < nd.first + nd.count; ++j) {
-          if (!cert_boxes_meet(h.box[j], q)) continue;
-          const std::uint32_t u = h.order[j];
-          if (o == side && same_patch(u)) continue;
-          const std::uint32_t slot = so.slot[u];
-          const CertTri* pre_u = slot != kNil && pre_begin[o][slot] != kNil ? &pre[o][pre_begin[o][slot]] : nullptr;
-          // cert18: u in a level patch: the suspects apart from it skip
-          // all of u's pieces (fold_level_patch.cpp), and u is skipped when
-          // all are.
-          bool any_skip = false;
-          if (slot != kNil && patch_of[o][slot] != kNil) {
-            const LevelPatch& pu = patches[o][patch_of[o][slot]];
-            skip.assign(sus.size(), 0);
-            bool all = true;
-            for (std::size_t k = 0; k < sus.size(); ++k) {
-              skip[k] = level_patch_apart(pu, sus[k].p, sus[k].v) ? 1 : 0;
-              any_skip = any_skip || skip[k] != 0;
-              all = all && skip[k] != 0;
+        for (std::uint32_t j = nd.first; j < nd.first + nd.count; ++j)
+          if (cert_boxes_meet(h.box[j], group_q)) found[o].push_back(j);
+      }
+    }
+    walks += 1;
+    for (std::uint32_t mi = group_begin[g]; mi < group_begin[g + 1] && !failed.load(std::memory_order_relaxed);
+         ++mi) {
+      const std::size_t member = mi - group_begin[g];
+      const int side = static_cast<int>(items[group_items[mi]][0]);
+      const std::uint32_t t = items[group_items[mi]][1];
+      const CutSide& s = cut.sides[side];
+      const std::array<double, 6>& q = boxes[member];
+      const CertTri* sus = sus_all.data() + sus_begin[member];
+      const std::uint64_t* sus_key = key_all.data() + sus_begin[member];
+      const std::size_t n_sus = sus_begin[member + 1] - sus_begin[member];
+      std::size_t n_pairs = 0, n_exact = 0, n_embedded = 0;
+      // cert17: pairs of two pieces of u, or of u and a neighbour across one
+      // of its edges, need no test when those pieces certainly form an
+      // embedded triangulation once rounded (rounded_pieces_embedded,
+      // fold_embedding.cpp): they meet only in the corners they share by id,
+      // which is all the pair tests below show (verdicts made before the
+      // loop: embed_ok).
+      const std::uint32_t slot_t = s.slot[t];
+      const bool own_embedded = embed_ok[side][slot_t] & 1u;
+      // cert18: t's own level patch: a found piece apart from it is apart
+      // from every suspect (all pieces of t).
+      const LevelPatch* own_patch = patch_of[side][slot_t] != kNil ? &patches[side][patch_of[side][slot_t]] : nullptr;
+      thread_local std::vector<std::uint8_t> skip;  // per suspect: apart from u's level patch
+      std::size_t n_level = 0;
+      n_embedded += own_embedded ? 1 : 0;
+      const TriMesh& mt = *s.m;
+      auto same_patch = [&](std::uint32_t u) {
+        if (u == t || !own_embedded) return own_embedded;
+        for (std::size_t k = 0; k < 3; ++k) {
+          const auto& et = mt.edge_tri[mt.tri_edge[t][k]];
+          if ((et[0] == t ? et[1] : et[0]) == u) return (embed_ok[side][slot_t] >> (k + 1) & 1u) != 0;
+        }
+        return false;
+      };
+      CertTri x;
+      for (int o = 0; o < 2 && !failed.load(std::memory_order_relaxed); ++o) {
+        const Bvh& h = *bvhs[o];
+        const CutSide& so = cut.sides[o];
+        {
+          for (const std::uint32_t j : found[o]) {
+            if (!cert_boxes_meet(h.box[j], q)) continue;
+            const std::uint32_t u = h.order[j];
+            if (o == side && same_patch(u)) continue;
+            const std::uint32_t slot = so.slot[u];
+            const CertTri* pre_u = slot != kNil && pre_begin[o][slot] != kNil ? &pre[o][pre_begin[o][slot]] : nullptr;
+            // cert18: u in a level patch: the suspects apart from it skip
+            // all of u's pieces (fold_level_patch.cpp), and u is skipped when
+            // all are.
+            bool any_skip = false;
+            if (slot != kNil && patch_of[o][slot] != kNil) {
+              const LevelPatch& pu = patches[o][patch_of[o][slot]];
+              skip.assign(n_sus, 0);
+              bool all = true;
+              for (std::size_t k = 0; k < n_sus; ++k) {
+                skip[k] = level_patch_apart(pu, sus[k].p, sus[k].v) ? 1 : 0;
+                any_skip = any_skip || skip[k] != 0;
+                all = all && skip[k] != 0;
+              }
+              if (any_skip) ++n_level;
+              if (all) continue;
             }
-            if (any_skip) ++n_level;
-            if (all) continue;
-          }
-          for (std::uint32_t p = so.piece_begin[u]; p < so.piece_begin[u + 1]; ++p) {
-            if (!so.keep[p]) continue;
-            // A made piece's box first: most of a fan's miss a small query.
-            if (pre_u != nullptr && !cert_boxes_meet(q, pre_u[p - so.piece_begin[u]].box)) continue;
-            const std::uint64_t key = (std::uint64_t{static_cast<std::uint32_t>(o)} << 32) | p;
-            const bool suspect = is_suspect(so.piece[p]);
-            int made = 0;  // 1: corners and box, 2: and the normal
-            const CertTri* xp = &x;
-            for (std::size_t k = 0; k < sus.size(); ++k) {
-              // A pair of suspects once, from the smaller key's side (its
-              // query finds the other: the boxes' relation is symmetric).
-              if (key == sus_key[k] || (suspect && key < sus_key[k])) continue;
-              if (made == 0) {
-                if (pre_u != nullptr) {
-                  xp = pre_u + (p - so.piece_begin[u]);
+            for (std::uint32_t p = so.piece_begin[u]; p < so.piece_begin[u + 1]; ++p) {
+              if (!so.keep[p]) continue;
+              // A made piece's box first: most of a fan's miss a small query.
+              if (pre_u != nullptr && !cert_boxes_meet(q, pre_u[p - so.piece_begin[u]].box)) continue;
+              const std::uint64_t key = (std::uint64_t{static_cast<std::uint32_t>(o)} << 32) | p;
+              const bool suspect = is_suspect(so.piece[p]);
+              int made = 0;  // 1: corners and box, 2: and the normal
+              const CertTri* xp = &x;
+              for (std::size_t k = 0; k < n_sus; ++k) {
+                // A pair of suspects once, from the smaller key's side (its
+                // query finds the other: the boxes' relation is symmetric).
+                if (key == sus_key[k] || (suspect && key < sus_key[k])) continue;
+                if (made == 0) {
+                  if (pre_u != nullptr) {
+                    xp = pre_u + (p - so.piece_begin[u]);
+                    made = 2;
+                  } else {
+                    cert_corners(cut, a, b, so.piece[p], x);
+                    made = 1;
+                  }
+                  if (!cert_boxes_meet(q, xp->box)) break;
+                  if (own_patch != nullptr && level_patch_apart(*own_patch, xp->p, xp->v)) {
+                    ++n_level;
+                    break;
+                  }
+                }
+                if (any_skip && skip[k] != 0) continue;
+                if (!cert_boxes_meet(sus[k].box, xp->box)) continue;
+                if (made == 1) {
+                  cert_normal(x);
                   made = 2;
-                } else {
-                  cert_corners(cut, a, b, so.piece[p], x);
-                  made = 1;
                 }
-                if (!cert_boxes_meet(q, xp->box)) break;
-                if (own_patch != nullptr && level_patch_apart(*own_patch, xp->p, xp->v)) {
-                  ++n_level;
-                  break;
+                ++n_pairs;
+                // The level-plane rule after the self-check's rules (which
+                // decide most pairs of a generic cut at no extra cost), before
+                // the separating planes (17 candidates).
+                if (cert_apart(sus[k], *xp) ||
+                    (shortcut && (cert_level_apart(sus[k], *xp) || cert_level_apart(*xp, sus[k]))) ||
+                    cert_apart_more(sus[k], *xp))
+                  continue;
+                ++n_exact;
+                if (cert_cross_exact(sus[k], *xp)) {
+                  failed = true;
+                  return;
                 }
-              }
-              if (any_skip && skip[k] != 0) continue;
-              if (!cert_boxes_meet(sus[k].box, xp->box)) continue;
-              if (made == 1) {
-                cert_normal(x);
-                made = 2;
-              }
-              ++n_pairs;
-              // The level-plane rule after the self-check's rules (which
-              // decide most pairs of a generic cut at no extra cost), before
-              // the separating planes (17 candidates).
-              if (cert_apart(sus[k], *xp) ||
-                  (shortcut && (cert_level_apart(sus[k], *xp) || cert_level_apart(*xp, sus[k]))) ||
-                  cert_apart_more(sus[k], *xp))
-                continue;
-              ++n_exact;
-              if (cert_cross_exact(sus[k], *xp)) {
-                failed = true;
-                return;
               }
             }
           }
         }
       }
+      pairs += n_pairs;
+      exact += n_exact;
+      embedded += n_embedded;
+      level_skips += n_level;
     }
-    pairs += n_pairs;
-    exact += n_exact;
-    embedded += n_embedded;
-    level_skips += n_level;
   });
   (failed ? result_check_counts().full : result_check_counts().certified) += 1;
   level_patch_counts().patches += patches[0].size() + patches[1].size();
   level_patch_counts().skips += level_skips;
+  cert_walk_counts().walks += walks;
   result_check_counts().pairs += pairs;
   result_check_counts().embedded += embedded;
   if (stats != nullptr) {

@@ -83,6 +83,7 @@ int orient2_rotated(const Vec3d& p, const Vec3d& q, const Vec3d& r, int axis) no
 /// Per-thread scratch of rounded_pieces_embedded.
 struct EmbedScratch {
   std::vector<std::uint64_t> directed;  // (from << 32) | to, every piece edge
+  std::vector<std::uint64_t> table;     // cert19: open addressing, the directed edges and (v << 32) | v
   std::vector<std::uint64_t> boundary;  // directed edges without their reverse
   std::vector<std::uint32_t> verts;     // piece corners, for the Euler count
   std::vector<std::uint32_t> cycle;     // the boundary cycle from the first corner
@@ -159,20 +160,53 @@ bool rounded_pieces_embedded(const Cut& cut, const TriMesh& a, const TriMesh& b,
       ++faces;
     }
   }
-  std::sort(sc.directed.begin(), sc.directed.end());
-  if (std::adjacent_find(sc.directed.begin(), sc.directed.end()) != sc.directed.end()) return false;
+  // cert19: the directed edges and the vertices in one open-addressing set
+  // (linear probing, a power of two at least four times the keys; a piece's
+  // ids are distinct, as its orientation is certain, so a vertex's key
+  // (v << 32) | v is never an edge's), not sorted: a repeated directed edge,
+  // the boundary (the edges whose reverse is absent) and the vertex count in
+  // one pass each; only the boundary, a few dozen edges, is sorted.
+  std::size_t size = 64;
+  int shift = 58;
+  while (size < 8 * sc.directed.size()) {
+    size *= 2;
+    --shift;
+  }
+  constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  sc.table.assign(size, kEmpty);
+  const std::size_t mask = size - 1;
+  auto home = [&](std::uint64_t key) { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift); };
+  // 1: newly inserted, 0: present already.
+  auto insert = [&](std::uint64_t key) {
+    for (std::size_t i = home(key);; i = (i + 1) & mask) {
+      if (sc.table[i] == key) return 0;
+      if (sc.table[i] == kEmpty) {
+        sc.table[i] = key;
+        return 1;
+      }
+    }
+  };
+  auto has = [&](std::uint64_t key) {
+    for (std::size_t i = home(key);; i = (i + 1) & mask) {
+      if (sc.table[i] == key) return true;
+      if (sc.table[i] == kEmpty) return false;
+    }
+  };
+  std::size_t n_verts = 0;
+  for (std::size_t k = 0; k < sc.directed.size(); ++k) {
+    if (insert(sc.directed[k]) == 0) return false;  // a directed edge twice
+    n_verts += static_cast<std::size_t>(insert((std::uint64_t{sc.verts[k]} << 32) | sc.verts[k]));
+  }
   sc.boundary.clear();
   for (const std::uint64_t e : sc.directed) {
     const std::uint64_t rev = (e << 32) | (e >> 32);
-    if (!std::binary_search(sc.directed.begin(), sc.directed.end(), rev)) sc.boundary.push_back(e);
+    if (!has(rev)) sc.boundary.push_back(e);
   }
-  // Sorted by their first corner (the directed list is): a boundary vertex
-  // starts one boundary edge, else the boundary is not one simple cycle.
+  std::sort(sc.boundary.begin(), sc.boundary.end());
+  // Sorted by their first corner: a boundary vertex starts one boundary
+  // edge, else the boundary is not one simple cycle.
   for (std::size_t k = 1; k < sc.boundary.size(); ++k)
     if (sc.boundary[k] >> 32 == sc.boundary[k - 1] >> 32) return false;
-  std::sort(sc.verts.begin(), sc.verts.end());
-  const std::size_t n_verts =
-      static_cast<std::size_t>(std::unique(sc.verts.begin(), sc.verts.end()) - sc.verts.begin());
   // V - E + F = 1: E counts interior edges once and boundary edges once.
   const std::size_t n_edges = (sc.directed.size() + sc.boundary.size()) / 2;
   if (n_verts + faces != n_edges + 1) return false;

@@ -59,4 +59,17 @@ struct LevelPatchCounts {
 };
 [[nodiscard]] LevelPatchCounts& level_patch_counts() noexcept;
 
+// ---- cert19: the certificate's hierarchy walks shared (fold_certificate.cpp)
+/// Neighbouring cut triangles cut into few pieces share one walk of the
+/// nets' hierarchies (on, the default) or each walks them alone (off: the
+/// tests' reference; the same pairs either way). Process-wide; for tests
+/// and measurements.
+void set_grouped_walk(bool on) noexcept;
+[[nodiscard]] bool grouped_walk_on() noexcept;
+/// Process-wide count of the certificate's walks (one per group).
+struct CertWalkCounts {
+  std::atomic<std::size_t> walks{0};
+};
+[[nodiscard]] CertWalkCounts& cert_walk_counts() noexcept;
+
 }  // namespace atelier::net_detail

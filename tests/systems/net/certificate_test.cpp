@@ -545,5 +545,50 @@ TEST(NetCertificateLevelPatch, RuleKeepsVerdictsAndBytes) {
   EXPECT_LT(cray.pairs_on * 5, cray.pairs_off * 3) << "the rule no longer decides the pairs against the slab top";
 }
 
+// ---- cert19: the hierarchy walks shared by neighbouring cut triangles
+
+// The Booleans: walking the hierarchies once per group of neighbouring cut
+// triangles tests exactly the pairs the walks per triangle test (a member's
+// query keeps the group's finds whose boxes meet its own), so the same
+// verdict, the same pair count and the same bytes, on 1 and 2 threads, with
+// fewer walks.
+TEST(NetCertificateWalk, GroupedWalksKeepPairsVerdictsAndBytes) {
+  auto walks = [](const PolygonSoup& a, const PolygonSoup& b, bool grouped) {
+    net_detail::set_grouped_walk(grouped);
+    const std::size_t w0 = net_detail::cert_walk_counts().walks;
+    BooleanOptions o;
+    o.op = BooleanOp::kUnion;
+    ExecContext ctx;
+    ctx.threads = 1;
+    EXPECT_TRUE(net_boolean(a, b, o, ctx).has_value());
+    net_detail::set_grouped_walk(true);
+    return net_detail::cert_walk_counts().walks - w0;
+  };
+  Compared shapes;
+  const PolygonSoup s0 = net_test::icosphere(3, 1.0, {0, 0, 0}), s1 = net_test::icosphere(3, 0.9, {0.31, 0.17, 0.05});
+  compare_rule(s0, s1, "icospheres", net_detail::set_grouped_walk, net_detail::cert_walk_counts().walks, shapes);
+  compare_rule(net_test::box_triangles({-1e30, -1e30, -1e30}, {1e30, 1e30, -100.0}),
+               net_test::icosphere(3, 2.5e4, {3.0, -7.0, -100.0}), "slab and sphere", net_detail::set_grouped_walk,
+               net_detail::cert_walk_counts().walks, shapes);
+  std::cout << "icospheres and slab: certified " << shapes.certified << " of 16, pairs " << shapes.pairs_off
+            << " -> " << shapes.pairs_on << "\n";
+  EXPECT_GE(shapes.certified, 9u);
+  EXPECT_EQ(shapes.pairs_on, shapes.pairs_off) << "a member's query lost or gained pairs";
+  const std::size_t alone = walks(s0, s1, false), grouped = walks(s0, s1, true);
+  std::cout << "icospheres' union: walks " << alone << " -> " << grouped << "\n";
+  EXPECT_LT(grouped * 2, alone);
+  if (!std::filesystem::exists(kPairs)) GTEST_SKIP() << "shared data absent: " << kPairs;
+  const PolygonSoup left = net_polygons(read_obj(kPairs / "Cray_left.obj"));
+  const PolygonSoup right = net_polygons(read_obj(kPairs / "Cray_right.obj"));
+  Compared cray;
+  compare_rule(left, right, "Cray", net_detail::set_grouped_walk, net_detail::cert_walk_counts().walks, cray);
+  const std::size_t cray_alone = walks(left, right, false), cray_grouped = walks(left, right, true);
+  std::cout << "Cray: certified " << cray.certified << " of 8, pairs " << cray.pairs_off << " -> " << cray.pairs_on
+            << ", union's walks " << cray_alone << " -> " << cray_grouped << "\n";
+  EXPECT_EQ(cray.certified, 8u);
+  EXPECT_EQ(cray.pairs_on, cray.pairs_off);
+  EXPECT_LT(cray_grouped * 2, cray_alone);
+}
+
 }  // namespace
 }  // namespace atelier::certificate_test
