@@ -35,6 +35,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../../../systems/net/boolean_detail.h"  // result_check_counts: which results the certificate passed
@@ -46,6 +47,16 @@ namespace {
 namespace PMP = CGAL::Polygon_mesh_processing;
 using Kex = CGAL::Exact_predicates_exact_constructions_kernel;
 using Kin = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+/// One thread, and two with the sequential threshold lowered so that two
+/// threads do run: the pair the same-bits tests compare.
+std::pair<ExecContext, ExecContext> one_and_two_threads() {
+  ExecContext one, two;
+  one.threads = 1;
+  two.threads = 2;
+  one.sequential_threshold = two.sequential_threshold = 2;
+  return {one, two};
+}
 
 /// Whether the Booleans split polygon c as the fan from its first corner:
 /// exactly planar and strictly convex (docs/glossary.md, "fan split of
@@ -895,10 +906,8 @@ TEST(NetDegeneratePairs, DefaultCheckGivesTheSameBitsForOneAndTwoThreads) {
     for (BooleanOp op : kOps) {
       BooleanOptions o;
       o.op = op;
-      ExecContext one, two;
-      one.threads = 1;
-      two.threads = 2;
-      one.sequential_threshold = two.sequential_threshold = 2;
+      const auto threads = one_and_two_threads();
+      const ExecContext &one = threads.first, &two = threads.second;
       const auto r1 = net_boolean(a, b, o, one);
       const auto r2 = net_boolean(a, b, o, two);
       ASSERT_EQ(r1.has_value(), r2.has_value());
@@ -1084,10 +1093,8 @@ TEST(NetDegeneratePairs, LeanFoldRepairKeepsVerdictsAndBytes) {
                     for (BooleanOp op : kOps) {
                       BooleanOptions o;
                       o.op = op;
-                      ExecContext one, two;
-                      one.threads = 1;
-                      two.threads = 2;
-                      one.sequential_threshold = two.sequential_threshold = 2;
+                      const auto threads = one_and_two_threads();
+      const ExecContext &one = threads.first, &two = threads.second;
                       const std::string w = what + " op " + std::to_string(static_cast<int>(op));
                       // Thread CPU time of each one-thread Boolean (the
                       // figures of docs/performance.md, degen19).
