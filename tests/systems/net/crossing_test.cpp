@@ -256,15 +256,8 @@ TEST(NetCrossing, ZeroLengthEdgesOfSplitVerticesAreMergedBack) {
 // Mutant: manifold_at always true (the merge is taken: left = 0 and the
 // soup changes).
 TEST(NetCrossing, AZeroLengthEdgeWhoseMergeIsNotManifoldIsLeft) {
-  PolygonSoup s = net_test::box_triangles({0, 0, 0}, {1, 1, 1});
-  const PolygonSoup b = net_test::box_triangles({1, 1, 1}, {2, 2, 2});
-  const auto base = static_cast<std::uint32_t>(s.positions.size());
-  for (const Vec3d& p : b.positions) s.positions.push_back(p);
-  for (std::size_t f = 0; f < b.face_count(); ++f) {
-    std::vector<std::uint32_t> c(b.face(f).begin(), b.face(f).end());
-    for (auto& x : c) x += base;
-    s.add_face(c);
-  }
+  const PolygonSoup s =
+      net_test::joined(net_test::box_triangles({0, 0, 0}, {1, 1, 1}), net_test::box_triangles({1, 1, 1}, {2, 2, 2}));
   std::vector<std::uint8_t> sides(s.face_count(), 0);
   std::vector<std::uint32_t> remap;
   PolygonSoup t = s;

@@ -20,18 +20,6 @@
 namespace atelier {
 namespace {
 
-PolygonSoup promise_joined(const PolygonSoup& x, const PolygonSoup& y) {
-  PolygonSoup s = x;
-  const auto n = static_cast<std::uint32_t>(s.positions.size());
-  for (const auto& p : y.positions) s.positions.push_back(p);
-  for (std::size_t f = 0; f < y.face_count(); ++f) {
-    std::vector<std::uint32_t> c(y.face(f).begin(), y.face(f).end());
-    for (auto& v : c) v += n;
-    s.add_face(c);
-  }
-  return s;
-}
-
 struct PromiseCase {
   const char* what;
   PolygonSoup crossing;  // closed, outward, manifold, crossing itself
@@ -44,7 +32,7 @@ std::vector<PromiseCase> promise_cases() {
   std::vector<PromiseCase> c;
   // Two overlapping spheres in one soup; a slab through their circle of
   // crossing, and a sphere inside their lens poking out of both.
-  const PolygonSoup spheres = promise_joined(icosphere(2, 1.0, {0, 0, 0}), icosphere(2, 1.0, {1, 0, 0}));
+  const PolygonSoup spheres = net_test::joined(icosphere(2, 1.0, {0, 0, 0}), icosphere(2, 1.0, {1, 0, 0}));
   c.push_back({"spheres / slab", spheres, box_triangles({0.3, -2, -0.2}, {0.7, 2, 0.21})});
   c.push_back({"spheres / lens", spheres, icosphere(2, 0.6, {0.45, 0.1, 0.05})});
   // A box with a top corner pushed through its bottom (a face through
@@ -62,7 +50,7 @@ std::vector<PromiseCase> promise_cases() {
   // of the unit box's bottom: two cut points at one place on that edge (the
   // crash).
   const PolygonSoup cross =
-      promise_joined(box_triangles({-1, -1, -1}, {0.5, 2, 0.75}), box_triangles({0, 0.5, -1}, {2, 2, 0.75}));
+      net_test::joined(box_triangles({-1, -1, -1}, {0.5, 2, 0.75}), box_triangles({0, 0.5, -1}, {2, 2, 0.75}));
   c.push_back({"crossing line through an edge", cross, box_triangles({0, 0, 0}, {1, 1, 1})});
   // Two overlapping boxes (quads), a sphere about one crossing edge.
   c.push_back({"two boxes / sphere", net_test::two_boxes_in_one_net(), icosphere(2, 0.3, {2, 1, 1.5})});
@@ -125,7 +113,7 @@ TEST(NetPromise, CrossingNetsMetByTheCutAreRefusedNamingTheFaces) {
 /// result is refused naming the crossing.
 TEST(NetPromise, ACrossingTheCutDoesNotMeetIsCopiedAndRefusedAsAnOperand) {
   const PolygonSoup spheres =
-      promise_joined(net_test::icosphere(2, 1.0, {0, 0, 0}), net_test::icosphere(2, 1.0, {1, 0, 0}));
+      net_test::joined(net_test::icosphere(2, 1.0, {0, 0, 0}), net_test::icosphere(2, 1.0, {1, 0, 0}));
   const PolygonSoup far = net_test::box({5, 5, 5}, {6, 6, 6});
   BooleanOptions o;
   o.check_self_intersection = false;

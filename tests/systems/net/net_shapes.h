@@ -155,19 +155,22 @@ inline std::vector<PolygonSoup> spheres_across_the_slab(int n) {
   return out;
 }
 
+/// x and y in one soup: y's ids follow x's.
+inline PolygonSoup joined(const PolygonSoup& x, const PolygonSoup& y) {
+  PolygonSoup s = x;
+  const auto n = static_cast<std::uint32_t>(s.positions.size());
+  for (const auto& p : y.positions) s.positions.push_back(p);
+  for (std::size_t f = 0; f < y.face_count(); ++f) {
+    std::vector<std::uint32_t> c(y.face(f).begin(), y.face(f).end());
+    for (auto& v : c) v += n;
+    s.add_face(c);
+  }
+  return s;
+}
+
 /// Two overlapping boxes in one net ([.5, 2]^3 and [1, 3]^3): closed,
 /// oriented and manifold, but intersecting itself.
-inline PolygonSoup two_boxes_in_one_net() {
-  PolygonSoup two = box({.5, .5, .5}, {2, 2, 2});
-  const PolygonSoup other = box({1, 1, 1}, {3, 3, 3});
-  for (const auto& p : other.positions) two.positions.push_back(p);
-  for (std::size_t f = 0; f < other.face_count(); ++f) {
-    std::vector<std::uint32_t> c(other.face(f).begin(), other.face(f).end());
-    for (auto& x : c) x += 8;
-    two.add_face(c);
-  }
-  return two;
-}
+inline PolygonSoup two_boxes_in_one_net() { return joined(box({.5, .5, .5}, {2, 2, 2}), box({1, 1, 1}, {3, 3, 3})); }
 
 /// Builds the result into a Model: closed (no boundary), consistently
 /// oriented, 2-manifold (the builder refuses the rest), validate() clean.
