@@ -119,8 +119,8 @@ FlatMerge merge_flat_edges(PolygonSoup& out, std::vector<std::uint8_t>& face_sid
   };
   std::vector<std::uint32_t> alias(nv);
   std::iota(alias.begin(), alias.end(), 0u);
-  // Each pass takes the zero-length edges left by the last; a merge or a
-  // re-triangulation removes at least one face, so the passes end.
+  // Each pass takes the zero-length edges left by the last; a merge removes
+  // at least one face (the flat one), and the passes are capped at 8.
   for (int pass = 0; pass < 8 && !edges.empty(); ++pass) {
     for (const auto& [u, w] : edges) {
       if (alias[u] != u || alias[w] != w) continue;  // one of them merged in this pass: next pass
@@ -150,7 +150,6 @@ FlatMerge merge_flat_edges(PolygonSoup& out, std::vector<std::uint8_t>& face_sid
         }
         alias[w] = u;
         ++done.merged;
-        continue;
       }
     }
     edges = zero_edges(faces, gone);
